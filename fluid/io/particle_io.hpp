@@ -1,0 +1,59 @@
+#pragma once
+// Particle position files shared by every command that reads or writes particles
+// (`fluiddemo mesh`, `simulate`, `query-collider`) and by the tests and benchmarks.
+//
+// Formats, chosen by extension (case-insensitive):
+//   .xyz  one particle per line, "x y z" separated by spaces/tabs; blank lines and lines
+//         starting with '#' are ignored; extra columns after z are ignored.
+//   .csv  "x,y,z" per line; an optional first header row is allowed when it names the
+//         columns (x, y and z are then picked by name, in any order).
+//   .ply  ASCII or binary (little/big endian) PLY with a `vertex` element holding float or
+//         double properties x, y, z; other properties and elements are skipped.
+// Errors name the file and the 1-based line (text) or vertex index (binary) and never crash.
+// NaN/inf coordinates are rejected.
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+// SoA particle positions owned by the caller.
+struct ParticlePositions {
+  std::vector<float> x, y, z;
+
+  std::size_t size() const { return x.size(); }
+  bool empty() const { return x.empty(); }
+  void clear() { x.clear(); y.clear(); z.clear(); }
+  void push_back(glm::vec3 p) { x.push_back(p.x); y.push_back(p.y); z.push_back(p.z); }
+  glm::vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
+};
+
+// Empty error == success. The message is complete ("file.xyz:12: ..."), ready to print.
+struct IoStatus {
+  std::string error;
+  bool ok() const { return error.empty(); }
+};
+
+// Reads `path` into `out` (cleared first). On failure `out` is left empty.
+IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& out);
+
+// Parses text in the given format ("xyz" or "csv"); `name` is used in messages.
+IoStatus parseParticleText(const std::string& text, const std::string& format, const std::string& name,
+                           ParticlePositions& out);
+
+enum class OverwritePolicy { refuse, replace };
+
+// Writes "x y z" lines with round-trip precision (max_digits10). Refuses to replace an
+// existing file unless told to, so nothing a user made is lost silently.
+IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePositions& particles,
+                          OverwritePolicy overwrite = OverwritePolicy::refuse);
+
+// Writes a binary little-endian PLY with float x, y, z.
+IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePositions& particles,
+                          OverwritePolicy overwrite = OverwritePolicy::refuse);
+
+}  // namespace fluid

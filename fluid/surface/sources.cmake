@@ -1,0 +1,2 @@
+# Sources of fluid/surface, added to the `fluid` library.
+# target_sources(fluid PRIVATE ${CMAKE_CURRENT_LIST_DIR}/file.cpp)

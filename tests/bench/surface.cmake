@@ -1,0 +1,1 @@
+# Benchmarks of fluid/surface.

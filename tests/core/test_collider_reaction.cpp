@@ -1,0 +1,82 @@
+// Kolb et al. 2004 §3.3.2 collision reaction and double check.
+#include "fluid/core/collider.hpp"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+constexpr glm::vec3 kUp{0.0f, 0.0f, 1.0f};
+
+fluid::ColliderSample sample(float distance, glm::vec3 normal = kUp) { return {distance, normal, true}; }
+
+TEST(CollisionResponse, SplitsIntoFrictionAndResilience) {
+  const fluid::CollisionMaterial material{0.25f, 0.5f, 0.01f};
+  const glm::vec3 v = fluid::collisionResponse({2.0f, 0.0f, -4.0f}, kUp, material);
+  EXPECT_FLOAT_EQ(v.x, 1.5f);  // (1 - ν) v∥
+  EXPECT_FLOAT_EQ(v.z, 2.0f);  // −ε v⊥
+  EXPECT_FLOAT_EQ(v.y, 0.0f);
+}
+
+TEST(CollisionResponse, LeavesOutgoingVelocityAlone) {
+  const glm::vec3 v = fluid::collisionResponse({1.0f, 2.0f, 3.0f}, kUp, {});
+  EXPECT_EQ(v, glm::vec3(1.0f, 2.0f, 3.0f));
+}
+
+TEST(CollisionResponse, SkipsFrictionBelowSpeedThreshold) {
+  const fluid::CollisionMaterial material{0.5f, 0.0f, 1.0f};
+  const glm::vec3 v = fluid::collisionResponse({0.3f, 0.0f, -0.1f}, kUp, material);
+  EXPECT_FLOAT_EQ(v.x, 0.3f);
+  EXPECT_FLOAT_EQ(v.z, 0.0f);
+}
+
+TEST(ResolveCollision, NoCollisionWhenPredictedOutsideOrInvalid) {
+  const auto outside = fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, 0.5f}, {0, 0, -1}, sample(0.5f), {}, 0.5f,
+                                               0.01f, {});
+  EXPECT_EQ(outside.outcome, fluid::CollisionOutcome::none);
+  EXPECT_EQ(outside.position, glm::vec3(0, 0, 0.5f));
+  const auto invalid = fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, -0.5f}, {0, 0, -1}, fluid::ColliderSample{},
+                                               {}, 0.5f, 0.01f, {});
+  EXPECT_EQ(invalid.outcome, fluid::CollisionOutcome::none);
+}
+
+TEST(ResolveCollision, AboutToCollideReactsAndEndsOutside) {
+  const fluid::CollisionMaterial material{0.0f, 0.5f, 0.0f};
+  const auto result = fluid::resolveCollision({0, 0, 0.1f}, sample(0.1f), {0, 0, -0.2f}, {0, 0, -3.0f}, sample(-0.2f), {},
+                                              0.1f, 0.01f, material);
+  EXPECT_EQ(result.outcome, fluid::CollisionOutcome::reacted);
+  EXPECT_NEAR(result.position.z, 0.01f, 1e-6f);
+  EXPECT_NEAR(result.velocity.z, 1.5f, 1e-6f);
+}
+
+TEST(ResolveCollision, CaughtParticleIsPushedOutHeadingOutside) {
+  const auto result = fluid::resolveCollision({0, 0, -0.3f}, sample(-0.3f), {0, 0, -0.4f}, {1.0f, 0, -1.0f}, sample(-0.4f),
+                                              {}, 0.1f, 0.0f, {});
+  EXPECT_EQ(result.outcome, fluid::CollisionOutcome::pushed_out);
+  EXPECT_GE(result.position.z, 0.0f);
+  EXPECT_GT(result.velocity.z, 0.0f);
+  EXPECT_FLOAT_EQ(result.velocity.x, 1.0f);
+}
+
+TEST(ResolveCollision, MovingColliderPushesRestingParticle) {
+  // A wall moving up at 2 m/s hits a particle at rest: in the wall's frame the particle
+  // heads inside at 2 m/s, so afterwards it must move up at least as fast as the wall.
+  const fluid::CollisionMaterial material{0.0f, 0.0f, 0.0f};
+  const auto result = fluid::resolveCollision({0, 0, 0.0f}, sample(0.01f), {0, 0, 0.0f}, {0, 0, 0}, sample(-0.05f),
+                                              {0, 0, 2.0f}, 0.1f, 0.0f, material);
+  EXPECT_EQ(result.outcome, fluid::CollisionOutcome::reacted);
+  EXPECT_NEAR(result.velocity.z, 2.0f, 1e-6f);
+}
+
+TEST(ColliderPose, RoundTripsPointsAndRigidVelocity) {
+  fluid::ColliderPose pose;
+  pose.rotation = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 0, 1));
+  pose.translation = {1, 2, 3};
+  pose.angular_velocity = {0, 0, 1};
+  const glm::vec3 local = fluid::toColliderSpace(pose, {1, 3, 3});
+  EXPECT_NEAR(local.x, 1.0f, 1e-6f);
+  EXPECT_NEAR(local.y, 0.0f, 1e-6f);
+  const glm::vec3 v = fluid::colliderVelocityAt(pose, {2, 2, 3});
+  EXPECT_NEAR(v.y, 1.0f, 1e-6f);  // ω × r with r = +x
+}
+
+}  // namespace
