@@ -1,0 +1,58 @@
+// The schema every scene file and --set override is validated against. A section with
+// is_effect = true is an effect: its system is constructed only when a scene lists it.
+#include "game/scene/scene_config.hpp"
+
+#include <array>
+
+namespace game {
+namespace {
+
+ParamValue num(double value) { return {ParamType::number, value, false, {}, {}}; }
+ParamValue integer(int value) { return {ParamType::integer, static_cast<double>(value), false, {}, {}}; }
+ParamValue flag(bool value) { return {ParamType::boolean, 0.0, value, {}, {}}; }
+ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false, {x, y, z}, {}}; }
+
+const std::array kSceneParams = {
+    ParamSpec{"step_hz", ParamType::number, 30.0, 240.0, num(60.0), "fixed simulation steps per second"},
+    ParamSpec{"substeps", ParamType::integer, 1, 16, integer(1), "physics substeps per simulation step"},
+    ParamSpec{"max_steps_per_frame", ParamType::integer, 1, 20, integer(5), "backlog cap after a hitch"},
+    ParamSpec{"seed", ParamType::integer, 0, 2147483647, integer(1), "seed of every random choice in the scene"},
+};
+
+const std::array kCameraParams = {
+    ParamSpec{"position", ParamType::vec3, -1000.0, 1000.0, vec(0.0f, 2.0f, 12.0f), "start position (m), y up"},
+    ParamSpec{"yaw_degrees", ParamType::number, -360.0, 360.0, num(-90.0), "heading; -90 looks along -z"},
+    ParamSpec{"pitch_degrees", ParamType::number, -89.0, 89.0, num(-8.0), "look up (+) or down (-)"},
+    ParamSpec{"fov_degrees", ParamType::number, 20.0, 120.0, num(60.0), "vertical field of view"},
+    ParamSpec{"move_speed", ParamType::number, 0.1, 100.0, num(5.0), "WASD speed (m/s)"},
+};
+
+const std::array kRigidBodyParams = {
+    ParamSpec{"gravity", ParamType::vec3, -100.0, 100.0, vec(0.0f, -9.81f, 0.0f), "m/s^2"},
+    ParamSpec{"crates", ParamType::integer, 0, 200, integer(6), "crates stacked around the fountain"},
+    ParamSpec{"crate_size", ParamType::number, 0.1, 5.0, num(0.6), "crate edge length (m)"},
+    ParamSpec{"throw_speed", ParamType::number, 0.0, 100.0, num(14.0), "speed of a crate thrown with left click (m/s)"},
+};
+
+const std::array kSpriteParticleParams = {
+    ParamSpec{"rate", ParamType::number, 0.0, 100000.0, num(1500.0), "particles emitted per second"},
+    ParamSpec{"speed", ParamType::number, 0.0, 50.0, num(7.0), "jet speed at the nozzle (m/s)"},
+    ParamSpec{"spread_degrees", ParamType::number, 0.0, 90.0, num(6.0), "half-angle of the jet cone"},
+    ParamSpec{"lifetime", ParamType::number, 0.1, 60.0, num(4.0), "seconds before a particle is recycled"},
+    ParamSpec{"max_particles", ParamType::integer, 0, 1000000, integer(8000), "particle budget"},
+    ParamSpec{"size", ParamType::number, 0.005, 1.0, num(0.06), "sprite radius (m)"},
+    ParamSpec{"restitution", ParamType::number, 0.0, 1.0, num(0.3), "bounce off ground and basin"},
+};
+
+const std::array kSections = {
+    SectionSpec{"scene", false, "simulation clock", kSceneParams},
+    SectionSpec{"camera", false, "first-person camera", kCameraParams},
+    SectionSpec{"rigid_bodies", true, "Bullet world: ground, basin, statue, crates", kRigidBodyParams},
+    SectionSpec{"sprite_particles", true, "fountain jet of gravity particles drawn as point sprites", kSpriteParticleParams},
+};
+
+}  // namespace
+
+std::span<const SectionSpec> sceneSchema() { return kSections; }
+
+}  // namespace game
