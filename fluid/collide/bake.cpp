@@ -460,6 +460,18 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
     }
     normals[t] = glm::vec3(glm::normalize(n));
   }
+  // Outward = counter-clockwise; a mesh whose signed volume is negative is wound clockwise
+  // throughout, so flip every normal. (Orienting per texel by the view direction instead
+  // fails for back-facing triangles caught at silhouettes.)
+  double volume6 = 0.0;
+  for (std::size_t t = 0; t < tris; ++t) {
+    const dvec3 a = mesh.positions[mesh.indices[3 * t]], b = mesh.positions[mesh.indices[3 * t + 1]],
+                c = mesh.positions[mesh.indices[3 * t + 2]];
+    volume6 += glm::dot(a, glm::cross(b, c));
+  }
+  if (volume6 < 0.0) {
+    for (glm::vec3& nn : normals) nn = -nn;
+  }
   if (status.degenerate_triangles == tris) {
     status.error = "all " + std::to_string(tris) + " triangles are degenerate (zero area): nothing to bake";
     return status;
@@ -484,14 +496,7 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
         const bool want_less = both || spec.compare == DepthCompare::less;
         const bool want_greater = both || spec.compare == DepthCompare::greater;
         rasterOrtho(mesh, skip, map.collider_to_map, n, want_less, want_greater, less, greater);
-        const glm::vec3 forward = orthoFrame(spec.ortho).forward;
-        // Outward normal faces the viewer for a LESS hit and away for a GREATER hit.
-        auto oriented = [&](std::int32_t tri, bool is_less) {
-          glm::vec3 nn = normals[static_cast<std::size_t>(tri)];
-          const float d = glm::dot(nn, forward);
-          if (is_less ? d > 0.0f : d < 0.0f) nn = -nn;
-          return nn;
-        };
+        auto oriented = [&](std::int32_t tri, bool) { return normals[static_cast<std::size_t>(tri)]; };
         map.encloses_collider = true;
         for (int corner = 0; corner < 8; ++corner) {
           const glm::vec3 p{corner & 1 ? bounds.hi.x : bounds.lo.x, corner & 2 ? bounds.hi.y : bounds.lo.y,
@@ -561,7 +566,6 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
         }
         const std::size_t count = static_cast<std::size_t>(kFaces) * n * n;
         map.texels.assign(count * 4, 0);
-        const glm::vec3 center = spec.cube.center;
         for (std::size_t k = 0; k < count; ++k) {
           std::uint8_t* t = map.texels.data() + k * 4;
           const std::int32_t tri = less.triangle[k];
@@ -569,11 +573,7 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
             storeFixed(t, 0xFFFFu, kFixedBackground);
             continue;
           }
-          // dot(n, x − centre) has one sign over the triangle's plane: orient so a LESS hit
-          // faces the centre and a GREATER hit faces away.
-          glm::vec3 nn = normals[static_cast<std::size_t>(tri)];
-          const float side = glm::dot(nn, mesh.positions[mesh.indices[3 * static_cast<std::size_t>(tri)]] - center);
-          if (is_less ? side > 0.0f : side < 0.0f) nn = -nn;
+          const glm::vec3 nn = normals[static_cast<std::size_t>(tri)];
           const glm::ivec2 ij = l1Texel(nn, rn);
           const double depth01 = less.depth[k] / 1.7320508075688772;
           storeFixed(t, static_cast<std::uint32_t>(ij.x | (ij.y << 8)), encodeFixedDepth(static_cast<float>(depth01)));

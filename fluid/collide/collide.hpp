@@ -65,8 +65,10 @@
 //          This is the paper's (1 − r/L)|S·P'| with the sign chosen so that points between
 //          the centre and a LESS surface are outside (the paper's "negate" remark, §4.3).
 //
-// Votes (rule (2)): a map votes invalid when P' is outside its view volume ([0,1]³ ortho,
-// [−1,1]³ cube) or the texel is background. An invalid vote is ignored, except for maps whose
+// Votes (rule (2)): a map votes invalid when P' is outside its view volume or the texel is
+// background. View volume: cube [−1,1]³; ortho (P'x, P'y) in [0,1)², and along z a LESS map
+// up to its far plane (P'z <= 1), a GREATER map from its near plane (P'z >= 0) — the part in
+// front of the near plane is kept because eq. (1) still holds there. An invalid vote is ignored, except for maps whose
 // view volume encloses the whole collider (encloses_collider, set by the baker): there it is
 // "far outside" (+FLT_MAX), as §4.1 allows.
 // ---------------------------------------------------------------------------------------
@@ -167,7 +169,8 @@ class DepthMapCollider final : public SignedDistanceShape {
 // ---- Baking (§4.1, §4.3): CPU rasterizer ----------------------------------------------
 
 // Triangle mesh as plain arrays (no assimp here): positions and 3 indices per triangle.
-// Winding does not matter: normals are oriented by the view (a LESS hit faces the viewer).
+// Closed meshes with consistent winding; outward is counter-clockwise, and a mesh wound
+// the other way round throughout (negative signed volume) is detected and flipped.
 struct MeshView {
   std::span<const glm::vec3> positions;
   std::span<const std::uint32_t> indices;  // size multiple of 3, each < positions.size()

@@ -58,41 +58,45 @@ inline std::uint16_t loadU16(const std::uint8_t* p) {
 
 void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
   const glm::vec3 q = transformPoint(map.collider_to_map, p);
-  // Outside the view volume: invalid vote (§4.1). The z test also keeps points behind the
-  // far plane from being called "inside" by a front map.
-  if (!(q.x >= 0.0f && q.x < 1.0f && q.y >= 0.0f && q.y < 1.0f && q.z >= 0.0f && q.z <= 1.0f)) {
-    if (map.format == DepthMapFormat::front_back16) invalidVote(w, map);
-    invalidVote(w, map);
-    return;
+  const bool two = map.format == DepthMapFormat::front_back16;
+  // Outside the map's footprint: invalid vote (§4.1).
+  if (!(q.x >= 0.0f && q.x < 1.0f && q.y >= 0.0f && q.y < 1.0f)) {
+    if (two) invalidVote(w, map);
+    return invalidVote(w, map);
   }
+  // Along the view direction a LESS map is valid up to its far plane and a GREATER map from
+  // its near plane on: a point in front of the near plane is still in front of the first
+  // surface, so eq. (1) holds there; behind the far plane it would wrongly read "inside".
+  const bool less_ok = q.z <= 1.0f, greater_ok = q.z >= 0.0f;
   const int n = static_cast<int>(map.resolution);
   const float nf = static_cast<float>(n);
   const int i = std::min(static_cast<int>(q.x * nf), n - 1);
   const int j = std::min(static_cast<int>(q.y * nf), n - 1);
   const std::uint32_t texel = static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
   const std::uint8_t* t = map.texels.data() + texel * texelBytes(map.format);
-  const float sign_less = map.compare == DepthCompare::less ? 1.0f : -1.0f;
+  const bool less = map.compare == DepthCompare::less;
+  const float sign_less = less ? 1.0f : -1.0f;
   switch (map.format) {
     case DepthMapFormat::float32: {
       float depth;
       std::memcpy(&depth, t + 12, 4);
-      if (depth < 0.0f) return invalidVote(w, map);
+      if (depth < 0.0f || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
       return vote(w, sign_less * map.z_scale * (depth - q.z), &map, texel, 0);
     }
     case DepthMapFormat::fixed8: {
       const std::uint16_t code = static_cast<std::uint16_t>((t[2] << 8) | t[3]);
-      if (code == kFixedBackground) return invalidVote(w, map);
+      if (code == kFixedBackground || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
       return vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
     }
     case DepthMapFormat::front_back16: {
       const float front = halfToFloat(loadU16(t + 4));
       const float back = halfToFloat(loadU16(t + 6));
-      if (front < 0.0f) {
+      if (front < 0.0f || !less_ok) {
         invalidVote(w, map);
       } else {
         vote(w, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
       }
-      if (back < 0.0f) {
+      if (back < 0.0f || !greater_ok) {
         invalidVote(w, map);
       } else {
         vote(w, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
