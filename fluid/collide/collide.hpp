@@ -157,7 +157,8 @@ class DepthMapCollider final : public SignedDistanceShape {
   int normalResolution() const { return normal_resolution_; }
   // Number of single depth maps in the paper's sense (front_back16 = 2, cube8 = 6).
   int depthMapCount() const;
-  // Texel bytes plus the normal index texture (if any map indexes normals).
+  // Texel bytes of all maps. The normal index texture (12·R_n² bytes as RGB float32, 768 KiB
+  // at 256²) is shared by every collider with the same R_n and is not counted.
   std::size_t bytes() const;
 
  private:

@@ -187,13 +187,7 @@ int DepthMapCollider::depthMapCount() const {
 
 std::size_t DepthMapCollider::bytes() const {
   std::size_t total = 0;
-  bool indexed = false;
-  for (const DepthMap& m : maps_) {
-    total += m.texels.size();
-    indexed = indexed || m.format != DepthMapFormat::float32;
-  }
-  // The normal index texture as the GPU holds it: RGB float32.
-  if (indexed) total += normal_table_.size() * 3 * sizeof(float);
+  for (const DepthMap& m : maps_) total += m.texels.size();
   return total;
 }
 
