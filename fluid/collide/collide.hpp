@@ -48,7 +48,16 @@
 //                depth = r/sqrt(3), r = |P'| of the surface hit in the normalised volume;
 //                decode r = float(q) * kCubeRadiusStep, kCubeRadiusStep = float(sqrt(3)/65535).
 //   Texel (i,j) of an N×N map is stored at index j·N + i (cube: face·N·N + j·N + i).
-//   Texel lookup is nearest: i = floor(u·N) in float, valid iff 0 <= i < N.
+//   Texel lookup is nearest: ortho i = floor(u·N) in float, valid iff 0 <= i < N (u = P'x,
+//   v = P'y); cube i = clamp(floor(s·N), 0, N−1). Upload without filtering (texelFetch).
+//
+// Baking (what the texels mean): ortho maps are rasterized conservatively: a texel holds the
+// nearest (LESS) / farthest (GREATER) depth over every triangle whose projection touches the
+// texel square, taken at the texel centre when it lies inside the triangle and at the
+// nearest point of the triangle's outline otherwise. So a point inside the collider never
+// reads a background texel, which is what makes "invalid = far outside" safe. Cube texels
+// hold the hit of the ray through the texel centre (no conservative cover). Stored normals
+// are the outward face normals of the winning triangles.
 //
 // Map coordinates (§4.1, item 3 and 4): collider_to_map = T_OC→DC (affine, column-major).
 //   ortho: P' = T·P with (P'x, P'y) texture coordinates in [0,1]², P'z the depth in [0,1]
@@ -126,7 +135,9 @@ const char* formatName(DepthMapFormat format);
 bool parseFormat(const std::string& name, DepthMapFormat& out);
 
 // Bytes per texel of one map layer (cube8: per face texel).
-std::size_t texelBytes(DepthMapFormat format);
+constexpr std::size_t texelBytes(DepthMapFormat format) {
+  return format == DepthMapFormat::float32 ? 16 : format == DepthMapFormat::front_back16 ? 8 : 4;
+}
 
 struct DepthMap {
   DepthMapFormat format = DepthMapFormat::float32;

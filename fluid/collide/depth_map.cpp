@@ -50,6 +50,18 @@ inline glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) {
   return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
 }
 
+// binary16 -> float for the depths the maps hold (normal numbers, zero, −1): one shift and
+// add; anything else (subnormal, inf, NaN) takes the exact general path.
+inline float depthHalf(std::uint16_t bits) {
+  const std::uint32_t exponent = (bits >> 10) & 0x1Fu;
+  if (exponent == 0u || exponent == 31u) return halfToFloat(bits);
+  const std::uint32_t f = ((static_cast<std::uint32_t>(bits) & 0x8000u) << 16) |
+                          (((static_cast<std::uint32_t>(bits) & 0x7FFFu) << 13) + (112u << 23));
+  float out;
+  std::memcpy(&out, &f, 4);
+  return out;
+}
+
 inline std::uint16_t loadU16(const std::uint8_t* p) {
   std::uint16_t v;
   std::memcpy(&v, p, 2);
@@ -89,8 +101,8 @@ void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
       return vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
     }
     case DepthMapFormat::front_back16: {
-      const float front = halfToFloat(loadU16(t + 4));
-      const float back = halfToFloat(loadU16(t + 6));
+      const float front = depthHalf(loadU16(t + 4));
+      const float back = depthHalf(loadU16(t + 6));
       if (front < 0.0f || !less_ok) {
         invalidVote(w, map);
       } else {

@@ -155,14 +155,4 @@ bool parseFormat(const std::string& name, DepthMapFormat& out) {
   return false;
 }
 
-std::size_t texelBytes(DepthMapFormat format) {
-  switch (format) {
-    case DepthMapFormat::float32: return 16;
-    case DepthMapFormat::fixed8: return 4;
-    case DepthMapFormat::front_back16: return 8;
-    case DepthMapFormat::cube8: return 4;
-  }
-  return 0;
-}
-
 }  // namespace fluid
