@@ -277,7 +277,7 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
 // ---- Batch queries and the particle step ----------------------------------------------
 
 struct ParallelDesc {
-  int threads = 0;          // 0 = all hardware threads
+  int threads = 0;          // 0 = the calling TBB arena (all threads by default); n > 0: an arena of n threads
   std::size_t grain = 4096;  // points per task
 };
 

@@ -11,7 +11,6 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
-#include <thread>
 
 namespace fluid {
 
@@ -253,18 +252,20 @@ void DepthMapCollider::query(std::span<const glm::vec3> local_points, std::span<
 std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm::vec3> points,
                           std::span<ColliderSample> out, const ParallelDesc& desc) {
   assert(points.size() == out.size());
-  const int threads = desc.threads > 0 ? desc.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::size_t grain = std::max<std::size_t>(desc.grain, 1);
-  if (threads == 1 || points.size() <= grain) {
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), grain),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
+                      });
+  };
+  if (desc.threads == 1 || points.size() <= grain) {
     shape.query(points, out);
+  } else if (desc.threads <= 0) {
+    run();  // the caller's arena: no arena set-up per call (per-frame use)
   } else {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), grain),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
-                        });
-    });
+    tbb::task_arena arena(desc.threads);
+    arena.execute(run);
   }
   std::size_t non_finite = 0;
   for (std::size_t k = 0; k < points.size(); ++k) {
