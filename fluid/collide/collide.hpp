@@ -77,9 +77,12 @@
 // Votes (rule (2)): a map votes invalid when P' is outside its view volume or the texel is
 // background. View volume: cube [−1,1]³; ortho (P'x, P'y) in [0,1)², and along z a LESS map
 // up to its far plane (P'z <= 1), a GREATER map from its near plane (P'z >= 0) — the part in
-// front of the near plane is kept because eq. (1) still holds there. An invalid vote is ignored, except for maps whose
-// view volume encloses the whole collider (encloses_collider, set by the baker): there it is
-// "far outside" (+FLT_MAX), as §4.1 allows.
+// front of the near plane is kept because eq. (1) still holds there. An invalid vote is
+// ignored, except for maps whose view volume encloses the whole collider (encloses_collider,
+// set by the baker): there it is "far outside" (+FLT_MAX), as §4.1 allows.
+// Rule (2) is evaluated order-independently: f = min of the votes >= 0 if any, else the max
+// of the negative votes; the normal is that of the winning texel (first map wins ties).
+// Measured L1 index error (docs/collide.md): max 0.94°, mean 0.33° at 256²; max ≈ 241°/R.
 // ---------------------------------------------------------------------------------------
 
 #include "fluid/core/collider.hpp"
