@@ -111,7 +111,7 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
               "counted). Shapes: sphere r=1 (48×96 UV), torus R=1 r=0.35 (96×32), fountain basin (96 segments, "
               "rim overhanging its cavity; tests/collide/collide_meshes.cpp).\n\n",
               count);
-  std::printf("| shape | maps | depth maps | res | misclass %% | mean |Δd| | max |Δd| | mean normal err (deg) | "
+  std::printf("| shape | maps | depth maps | res | misclass %% | mean \\|Δd\\| | max \\|Δd\\| | mean normal err (deg) | "
               "max normal err (deg) | ns/query | bytes | bake ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Shape& shape : shapes) {
