@@ -28,6 +28,15 @@ int edgeBetween(int a, int b) {
   return -1;
 }
 
+// Faces holding edge e: (axis u, side = bit u of its base corner) for both u != its axis.
+bool shareFace(int e0, int e1) {
+  for (int u = 0; u < 3; ++u) {
+    if (u == kEdgeAxis[e0] || u == kEdgeAxis[e1]) continue;
+    if (((kEdgeBase[e0] >> u) & 1) == ((kEdgeBase[e1] >> u) & 1)) return true;
+  }
+  return false;
+}
+
 CaseTable buildCase(int cube) {
   CaseTable t;
   auto inside = [cube](int c) { return (cube >> c) & 1; };
@@ -96,10 +105,21 @@ CaseTable buildCase(int cube) {
       used[cur] = true;
       loop[n++] = cur;
     }
+    // Fan apex: a diagonal between two crossings on the same cube face would lie in that face
+    // and be shared with the neighbour cube's patch (an edge of four triangles). Pick an apex
+    // whose diagonals all cross the cube's interior.
+    int apex = -1;
+    for (int r = 0; r < n && apex < 0; ++r) {
+      bool ok = true;
+      for (int i = 2; i + 1 < n && ok; ++i) ok = !shareFace(loop[r], loop[(r + i) % n]);
+      if (ok) apex = r;
+    }
+    assert(apex >= 0);
+    if (apex < 0) apex = 0;
     for (int i = 1; i + 1 < n; ++i) {
-      t.edges[3 * tri + 0] = std::uint8_t(loop[0]);
-      t.edges[3 * tri + 1] = std::uint8_t(loop[i]);
-      t.edges[3 * tri + 2] = std::uint8_t(loop[i + 1]);
+      t.edges[3 * tri + 0] = std::uint8_t(loop[apex]);
+      t.edges[3 * tri + 1] = std::uint8_t(loop[(apex + i) % n]);
+      t.edges[3 * tri + 2] = std::uint8_t(loop[(apex + i + 1) % n]);
       ++tri;
     }
   }

@@ -3,4 +3,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/mc_tables.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/field.cpp
   ${CMAKE_CURRENT_LIST_DIR}/marching_slices.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/baselines.cpp
 )
