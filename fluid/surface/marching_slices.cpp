@@ -598,7 +598,10 @@ class BlockMesher {
       const bool aboveEmpty = z + 1 >= n_ || w_.todo[z + 1].empty();
       if (belowEmpty) freeSlice(z);
       if (aboveEmpty) freeSlice(z + 1);
-      if (!belowEmpty) --z;  // the sweep reverses: slab z-1 got work from this one
+      if (!belowEmpty) {  // the sweep reverses: slab z-1 got work from this one
+        --z;
+        ++out_.stats.slabReversals;
+      }
     }
     for (int i = 0; i <= n_; ++i) freeSlice(i);
   }
@@ -1117,6 +1120,7 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
     stats.seedEvaluations += o.stats.seedEvaluations;
     stats.particlesLookedUp += o.stats.particlesLookedUp;
     stats.maxActiveSlices = std::max(stats.maxActiveSlices, o.stats.maxActiveSlices);
+    stats.slabReversals += o.stats.slabReversals;
     stats.cornerCacheBytesPeakBlock = std::max(stats.cornerCacheBytesPeakBlock, o.cornerBytes);
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }

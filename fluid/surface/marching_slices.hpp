@@ -90,6 +90,7 @@ struct SurfaceStats {
   std::uint64_t vertices = 0;
   std::uint32_t blocks = 0;
   std::uint32_t maxActiveSlices = 0;  // most slice caches alive at once in one block
+  std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
   // Working memory, bytes actually touched: largest single block, and summed over all blocks
   // processed concurrently (one per worker).
   std::uint64_t cornerCacheBytesPeakBlock = 0;    // slice caches (index arrays + corner caches)
