@@ -18,7 +18,7 @@ SurfaceStatus extractBlockedSurfaceFollowing(SurfaceExtractor& extractor, const 
 namespace {
 
 struct CornerValue {
-  double value;
+  float value;
   float g[3];
 };
 
@@ -27,7 +27,7 @@ struct CornerValue {
 void emitVertex(const CornerValue& a, const CornerValue& b, std::int64_t i, std::int64_t j, std::int64_t k, int axis,
                 const SurfaceParams& params, SurfaceMesh& out) {
   const double s = params.cube;
-  const double tt = (double(params.threshold) - a.value) / (b.value - a.value);
+  const double tt = (double(params.threshold) - double(a.value)) / (double(b.value) - double(a.value));
   double p[3] = {double(i) * s, double(j) * s, double(k) * s};
   p[axis] += tt * s;
   const float tf = float(tt);
@@ -166,11 +166,8 @@ void dense(BaselineState& st, const SurfaceParams& params, double rcMax, Surface
   st.cornerBytes = 2 * cells * sizeof(CornerValue) + 5 * cells * sizeof(std::uint32_t);
   st.particleBytes = ps.size() * sizeof(Particle);
   std::size_t window = 0;
-  // Gradients are summed in double per corner before rounding to float, as marching slices does.
-  std::vector<double> gacc(cells * 3);
   auto fill = [&](std::int64_t k, std::vector<CornerValue>& slice) {
     std::fill(slice.begin(), slice.end(), CornerValue{0, {0, 0, 0}});
-    std::fill(gacc.begin(), gacc.end(), 0.0);
     const double cz = double(k) * s;
     while (window < ps.size() && ps[window].z <= cz - rcMax) ++window;
     for (std::size_t pi = window; pi < ps.size() && ps[pi].z < cz + rcMax; ++pi) {
@@ -184,14 +181,11 @@ void dense(BaselineState& st, const SurfaceParams& params, double rcMax, Surface
         for (std::int64_t i = xa; i <= xb; ++i) {
           const double cx = double(i) * s, cy = double(j) * s;
           if (!influences(p, cx, cy, cz)) continue;
-          const std::size_t id = std::size_t(j - i0[1]) * nx + std::size_t(i - i0[0]);
-          accumulate(p, cx, cy, cz, slice[id].value, gacc[3 * id], gacc[3 * id + 1], gacc[3 * id + 2]);
+          CornerValue& c = slice[std::size_t(j - i0[1]) * nx + std::size_t(i - i0[0])];
+          accumulate(p, i, j, k, s, c.value, c.g[0], c.g[1], c.g[2]);
         }
     }
-    for (std::size_t id = 0; id < cells; ++id)
-      for (int c = 0; c < 3; ++c) slice[id].g[c] = float(gacc[3 * id + c]);
   };
-  st.cornerBytes += gacc.size() * sizeof(double);
   const auto& table = mc::tables().cases[0];
   fill(i0[2], st.lower);
   for (std::int64_t k = i0[2]; k < i1[2]; ++k) {
@@ -268,7 +262,7 @@ void hashed(BaselineState& st, const SurfaceParams& params, double rcMax, Surfac
     BaselineState::HCorner c{};
     const double cx = double(i) * s, cy = double(j) * s, cz = double(k) * s;
     const std::int64_t ci = floorDiv(cx, rcMax), cj = floorDiv(cy, rcMax), ck = floorDiv(cz, rcMax);
-    double g[3] = {0, 0, 0};
+    float g[3] = {0, 0, 0};
     for (std::int64_t dk = -1; dk <= 1; ++dk)
       for (std::int64_t dj = -1; dj <= 1; ++dj)
         for (std::int64_t di = -1; di <= 1; ++di) {
@@ -277,10 +271,10 @@ void hashed(BaselineState& st, const SurfaceParams& params, double rcMax, Surfac
           const std::uint32_t first = st.cellRanges[2 * *cell], count = st.cellRanges[2 * *cell + 1];
           for (std::uint32_t q = first; q < first + count; ++q) {
             const Particle& p = ps[st.cellParticles[q]];
-            if (influences(p, cx, cy, cz)) accumulate(p, cx, cy, cz, c.c.value, g[0], g[1], g[2]);
+            if (influences(p, cx, cy, cz)) accumulate(p, i, j, k, s, c.c.value, g[0], g[1], g[2]);
           }
         }
-    for (int a = 0; a < 3; ++a) c.c.g[a] = float(g[a]);
+    for (int a = 0; a < 3; ++a) c.c.g[a] = g[a];
     st.corners.push_back(c);
     ++out.stats.cornersEvaluated;
     return id;
@@ -288,10 +282,10 @@ void hashed(BaselineState& st, const SurfaceParams& params, double rcMax, Surfac
   // Seeds (as §4): step down from each particle's nearest corner.
   st.stack.clear();
   for (const Particle& p : ps) {
-    const std::int64_t i = std::llround(p.x / s), j = std::llround(p.y / s);
-    std::int64_t k = std::llround(p.z / s);
+    const std::int64_t i = iround(p.x / s), j = iround(p.y / s);
+    std::int64_t k = iround(p.z / s);
     if (!(st.corners[corner(i, j, k)].c.value > t)) continue;
-    const int steps = int(std::ceil(std::sqrt(p.rc2) / s)) + 1;
+    const int steps = iceil(std::sqrt(p.rc2) / s) + 1;
     for (int n = 0; n < steps; ++n, --k)
       if (!(st.corners[corner(i, j, k - 1)].c.value > t)) {
         st.stack.push_back({i, j, k - 1});

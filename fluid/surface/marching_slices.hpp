@@ -141,7 +141,9 @@ class SurfaceExtractor {
   std::unique_ptr<detail::ExtractorState> state;
 };
 
-// Field at a point (the paper's f summed over all particles; brute force, for tests/tools).
-double surfaceFieldAt(const SurfaceInput& input, const SurfaceParams& params, double x, double y, double z);
+// Field at lattice corner (i, j, k), i.e. at (i S, j S, k S): the paper's f summed over all
+// particles by brute force, with the same arithmetic as the extractors (for tests and tools).
+float surfaceFieldAtCorner(const SurfaceInput& input, const SurfaceParams& params, std::int64_t i, std::int64_t j,
+                           std::int64_t k);
 
 }  // namespace fluid

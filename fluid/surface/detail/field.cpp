@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
 namespace fluid::detail {
 
@@ -29,9 +30,14 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
     const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
     const double rci = rc * scale;
     p.rc2 = rci * rci;
-    p.k = 1.0 / (2.0 * p.rc2);
-    p.strength = input.strength.empty() ? 1.0 : double(input.strength[i]);
+    p.k = float(1.0 / (2.0 * p.rc2));
+    p.strength = input.strength.empty() ? 1.0f : input.strength[i];
     p.index = static_cast<std::uint32_t>(i);
+    const double pc[3] = {p.x, p.y, p.z};
+    for (int a = 0; a < 3; ++a) {
+      p.anchor[a] = static_cast<std::int64_t>(std::floor(pc[a] / double(params.cube)));
+      p.rest[a] = float(pc[a] - double(p.anchor[a]) * double(params.cube));
+    }
     rcMax = std::max(rcMax, rci);
   }
   // Sort by (z, index): the summation order every method uses (see the header).

@@ -15,10 +15,12 @@ namespace fluid::detail {
 // One particle, prepared. Positions are doubles of the float input.
 struct Particle {
   double x, y, z;
-  double rc2;       // Rc_i^2: influence iff (dx*dx + dy*dy) + dz*dz < rc2
-  double k;         // 1 / (2 Rc_i^2), so u = r^2 k = (r / (sqrt2 Rc_i))^2
-  double strength;  // s_i
-  std::uint32_t index;  // input index (user data)
+  double rc2;                // Rc_i^2: influence iff (dx*dx + dy*dy) + dz*dz < rc2 (in double)
+  std::int64_t anchor[3];    // lattice index floor(p / S) per axis
+  float rest[3];             // float(p - anchor * S) per axis, in [0, S)
+  float k;                   // 1 / (2 Rc_i^2), so u = r^2 k = (r / (sqrt2 Rc_i))^2
+  float strength;            // s_i
+  std::uint32_t index;       // input index (user data)
 };
 
 // The exact-influence predicate. Every lookup structure must return exactly the particles for
@@ -28,26 +30,35 @@ inline bool influences(const Particle& p, double cx, double cy, double cz) {
   return (dx * dx + dy * dy) + dz * dz < p.rc2;
 }
 
-// Adds particle p's contribution at corner c to value and gradient. f = s (u - 1/2)^2 with
-// u = r^2 k; df/dc = s * 2 (u - 1/2) * k * 2 (c - p). Caller guarantees influences() is true.
-inline void accumulate(const Particle& p, double cx, double cy, double cz, double& value, double& gx,
-                       double& gy, double& gz) {
-  const double dx = cx - p.x, dy = cy - p.y, dz = cz - p.z;
-  const double u = ((dx * dx + dy * dy) + dz * dz) * p.k;
-  const double w = u - 0.5;
-  value += p.strength * (w * w);
-  const double g = p.strength * 4.0 * w * p.k;
+// Shared arithmetic of every extractor: the offset from a particle to lattice corner c along an
+// axis is float((c - anchor) * S) - rest, which depends only on the global lattice index (not on
+// any block origin) and stays precise far from the origin. The paper's f(r) is then evaluated in
+// float:  f = s (u - 1/2)^2, u = r^2 k;  df/dc = 4 s (u - 1/2) k (c - p).
+inline float latticeOffset(std::int64_t corner, std::int64_t anchor, float rest, double s) {
+  return float(double(corner - anchor) * s) - rest;
+}
+
+inline float contribution(float dxy2, float dz, float k, float s) {
+  const float w = (dxy2 + dz * dz) * k - 0.5f;
+  return s * (w * w);
+}
+
+inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx,
+                       float& gy, float& gz) {
+  const float w = (dxy2 + dz * dz) * k - 0.5f;
+  value += s * (w * w);
+  const float g = 4.0f * s * w * k;
   gx += g * dx;
   gy += g * dy;
   gz += g * dz;
 }
 
-// Contribution only (margin corners need the sign, not the normal; same bits as above).
-inline double contribution(const Particle& p, double cx, double cy, double cz) {
-  const double dx = cx - p.x, dy = cy - p.y, dz = cz - p.z;
-  const double u = ((dx * dx + dy * dy) + dz * dz) * p.k;
-  const double w = u - 0.5;
-  return p.strength * (w * w);
+// Lattice-corner form (oracle, baselines). Caller guarantees influences() is true there.
+inline void accumulate(const Particle& p, std::int64_t i, std::int64_t j, std::int64_t k, double s, float& value,
+                       float& gx, float& gy, float& gz) {
+  const float dx = latticeOffset(i, p.anchor[0], p.rest[0], s), dy = latticeOffset(j, p.anchor[1], p.rest[1], s),
+              dz = latticeOffset(k, p.anchor[2], p.rest[2], s);
+  accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.strength, value, gx, gy, gz);
 }
 
 // Axis permutation used to sweep along the axis nearest the view (paper §5, "rotate the
@@ -65,6 +76,16 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
 
 // Lattice coordinate helpers: corner k sits at k * S.
 inline std::int64_t floorDiv(double v, double s) { return static_cast<std::int64_t>(std::floor(v / s)); }
+// floor/ceil/round without a libm call (values are far inside the int range here).
+inline int ifloor(double v) {
+  const int i = static_cast<int>(v);
+  return i - (v < double(i));
+}
+inline int iceil(double v) {
+  const int i = static_cast<int>(v);
+  return i + (v > double(i));
+}
+inline int iround(double v) { return ifloor(v + 0.5); }
 
 // Edge key shared by all methods (SurfaceMesh::edgeKeys).
 inline std::uint64_t edgeKey(std::int64_t i, std::int64_t j, std::int64_t k, int axis) {
