@@ -443,7 +443,10 @@ class BlockMesher {
           } else {
             while (hi >= lo && !inside(hi)) --hi;
           }
-          if (lo <= hi) window_ = std::max({window_, mid - lo, hi - mid});
+          if (lo <= hi) {
+            window_ = mid - lo > window_ ? mid - lo : window_;
+            window_ = hi - mid > window_ ? hi - mid : window_;
+          }
         }
         ColumnEntry& e = w_.entries[w_.cursor[col(x, y)]++];
         e.dx = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
