@@ -48,8 +48,8 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
     return bad("surface params: threshold = " + std::to_string(p.threshold) + " must be > 0");
   if (std::ceil(p.rc / p.cube) > 4000)
     return bad("surface params: rc / cube = " + std::to_string(p.rc / p.cube) + " is too fine (max 4000)");
-  if (p.blockCubes < 4 || p.blockCubes > 1024)
-    return bad("surface params: blockCubes = " + std::to_string(p.blockCubes) + " must be in [4, 1024]");
+  if (p.blockCubes != 0 && (p.blockCubes < 4 || p.blockCubes > 1024))
+    return bad("surface params: blockCubes = " + std::to_string(p.blockCubes) + " must be 0 (auto) or in [4, 1024]");
   if (p.threads < 0 || p.threads > 256)
     return bad("surface params: threads = " + std::to_string(p.threads) + " must be in [0, 256]");
   if (!std::isfinite(p.originX) || !std::isfinite(p.originY) || !std::isfinite(p.originZ))
@@ -1026,11 +1026,12 @@ void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& params, Se
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
+  const int maxBlock = params.blockCubes > 0 ? params.blockCubes : std::max(32, 8 * su.m);
   for (int a = 0; a < 3; ++a) {
     const std::int64_t c0 = floorDiv(lo[a] - su.rcMax, su.s) - 1;
     const std::int64_t c1 = floorDiv(hi[a] + su.rcMax, su.s) + 2;
     const std::int64_t extent = std::max<std::int64_t>(1, c1 - c0);
-    su.nb[a] = int((extent + params.blockCubes - 1) / params.blockCubes);
+    su.nb[a] = int((extent + maxBlock - 1) / maxBlock);
     su.b[a] = int((extent + su.nb[a] - 1) / su.nb[a]);
     su.n[a] = su.b[a] + 2 * su.m;
     su.lattice0[a] = c0;
@@ -1202,6 +1203,15 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
       br.bx = st.blocks[i].bx;
       br.by = st.blocks[i].by;
       br.bz = st.blocks[i].bz;
+      const int bc[3] = {br.bx, br.by, br.bz};
+      for (int a = 0; a < 3; ++a) {
+        const double c0 = double(su.lattice0[a] + std::int64_t(bc[a]) * su.b[a]) * su.s;
+        const double c1 = c0 + double(su.b[a]) * su.s;
+        const int wa = su.frame.axis[a];
+        const double w0 = su.frame.sign[a] * c0, w1 = su.frame.sign[a] * c1;
+        br.boundsMin[wa] = float(std::min(w0, w1) - su.origin[wa]);
+        br.boundsMax[wa] = float(std::max(w0, w1) - su.origin[wa]);
+      }
       br.indices = {ib, std::uint32_t(o.indices.size())};
       br.firstVertex = vb;
       br.vertexCount = std::uint32_t(o.positions.size());
@@ -1271,6 +1281,7 @@ BlockCacheProbe::BlockCacheProbe(const SurfaceInput& input, const SurfaceParams&
   prepareParticles(input, params, SweepFrame{}, particles, su.rcMax);
   su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));
   // A fixed grid of blockCubes-sized blocks from lattice index 0, so the test can aim at seams.
+  assert(params.blockCubes > 0);
   for (int a = 0; a < 3; ++a) {
     su.b[a] = params.blockCubes;
     su.n[a] = su.b[a] + 2 * su.m;

@@ -50,7 +50,11 @@ struct SurfaceParams {
   float rc = 3.0f;          // cutoff radius Rc, world units, > 0
   float threshold = 0.2f;   // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
   float cube = 1.0f;        // cube edge S, world units, > 0
-  int blockCubes = 32;      // interior cubes per block edge, [4, 1024]
+  // Largest interior cubes per block edge, 0 = auto (max(32, 8 ceil(Rc/S)): margins of ceil(Rc/S)
+  // cubes stay a small share of each block), else [4, 1024]. The particles' lattice extent is
+  // cut into equal blocks no larger than this. It never depends on `threads`, so the output
+  // does not either.
+  int blockCubes = 0;
   int threads = 0;          // 0 = all hardware threads, else 1..256
   SurfaceOrder order = SurfaceOrder::none;
   glm::vec3 eye{0.0f};               // for ordering: eye position (blocks sorted by distance)
@@ -68,7 +72,8 @@ struct IndexRange {
 };
 
 struct SurfaceBlockRange {
-  int bx = 0, by = 0, bz = 0;    // block coordinates (interior cubes [b*blockCubes, (b+1)*blockCubes))
+  int bx = 0, by = 0, bz = 0;    // block index in the block grid (sweep frame)
+  glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // interior box, world units minus origin (for culling)
   IndexRange indices;            // its triangles
   std::uint32_t firstVertex = 0, vertexCount = 0;
   std::uint32_t firstSlabRun = 0, slabRunCount = 0;  // into SurfaceMesh::slabRuns

@@ -112,7 +112,7 @@ TEST(MarchingSlices, SameTrianglesForEveryBlockSize) {
   p.cube = 0.6f;
   p.blockCubes = 32;
   const auto reference = canonicalTriangles(slices(inputOf(ps), p));
-  for (int b : {4, 7, 16, 64, 200}) {
+  for (int b : {0, 4, 7, 16, 64, 200}) {
     p.blockCubes = b;
     const fluid::SurfaceMesh m = slices(inputOf(ps), p);
     EXPECT_TRUE(canonicalTriangles(m) == reference) << "blockCubes " << b;
@@ -142,20 +142,32 @@ TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
 }
 
 TEST(MarchingSlices, ParticlesOnCornersAndBlockBoundaries) {
-  // S = 0.5, blocks of 8 cubes = 4 units: particles exactly on lattice corners, on block faces
-  // (multiples of 4) and on block edges/corners.
+  // Particles exactly on lattice corners (S = 0.5, coordinates multiples of 0.5); for each block
+  // size, the test checks that some particle sits exactly on a block face, so seams are hit.
   std::vector<float> x, y, z;
-  for (float a : {-4.0f, 0.0f, 4.0f, 4.5f, 8.0f})
-    for (float b : {-4.0f, 0.0f, 4.0f})
-      for (float c : {0.0f, 4.0f}) {
+  for (float a : {-4.0f, -2.5f, 0.0f, 1.5f, 4.0f, 4.5f, 8.0f})
+    for (float b : {-4.0f, -1.0f, 0.0f, 4.0f})
+      for (float c : {0.0f, 2.0f, 4.0f}) {
         x.push_back(a);
         y.push_back(b);
         z.push_back(c);
       }
-  fluid::SurfaceParams p;
-  p.cube = 0.5f;
-  p.blockCubes = 8;
-  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 100);
+  for (int blockCubes : {4, 5, 6, 8}) {
+    fluid::SurfaceParams p;
+    p.cube = 0.5f;
+    p.blockCubes = blockCubes;
+    const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+    const fluid::SurfaceMesh m = slices(in, p);
+    std::size_t onFace = 0;
+    for (const fluid::SurfaceBlockRange& b : m.blocks)
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const float pc[3] = {x[i], y[i], z[i]};
+        for (int a = 0; a < 3; ++a) onFace += pc[a] == b.boundsMin[a] || pc[a] == b.boundsMax[a];
+      }
+    EXPECT_GT(onFace, 0u) << "no particle on a block face for blockCubes " << blockCubes;
+    EXPECT_GT(m.blocks.size(), 8u);
+    expectClosedAndEqualToOracle(in, p, 100);
+  }
 }
 
 TEST(MarchingSlices, FieldExactlyEqualToThresholdAtCorners) {
