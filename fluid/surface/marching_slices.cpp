@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -968,17 +969,36 @@ SweepFrame chooseFrame(const SurfaceParams& p) {
   return f;
 }
 
-template <class W, class Run>
-void runParallel(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
-  st.arena->execute([&] {
+// Runs fn(slot, i) for i in [0, n) on the arena's workers; slot < max_concurrency identifies the
+// worker (its scratch). ThreadSanitizer cannot see the synchronisation inside the uninstrumented
+// system oneTBB, so TSan builds run the same per-item work on plain std::threads instead.
+template <class Fn>
+void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
+#if defined(__SANITIZE_THREAD__)
+  const int slots = arena.max_concurrency();
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> pool;
+  for (int t = 0; t < slots; ++t)
+    pool.emplace_back([&, t] {
+      for (std::size_t i = next++; i < n; i = next++) fn(t, i);
+    });
+  for (std::thread& th : pool) th.join();
+#else
+  arena.execute([&] {
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, st.blocks.size(), 1),
+        tbb::blocked_range<std::size_t>(0, n, 1),
         [&](const tbb::blocked_range<std::size_t>& r) {
-          W& w = *workers[std::size_t(tbb::this_task_arena::current_thread_index())];
-          for (std::size_t i = r.begin(); i != r.end(); ++i) run(w, i);
+          const int slot = tbb::this_task_arena::current_thread_index();
+          for (std::size_t i = r.begin(); i != r.end(); ++i) fn(slot, i);
         },
         tbb::simple_partitioner());
   });
+#endif
+}
+
+template <class W, class Run>
+void runParallel(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
+  parallelItems(*st.arena, st.blocks.size(), [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], i); });
 }
 
 template <class Policy>
@@ -1185,8 +1205,7 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
   out.indices.resize(st.indexBase[nb]);
   out.slabRuns.resize(st.runBase[nb]);
   out.blocks.resize(nb);
-  st.arena->execute([&] {
-    tbb::parallel_for(std::size_t(0), nb, [&](std::size_t i) {
+  parallelItems(*st.arena, nb, [&](int, std::size_t i) {
       const BlockOut& o = st.outs[i];
       const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
       std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
@@ -1217,7 +1236,6 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
       br.vertexCount = std::uint32_t(o.positions.size());
       br.firstSlabRun = rb;
       br.slabRunCount = std::uint32_t(o.runs.size());
-    });
   });
   stats.triangles = out.indices.size() / 3;
   stats.vertices = out.positions.size();
