@@ -1046,15 +1046,27 @@ void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& params, Se
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
-  const int maxBlock = params.blockCubes > 0 ? params.blockCubes : std::max(32, 8 * su.m);
+  // Auto: blocks of up to max(64, 12 m) cubes keep the margins (m = ceil(Rc/S) cubes each side,
+  // traversed but not emitted, §3) a modest share of the work; a set that fits one such block is
+  // cut in two along its longest axis when both halves stay at least 5 m wide, so mid-size sets
+  // still have two blocks to run in parallel. Depends on the data, S and Rc only.
+  const bool autoSize = params.blockCubes <= 0;
+  const int maxBlock = autoSize ? std::max(64, 12 * su.m) : params.blockCubes;
+  std::int64_t extent[3];
   for (int a = 0; a < 3; ++a) {
     const std::int64_t c0 = floorDiv(lo[a] - su.rcMax, su.s) - 1;
     const std::int64_t c1 = floorDiv(hi[a] + su.rcMax, su.s) + 2;
-    const std::int64_t extent = std::max<std::int64_t>(1, c1 - c0);
-    su.nb[a] = int((extent + maxBlock - 1) / maxBlock);
-    su.b[a] = int((extent + su.nb[a] - 1) / su.nb[a]);
-    su.n[a] = su.b[a] + 2 * su.m;
+    extent[a] = std::max<std::int64_t>(1, c1 - c0);
+    su.nb[a] = int((extent[a] + maxBlock - 1) / maxBlock);
     su.lattice0[a] = c0;
+  }
+  if (autoSize && su.nb[0] * su.nb[1] * su.nb[2] == 1) {
+    const int a = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
+    if ((extent[a] + 1) / 2 >= 5 * su.m) su.nb[a] = 2;
+  }
+  for (int a = 0; a < 3; ++a) {
+    su.b[a] = int((extent[a] + su.nb[a] - 1) / su.nb[a]);
+    su.n[a] = su.b[a] + 2 * su.m;
   }
 }
 
