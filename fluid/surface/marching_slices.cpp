@@ -189,6 +189,7 @@ struct BlockOut {
   std::vector<std::uint32_t> indices;
   std::vector<std::int32_t> triSlab;  // slab of each triangle (for runs / exact order)
   std::vector<std::uint32_t> sortScratch;
+  std::vector<std::pair<float, std::uint32_t>> depthScratch;
   std::vector<SurfaceSlabRun> runs;
   SurfaceStats stats;
   std::uint64_t cornerBytes = 0, particleBytes = 0;
@@ -220,6 +221,8 @@ struct Setup {
   bool flip = false;
   SweepFrame frame;
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
+  double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
+  double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
 };
 
 // Per-worker scratch, reused across blocks and frames.
@@ -727,7 +730,9 @@ class BlockMesher {
     }
   }
 
-  // Exact order (§5): one index range per slab, slabs in sweep order (stable counting sort).
+  // Exact order (§5): one index range per slab, slabs in sweep order (stable counting sort), and
+  // within a slab the triangles sorted by the depth of their centroid along the view direction,
+  // farthest first (the paper's "cubes within each slice ... sorted by distance to viewer").
   void sortBySlab() {
     const std::size_t nt = out_.triSlab.size();
     if (nt == 0) return;
@@ -736,12 +741,28 @@ class BlockMesher {
     std::fill(count.begin(), count.end(), 0u);
     for (std::int32_t s : out_.triSlab) ++count[std::size_t(s - base) + 1];
     for (int i = 0; i < nz_; ++i) count[i + 1] += count[i];
+    auto& keyed = out_.depthScratch;
+    keyed.resize(nt);
+    for (std::size_t i = 0; i < nt; ++i) {
+      const std::uint32_t* t = &out_.indices[3 * i];
+      double depth = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double c = (double(out_.positions[t[0]][a]) + out_.positions[t[1]][a] + out_.positions[t[2]][a]) / 3.0;
+        depth += (c - su_.eyeRel[a]) * su_.view[a];
+      }
+      const std::uint32_t dst = count[std::size_t(out_.triSlab[i] - base)]++;
+      keyed[dst] = {float(-depth), std::uint32_t(i)};  // ascending key = farthest first
+    }
+    // count[s] is now the end of slab s; sort each slab's range by depth (ties: emission order).
+    std::uint32_t begin = 0;
+    for (int sl = 0; sl < nz_; ++sl) {
+      const std::uint32_t end = count[std::size_t(sl)];
+      std::sort(keyed.begin() + begin, keyed.begin() + end);
+      begin = end;
+    }
     auto& tmp = out_.sortScratch;
     tmp.resize(nt * 3);
-    for (std::size_t i = 0; i < nt; ++i) {
-      const std::uint32_t dst = count[std::size_t(out_.triSlab[i] - base)]++;
-      std::memcpy(&tmp[3 * dst], &out_.indices[3 * i], 3 * sizeof(std::uint32_t));
-    }
+    for (std::size_t i = 0; i < nt; ++i) std::memcpy(&tmp[3 * i], &out_.indices[3 * keyed[i].second], 3 * sizeof(std::uint32_t));
     out_.indices.swap(tmp);
     std::sort(out_.triSlab.begin(), out_.triSlab.end());
   }
@@ -1094,6 +1115,14 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
   su.origin[0] = params.originX;
   su.origin[1] = params.originY;
   su.origin[2] = params.originZ;
+  {
+    const float e[3] = {params.eye.x, params.eye.y, params.eye.z};
+    const float d[3] = {params.viewDir.x, params.viewDir.y, params.viewDir.z};
+    for (int a = 0; a < 3; ++a) {
+      su.eyeRel[a] = double(e[a]) - su.origin[a];
+      su.view[a] = params.order == SurfaceOrder::frontToBack ? -double(d[a]) : double(d[a]);
+    }
+  }
   prepareParticles(input, params, su.frame, st.particles, su.rcMax);
   if (st.particles.empty()) return {};
   su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)

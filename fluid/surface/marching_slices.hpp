@@ -60,7 +60,9 @@ struct SurfaceParams {
   SurfaceOrder order = SurfaceOrder::none;
   glm::vec3 eye{0.0f};               // for ordering: eye position (blocks sorted by distance)
   glm::vec3 viewDir{0.0f, 0.0f, -1.0f};  // for ordering: view direction (need not be unit)
-  bool exactSlabOrder = false;  // with an order: one index range per slab, emitted in sweep order
+  // With an order: one index range per slab per block, slabs in sweep order, and triangles
+  // within a slab sorted by centroid depth along viewDir (farthest first for backToFront).
+  bool exactSlabOrder = false;
   // Output positions are written as float(p - origin); put it near the particles when they sit
   // far from zero (e.g. 1e5) so float vertices keep their precision. Double precision inside.
   double originX = 0.0, originY = 0.0, originZ = 0.0;
