@@ -152,3 +152,50 @@ TEST(SurfaceStrength, StrengthAndRadiusScaleChangeTheLoneRadius) {
   const std::vector<float> bad = {-1.0f};
   EXPECT_NE(ex.extract({x, y, z, bad, {}, {}}, p, m).error.find("strength[0]"), std::string::npos);
 }
+
+#include "fluid/surface/marching_slices_policy.hpp"
+
+namespace {
+// A caller's own compile-time policy: the field-weighted mean of a per-particle scalar (here the
+// particle's own input index), and a count of contributions, carried to the vertices.
+struct IndexMeanPolicy {
+  struct CornerData {
+    float sum = 0, weight = 0, count = 0;
+  };
+  static constexpr bool kHasUser = true;
+  void add(CornerData& c, std::uint32_t particle, float w) const {
+    c.sum += w * float(particle);
+    c.weight += w;
+    c.count += 1;
+  }
+  glm::vec4 vertex(const CornerData& a, const CornerData& b, float t) const {
+    const float ma = a.weight > 0 ? a.sum / a.weight : 0, mb = b.weight > 0 ? b.sum / b.weight : 0;
+    return {ma + t * (mb - ma), a.count, b.count, t};
+  }
+};
+}  // namespace
+
+TEST(SurfacePolicy, CallerPolicyIsInterpolatedAndGeometryUnchanged) {
+  const std::vector<float> x = {0, 0, 20}, y = {0, 0, 0}, z = {0, 0.1f, 0};
+  fluid::SurfaceParams p;
+  p.cube = 0.25f;
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh m, plain;
+  ASSERT_TRUE(fluid::extractWithPolicy(ex, {x, y, z, {}, {}, {}}, p, IndexMeanPolicy{}, m).ok());
+  ASSERT_TRUE(ex.extract({x, y, z, {}, {}, {}}, p, plain).ok());
+  EXPECT_TRUE(m.positions == plain.positions);
+  EXPECT_TRUE(m.indices == plain.indices);
+  ASSERT_EQ(m.attributes.size(), m.positions.size());
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const glm::vec4 a = m.attributes[v];
+    if (m.positions[v].x > 10) {
+      EXPECT_FLOAT_EQ(a.x, 2.0f);  // only particle 2 out there
+    } else {
+      EXPECT_GT(a.x, 0.0f);  // a blend of particles 0 and 1
+      EXPECT_LT(a.x, 1.0f);
+    }
+    EXPECT_GE(a.w, 0.0f);
+    EXPECT_LE(a.w, 1.0f);
+    EXPECT_LE(a.y, 2.0f);  // never more particles than exist there
+  }
+}
