@@ -358,19 +358,26 @@ class BlockMesher {
         int lo = 1, hi = 0;
         if (dxy < p.rc2) {
           const double h = std::sqrt(p.rc2 - dxy) * inv;
-          lo = std::clamp(iceil(fz - h), 1, nz_ - 1);
-          hi = std::clamp(ifloor(fz + h), 1, nz_ - 1);
-          if (lo > 1 && inside(lo - 1)) {
-            do --lo;
-            while (lo > 1 && inside(lo - 1));
-          } else {
-            while (lo <= hi && !inside(lo)) ++lo;
+          const double zlo = fz - h, zhi = fz + h;
+          lo = std::clamp(iceil(zlo), 1, nz_ - 1);
+          hi = std::clamp(ifloor(zhi), 1, nz_ - 1);
+          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+          // bound is within 1e-6 of a lattice slice, settle it with the predicate itself.
+          if (std::abs(zlo - double(iround(zlo))) < 1e-6) {
+            if (lo > 1 && inside(lo - 1)) {
+              do --lo;
+              while (lo > 1 && inside(lo - 1));
+            } else {
+              while (lo <= hi && !inside(lo)) ++lo;
+            }
           }
-          if (hi < nz_ - 1 && inside(hi + 1)) {
-            do ++hi;
-            while (hi < nz_ - 1 && inside(hi + 1));
-          } else {
-            while (hi >= lo && !inside(hi)) --hi;
+          if (std::abs(zhi - double(iround(zhi))) < 1e-6) {
+            if (hi < nz_ - 1 && inside(hi + 1)) {
+              do ++hi;
+              while (hi < nz_ - 1 && inside(hi + 1));
+            } else {
+              while (hi >= lo && !inside(hi)) --hi;
+            }
           }
           if (lo <= hi) {
             window_ = mid - lo > window_ ? mid - lo : window_;
@@ -380,8 +387,9 @@ class BlockMesher {
         ColumnEntry& e = w_.entries[w_.cursor[col(x, y)]++];
         e.dx = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
         e.dy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
-        e.minZ = std::int16_t(lo);
-        e.maxZ = std::int16_t(hi);
+        // An empty range is stored as [-32000, -32000], which no corner (z >= 0) falls in.
+        e.minZ = std::int16_t(lo <= hi ? lo : -32000);
+        e.maxZ = std::int16_t(lo <= hi ? hi : -32000);
         e.midZ = std::int16_t(std::clamp(mid, -32000, 32000));
         e.pad = 0;
         e.particle = li;
@@ -410,7 +418,8 @@ class BlockMesher {
     const BlockParticle* bp = w_.local.data();
     for (std::uint32_t i = cur; i < end; ++i) {
       if (e[i].midZ > hi) break;
-      if (e[i].minZ > z || e[i].maxZ < z) continue;
+      // min_z <= z <= max_z as one unsigned compare (an empty range never passes).
+      if (unsigned(z - e[i].minZ) > unsigned(e[i].maxZ - e[i].minZ)) continue;
       const BlockParticle& q = bp[e[i].particle];
       f(e[i], q, zoff[-e[i].midZ] - q.restZ);
     }
@@ -540,8 +549,14 @@ class BlockMesher {
   }
 
   std::uint32_t lookupOrEval(Slice<Policy>& slice, int x, int y, int z) {
+    const SliceCell& cell = slice.cells[col(x, y)];
+    if (cell.corner) [[likely]]
+      return cell.corner - 1;
+    return evaluateInto(slice, x, y, z);
+  }
+
+  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, int x, int y, int z) {
     SliceCell& cell = slice.cells[col(x, y)];
-    if (cell.corner) return cell.corner - 1;
     Corner<Policy> c;
     if (interiorCorner(x, y, z))
       evaluate<true>(x, y, z, c);
