@@ -146,6 +146,7 @@ class SurfaceExtractor {
   // identical for every thread count; for other block sizes it is the same triangle set.
   SurfaceStatus extract(const SurfaceInput& input, const SurfaceParams& params, SurfaceMesh& out);
 
+  // Internal scratch (public only so extractWithPolicy<Policy>() can reach it); do not touch.
   std::unique_ptr<detail::ExtractorState> state;
 };
 
