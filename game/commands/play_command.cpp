@@ -1,19 +1,208 @@
+// `fluiddemo play` and `fluiddemo smoke`: command-line front ends of runScene().
 #include "game/commands.hpp"
+#include "game/paths.hpp"
+#include "game/run_scene.hpp"
+#include "game/smoke_checks.hpp"
 
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 
 namespace game {
+namespace {
 
-// Placeholder until its module lands; replaced by the real command.
-int playCommand(const Args&) {
-  std::fprintf(stderr, "fluiddemo: this subcommand is not built yet\n");
-  return 2;
+bool displayAvailable() {
+  const char* driver = std::getenv("SDL_VIDEODRIVER");
+  if (driver != nullptr && (std::string_view(driver) == "offscreen" || std::string_view(driver) == "dummy")) return false;
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  return (x11 != nullptr && *x11 != '\0') || (wayland != nullptr && *wayland != '\0');
 }
 
-// Placeholder until its module lands; replaced by the real command.
-int smokeCommand(const Args&) {
-  std::fprintf(stderr, "fluiddemo: this subcommand is not built yet\n");
-  return 2;
+// Parses args with CLI11. Returns -1 to go on, otherwise the exit code (0 for --help, 2 for usage errors).
+int parseArgs(CLI::App& app, const Args& args) {
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& error) {
+    std::fprintf(stderr, "fluiddemo %s: %s\n\n%s", app.get_name().c_str(), error.what(), app.help().c_str());
+    return 2;
+  }
+  return -1;
+}
+
+struct SceneChoice {
+  SceneConfig config;
+  std::string error;
+};
+
+SceneChoice loadScene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+  SceneChoice choice;
+  std::filesystem::path path;
+  if (SceneStatus status = resolveScene(name_or_path, scenesDir(), path); !status.ok()) {
+    choice.error = status.error;
+    return choice;
+  }
+  if (SceneStatus status = loadSceneFile(path, choice.config); !status.ok()) {
+    choice.error = status.error;
+    return choice;
+  }
+  for (const std::string& assignment : overrides) {
+    if (SceneStatus status = applyOverride(choice.config, assignment); !status.ok()) {
+      choice.error = status.error;
+      return choice;
+    }
+  }
+  return choice;
+}
+
+void printTimingSummary(const SceneConfig& scene, const RunOptions& options, const RunReport& report) {
+  std::printf("fluiddemo: scene '%s', %d frames, %llu simulation steps, %dx%d %s\n", scene.name.c_str(),
+              report.frames_rendered, static_cast<unsigned long long>(report.simulation_steps), options.width,
+              options.height, options.headless ? "headless" : "window");
+  std::printf("renderer: %s\n", report.gl_renderer.c_str());
+  std::string systems;
+  for (const std::string& system : report.systems_constructed) systems += (systems.empty() ? "" : ", ") + system;
+  std::printf("systems running: %s\n", systems.empty() ? "(none)" : systems.c_str());
+  std::printf("%-10s %10s %10s %10s\n", "phase", "mean ms", "max ms", "samples");
+  for (const PhaseTiming& phase : report.phases) {
+    std::printf("%-10s %10.3f %10.3f %10llu\n", phase.phase.c_str(), phase.mean_ms, phase.max_ms,
+                static_cast<unsigned long long>(phase.samples));
+  }
+  std::printf("%-10s %10.3f\n", "frame", report.mean_frame_ms);
+}
+
+constexpr int kDefaultHeadlessFrames = 240;
+
+}  // namespace
+
+int playCommand(const Args& args) {
+  CLI::App app{"Play a scene: a window when a display exists, otherwise headless.", "play"};
+  std::string scene_name = "fountain";
+  std::vector<std::string> overrides;
+  RunOptions options;
+  bool no_ui = false;
+  std::string screenshot;
+  app.add_option("scene", scene_name, "scene name in content/scenes or path to a scene .json")->capture_default_str();
+  app.add_flag("--headless", options.headless, "no window: render offscreen (automatic without a display)");
+  app.add_option("--frames", options.frames, "render N frames then exit (0 = until closed; headless default 240)")
+      ->check(CLI::Range(0, 10000000));
+  app.add_option("--width", options.width, "framebuffer width")->check(CLI::Range(64, 8192))->capture_default_str();
+  app.add_option("--height", options.height, "framebuffer height")->check(CLI::Range(64, 8192))->capture_default_str();
+  app.add_option("--screenshot", screenshot, "write the last frame to this PNG");
+  app.add_option("--set", overrides, "override a scene parameter: section.key=value (repeatable)");
+  app.add_flag("--no-ui", no_ui, "start with the overlay hidden");
+  if (int code = parseArgs(app, args); code >= 0) return code;
+
+  SceneChoice choice = loadScene(scene_name, overrides);
+  if (!choice.error.empty()) {
+    std::fprintf(stderr, "fluiddemo play: %s\n", choice.error.c_str());
+    return 1;
+  }
+  if (!displayAvailable()) options.headless = true;
+  if (options.headless && options.frames == 0) options.frames = kDefaultHeadlessFrames;
+  options.screenshot = screenshot;
+  options.show_ui = !no_ui;
+
+  RunReport report;
+  std::string error;
+  const int code = runScene(choice.config, options, report, error);
+  if (code != 0) {
+    std::fprintf(stderr, "fluiddemo play: %s\n", error.c_str());
+    return code;
+  }
+  printTimingSummary(choice.config, options, report);
+  if (!report.nonfinite_state.empty()) {
+    std::fprintf(stderr, "fluiddemo play: non-finite simulation state: %s\n", report.nonfinite_state.c_str());
+    return 1;
+  }
+  if (!screenshot.empty()) std::printf("screenshot: %s\n", screenshot.c_str());
+  return 0;
+}
+
+int smokeCommand(const Args& args) {
+  CLI::App app{"Run scenes headless for a few frames and check every frame for failure.", "smoke"};
+  std::string scene_name;
+  bool all = false;
+  int frames = 30;
+  int width = 160;
+  int height = 120;
+  std::string out_dir;
+  auto* scene_option = app.add_option("--scene", scene_name, "one scene name or path");
+  app.add_flag("--all", all, "every scene in content/scenes")->excludes(scene_option);
+  app.add_option("--frames", frames, "frames per scene")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--width", width, "framebuffer width")->check(CLI::Range(64, 4096))->capture_default_str();
+  app.add_option("--height", height, "framebuffer height")->check(CLI::Range(64, 4096))->capture_default_str();
+  app.add_option("--out", out_dir, "write each scene's last frame to DIR/<scene>.png (replacing it)");
+  if (int code = parseArgs(app, args); code >= 0) return code;
+
+  std::vector<std::string> scenes;
+  if (all || scene_name.empty()) {
+    scenes = availableScenes(scenesDir());
+    if (scenes.empty()) {
+      std::fprintf(stderr, "fluiddemo smoke: no scenes in %s\n", scenesDir().string().c_str());
+      return 1;
+    }
+  } else {
+    scenes.push_back(scene_name);
+  }
+  if (!out_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(out_dir, error);
+    if (error) {
+      std::fprintf(stderr, "fluiddemo smoke: cannot create %s: %s\n", out_dir.c_str(), error.message().c_str());
+      return 1;
+    }
+  }
+
+  int failures = 0;
+  for (const std::string& name : scenes) {
+    SceneChoice choice = loadScene(name, {});
+    std::string failure = choice.error;
+    RunReport report;
+    if (failure.empty()) {
+      RunOptions options;
+      options.headless = true;
+      options.frames = frames;
+      options.width = width;
+      options.height = height;
+      options.show_ui = false;
+      options.capture_last_frame = true;
+      options.fixed_frame_time = true;
+      if (!out_dir.empty()) options.screenshot = std::filesystem::path(out_dir) / (choice.config.name + ".png");
+      std::string error;
+      if (runScene(choice.config, options, report, error) != 0) {
+        failure = error;
+      } else if (report.gl_errors > 0) {
+        failure = std::to_string(report.gl_errors) + " GL errors";
+      } else if (!report.nonfinite_state.empty()) {
+        failure = "non-finite simulation state: " + report.nonfinite_state;
+      } else if (report.frames_rendered != frames) {
+        failure = "rendered " + std::to_string(report.frames_rendered) + " of " + std::to_string(frames) + " frames";
+      } else {
+        const FrameCheck check = checkFrame(report.last_frame_rgba, report.blank_frame_rgba, report.frame_width,
+                                            report.frame_height);
+        failure = check.failure;
+      }
+    }
+    if (failure.empty()) {
+      std::string systems;
+      for (const std::string& system : report.systems_constructed) systems += (systems.empty() ? "" : ",") + system;
+      std::printf("smoke %-16s ok    %d frames, %.2f ms/frame, systems: %s\n", name.c_str(), report.frames_rendered,
+                  report.mean_frame_ms, systems.c_str());
+    } else {
+      ++failures;
+      std::printf("smoke %-16s FAIL  %s\n", name.c_str(), failure.c_str());
+    }
+  }
+  std::printf("smoke: %zu passed, %d failed\n", scenes.size() - static_cast<std::size_t>(failures), failures);
+  return failures == 0 ? 0 : 1;
 }
 
 }  // namespace game

@@ -9,7 +9,6 @@ namespace {
 
 ParamValue num(double value) { return {ParamType::number, value, false, {}, {}}; }
 ParamValue integer(int value) { return {ParamType::integer, static_cast<double>(value), false, {}, {}}; }
-ParamValue flag(bool value) { return {ParamType::boolean, 0.0, value, {}, {}}; }
 ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false, {x, y, z}, {}}; }
 
 const std::array kSceneParams = {

@@ -77,8 +77,8 @@ struct SceneConfig {
   SectionConfig camera;                // "camera" section
   std::vector<SectionConfig> effects;  // listed effects only, in schema order
 
-  bool has(std::string_view effect) const;
-  const SectionConfig* effect(std::string_view effect) const;  // nullptr when not listed
+  bool has(std::string_view effect_name) const;
+  const SectionConfig* effect(std::string_view effect_name) const;  // nullptr when not listed
   std::vector<std::string> effectNames() const;
 };
 

@@ -1,0 +1,334 @@
+#include "game/scene/scene_config.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cassert>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace game {
+namespace {
+
+using Json = nlohmann::json;
+
+std::string_view typeName(ParamType type) {
+  switch (type) {
+    case ParamType::number: return "a number";
+    case ParamType::integer: return "an integer";
+    case ParamType::boolean: return "true or false";
+    case ParamType::vec3: return "an array of 3 numbers";
+    case ParamType::text: return "a string";
+  }
+  return "?";
+}
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+std::string rangeText(const ParamSpec& spec) {
+  std::string text = "[";
+  text += formatNumber(spec.min);
+  text += ", ";
+  text += formatNumber(spec.max);
+  text += "]";
+  return text;
+}
+
+// Prefix of every message: "file: key.path: ".
+std::string at(const std::string& file, std::string_view key_path) {
+  return file + ": " + std::string(key_path) + ": ";
+}
+
+std::string checkNumber(const ParamSpec& spec, double value, const std::string& where) {
+  if (!std::isfinite(value)) return where + "value " + formatNumber(value) + " is not finite";
+  if (spec.type == ParamType::integer && value != std::floor(value)) {
+    return where + "value " + formatNumber(value) + " is not " + std::string(typeName(spec.type));
+  }
+  if (value < spec.min || value > spec.max) {
+    return where + "value " + formatNumber(value) + " is out of range " + rangeText(spec);
+  }
+  return {};
+}
+
+// Converts one JSON value to the spec's type, with range checks.
+std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::string& where, ParamValue& out) {
+  out = spec.default_value;
+  const std::string got = " (got " + value.dump() + ")";
+  switch (spec.type) {
+    case ParamType::number:
+    case ParamType::integer:
+      if (!value.is_number()) return where + "expected " + std::string(typeName(spec.type)) + got;
+      out.number = value.get<double>();
+      return checkNumber(spec, out.number, where);
+    case ParamType::boolean:
+      if (!value.is_boolean()) return where + "expected " + std::string(typeName(spec.type)) + got;
+      out.boolean = value.get<bool>();
+      return {};
+    case ParamType::text:
+      if (!value.is_string()) return where + "expected " + std::string(typeName(spec.type)) + got;
+      out.text = value.get<std::string>();
+      return {};
+    case ParamType::vec3: {
+      if (!value.is_array() || value.size() != 3) return where + "expected " + std::string(typeName(spec.type)) + got;
+      for (int i = 0; i < 3; ++i) {
+        if (!value[static_cast<std::size_t>(i)].is_number()) return where + "expected " + std::string(typeName(spec.type)) + got;
+        const double component = value[static_cast<std::size_t>(i)].get<double>();
+        if (std::string error = checkNumber(spec, component, where); !error.empty()) return error;
+        out.vec[i] = static_cast<float>(component);
+      }
+      return {};
+    }
+  }
+  return where + "unsupported type";
+}
+
+// Appends ", item" (or "item" first). Written out because `"" + std::string` trips a GCC 12
+// -Wrestrict false positive.
+void appendListItem(std::string& list, std::string_view item) {
+  if (!list.empty()) list += ", ";
+  list += item;
+}
+
+SectionConfig defaultSection(const SectionSpec& spec) {
+  SectionConfig section;
+  section.name = std::string(spec.name);
+  for (const ParamSpec& param : spec.params) section.params.emplace(std::string(param.key), param.default_value);
+  return section;
+}
+
+std::string knownKeys(const SectionSpec& spec) {
+  std::string keys;
+  for (const ParamSpec& param : spec.params) appendListItem(keys, param.key);
+  return keys.empty() ? "(none)" : keys;
+}
+
+std::string knownEffects() {
+  std::string names;
+  for (const SectionSpec& spec : sceneSchema()) {
+    if (spec.is_effect) appendListItem(names, spec.name);
+  }
+  return names;
+}
+
+const ParamSpec* findParam(const SectionSpec& spec, std::string_view key) {
+  for (const ParamSpec& param : spec.params) {
+    if (param.key == key) return &param;
+  }
+  return nullptr;
+}
+
+std::string sectionFromJson(const SectionSpec& spec, const Json& object, const std::string& file,
+                            const std::string& path, SectionConfig& out) {
+  out = defaultSection(spec);
+  if (!object.is_object()) return at(file, path) + "expected an object (got " + object.dump() + ")";
+  for (const auto& [key, value] : object.items()) {
+    const ParamSpec* param = findParam(spec, key);
+    const std::string key_path = path + "." + key;
+    if (param == nullptr) return at(file, key_path) + "unknown key (known: " + knownKeys(spec) + ")";
+    if (std::string error = paramFromJson(*param, value, at(file, key_path), out.params[key]); !error.empty()) {
+      return error;
+    }
+  }
+  return {};
+}
+
+SectionConfig* findConfigSection(SceneConfig& scene, std::string_view name) {
+  if (name == "scene") return &scene.scene;
+  if (name == "camera") return &scene.camera;
+  for (SectionConfig& effect : scene.effects) {
+    if (effect.name == name) return &effect;
+  }
+  return nullptr;
+}
+
+// Parses an override value written on the command line as JSON, accepting "1,2,3" for vec3
+// and bare words for text.
+Json overrideValueToJson(const ParamSpec& spec, std::string_view text) {
+  std::string value(text);
+  if (spec.type == ParamType::vec3 && !value.empty() && value.front() != '[') value = "[" + value + "]";
+  if (spec.type == ParamType::text && (value.empty() || value.front() != '"')) return Json(value);
+  return Json::parse(value, nullptr, false);
+}
+
+}  // namespace
+
+const SectionSpec* findSection(std::string_view name) {
+  for (const SectionSpec& spec : sceneSchema()) {
+    if (spec.name == name) return &spec;
+  }
+  return nullptr;
+}
+
+static const ParamValue& findValue(const SectionConfig& section, std::string_view key, ParamType type) {
+  const auto found = section.params.find(key);
+  assert(found != section.params.end() && "parameter not in the schema");
+  assert(found->second.type == type && "parameter read with the wrong type");
+  (void)type;
+  return found->second;
+}
+
+double SectionConfig::number(std::string_view key) const { return findValue(*this, key, ParamType::number).number; }
+int SectionConfig::integer(std::string_view key) const {
+  return static_cast<int>(findValue(*this, key, ParamType::integer).number);
+}
+bool SectionConfig::boolean(std::string_view key) const { return findValue(*this, key, ParamType::boolean).boolean; }
+glm::vec3 SectionConfig::vec3(std::string_view key) const { return findValue(*this, key, ParamType::vec3).vec; }
+const std::string& SectionConfig::text(std::string_view key) const {
+  return findValue(*this, key, ParamType::text).text;
+}
+
+bool SceneConfig::has(std::string_view effect_name) const { return effect(effect_name) != nullptr; }
+
+const SectionConfig* SceneConfig::effect(std::string_view effect_name) const {
+  for (const SectionConfig& section : effects) {
+    if (section.name == effect_name) return &section;
+  }
+  return nullptr;
+}
+
+std::vector<std::string> SceneConfig::effectNames() const {
+  std::vector<std::string> names;
+  for (const SectionConfig& section : effects) names.push_back(section.name);
+  return names;
+}
+
+SceneStatus parseSceneText(const std::string& json_text, const std::string& file_label, SceneConfig& out) {
+  out = SceneConfig{};
+  Json root;
+  try {
+    root = Json::parse(json_text);
+  } catch (const Json::parse_error& error) {
+    // nlohmann reports "line L, column C"; keep its wording after the file name.
+    return {file_label + ": invalid JSON: " + error.what()};
+  }
+  if (!root.is_object()) return {file_label + ": the top level must be an object (got " + root.dump() + ")"};
+
+  const SectionSpec* scene_spec = findSection("scene");
+  const SectionSpec* camera_spec = findSection("camera");
+  assert(scene_spec && camera_spec);
+  SceneConfig scene;
+  scene.scene = defaultSection(*scene_spec);
+  scene.camera = defaultSection(*camera_spec);
+  bool has_effects = false;
+  for (const auto& [key, value] : root.items()) {
+    if (key == "description") {
+      if (!value.is_string()) return {at(file_label, key) + "expected a string (got " + value.dump() + ")"};
+      scene.description = value.get<std::string>();
+    } else if (key == "scene" || key == "camera") {
+      const SectionSpec& spec = key == "scene" ? *scene_spec : *camera_spec;
+      SectionConfig& section = key == "scene" ? scene.scene : scene.camera;
+      if (std::string error = sectionFromJson(spec, value, file_label, key, section); !error.empty()) return {error};
+    } else if (key == "effects") {
+      has_effects = true;
+      if (!value.is_object()) return {at(file_label, key) + "expected an object of effects (got " + value.dump() + ")"};
+      // Effects are kept in schema order so construction order does not depend on the file.
+      for (const SectionSpec& spec : sceneSchema()) {
+        if (!spec.is_effect || !value.contains(spec.name)) continue;
+        SectionConfig section;
+        const std::string path = "effects." + std::string(spec.name);
+        if (std::string error = sectionFromJson(spec, value.at(std::string(spec.name)), file_label, path, section);
+            !error.empty()) {
+          return {error};
+        }
+        scene.effects.push_back(std::move(section));
+      }
+      for (const auto& [effect_name, effect_value] : value.items()) {
+        const SectionSpec* spec = findSection(effect_name);
+        if (spec == nullptr || !spec->is_effect) {
+          return {at(file_label, "effects." + effect_name) + "unknown effect (known: " + knownEffects() + ")"};
+        }
+        (void)effect_value;
+      }
+    } else {
+      return {at(file_label, key) + "unknown top-level key (known: description, scene, camera, effects)"};
+    }
+  }
+  if (!has_effects) return {at(file_label, "effects") + "missing (a scene must list its effects)"};
+  out = std::move(scene);
+  return {};
+}
+
+SceneStatus loadSceneFile(const std::filesystem::path& path, SceneConfig& out) {
+  out = SceneConfig{};
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return {path.string() + ": scene file not found"};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {path.string() + ": cannot open scene file"};
+  std::ostringstream text;
+  text << in.rdbuf();
+  SceneStatus status = parseSceneText(text.str(), path.string(), out);
+  if (status.ok()) {
+    out.name = path.stem().string();
+    out.source = path;
+  }
+  return status;
+}
+
+SceneStatus applyOverride(SceneConfig& scene, std::string_view assignment) {
+  const std::string label = "--set " + std::string(assignment);
+  const std::size_t equals = assignment.find('=');
+  if (equals == std::string_view::npos) return {label + ": expected section.key=value"};
+  const std::string_view path = assignment.substr(0, equals);
+  const std::string_view value_text = assignment.substr(equals + 1);
+  const std::size_t dot = path.find('.');
+  if (dot == std::string_view::npos) return {label + ": expected section.key=value (e.g. camera.fov_degrees=70)"};
+  const std::string_view section_name = path.substr(0, dot);
+  const std::string_view key = path.substr(dot + 1);
+
+  const SectionSpec* spec = findSection(section_name);
+  if (spec == nullptr) {
+    return {label + ": unknown section '" + std::string(section_name) + "' (scene, camera, or an effect: " +
+            knownEffects() + ")"};
+  }
+  SectionConfig* section = findConfigSection(scene, section_name);
+  if (section == nullptr) {
+    return {label + ": effect '" + std::string(section_name) + "' is not used by scene '" + scene.name + "'"};
+  }
+  const ParamSpec* param = findParam(*spec, key);
+  if (param == nullptr) {
+    return {label + ": unknown key '" + std::string(key) + "' (known: " + knownKeys(*spec) + ")"};
+  }
+  const Json value = overrideValueToJson(*param, value_text);
+  if (value.is_discarded()) return {label + ": cannot parse value '" + std::string(value_text) + "'"};
+  ParamValue parsed;
+  if (std::string error = paramFromJson(*param, value, label + ": ", parsed); !error.empty()) return {error};
+  section->params[std::string(key)] = parsed;
+  return {};
+}
+
+std::vector<std::string> availableScenes(const std::filesystem::path& scenes_dir) {
+  std::vector<std::string> names;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(scenes_dir, error)) {
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+SceneStatus resolveScene(std::string_view name_or_path, const std::filesystem::path& scenes_dir,
+                         std::filesystem::path& out) {
+  const std::filesystem::path as_path{std::string(name_or_path)};
+  std::error_code error;
+  if (as_path.extension() == ".json" || name_or_path.find('/') != std::string_view::npos) {
+    if (!std::filesystem::is_regular_file(as_path, error)) return {as_path.string() + ": scene file not found"};
+    out = as_path;
+    return {};
+  }
+  const std::filesystem::path candidate = scenes_dir / (std::string(name_or_path) + ".json");
+  if (std::filesystem::is_regular_file(candidate, error)) {
+    out = candidate;
+    return {};
+  }
+  std::string list;
+  for (const std::string& name : availableScenes(scenes_dir)) appendListItem(list, name);
+  return {"unknown scene '" + std::string(name_or_path) + "' (available: " + (list.empty() ? "none" : list) + ")"};
+}
+
+}  // namespace game
