@@ -1,8 +1,9 @@
 #version 330 core
-// Each sprite is shaded as a small water droplet: sphere normal from the point coordinate,
+// Each sprite quad is shaded as a small water droplet: sphere normal from the point coordinate,
 // diffuse + sharp highlight + a Fresnel-like rim reflecting the sky.
 in float v_shade;
 in vec3 v_world;
+in vec2 v_corner;
 uniform mat4 u_view;
 uniform vec3 u_colour;
 uniform vec3 u_sun_direction;
@@ -16,8 +17,7 @@ out vec4 out_colour;
 vec3 toneMap(vec3 c) { return pow(c / (1.0 + c), vec3(1.0 / 2.2)); }
 
 void main() {
-  vec2 p = gl_PointCoord * 2.0 - 1.0;
-  p.y = -p.y;
+  vec2 p = v_corner;
   float r2 = dot(p, p);
   if (r2 > 1.0) discard;
   vec3 n_view = vec3(p, sqrt(1.0 - r2));

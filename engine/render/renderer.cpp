@@ -133,6 +133,7 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
   glBindBuffer(GL_ARRAY_BUFFER, out.particle_buffer.id());
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(glm::vec4), nullptr);
+  glVertexAttribDivisor(0, 1);  // one particle per instance; the quad's corners come from gl_VertexID
   glBindVertexArray(0);
   ImageData white;
   white.width = white.height = 1;
@@ -215,12 +216,11 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   glDisable(GL_CULL_FACE);
   checkGl(r.errors, "mesh pass");
 
-  // Point-sprite particles, depth-tested and depth-writing (opaque spheres).
+  // Sprite particles (instanced camera-facing quads), depth-tested and depth-writing.
   const GLuint points = r.particle_program.id();
   glUseProgram(points);
-  glEnable(GL_PROGRAM_POINT_SIZE);
-  setUniform(points, "u_view_projection", view_projection);
   setUniform(points, "u_view", view.view);
+  setUniform(points, "u_projection", view.projection);
   setUniform(points, "u_projection_scale", view.projection[1][1] * 0.5f * static_cast<float>(r.height));
   setUniform(points, "u_sun_direction", sun);
   setUniform(points, "u_sun_colour", lighting.sun_colour);
@@ -245,9 +245,8 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
                     batch.particles.data());
     setUniform(points, "u_radius", batch.radius);
     setUniform(points, "u_colour", batch.colour);
-    glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(batch.particles.size()));
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 6, static_cast<GLsizei>(batch.particles.size()));
   }
-  glDisable(GL_PROGRAM_POINT_SIZE);
   glBindVertexArray(0);
   glUseProgram(0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -1,7 +1,8 @@
 #pragma once
 // Forward renderer. Every scene pass draws into the scene FBO (colour RGBA8 + depth texture,
 // so later passes such as fluid refraction can sample both); the window only receives a blit.
-// Passes in order: sky (full-screen triangle) -> lit textured meshes -> point-sprite particles.
+// Passes in order: sky (full-screen triangle) -> lit textured meshes -> sprite particles
+// (instanced camera-facing quads shaded as spheres).
 // Output is display-ready (tone-mapped, gamma-encoded) RGBA8.
 
 #include "engine/assets/assets.hpp"
@@ -44,7 +45,7 @@ struct DrawItem {
   float shininess = 24.0f;
 };
 
-// Point sprites shaded as small spheres. xyz = world position (m), w = 0..1 shade
+// Sprite particles shaded as small spheres. xyz = world position (m), w = 0..1 shade
 // (0 = fresh jet, brighter; 1 = old, deeper blue).
 struct ParticleBatch {
   std::span<const glm::vec4> particles;
