@@ -78,6 +78,7 @@ void buildDrawList(const World& world, const SceneAssets& assets, float alpha, s
   ground.mesh = &assets.ground;
   ground.texture = &assets.paving;
   ground.specular = 0.05f;
+  ground.casts_shadow = false;
   items.push_back(ground);
   engine::DrawItem basin;
   basin.mesh = &assets.basin;

@@ -118,7 +118,60 @@ GpuTexture uploadTexture(const ImageData& image) {
   return out;
 }
 
-bool createRenderer(const std::filesystem::path& shader_dir, int width, int height, Renderer& out, std::string& error) {
+namespace {
+
+bool createShadowMap(Renderer& r, int size, std::string& error) {
+  r.shadow_size = std::clamp(size, 256, 8192);
+  r.shadow_depth = GlTexture(genTexture());
+  glBindTexture(GL_TEXTURE_2D, r.shadow_depth.id());
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, r.shadow_size, r.shadow_size, 0, GL_DEPTH_COMPONENT,
+               GL_UNSIGNED_INT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  GLuint fbo = 0;
+  glGenFramebuffers(1, &fbo);
+  r.shadow_fbo = GlFramebuffer(fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, r.shadow_depth.id(), 0);
+  glDrawBuffer(GL_NONE);
+  glReadBuffer(GL_NONE);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    error = "shadow map framebuffer is incomplete (status " + std::to_string(status) + ")";
+    return false;
+  }
+  return true;
+}
+
+// Orthographic sun camera around a point ahead of the eye, snapped to the texel grid.
+glm::mat4 sunViewProjection(const FrameView& view, glm::vec3 sun, float extent, int size) {
+  const glm::mat4 camera_to_world = glm::inverse(view.view);
+  glm::vec3 forward = -glm::vec3(camera_to_world[2]);
+  forward.y = 0.0f;
+  forward = glm::length(forward) > 1e-4f ? glm::normalize(forward) : glm::vec3(0, 0, -1);
+  glm::vec3 focus = view.eye + forward * (0.6f * extent);
+  focus.y = 0.0f;
+  const glm::vec3 up = std::abs(sun.y) > 0.99f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  glm::mat4 light_view = glm::lookAt(focus + sun * (2.0f * extent), focus, up);
+  // Snap the focus to whole texels in light space.
+  const float texel = 2.0f * extent / static_cast<float>(size);
+  const glm::vec4 origin = light_view * glm::vec4(focus, 1.0f);
+  const glm::vec2 snapped = glm::floor(glm::vec2(origin) / texel) * texel;
+  light_view = glm::translate(glm::mat4(1.0f), glm::vec3(snapped - glm::vec2(origin), 0.0f)) * light_view;
+  const glm::mat4 projection = glm::ortho(-extent, extent, -extent, extent, 0.1f, 4.0f * extent);
+  return projection * light_view;
+}
+
+}  // namespace
+
+bool createRenderer(const std::filesystem::path& shader_dir, int width, int height, Renderer& out, std::string& error,
+                    int shadow_size) {
   out.shader_dir = shader_dir;
   out.sky_program = loadProgram(shader_dir, "sky.vert", "sky.frag", error);
   if (!out.sky_program) return false;
@@ -126,6 +179,9 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
   if (!out.mesh_program) return false;
   out.particle_program = loadProgram(shader_dir, "particles.vert", "particles.frag", error);
   if (!out.particle_program) return false;
+  out.shadow_program = loadProgram(shader_dir, "shadow.vert", "shadow.frag", error);
+  if (!out.shadow_program) return false;
+  if (!createShadowMap(out, shadow_size, error)) return false;
   out.empty_vao = GlVertexArray(genVertexArray());
   out.particle_vao = GlVertexArray(genVertexArray());
   out.particle_buffer = GlBuffer(genBuffer());
@@ -165,6 +221,34 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   const glm::mat4 view_projection = view.projection * view.view;
   const glm::vec3 sun = glm::normalize(lighting.sun_direction);
 
+  // Sun shadow map: depth of every mesh seen from the sun.
+  const bool shadows = lighting.shadow_extent > 0.0f;
+  const glm::mat4 light_view_projection =
+      shadows ? sunViewProjection(view, sun, lighting.shadow_extent, r.shadow_size) : glm::mat4(1.0f);
+  glBindFramebuffer(GL_FRAMEBUFFER, r.shadow_fbo.id());
+  glViewport(0, 0, r.shadow_size, r.shadow_size);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  if (shadows) {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);
+    const GLuint shadow = r.shadow_program.id();
+    glUseProgram(shadow);
+    setUniform(shadow, "u_light_view_projection", light_view_projection);
+    for (const DrawItem& item : items) {
+      if (item.mesh == nullptr || item.mesh->index_count == 0 || !item.casts_shadow) continue;
+      setUniform(shadow, "u_model", item.model);
+      glBindVertexArray(item.mesh->vao.id());
+      glDrawElements(GL_TRIANGLES, item.mesh->index_count, GL_UNSIGNED_INT, nullptr);
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+  }
+  checkGl(r.errors, "shadow pass");
+  glBindFramebuffer(GL_FRAMEBUFFER, r.scene_fbo.id());
+  glViewport(0, 0, r.width, r.height);
+
   // Sky: a full-screen triangle at the far plane, coloured by view direction.
   glDisable(GL_DEPTH_TEST);
   glDepthMask(GL_FALSE);
@@ -200,6 +284,11 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   setUniform(mesh, "u_ground_ambient", lighting.ground_ambient);
   setUniform(mesh, "u_fog_density", lighting.fog_density);
   setUniform(mesh, "u_albedo", 0);
+  setUniform(mesh, "u_shadow_map", 1);
+  setUniform(mesh, "u_shadow_texel", 1.0f / static_cast<float>(r.shadow_size));
+  setUniform(mesh, "u_light_view_projection", light_view_projection);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, r.shadow_depth.id());
   glActiveTexture(GL_TEXTURE0);
   for (const DrawItem& item : items) {
     if (item.mesh == nullptr || item.mesh->index_count == 0) continue;

@@ -1,7 +1,8 @@
 #pragma once
 // Forward renderer. Every scene pass draws into the scene FBO (colour RGBA8 + depth texture,
 // so later passes such as fluid refraction can sample both); the window only receives a blit.
-// Passes in order: sky (full-screen triangle) -> lit textured meshes -> sprite particles
+// Passes in order: sun shadow map (depth only) -> sky (full-screen triangle) -> lit textured
+// meshes -> sprite particles
 // (instanced camera-facing quads shaded as spheres).
 // Output is display-ready (tone-mapped, gamma-encoded) RGBA8.
 
@@ -43,6 +44,7 @@ struct DrawItem {
   float uv_scale = 1.0f;               // texture repeats
   float specular = 0.15f;              // 0..1
   float shininess = 24.0f;
+  bool casts_shadow = true;            // false for the ground (it only receives)
 };
 
 // Sprite particles shaded as small spheres. xyz = world position (m), w = 0..1 shade
@@ -60,12 +62,15 @@ struct FrameView {
 };
 
 struct Lighting {
-  glm::vec3 sun_direction{0.45f, 0.75f, 0.35f};  // towards the sun, normalised on use
+  glm::vec3 sun_direction{0.7f, 0.62f, -0.35f};  // towards the sun, normalised on use
   glm::vec3 sun_colour{2.6f, 2.45f, 2.2f};
-  glm::vec3 sky_zenith{0.16f, 0.32f, 0.72f};
-  glm::vec3 sky_horizon{0.62f, 0.74f, 0.88f};
+  glm::vec3 sky_zenith{0.09f, 0.24f, 0.66f};
+  glm::vec3 sky_horizon{0.58f, 0.7f, 0.86f};
   glm::vec3 ground_ambient{0.22f, 0.2f, 0.17f};
-  float fog_density = 0.012f;                    // 1/m
+  float fog_density = 0.008f;                    // 1/m
+  // Directional shadow map: an orthographic box of 2*shadow_extent metres around a point ahead
+  // of the camera, snapped to whole texels so shadows do not shimmer as the camera moves.
+  float shadow_extent = 16.0f;                   // m; 0 disables shadows
 };
 
 struct Renderer {
@@ -73,6 +78,10 @@ struct Renderer {
   GlProgram sky_program;
   GlProgram mesh_program;
   GlProgram particle_program;
+  GlProgram shadow_program;
+  GlFramebuffer shadow_fbo;
+  GlTexture shadow_depth;          // depth texture compared in the mesh shader (sampler2DShadow)
+  int shadow_size = 2048;          // texels per side
   GlVertexArray empty_vao;          // core profile needs a VAO for attribute-less draws
   GlVertexArray particle_vao;
   GlBuffer particle_buffer;
@@ -86,10 +95,11 @@ struct Renderer {
   GlErrorLog errors;
 };
 
-// Loads the shaders from `shader_dir` and creates the scene FBO. On failure returns false
+// Loads the shaders from `shader_dir` and creates the scene FBO and the shadow map
+// (`shadow_size` texels per side, clamped to [256, 8192]). On failure returns false
 // with an error naming the shader file and line, or the incomplete framebuffer.
 bool createRenderer(const std::filesystem::path& shader_dir, int width, int height, Renderer& out,
-                    std::string& error);
+                    std::string& error, int shadow_size = 2048);
 bool resizeRenderer(Renderer& renderer, int width, int height, std::string& error);
 
 // Clears the scene FBO and, when `draw_content` is true, draws sky, meshes and particles.

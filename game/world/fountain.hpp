@@ -32,7 +32,7 @@ struct FountainGeometry {
 };
 
 // Signed distance to ground (y = 0 half-space) ∪ basin ∪ statue. Exact inside each primitive,
-// a conservative bound across the CSG joins; normals by central differences of the field.
+// a bound across the CSG joins; normals are the deciding primitive's analytic gradient.
 // The shape is static: collider space = world space.
 class FountainShape final : public fluid::SignedDistanceShape {
  public:
