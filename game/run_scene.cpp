@@ -116,7 +116,7 @@ void buildDrawList(const World& world, const SceneAssets& assets, float alpha, s
 std::pair<bool, bool> drawScenePanel(World& world) {
   bool changed = false;
   bool restart = false;
-  ImGui::SetNextWindowPos(ImVec2(10, 420), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowPos(ImVec2(std::max(ImGui::GetIO().DisplaySize.x - 390.0f, 400.0f), 10), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Scene")) {
     ImGui::End();
@@ -129,6 +129,7 @@ std::pair<bool, bool> drawScenePanel(World& world) {
                 world.rigid_bodies->thrown);
   }
   ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
+  ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);
   auto edit_section = [&](SectionConfig& section) {
     const SectionSpec* spec = findSection(section.name);
     if (spec == nullptr || !ImGui::TreeNodeEx(section.name.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
@@ -168,6 +169,7 @@ std::pair<bool, bool> drawScenePanel(World& world) {
   for (SectionConfig& effect : world.scene.effects) edit_section(effect);
   edit_section(world.scene.scene);
   ImGui::TextDisabled("counts, sizes and scene.* apply on restart");
+  ImGui::PopItemWidth();
   restart = ImGui::Button("Restart scene with these values");
   ImGui::End();
   return {changed, restart};
@@ -304,7 +306,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
               engine::readSceneRgba(renderer, report.blank_frame_rgba);
             }
           }
-          engine::presentToWindow(renderer, platform.width, platform.height);
+          // Headless there is nobody to show the window to; the scene FBO is the output.
+          if (!platform.headless) engine::presentToWindow(renderer, platform.width, platform.height);
         }
         {
           engine::ScopedPhase phase(profiler, engine::Phase::ui);

@@ -249,24 +249,6 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   glBindFramebuffer(GL_FRAMEBUFFER, r.scene_fbo.id());
   glViewport(0, 0, r.width, r.height);
 
-  // Sky: a full-screen triangle at the far plane, coloured by view direction.
-  glDisable(GL_DEPTH_TEST);
-  glDepthMask(GL_FALSE);
-  glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
-  const GLuint sky = r.sky_program.id();
-  glUseProgram(sky);
-  setUniform(sky, "u_inverse_view_projection", glm::inverse(view_projection));
-  setUniform(sky, "u_eye", view.eye);
-  setUniform(sky, "u_sun_direction", sun);
-  setUniform(sky, "u_sun_colour", lighting.sun_colour);
-  setUniform(sky, "u_sky_zenith", lighting.sky_zenith);
-  setUniform(sky, "u_sky_horizon", lighting.sky_horizon);
-  setUniform(sky, "u_ground_ambient", lighting.ground_ambient);
-  glBindVertexArray(r.empty_vao.id());
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  checkGl(r.errors, "sky pass");
-
   // Opaque lit meshes.
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
@@ -336,10 +318,33 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
     setUniform(points, "u_colour", batch.colour);
     glDrawArraysInstanced(GL_TRIANGLES, 0, 6, static_cast<GLsizei>(batch.particles.size()));
   }
+  checkGl(r.errors, "particle pass");
+
+  // Sky last: a full-screen triangle at the far plane, depth-tested with LEQUAL so it only
+  // shades the pixels nothing else covered (no overdraw under the ground).
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  const GLuint sky = r.sky_program.id();
+  glUseProgram(sky);
+  setUniform(sky, "u_inverse_view_projection", glm::inverse(view_projection));
+  setUniform(sky, "u_eye", view.eye);
+  setUniform(sky, "u_sun_direction", sun);
+  setUniform(sky, "u_sun_colour", lighting.sun_colour);
+  setUniform(sky, "u_sky_zenith", lighting.sky_zenith);
+  setUniform(sky, "u_sky_horizon", lighting.sky_horizon);
+  setUniform(sky, "u_ground_ambient", lighting.ground_ambient);
+  glBindVertexArray(r.empty_vao.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  checkGl(r.errors, "sky pass");
+
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
   glBindVertexArray(0);
   glUseProgram(0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  checkGl(r.errors, "particle pass");
 }
 
 void presentToWindow(Renderer& r, int window_width, int window_height) {

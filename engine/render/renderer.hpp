@@ -1,8 +1,8 @@
 #pragma once
 // Forward renderer. Every scene pass draws into the scene FBO (colour RGBA8 + depth texture,
 // so later passes such as fluid refraction can sample both); the window only receives a blit.
-// Passes in order: sun shadow map (depth only) -> sky (full-screen triangle) -> lit textured
-// meshes -> sprite particles
+// Passes in order: sun shadow map (depth only) -> lit textured meshes -> sprite particles ->
+// sky (full-screen triangle behind everything)
 // (instanced camera-facing quads shaded as spheres).
 // Output is display-ready (tone-mapped, gamma-encoded) RGBA8.
 
@@ -102,7 +102,7 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
                     std::string& error, int shadow_size = 2048);
 bool resizeRenderer(Renderer& renderer, int width, int height, std::string& error);
 
-// Clears the scene FBO and, when `draw_content` is true, draws sky, meshes and particles.
+// Clears the scene FBO and, when `draw_content` is true, draws meshes, particles and sky.
 // `draw_content = false` gives the "nothing drawn" frame the smoke test compares against.
 void renderScene(Renderer& renderer, const FrameView& view, const Lighting& lighting, std::span<const DrawItem> items,
                  std::span<const ParticleBatch> particles, bool draw_content);

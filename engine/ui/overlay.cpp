@@ -5,7 +5,6 @@
 #include <imgui.h>
 
 #include <algorithm>
-#include <array>
 #include <cstdio>
 
 namespace engine {
@@ -91,24 +90,42 @@ void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> s
     }
     ImGui::EndTable();
   }
-  // Oldest to newest, one plot per phase plus the whole frame, sharing one scale.
-  std::array<float, Profiler::kHistory> values{};
+  // Stacked per-phase bars for the last kHistory frames (oldest left), the frame total as a
+  // line on top; the colours match the legend below.
+  static constexpr ImU32 kColours[kPhaseCount] = {IM_COL32(200, 200, 200, 255), IM_COL32(230, 120, 60, 255),
+                                                  IM_COL32(70, 150, 240, 255), IM_COL32(150, 90, 220, 255),
+                                                  IM_COL32(90, 200, 110, 255), IM_COL32(240, 210, 70, 255)};
   const int count = profiler.filled;
   float scale = 1.0f;
+  for (int i = 0; i < count; ++i) scale = std::max(scale, profiler.frame_history[i]);
+  const ImVec2 size(std::max(ImGui::GetContentRegionAvail().x, 100.0f), 90.0f);
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  draw->AddRectFilled(origin, ImVec2(origin.x + size.x, origin.y + size.y), IM_COL32(20, 24, 32, 220));
+  const float bar = size.x / static_cast<float>(Profiler::kHistory);
   for (int i = 0; i < count; ++i) {
-    const int slot = (profiler.head - count + i + Profiler::kHistory) % Profiler::kHistory;
-    scale = std::max(scale, profiler.frame_history[slot]);
+    const int frames_ago = count - 1 - i;
+    const float x0 = origin.x + size.x - static_cast<float>(frames_ago + 1) * bar;
+    float y = origin.y + size.y;
+    for (int p = 0; p < kPhaseCount; ++p) {
+      const float h = historyAt(profiler, static_cast<Phase>(p), frames_ago) / scale * size.y;
+      if (h <= 0.0f) continue;
+      draw->AddRectFilled(ImVec2(x0, y - h), ImVec2(x0 + std::max(bar, 1.0f), y), kColours[p]);
+      y -= h;
+    }
+    const int slot = (profiler.head - 1 - frames_ago + 2 * Profiler::kHistory) % Profiler::kHistory;
+    const float total = profiler.frame_history[slot] / scale * size.y;
+    draw->AddRectFilled(ImVec2(x0, origin.y + size.y - total - 1.0f), ImVec2(x0 + std::max(bar, 1.0f), origin.y + size.y - total),
+                        IM_COL32(255, 255, 255, 200));
   }
-  for (int i = 0; i < count; ++i) {
-    values[i] = profiler.frame_history[(profiler.head - count + i + Profiler::kHistory) % Profiler::kHistory];
-  }
-  char label[64];
-  std::snprintf(label, sizeof label, "frame\n(0..%.0f ms)", scale);
-  ImGui::PlotLines(label, values.data(), count, 0, nullptr, 0.0f, scale, ImVec2(0, 60));
+  ImGui::Dummy(size);
+  ImGui::Text("0 .. %.1f ms, last %d frames; white = whole frame", scale, count);
   for (int p = 0; p < kPhaseCount; ++p) {
-    const auto phase = static_cast<Phase>(p);
-    for (int i = 0; i < count; ++i) values[i] = historyAt(profiler, phase, count - 1 - i);
-    ImGui::PlotLines(phaseName(phase).data(), values.data(), count, 0, nullptr, 0.0f, scale, ImVec2(0, 28));
+    if (p > 0) ImGui::SameLine();
+    ImGui::ColorButton(phaseName(static_cast<Phase>(p)).data(), ImGui::ColorConvertU32ToFloat4(kColours[p]),
+                       ImGuiColorEditFlags_NoTooltip, ImVec2(10, 10));
+    ImGui::SameLine(0.0f, 3.0f);
+    ImGui::TextUnformatted(phaseName(static_cast<Phase>(p)).data());
   }
   ImGui::Separator();
   ImGui::Text("running systems (%zu):", systems.size());
