@@ -48,6 +48,29 @@ TEST_F(AssetFiles, ProjectModelsAndTexturesLoad) {
   EXPECT_EQ(image.rgba.size(), 256u * 256u * 4u);
 }
 
+TEST_F(AssetFiles, GltfWithEmbeddedBufferLoads) {
+  // One triangle: 3 float3 positions (36 bytes) then 3 uint16 indices (+2 padding), base64.
+  const std::string gltf = R"({
+    "asset": {"version": "2.0"},
+    "scene": 0, "scenes": [{"nodes": [0]}],
+    "nodes": [{"mesh": 0, "translation": [0, 2, 0]}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+    "buffers": [{"byteLength": 44,
+                 "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                    {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                   "min": [0, 0, 0], "max": [1, 1, 0]},
+                  {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+  })";
+  engine::MeshData mesh;
+  std::string error;
+  ASSERT_TRUE(engine::loadMesh(write("triangle.gltf", gltf), mesh, error)) << error;
+  EXPECT_EQ(mesh.indices.size(), 3u);
+  EXPECT_NEAR(mesh.bounds_min.y, 2.0f, 1e-6f);  // the node's translation is applied
+  EXPECT_NEAR(mesh.bounds_max.y, 3.0f, 1e-6f);
+}
+
 TEST_F(AssetFiles, MissingFilesAreNamed) {
   engine::MeshData mesh;
   engine::ImageData image;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <random>
 
 namespace {
 
@@ -27,6 +28,29 @@ TEST(FountainShape, DistancesMatchTheGeometry) {
   shape.query(points, samples);
   EXPECT_TRUE(samples[0].valid);
   EXPECT_NEAR(samples[0].normal.y, 1.0f, 1e-3f);
+}
+
+TEST(FountainShape, AnalyticNormalsMatchTheFieldsDifferences) {
+  // Away from CSG joins (where the field has a kink) the normal must equal the field's gradient.
+  const game::FountainShape shape;
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> xz(-4.0f, 4.0f), y(-0.5f, 3.0f);
+  int compared = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const glm::vec3 p(xz(rng), y(rng), xz(rng));
+    constexpr float h = 1e-3f;
+    const glm::vec3 g(shape.distance(p + glm::vec3(h, 0, 0)) - shape.distance(p - glm::vec3(h, 0, 0)),
+                      shape.distance(p + glm::vec3(0, h, 0)) - shape.distance(p - glm::vec3(0, h, 0)),
+                      shape.distance(p + glm::vec3(0, 0, h)) - shape.distance(p - glm::vec3(0, 0, h)));
+    if (std::abs(glm::length(g) / (2.0f * h) - 1.0f) > 1e-2f) continue;  // on a kink
+    std::vector<glm::vec3> points{p};
+    std::vector<fluid::ColliderSample> samples(1);
+    shape.query(points, samples);
+    ASSERT_NEAR(samples[0].distance, shape.distance(p), 1e-6f);
+    ASSERT_GT(glm::dot(samples[0].normal, glm::normalize(g)), 0.999f) << p.x << ", " << p.y << ", " << p.z;
+    ++compared;
+  }
+  EXPECT_GT(compared, 3000);
 }
 
 TEST(SpriteParticles, EmitsAtTheRateAndRespectsTheBudget) {
