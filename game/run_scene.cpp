@@ -209,7 +209,9 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     engine::Renderer renderer;
     SceneAssets assets;
     engine::Overlay overlay;
-    if (!engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error) ||
+    // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
+    const int shadow_size = options.headless ? 1024 : 2048;
+    if (!engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) ||
         !loadSceneAssets(content_dir, assets, error) || !engine::createOverlay(platform, overlay, error)) {
       code = 1;
     } else {

@@ -2,6 +2,7 @@
 #include "game/world/sprite_particles.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <limits>
 #include <random>
@@ -98,6 +99,23 @@ TEST(SpriteParticles, SameSeedSameResultOtherSeedDifferent) {
   };
   EXPECT_EQ(run(5), run(5));
   EXPECT_NE(run(5), run(6));
+}
+
+TEST(SpriteParticles, ResultsDoNotDependOnTheThreadCount) {
+  const game::FountainShape shape;
+  auto run = [&](std::size_t threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    game::SpriteParticles s;
+    game::initSpriteParticles(s, params(), 6000, 9);
+    for (int i = 0; i < 150; ++i) game::stepSpriteParticles(s, shape, 1.0f / 60.0f);
+    EXPECT_GT(s.count, 1024u);  // more than one parallel range
+    return std::make_pair(std::vector<glm::vec3>(s.position.begin(), s.position.begin() + static_cast<std::ptrdiff_t>(s.count)),
+                          s.bounces);
+  };
+  const auto one = run(1);
+  const auto four = run(4);
+  EXPECT_EQ(one.first, four.first);
+  EXPECT_EQ(one.second, four.second);
 }
 
 TEST(SpriteParticles, NonFiniteValuesAreNamed) {
