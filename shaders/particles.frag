@@ -1,6 +1,6 @@
 #version 330 core
 // Each sprite quad is shaded as a small water droplet: sphere normal from the point coordinate,
-// diffuse + sharp highlight + a Fresnel-like rim reflecting the sky.
+// see the lighting terms below.
 in float v_shade;
 in vec3 v_world;
 in vec2 v_corner;
@@ -29,8 +29,12 @@ void main() {
   vec3 h = normalize(v + u_sun_direction);
   float highlight = pow(max(dot(n, h), 0.0), 60.0);
   float rim = pow(1.0 - n_view.z, 3.0);
-  vec3 colour = base * (0.35 * u_sky_zenith + 0.6 * u_sun_colour * n_dot_l) + u_sun_colour * highlight * 0.8 +
-                u_sky_horizon * rim * 0.6;
+  // Water lets light through: a sky-lit base, the sun's diffuse, forward scattering when the
+  // droplet is between the eye and the sun, a sharp highlight and a sky-coloured rim.
+  float scatter = pow(max(dot(-v, u_sun_direction), 0.0), 4.0);
+  vec3 colour = base * (0.5 * u_sky_horizon + 0.3 * u_sky_zenith + 0.5 * u_sun_colour * n_dot_l +
+                        0.35 * u_sun_colour * scatter) +
+                u_sun_colour * highlight * 0.8 + u_sky_horizon * rim * 0.6;
   float fog = 1.0 - exp(-length(u_eye - v_world) * u_fog_density);
   colour = mix(colour, u_sky_horizon, fog);
   out_colour = vec4(toneMap(colour), 1.0);
