@@ -14,9 +14,9 @@
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
+#include <imgui.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
-#include <imgui.h>
 
 #include <algorithm>
 #include <chrono>
@@ -37,10 +37,8 @@ bool loadSceneAssets(const std::filesystem::path& content_dir, SceneAssets& out,
     const char* file;
     engine::GpuMesh* target;
   };
-  const MeshJob meshes[] = {{"ground.obj", &out.ground},
-                            {"basin.obj", &out.basin},
-                            {"statue.obj", &out.statue},
-                            {"crate.obj", &out.crate}};
+  const MeshJob meshes[] = {
+      {"ground.obj", &out.ground}, {"basin.obj", &out.basin}, {"statue.obj", &out.statue}, {"crate.obj", &out.crate}};
   for (const MeshJob& job : meshes) {
     engine::MeshData data;
     if (!engine::loadMesh(content_dir / "models" / job.file, data, error)) return false;
@@ -67,7 +65,8 @@ std::filesystem::path shaderDirectory() {
 glm::mat4 bodyMatrix(const engine::BodyState& a, const engine::BodyState& b, float alpha, float scale) {
   const glm::vec3 position = glm::mix(a.position, b.position, alpha);
   const glm::quat rotation = glm::slerp(a.rotation, b.rotation, alpha);
-  return glm::translate(glm::mat4(1.0f), position) * glm::mat4_cast(rotation) * glm::scale(glm::mat4(1.0f), glm::vec3(scale));
+  return glm::translate(glm::mat4(1.0f), position) * glm::mat4_cast(rotation) *
+         glm::scale(glm::mat4(1.0f), glm::vec3(scale));
 }
 
 // Draw list for the current state, interpolated by `alpha` between the last two steps.
@@ -123,7 +122,8 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     return {false, false};
   }
   ImGui::Text("scene '%s', step %llu", world.scene.name.c_str(), static_cast<unsigned long long>(world.steps));
-  if (world.sprite_particles) ImGui::Text("particles: %zu / %zu", world.sprite_particles->count, world.sprite_particles->capacity);
+  if (world.sprite_particles)
+    ImGui::Text("particles: %zu / %zu", world.sprite_particles->count, world.sprite_particles->capacity);
   if (world.rigid_bodies) {
     ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*world.rigid_bodies->physics),
                 world.rigid_bodies->thrown);
@@ -153,12 +153,16 @@ std::pair<bool, bool> drawScenePanel(World& world) {
           value.number = v;
           break;
         }
-        case ParamType::boolean: edited = ImGui::Checkbox(label.c_str(), &value.boolean); break;
+        case ParamType::boolean:
+          edited = ImGui::Checkbox(label.c_str(), &value.boolean);
+          break;
         case ParamType::vec3:
           edited = ImGui::DragFloat3(label.c_str(), &value.vec.x, 0.05f, static_cast<float>(param.min),
                                      static_cast<float>(param.max), "%.2f", ImGuiSliderFlags_AlwaysClamp);
           break;
-        case ParamType::text: ImGui::Text("%s: %s", label.c_str(), value.text.c_str()); break;
+        case ParamType::text:
+          ImGui::Text("%s: %s", label.c_str(), value.text.c_str());
+          break;
       }
       if (ImGui::IsItemHovered()) ImGui::SetTooltip("%.*s", static_cast<int>(param.doc.size()), param.doc.data());
       changed |= edited;
@@ -275,8 +279,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           buildDrawList(world, assets, alpha, items, particle_scratch);
           engine::FrameView view;
           view.view = engine::cameraView(world.camera);
-          view.projection = engine::cameraProjection(world.camera, static_cast<float>(renderer.width) /
-                                                                       static_cast<float>(renderer.height));
+          view.projection = engine::cameraProjection(
+              world.camera, static_cast<float>(renderer.width) / static_cast<float>(renderer.height));
           view.eye = world.camera.position;
           engine::ParticleBatch batch;
           batch.particles = particle_scratch;
@@ -354,7 +358,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       engine::checkGl(renderer.errors, "end of run");
     }
     report.gl_errors = renderer.errors.count;
-    if (renderer.errors.count > 0) std::fprintf(stderr, "fluiddemo: first GL error: %s\n", renderer.errors.first.c_str());
+    if (renderer.errors.count > 0)
+      std::fprintf(stderr, "fluiddemo: first GL error: %s\n", renderer.errors.first.c_str());
     engine::destroyOverlay(overlay);
   }
   engine::destroyPlatform(platform);

@@ -1,9 +1,9 @@
 #include "engine/assets/assets.hpp"
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <stb_image.h>
+#include <assimp/Importer.hpp>
 
 #include <cmath>
 #include <system_error>
@@ -67,9 +67,9 @@ bool loadMesh(const std::filesystem::path& path, MeshData& out, std::string& err
   out = MeshData{};
   if (!checkReadable(path, error)) return false;
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(
-      path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
-                         aiProcess_FlipUVs | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                              aiProcess_GenSmoothNormals | aiProcess_FlipUVs |
+                                                              aiProcess_SortByPType | aiProcess_ValidateDataStructure);
   if (scene == nullptr || scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
     error = path.string() + ": cannot load model (" + importer.GetErrorString() + ")";
     return false;

@@ -9,9 +9,9 @@ struct FpsCamera {
   glm::vec3 position{0.0f, 2.0f, 12.0f};  // metres
   float yaw_degrees = -90.0f;
   float pitch_degrees = -8.0f;
-  float fov_degrees = 60.0f;               // vertical
-  float move_speed = 5.0f;                 // m/s
-  float mouse_sensitivity = 0.12f;         // degrees per pixel
+  float fov_degrees = 60.0f;        // vertical
+  float move_speed = 5.0f;          // m/s
+  float mouse_sensitivity = 0.12f;  // degrees per pixel
   float near_plane = 0.05f;
   float far_plane = 400.0f;
 };

@@ -19,14 +19,22 @@ void deleteShader(GLuint id) { glDeleteShader(id); }
 
 const char* glErrorName(GLenum error) {
   switch (error) {
-    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
-    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
-    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
-    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
-    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
-    case GL_STACK_UNDERFLOW: return "GL_STACK_UNDERFLOW";
-    case GL_STACK_OVERFLOW: return "GL_STACK_OVERFLOW";
-    default: return "unknown GL error";
+    case GL_INVALID_ENUM:
+      return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE:
+      return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION:
+      return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION:
+      return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY:
+      return "GL_OUT_OF_MEMORY";
+    case GL_STACK_UNDERFLOW:
+      return "GL_STACK_UNDERFLOW";
+    case GL_STACK_OVERFLOW:
+      return "GL_STACK_OVERFLOW";
+    default:
+      return "unknown GL error";
   }
 }
 
@@ -54,8 +62,10 @@ long parseNumber(std::string_view s, std::size_t& pos) {
 std::string formatLine(std::string_view line, const std::string& file_label) {
   std::size_t pos = 0;
   std::string_view prefix_word;
-  if (line.starts_with("ERROR: ")) prefix_word = "error: ", pos = 7;
-  else if (line.starts_with("WARNING: ")) prefix_word = "warning: ", pos = 9;
+  if (line.starts_with("ERROR: "))
+    prefix_word = "error: ", pos = 7;
+  else if (line.starts_with("WARNING: "))
+    prefix_word = "warning: ", pos = 9;
   const std::size_t start = pos;
   if (parseNumber(line, pos) >= 0 && pos < line.size()) {
     long number = -1, column = -1;
@@ -178,7 +188,9 @@ GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view 
   return program;
 }
 
-void setUniform(GLuint program, const char* name, int value) { glUniform1i(glGetUniformLocation(program, name), value); }
+void setUniform(GLuint program, const char* name, int value) {
+  glUniform1i(glGetUniformLocation(program, name), value);
+}
 void setUniform(GLuint program, const char* name, float value) {
   glUniform1f(glGetUniformLocation(program, name), value);
 }
@@ -200,8 +212,8 @@ namespace {
 void GLAPIENTRY debugCallback(GLenum /*source*/, GLenum type, GLuint id, GLenum severity, GLsizei /*length*/,
                               const GLchar* message, const void* /*user*/) {
   if (severity == GL_DEBUG_SEVERITY_NOTIFICATION || severity == GL_DEBUG_SEVERITY_LOW) return;
-  std::fprintf(stderr, "GL debug [%s type 0x%x id %u]: %s\n",
-               severity == GL_DEBUG_SEVERITY_HIGH ? "high" : "medium", type, id, message);
+  std::fprintf(stderr, "GL debug [%s type 0x%x id %u]: %s\n", severity == GL_DEBUG_SEVERITY_HIGH ? "high" : "medium",
+               type, id, message);
 }
 
 }  // namespace

@@ -168,8 +168,19 @@ BodyId findNonFiniteBody(const PhysicsWorld& world) {
     const btQuaternion q = t.getRotation();
     const btVector3 v = body.getLinearVelocity();
     const btVector3 w = body.getAngularVelocity();
-    const btScalar values[] = {t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z(), q.x(), q.y(), q.z(), q.w(),
-                               v.x(), v.y(), v.z(), w.x(), w.y(), w.z()};
+    const btScalar values[] = {t.getOrigin().x(),
+                               t.getOrigin().y(),
+                               t.getOrigin().z(),
+                               q.x(),
+                               q.y(),
+                               q.z(),
+                               q.w(),
+                               v.x(),
+                               v.y(),
+                               v.z(),
+                               w.x(),
+                               w.y(),
+                               w.z()};
     for (btScalar value : values) {
       if (!std::isfinite(value)) return static_cast<BodyId>(i);
     }

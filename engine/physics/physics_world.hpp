@@ -30,8 +30,8 @@ struct PhysicsDesc {
 };
 
 struct BodyDesc {
-  float mass = 0.0f;                        // kg; 0 = static
-  glm::vec3 position{0.0f};                 // metres, world
+  float mass = 0.0f;         // kg; 0 = static
+  glm::vec3 position{0.0f};  // metres, world
   glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
   glm::vec3 linear_velocity{0.0f};
   glm::vec3 angular_velocity{0.0f};

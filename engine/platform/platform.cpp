@@ -40,10 +40,12 @@ bool createPlatform(const PlatformDesc& desc, Platform& out, std::string& error)
     SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
     if (desc.debug_context) SDL_GL_SetAttribute(SDL_GL_CONTEXT_FLAGS, SDL_GL_CONTEXT_DEBUG_FLAG);
     Uint32 flags = SDL_WINDOW_OPENGL;
-    if (desc.headless) flags |= SDL_WINDOW_HIDDEN;
-    else flags |= SDL_WINDOW_RESIZABLE | SDL_WINDOW_ALLOW_HIGHDPI;
-    SDL_Window* window = SDL_CreateWindow(desc.title, SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, width,
-                                          height, flags);
+    if (desc.headless)
+      flags |= SDL_WINDOW_HIDDEN;
+    else
+      flags |= SDL_WINDOW_RESIZABLE | SDL_WINDOW_ALLOW_HIGHDPI;
+    SDL_Window* window =
+        SDL_CreateWindow(desc.title, SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, width, height, flags);
     if (window == nullptr) {
       attempts += std::string(" [window for GL ") + std::to_string(version.major) + "." +
                   std::to_string(version.minor) + ": " + SDL_GetError() + "]";
@@ -100,7 +102,9 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
   while (SDL_PollEvent(&event)) {
     if (event_hook != nullptr) event_hook(&event);
     switch (event.type) {
-      case SDL_QUIT: input.quit = true; break;
+      case SDL_QUIT:
+        input.quit = true;
+        break;
       case SDL_WINDOWEVENT:
         if (event.window.event == SDL_WINDOWEVENT_SIZE_CHANGED || event.window.event == SDL_WINDOWEVENT_RESIZED) {
           input.resized = true;
@@ -115,8 +119,10 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
           if (key == SDLK_F1) input.toggle_ui = true;
           if (key == SDLK_F12) input.screenshot = true;
           if (key == SDLK_ESCAPE) {
-            if (input.mouse_look) input.mouse_look = false;
-            else input.quit = true;
+            if (input.mouse_look)
+              input.mouse_look = false;
+            else
+              input.quit = true;
           }
           if (key == SDLK_TAB && !ui_wants_keyboard) input.mouse_look = !input.mouse_look;
         }
@@ -144,7 +150,8 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
           input.mouse_dy += static_cast<float>(event.motion.yrel);
         }
         break;
-      default: break;
+      default:
+        break;
     }
   }
   if (!platform.headless) SDL_SetRelativeMouseMode(input.mouse_look ? SDL_TRUE : SDL_FALSE);

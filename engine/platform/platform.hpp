@@ -10,35 +10,35 @@ namespace engine {
 
 struct PlatformDesc {
   const char* title = "fluiddemo";
-  int width = 1280;          // drawable size in pixels, clamped to [64, 8192]
+  int width = 1280;  // drawable size in pixels, clamped to [64, 8192]
   int height = 720;
-  bool headless = false;     // SDL offscreen driver (EGL pbuffer); sets SDL_VIDEODRIVER=offscreen if unset
-  bool vsync = true;         // ignored when headless
+  bool headless = false;       // SDL offscreen driver (EGL pbuffer); sets SDL_VIDEODRIVER=offscreen if unset
+  bool vsync = true;           // ignored when headless
   bool debug_context = false;  // request a KHR_debug context (debug builds)
 };
 
 struct Platform {
-  SDL_Window* window = nullptr;    // owned
-  SDL_GLContext context = nullptr; // owned
+  SDL_Window* window = nullptr;     // owned
+  SDL_GLContext context = nullptr;  // owned
   bool headless = false;
-  int width = 0;                   // current drawable size
+  int width = 0;  // current drawable size
   int height = 0;
   int gl_major = 0;
   int gl_minor = 0;
-  std::string gl_renderer;         // GL_RENDERER
-  std::string gl_version;          // GL_VERSION
+  std::string gl_renderer;  // GL_RENDERER
+  std::string gl_version;   // GL_VERSION
 };
 
 // Per-frame input. Mouse deltas accumulate between pollInput() calls.
 struct InputState {
   bool quit = false;
   bool forward = false, back = false, left = false, right = false, up = false, down = false;
-  bool fast = false;                 // shift
+  bool fast = false;                       // shift
   float mouse_dx = 0.0f, mouse_dy = 0.0f;  // pixels since the last poll (relative mode)
-  bool mouse_look = false;           // right button held, or relative mode toggled with Tab/M
-  bool left_click = false;           // a left press happened this frame
-  bool toggle_ui = false;            // F1 pressed this frame
-  bool screenshot = false;           // F12 pressed this frame
+  bool mouse_look = false;                 // right button held, or relative mode toggled with Tab/M
+  bool left_click = false;                 // a left press happened this frame
+  bool toggle_ui = false;                  // F1 pressed this frame
+  bool screenshot = false;                 // F12 pressed this frame
   bool resized = false;
 };
 

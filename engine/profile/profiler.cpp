@@ -7,13 +7,20 @@ namespace engine {
 
 std::string_view phaseName(Phase phase) {
   switch (phase) {
-    case Phase::input: return "input";
-    case Phase::physics: return "physics";
-    case Phase::fluid: return "fluid";
-    case Phase::meshing: return "meshing";
-    case Phase::render: return "render";
-    case Phase::ui: return "ui";
-    case Phase::count: break;
+    case Phase::input:
+      return "input";
+    case Phase::physics:
+      return "physics";
+    case Phase::fluid:
+      return "fluid";
+    case Phase::meshing:
+      return "meshing";
+    case Phase::render:
+      return "render";
+    case Phase::ui:
+      return "ui";
+    case Phase::count:
+      break;
   }
   return "?";
 }

@@ -18,20 +18,20 @@ std::string_view phaseName(Phase phase);
 struct PhaseStats {
   double sum_ms = 0.0;
   double max_ms = 0.0;
-  std::uint64_t frames = 0;         // frames in which the phase ran at least once
+  std::uint64_t frames = 0;  // frames in which the phase ran at least once
 };
 
 struct Profiler {
   static constexpr int kHistory = 300;
   using Clock = std::chrono::steady_clock;
 
-  std::array<double, kPhaseCount> current_ms{};   // this frame, so far
-  std::array<bool, kPhaseCount> ran{};             // phase entered this frame
+  std::array<double, kPhaseCount> current_ms{};  // this frame, so far
+  std::array<bool, kPhaseCount> ran{};           // phase entered this frame
   // history[phase][i]: ms of frame (head - kHistory + i); frame_ms likewise for whole frames.
   std::array<std::array<float, kHistory>, kPhaseCount> history{};
   std::array<float, kHistory> frame_history{};
-  int head = 0;                                    // next slot to write
-  int filled = 0;                                  // valid entries in the rings, <= kHistory
+  int head = 0;    // next slot to write
+  int filled = 0;  // valid entries in the rings, <= kHistory
   std::array<PhaseStats, kPhaseCount> stats{};
   double frame_sum_ms = 0.0;
   double frame_max_ms = 0.0;

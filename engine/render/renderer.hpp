@@ -37,22 +37,22 @@ GpuMesh uploadMesh(const MeshData& mesh);
 GpuTexture uploadTexture(const ImageData& image);
 
 struct DrawItem {
-  const GpuMesh* mesh = nullptr;       // required
-  const GpuTexture* texture = nullptr; // null = white
+  const GpuMesh* mesh = nullptr;        // required
+  const GpuTexture* texture = nullptr;  // null = white
   glm::mat4 model{1.0f};
-  glm::vec3 tint{1.0f};                // multiplies the texture (linear)
-  float uv_scale = 1.0f;               // texture repeats
-  float specular = 0.15f;              // 0..1
+  glm::vec3 tint{1.0f};    // multiplies the texture (linear)
+  float uv_scale = 1.0f;   // texture repeats
+  float specular = 0.15f;  // 0..1
   float shininess = 24.0f;
-  bool casts_shadow = true;            // false for the ground (it only receives)
+  bool casts_shadow = true;  // false for the ground (it only receives)
 };
 
 // Sprite particles shaded as small spheres. xyz = world position (m), w = 0..1 shade
 // (0 = fresh jet, brighter; 1 = old, deeper blue).
 struct ParticleBatch {
   std::span<const glm::vec4> particles;
-  float radius = 0.05f;                // world-space sprite radius (m)
-  glm::vec3 colour{0.35f, 0.6f, 0.9f}; // linear
+  float radius = 0.05f;                 // world-space sprite radius (m)
+  glm::vec3 colour{0.35f, 0.6f, 0.9f};  // linear
 };
 
 struct FrameView {
@@ -67,10 +67,10 @@ struct Lighting {
   glm::vec3 sky_zenith{0.09f, 0.24f, 0.66f};
   glm::vec3 sky_horizon{0.58f, 0.7f, 0.86f};
   glm::vec3 ground_ambient{0.22f, 0.2f, 0.17f};
-  float fog_density = 0.008f;                    // 1/m
+  float fog_density = 0.008f;  // 1/m
   // Directional shadow map: an orthographic box of 2*shadow_extent metres around a point ahead
   // of the camera, snapped to whole texels so shadows do not shimmer as the camera moves.
-  float shadow_extent = 16.0f;                   // m; 0 disables shadows
+  float shadow_extent = 16.0f;  // m; 0 disables shadows
 };
 
 struct Renderer {
@@ -80,9 +80,9 @@ struct Renderer {
   GlProgram particle_program;
   GlProgram shadow_program;
   GlFramebuffer shadow_fbo;
-  GlTexture shadow_depth;          // depth texture compared in the mesh shader (sampler2DShadow)
-  int shadow_size = 2048;          // texels per side
-  GlVertexArray empty_vao;          // core profile needs a VAO for attribute-less draws
+  GlTexture shadow_depth;   // depth texture compared in the mesh shader (sampler2DShadow)
+  int shadow_size = 2048;   // texels per side
+  GlVertexArray empty_vao;  // core profile needs a VAO for attribute-less draws
   GlVertexArray particle_vao;
   GlBuffer particle_buffer;
   std::size_t particle_capacity = 0;  // vec4s the buffer holds; grows, never shrinks
@@ -98,8 +98,8 @@ struct Renderer {
 // Loads the shaders from `shader_dir` and creates the scene FBO and the shadow map
 // (`shadow_size` texels per side, clamped to [256, 8192]). On failure returns false
 // with an error naming the shader file and line, or the incomplete framebuffer.
-bool createRenderer(const std::filesystem::path& shader_dir, int width, int height, Renderer& out,
-                    std::string& error, int shadow_size = 2048);
+bool createRenderer(const std::filesystem::path& shader_dir, int width, int height, Renderer& out, std::string& error,
+                    int shadow_size = 2048);
 bool resizeRenderer(Renderer& renderer, int width, int height, std::string& error);
 
 // Clears the scene FBO and, when `draw_content` is true, draws meshes, particles and sky.

@@ -59,7 +59,8 @@ void beginOverlayFrame(Overlay& overlay) {
   ImGui::NewFrame();
 }
 
-void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> systems, const std::string& gl_renderer) {
+void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> systems,
+                        const std::string& gl_renderer) {
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Frame (F1 hides)")) {
@@ -93,8 +94,8 @@ void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> s
   // Stacked per-phase bars for the last kHistory frames (oldest left), the frame total as a
   // line on top; the colours match the legend below.
   static constexpr ImU32 kColours[kPhaseCount] = {IM_COL32(200, 200, 200, 255), IM_COL32(230, 120, 60, 255),
-                                                  IM_COL32(70, 150, 240, 255), IM_COL32(150, 90, 220, 255),
-                                                  IM_COL32(90, 200, 110, 255), IM_COL32(240, 210, 70, 255)};
+                                                  IM_COL32(70, 150, 240, 255),  IM_COL32(150, 90, 220, 255),
+                                                  IM_COL32(90, 200, 110, 255),  IM_COL32(240, 210, 70, 255)};
   const int count = profiler.filled;
   float scale = 1.0f;
   for (int i = 0; i < count; ++i) scale = std::max(scale, profiler.frame_history[i]);
@@ -115,8 +116,8 @@ void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> s
     }
     const int slot = (profiler.head - 1 - frames_ago + 2 * Profiler::kHistory) % Profiler::kHistory;
     const float total = profiler.frame_history[slot] / scale * size.y;
-    draw->AddRectFilled(ImVec2(x0, origin.y + size.y - total - 1.0f), ImVec2(x0 + std::max(bar, 1.0f), origin.y + size.y - total),
-                        IM_COL32(255, 255, 255, 200));
+    draw->AddRectFilled(ImVec2(x0, origin.y + size.y - total - 1.0f),
+                        ImVec2(x0 + std::max(bar, 1.0f), origin.y + size.y - total), IM_COL32(255, 255, 255, 200));
   }
   ImGui::Dummy(size);
   ImGui::Text("0 .. %.1f ms, last %d frames; white = whole frame", scale, count);

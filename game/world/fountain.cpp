@@ -20,7 +20,7 @@ Field cappedCylinder(glm::vec3 p, float radius, float bottom, float top) {
   const float rho = std::sqrt(p.x * p.x + p.z * p.z);
   const glm::vec3 radial = rho > 1e-7f ? glm::vec3(p.x / rho, 0.0f, p.z / rho) : glm::vec3(1.0f, 0.0f, 0.0f);
   const glm::vec3 axial(0.0f, p.y >= centre ? 1.0f : -1.0f, 0.0f);
-  const float qr = rho - radius;               // > 0 outside the side
+  const float qr = rho - radius;                   // > 0 outside the side
   const float qy = std::abs(p.y - centre) - half;  // > 0 above the top / below the bottom
   if (qr <= 0.0f && qy <= 0.0f) {
     // Inside: the nearest face is the one with the larger (less negative) offset.

@@ -19,7 +19,7 @@ struct FountainGeometry {
   // Statue (a column with a dish and a spire), as capped cylinders.
   float plinth_radius = 0.6f;
   float plinth_top = 0.4f;
-  float column_radius = 0.45f;   // plinth to dish
+  float column_radius = 0.45f;  // plinth to dish
   float column_top = 1.42f;
   float dish_radius = 1.05f;
   float dish_bottom = 1.32f;

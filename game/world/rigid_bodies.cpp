@@ -51,7 +51,8 @@ bool buildRigidBodies(const RigidBodyParams& params, const std::filesystem::path
   for (int i = 0; i < params.crates; ++i) {
     const int stack = i % std::max(stacks, 1);
     const int level = i / std::max(stacks, 1);
-    const float angle = base_angle + 2.0f * std::numbers::pi_v<float> * (static_cast<float>(stack) + 0.3f * uniform01(rng)) /
+    const float angle = base_angle + 2.0f * std::numbers::pi_v<float> *
+                                         (static_cast<float>(stack) + 0.3f * uniform01(rng)) /
                                          static_cast<float>(std::max(stacks, 1));
     const float radius = 4.6f + 1.4f * uniform01(rng) * (level == 0 ? 1.0f : 0.0f);
     engine::BodyDesc desc;
@@ -83,10 +84,12 @@ void throwCrate(RigidBodies& bodies, glm::vec3 origin, glm::vec3 direction) {
   direction /= length;
   engine::BodyState state;
   state.position = origin + direction * (0.6f + bodies.params.crate_size);
-  state.rotation = glm::angleAxis(0.3f * static_cast<float>(bodies.thrown), glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)));
+  state.rotation =
+      glm::angleAxis(0.3f * static_cast<float>(bodies.thrown), glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)));
   state.linear_velocity = direction * bodies.params.throw_speed;
   state.angular_velocity = glm::vec3(1.5f, 0.7f, -1.0f);
-  const std::size_t stacked = bodies.crates.size() - static_cast<std::size_t>(std::min(bodies.thrown, RigidBodies::kMaxThrown));
+  const std::size_t stacked =
+      bodies.crates.size() - static_cast<std::size_t>(std::min(bodies.thrown, RigidBodies::kMaxThrown));
   if (bodies.thrown < RigidBodies::kMaxThrown) {
     const float size = bodies.params.crate_size;
     engine::BodyDesc desc;

@@ -28,10 +28,10 @@ struct RigidBodies {
 
   RigidBodyParams params;
   std::unique_ptr<engine::PhysicsWorld> physics;
-  std::vector<engine::BodyId> crates;           // stacked crates first, then thrown ones
-  std::vector<engine::BodyState> previous;      // per crate, before the last step
-  std::vector<engine::BodyState> current;       // per crate, after the last step
-  int thrown = 0;                               // crates thrown so far
+  std::vector<engine::BodyId> crates;       // stacked crates first, then thrown ones
+  std::vector<engine::BodyState> previous;  // per crate, before the last step
+  std::vector<engine::BodyState> current;   // per crate, after the last step
+  int thrown = 0;                           // crates thrown so far
   std::uint64_t steps = 0;
 };
 

@@ -25,8 +25,8 @@ bool isInside(const fluid::SignedDistanceShape& shape, glm::vec3 point) {
 
 // Collision of particle i after integration (Kolb et al. 2004 §3.3.2 double check); returns 1
 // when it reacted or was pushed out. Touches only particle i's entries.
-int collideParticle(SpriteParticles& s, const fluid::SignedDistanceShape& shape, const fluid::CollisionMaterial& material,
-                    float dt, std::size_t i) {
+int collideParticle(SpriteParticles& s, const fluid::SignedDistanceShape& shape,
+                    const fluid::CollisionMaterial& material, float dt, std::size_t i) {
   int bounced = 0;
   constexpr float skin = 1e-3f;
   s.previous[i] = s.position[i];

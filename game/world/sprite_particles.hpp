@@ -21,13 +21,13 @@ namespace game {
 
 // Live-tunable parameters (schema: effect_schema.cpp, section "sprite_particles").
 struct SpriteParticleParams {
-  float rate = 1500.0f;          // particles per second
-  float speed = 7.0f;            // m/s at the nozzle
-  float spread_degrees = 6.0f;   // half-angle of the jet cone
-  float lifetime = 4.0f;         // s
-  float size = 0.06f;            // sprite radius, m
-  float restitution = 0.3f;      // Kolb §3.3.2 resilience ε
-  float friction = 0.15f;        // Kolb §3.3.2 friction ν
+  float rate = 1500.0f;         // particles per second
+  float speed = 7.0f;           // m/s at the nozzle
+  float spread_degrees = 6.0f;  // half-angle of the jet cone
+  float lifetime = 4.0f;        // s
+  float size = 0.06f;           // sprite radius, m
+  float restitution = 0.3f;     // Kolb §3.3.2 resilience ε
+  float friction = 0.15f;       // Kolb §3.3.2 friction ν
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};
   glm::vec3 nozzle{0.0f, 2.5f, 0.0f};
 };
@@ -36,16 +36,16 @@ SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gr
 
 struct SpriteParticles {
   SpriteParticleParams params;
-  std::size_t capacity = 0;              // max_particles, fixed at construction
-  std::size_t count = 0;                 // alive particles are [0, count)
-  std::vector<glm::vec3> position;       // m
-  std::vector<glm::vec3> previous;       // position before the last step (render interpolation)
-  std::vector<glm::vec3> velocity;       // m/s
-  std::vector<float> age;                // s
-  double emit_debt = 0.0;                // fractional particles owed to the next step
+  std::size_t capacity = 0;         // max_particles, fixed at construction
+  std::size_t count = 0;            // alive particles are [0, count)
+  std::vector<glm::vec3> position;  // m
+  std::vector<glm::vec3> previous;  // position before the last step (render interpolation)
+  std::vector<glm::vec3> velocity;  // m/s
+  std::vector<float> age;           // s
+  double emit_debt = 0.0;           // fractional particles owed to the next step
   std::mt19937 rng;
   std::uint64_t steps = 0;
-  std::uint64_t bounces = 0;             // collision reactions so far (for tests/overlay)
+  std::uint64_t bounces = 0;  // collision reactions so far (for tests/overlay)
   // Scratch reused every step.
   std::vector<glm::vec3> predicted;
   std::vector<fluid::ColliderSample> previous_samples;

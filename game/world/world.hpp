@@ -19,11 +19,11 @@
 namespace game {
 
 struct World {
-  SceneConfig scene;                                 // live copy; the overlay edits it
-  std::vector<std::string> systems;                  // effect names constructed, schema order
-  std::unique_ptr<RigidBodies> rigid_bodies;         // "rigid_bodies" only
-  std::unique_ptr<SpriteParticles> sprite_particles; // "sprite_particles" only
-  FountainShape fountain;                            // analytic collision shape for particles
+  SceneConfig scene;                                  // live copy; the overlay edits it
+  std::vector<std::string> systems;                   // effect names constructed, schema order
+  std::unique_ptr<RigidBodies> rigid_bodies;          // "rigid_bodies" only
+  std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only
+  FountainShape fountain;                             // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
   int substeps = 1;

@@ -92,7 +92,8 @@ TEST_F(AssetFiles, EmptyGarbageAndTruncatedModelsFailWithTheFileName) {
   for (int i = 0; i < 4096; ++i) garbage.push_back(static_cast<char>((i * 7919) % 251));
   EXPECT_FALSE(engine::loadMesh(write("garbage.obj", garbage), mesh, error));
   EXPECT_NE(error.find("garbage.obj"), std::string::npos) << error;
-  EXPECT_FALSE(engine::loadMesh(write("garbage.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [tru"), mesh, error));
+  EXPECT_FALSE(
+      engine::loadMesh(write("garbage.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [tru"), mesh, error));
   EXPECT_NE(error.find("garbage.gltf"), std::string::npos) << error;
 
   // Cut inside the vertex list: no faces survive, so the model is rejected.

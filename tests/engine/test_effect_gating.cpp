@@ -49,8 +49,8 @@ TEST(EffectGating, WithoutRigidBodiesNoBulletObjectIsEverAllocated) {
   BulletAllocationCounter counter;
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sprite_particles": {"rate": 300}}})"), game::contentDir(),
-                               world, error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"sprite_particles": {"rate": 300}}})"), game::contentDir(), world, error))
       << error;
   engine::Profiler profiler;
   runSteps(world, profiler, 30);
@@ -70,8 +70,8 @@ TEST(EffectGating, WithRigidBodiesTheCounterSeesBullet) {
   BulletAllocationCounter counter;
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 3}}})"), game::contentDir(), world,
-                               error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 3}}})"), game::contentDir(), world, error))
       << error;
   engine::Profiler profiler;
   runSteps(world, profiler, 10);
@@ -105,8 +105,8 @@ TEST(EffectGating, AnEmptyEffectListBuildsNothing) {
 TEST(EffectGating, ThrownCratesAreCappedAndRecycled) {
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 2}}})"), game::contentDir(), world,
-                               error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 2}}})"), game::contentDir(), world, error))
       << error;
   for (int i = 0; i < game::RigidBodies::kMaxThrown + 5; ++i) {
     game::playerThrow(world);

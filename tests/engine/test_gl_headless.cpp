@@ -5,8 +5,8 @@
 #include "engine/render/renderer.hpp"
 #include "game/run_scene.hpp"
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <cstdlib>
 #include <fstream>

@@ -22,8 +22,8 @@ TEST(FountainShape, DistancesMatchTheGeometry) {
   EXPECT_NEAR(shape.distance({10.0f, 0.5f, 0.0f}), 0.5f, 1e-5f);                 // above the ground
   EXPECT_NEAR(shape.distance({2.0f, g.basin_floor + 0.1f, 0.0f}), 0.1f, 1e-5f);  // above the basin floor
   EXPECT_LT(shape.distance({0.5f * (g.basin_inner_radius + g.basin_outer_radius), 0.5f, 0.0f}), 0.0f);  // in the wall
-  EXPECT_LT(shape.distance({0.0f, 1.0f, 0.0f}), 0.0f);                          // inside the column
-  EXPECT_GT(shape.distance(g.nozzle), 0.0f);                                    // the nozzle is outside
+  EXPECT_LT(shape.distance({0.0f, 1.0f, 0.0f}), 0.0f);  // inside the column
+  EXPECT_GT(shape.distance(g.nozzle), 0.0f);            // the nozzle is outside
   std::vector<glm::vec3> points = {{10.0f, 0.5f, 0.0f}};
   std::vector<fluid::ColliderSample> samples(1);
   shape.query(points, samples);
@@ -74,8 +74,8 @@ TEST(SpriteParticles, BounceStayOutsideTheFountainAndRetire) {
     game::stepSpriteParticles(s, shape, 1.0f / 60.0f);
     for (std::size_t k = 0; k < s.count; ++k) {
       const glm::vec3 q = s.position[k];
-      ASSERT_GE(shape.distance(q), -2e-3f) << "particle " << k << " inside at step " << i << " at " << q.x << ", "
-                                           << q.y << ", " << q.z;
+      ASSERT_GE(shape.distance(q), -2e-3f)
+          << "particle " << k << " inside at step " << i << " at " << q.x << ", " << q.y << ", " << q.z;
     }
   }
   EXPECT_GT(s.bounces, 0u);
@@ -109,8 +109,9 @@ TEST(SpriteParticles, ResultsDoNotDependOnTheThreadCount) {
     game::initSpriteParticles(s, params(), 6000, 9);
     for (int i = 0; i < 150; ++i) game::stepSpriteParticles(s, shape, 1.0f / 60.0f);
     EXPECT_GT(s.count, 1024u);  // more than one parallel range
-    return std::make_pair(std::vector<glm::vec3>(s.position.begin(), s.position.begin() + static_cast<std::ptrdiff_t>(s.count)),
-                          s.bounces);
+    return std::make_pair(
+        std::vector<glm::vec3>(s.position.begin(), s.position.begin() + static_cast<std::ptrdiff_t>(s.count)),
+        s.bounces);
   };
   const auto one = run(1);
   const auto four = run(4);
