@@ -86,7 +86,10 @@ std::string formatLine(std::string_view line, const std::string& file_label) {
     if (number >= 0) {
       while (p < line.size() && (line[p] == ' ' || line[p] == ':')) ++p;
       std::string out = file_label + ":" + std::to_string(number);
-      if (column >= 0) out += ":" + std::to_string(column);
+      if (column >= 0) {
+        out += ':';
+        out += std::to_string(column);
+      }
       out += ": ";
       out += prefix_word;
       out += line.substr(p);
