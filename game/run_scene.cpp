@@ -179,10 +179,6 @@ std::pair<bool, bool> drawScenePanel(World& world) {
   return {changed, restart};
 }
 
-struct Captured {
-  std::vector<std::uint8_t> rgba;
-};
-
 }  // namespace
 
 int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& report, std::string& error) {
@@ -232,7 +228,6 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       std::vector<glm::vec4> particle_scratch;
       std::vector<std::uint8_t> pixels;
       auto last_time = std::chrono::steady_clock::now();
-      const auto start_time = last_time;
       std::uint64_t steps_done = 0;
 
       for (int frame = 0; options.frames <= 0 || frame < options.frames; ++frame) {
@@ -342,7 +337,6 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         ++report.frames_rendered;
         if (code != 0) break;
       }
-      (void)start_time;
       report.simulation_steps = steps_done;
       report.nonfinite_state = world.nonfinite_state;
       report.mean_frame_ms = engine::frameMeanMs(profiler);

@@ -66,7 +66,6 @@ std::string formatLine(std::string_view line, const std::string& file_label) {
     prefix_word = "error: ", pos = 7;
   else if (line.starts_with("WARNING: "))
     prefix_word = "warning: ", pos = 9;
-  const std::size_t start = pos;
   if (parseNumber(line, pos) >= 0 && pos < line.size()) {
     long number = -1, column = -1;
     std::size_t p = pos;
@@ -96,7 +95,6 @@ std::string formatLine(std::string_view line, const std::string& file_label) {
       return out;
     }
   }
-  (void)start;
   return file_label + ": " + std::string(line);
 }
 
