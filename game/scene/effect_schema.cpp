@@ -36,10 +36,11 @@ const std::array kRigidBodyParams = {
 const std::array kSpriteParticleParams = {
     ParamSpec{"rate", ParamType::number, 0.0, 100000.0, num(1500.0), "particles emitted per second"},
     ParamSpec{"speed", ParamType::number, 0.0, 50.0, num(7.0), "jet speed at the nozzle (m/s)"},
-    ParamSpec{"spread_degrees", ParamType::number, 0.0, 90.0, num(6.0), "half-angle of the jet cone"},
+    ParamSpec{"spread_degrees", ParamType::number, 0.0, 90.0, num(8.0), "half-angle of the jet cone"},
     ParamSpec{"lifetime", ParamType::number, 0.1, 60.0, num(4.0), "seconds before a particle is recycled"},
-    ParamSpec{"max_particles", ParamType::integer, 0, 1000000, integer(8000), "particle budget"},
-    ParamSpec{"size", ParamType::number, 0.005, 1.0, num(0.06), "sprite radius (m)"},
+    ParamSpec{"max_particles", ParamType::integer, 0, 1000000, integer(10000),
+              "particle budget (fixed at construction)"},
+    ParamSpec{"size", ParamType::number, 0.005, 1.0, num(0.035), "sprite radius (m)"},
     ParamSpec{"restitution", ParamType::number, 0.0, 1.0, num(0.3), "bounce off ground and basin"},
 };
 
@@ -47,7 +48,8 @@ const std::array kSections = {
     SectionSpec{"scene", false, "simulation clock", kSceneParams},
     SectionSpec{"camera", false, "first-person camera", kCameraParams},
     SectionSpec{"rigid_bodies", true, "Bullet world: ground, basin, statue, crates", kRigidBodyParams},
-    SectionSpec{"sprite_particles", true, "fountain jet of gravity particles drawn as point sprites", kSpriteParticleParams},
+    SectionSpec{"sprite_particles", true, "fountain jet of gravity particles drawn as point sprites",
+                kSpriteParticleParams},
 };
 
 }  // namespace

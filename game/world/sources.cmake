@@ -1,2 +1,8 @@
 # Sources of the game world, added to fluiddemo_game.
-target_sources(fluiddemo_game PRIVATE ${CMAKE_CURRENT_LIST_DIR}/run_scene_pending.cpp)
+target_sources(fluiddemo_game PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/fountain.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/sprite_particles.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/rigid_bodies.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/world.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/../run_scene.cpp
+)

@@ -1,0 +1,242 @@
+#include "engine/gl/gl.hpp"
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace engine {
+
+void deleteBuffer(GLuint id) { glDeleteBuffers(1, &id); }
+void deleteVertexArray(GLuint id) { glDeleteVertexArrays(1, &id); }
+void deleteTexture(GLuint id) { glDeleteTextures(1, &id); }
+void deleteFramebuffer(GLuint id) { glDeleteFramebuffers(1, &id); }
+void deleteRenderbuffer(GLuint id) { glDeleteRenderbuffers(1, &id); }
+void deleteProgram(GLuint id) { glDeleteProgram(id); }
+void deleteShader(GLuint id) { glDeleteShader(id); }
+
+const char* glErrorName(GLenum error) {
+  switch (error) {
+    case GL_INVALID_ENUM:
+      return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE:
+      return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION:
+      return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION:
+      return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY:
+      return "GL_OUT_OF_MEMORY";
+    case GL_STACK_UNDERFLOW:
+      return "GL_STACK_UNDERFLOW";
+    case GL_STACK_OVERFLOW:
+      return "GL_STACK_OVERFLOW";
+    default:
+      return "unknown GL error";
+  }
+}
+
+int checkGl(GlErrorLog& log, std::string_view where) {
+  int found = 0;
+  // glGetError returns one flag per call; a lost context could keep returning errors, so cap.
+  for (GLenum error = glGetError(); error != GL_NO_ERROR && found < 32; error = glGetError()) {
+    if (log.count == 0 && found == 0) log.first = std::string(glErrorName(error)) + " after " + std::string(where);
+    ++found;
+  }
+  log.count += found;
+  return found;
+}
+
+namespace {
+
+// Parses a leading "<digits>" at `s[pos]`; returns -1 when there is none.
+long parseNumber(std::string_view s, std::size_t& pos) {
+  if (pos >= s.size() || s[pos] < '0' || s[pos] > '9') return -1;
+  long value = 0;
+  while (pos < s.size() && s[pos] >= '0' && s[pos] <= '9') value = value * 10 + (s[pos++] - '0');
+  return value;
+}
+
+std::string formatLine(std::string_view line, const std::string& file_label) {
+  std::size_t pos = 0;
+  std::string_view prefix_word;
+  if (line.starts_with("ERROR: "))
+    prefix_word = "error: ", pos = 7;
+  else if (line.starts_with("WARNING: "))
+    prefix_word = "warning: ", pos = 9;
+  if (parseNumber(line, pos) >= 0 && pos < line.size()) {
+    long number = -1, column = -1;
+    std::size_t p = pos;
+    if (line[p] == ':') {  // Mesa "0:12(7): msg" or "ERROR: 0:12: msg"
+      ++p;
+      number = parseNumber(line, p);
+      if (number >= 0 && p < line.size() && line[p] == '(') {
+        ++p;
+        column = parseNumber(line, p);
+        if (p < line.size() && line[p] == ')') ++p;
+      }
+    } else if (line[p] == '(') {  // NVIDIA "0(12) : msg"
+      ++p;
+      number = parseNumber(line, p);
+      if (p < line.size() && line[p] == ')') ++p;
+    }
+    if (number >= 0) {
+      while (p < line.size() && (line[p] == ' ' || line[p] == ':')) ++p;
+      std::string out = file_label + ":" + std::to_string(number);
+      if (column >= 0) {
+        out += ':';
+        out += std::to_string(column);
+      }
+      out += ": ";
+      out += prefix_word;
+      out += line.substr(p);
+      return out;
+    }
+  }
+  return file_label + ": " + std::string(line);
+}
+
+}  // namespace
+
+std::string formatShaderLog(std::string_view log, const std::string& file_label) {
+  std::string out;
+  while (!log.empty()) {
+    const std::size_t end = log.find('\n');
+    std::string_view line = log.substr(0, end);
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\0')) line.remove_suffix(1);
+    if (!line.empty()) {
+      if (!out.empty()) out += '\n';
+      out += formatLine(line, file_label);
+    }
+    if (end == std::string_view::npos) break;
+    log.remove_prefix(end + 1);
+  }
+  if (out.empty()) out = file_label + ": failed without a log";
+  return out;
+}
+
+GlShader compileShader(GLenum stage, const std::string& source, const std::string& file_label, std::string& error) {
+  GlShader shader(glCreateShader(stage));
+  if (!shader) {
+    error = file_label + ": glCreateShader failed";
+    return {};
+  }
+  const char* text = source.c_str();
+  const GLint length = static_cast<GLint>(source.size());
+  glShaderSource(shader.id(), 1, &text, &length);
+  glCompileShader(shader.id());
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint log_length = 0;
+    glGetShaderiv(shader.id(), GL_INFO_LOG_LENGTH, &log_length);
+    std::string log(static_cast<std::size_t>(std::max(log_length, 1)), '\0');
+    glGetShaderInfoLog(shader.id(), log_length, nullptr, log.data());
+    error = formatShaderLog(log, file_label);
+    return {};
+  }
+  return shader;
+}
+
+namespace {
+
+bool readText(const std::filesystem::path& path, std::string& out, std::string& error) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    error = path.string() + ": cannot open shader file";
+    return false;
+  }
+  std::ostringstream text;
+  text << file.rdbuf();
+  out = text.str();
+  if (out.empty()) {
+    error = path.string() + ": shader file is empty";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view vertex_name,
+                      std::string_view fragment_name, std::string& error) {
+  const std::filesystem::path vertex_path = shader_dir / vertex_name;
+  const std::filesystem::path fragment_path = shader_dir / fragment_name;
+  std::string vertex_source, fragment_source;
+  if (!readText(vertex_path, vertex_source, error) || !readText(fragment_path, fragment_source, error)) return {};
+  GlShader vertex = compileShader(GL_VERTEX_SHADER, vertex_source, vertex_path.string(), error);
+  if (!vertex) return {};
+  GlShader fragment = compileShader(GL_FRAGMENT_SHADER, fragment_source, fragment_path.string(), error);
+  if (!fragment) return {};
+  GlProgram program(glCreateProgram());
+  glAttachShader(program.id(), vertex.id());
+  glAttachShader(program.id(), fragment.id());
+  glLinkProgram(program.id());
+  glDetachShader(program.id(), vertex.id());
+  glDetachShader(program.id(), fragment.id());
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint log_length = 0;
+    glGetProgramiv(program.id(), GL_INFO_LOG_LENGTH, &log_length);
+    std::string log(static_cast<std::size_t>(std::max(log_length, 1)), '\0');
+    glGetProgramInfoLog(program.id(), log_length, nullptr, log.data());
+    error = formatShaderLog(log, vertex_path.string() + " + " + fragment_path.string() + " (link)");
+    return {};
+  }
+  return program;
+}
+
+void setUniform(GLuint program, const char* name, int value) {
+  glUniform1i(glGetUniformLocation(program, name), value);
+}
+void setUniform(GLuint program, const char* name, float value) {
+  glUniform1f(glGetUniformLocation(program, name), value);
+}
+void setUniform(GLuint program, const char* name, const glm::vec2& value) {
+  glUniform2fv(glGetUniformLocation(program, name), 1, glm::value_ptr(value));
+}
+void setUniform(GLuint program, const char* name, const glm::vec3& value) {
+  glUniform3fv(glGetUniformLocation(program, name), 1, glm::value_ptr(value));
+}
+void setUniform(GLuint program, const char* name, const glm::vec4& value) {
+  glUniform4fv(glGetUniformLocation(program, name), 1, glm::value_ptr(value));
+}
+void setUniform(GLuint program, const char* name, const glm::mat4& value) {
+  glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, glm::value_ptr(value));
+}
+
+namespace {
+
+void GLAPIENTRY debugCallback(GLenum /*source*/, GLenum type, GLuint id, GLenum severity, GLsizei /*length*/,
+                              const GLchar* message, const void* /*user*/) {
+  if (severity == GL_DEBUG_SEVERITY_NOTIFICATION || severity == GL_DEBUG_SEVERITY_LOW) return;
+  std::fprintf(stderr, "GL debug [%s type 0x%x id %u]: %s\n", severity == GL_DEBUG_SEVERITY_HIGH ? "high" : "medium",
+               type, id, message);
+}
+
+}  // namespace
+
+bool enableDebugOutput() {
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  bool has_debug = major > 4 || (major == 4 && minor >= 3);
+  if (!has_debug) {
+    GLint count = 0;
+    glGetIntegerv(GL_NUM_EXTENSIONS, &count);
+    for (GLint i = 0; i < count && !has_debug; ++i) {
+      const auto* name = reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, static_cast<GLuint>(i)));
+      has_debug = name != nullptr && std::strcmp(name, "GL_KHR_debug") == 0;
+    }
+  }
+  if (!has_debug) return false;
+  glEnable(GL_DEBUG_OUTPUT);
+  glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
+  glDebugMessageCallback(debugCallback, nullptr);
+  return true;
+}
+
+}  // namespace engine

@@ -1,0 +1,93 @@
+#pragma once
+// Bullet rigid-body world: bodies from primitives (box, sphere, plane) and from triangle meshes
+// (static, BVH), stepped in fixed substeps. Bodies are addressed by index (BodyId) in insertion
+// order; they are never removed, only reset (thrown crates are recycled), so ids stay valid.
+
+#include "engine/assets/assets.hpp"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <memory>
+#include <vector>
+
+class btBroadphaseInterface;
+class btCollisionConfiguration;
+class btCollisionDispatcher;
+class btCollisionShape;
+class btConstraintSolver;
+class btDiscreteDynamicsWorld;
+class btRigidBody;
+class btStridingMeshInterface;
+struct btDefaultMotionState;
+
+namespace engine {
+
+using BodyId = int;
+
+struct PhysicsDesc {
+  glm::vec3 gravity{0.0f, -9.81f, 0.0f};  // m/s^2
+};
+
+struct BodyDesc {
+  float mass = 0.0f;         // kg; 0 = static
+  glm::vec3 position{0.0f};  // metres, world
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 linear_velocity{0.0f};
+  glm::vec3 angular_velocity{0.0f};
+  float friction = 0.6f;
+  float restitution = 0.1f;
+};
+
+struct BodyState {
+  glm::vec3 position{0.0f};
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 linear_velocity{0.0f};
+  glm::vec3 angular_velocity{0.0f};
+};
+
+// Owns every Bullet object. Not copyable; destroy with the unique_ptr from createPhysicsWorld.
+struct PhysicsWorld {
+  PhysicsWorld();
+  ~PhysicsWorld();
+  PhysicsWorld(const PhysicsWorld&) = delete;
+  PhysicsWorld& operator=(const PhysicsWorld&) = delete;
+
+  std::unique_ptr<btCollisionConfiguration> configuration;
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  std::unique_ptr<btBroadphaseInterface> broadphase;
+  std::unique_ptr<btConstraintSolver> solver;
+  std::unique_ptr<btDiscreteDynamicsWorld> world;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btStridingMeshInterface>> meshes;
+  std::vector<std::unique_ptr<std::vector<glm::vec3>>> mesh_vertices;  // referenced by `meshes`
+  std::vector<std::unique_ptr<std::vector<int>>> mesh_indices;
+  std::vector<std::unique_ptr<btDefaultMotionState>> motion_states;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;  // index = BodyId
+  std::uint64_t steps = 0;                           // substeps taken
+};
+
+std::unique_ptr<PhysicsWorld> createPhysicsWorld(const PhysicsDesc& desc);
+
+BodyId addBox(PhysicsWorld& world, const BodyDesc& desc, glm::vec3 half_extents);
+BodyId addSphere(PhysicsWorld& world, const BodyDesc& desc, float radius);
+// Infinite static plane {x : dot(normal, x) = offset}.
+BodyId addStaticPlane(PhysicsWorld& world, glm::vec3 normal, float offset, float friction = 0.8f);
+// Static concave body from a mesh (copied; `mesh` may be freed afterwards). Returns -1 and
+// sets `error` if the mesh is empty or desc.mass != 0 (Bullet's BVH meshes are static only).
+BodyId addStaticTriangleMesh(PhysicsWorld& world, const BodyDesc& desc, const MeshData& mesh, std::string& error);
+
+// Advances exactly `substeps` internal steps of step_seconds / substeps each (no Bullet
+// interpolation, so the result depends only on the inputs).
+void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps);
+
+int bodyCount(const PhysicsWorld& world);
+BodyState bodyState(const PhysicsWorld& world, BodyId id);
+// Teleports a body and sets its velocities (wakes it up).
+void resetBody(PhysicsWorld& world, BodyId id, const BodyState& state);
+void setGravity(PhysicsWorld& world, glm::vec3 gravity);
+
+// First body whose transform or velocity is NaN/inf, or -1.
+BodyId findNonFiniteBody(const PhysicsWorld& world);
+
+}  // namespace engine

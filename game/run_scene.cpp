@@ -1,0 +1,363 @@
+// runScene(): builds the world a scene asks for, runs the engine loop (window or headless) with
+// a fixed simulation step and interpolated rendering, and reports what happened.
+#include "game/run_scene.hpp"
+
+#include "engine/assets/assets.hpp"
+#include "engine/camera/camera.hpp"
+#include "engine/gl/gl.hpp"
+#include "engine/loop/fixed_step.hpp"
+#include "engine/platform/platform.hpp"
+#include "engine/profile/profiler.hpp"
+#include "engine/render/image_write.hpp"
+#include "engine/render/renderer.hpp"
+#include "engine/ui/overlay.hpp"
+#include "game/paths.hpp"
+#include "game/world/world.hpp"
+
+#include <imgui.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+namespace game {
+namespace {
+
+// GPU copies of the fountain's models and textures.
+struct SceneAssets {
+  engine::GpuMesh ground, basin, statue, crate;
+  engine::GpuTexture paving, stone, wood;
+};
+
+bool loadSceneAssets(const std::filesystem::path& content_dir, SceneAssets& out, std::string& error) {
+  struct MeshJob {
+    const char* file;
+    engine::GpuMesh* target;
+  };
+  const MeshJob meshes[] = {
+      {"ground.obj", &out.ground}, {"basin.obj", &out.basin}, {"statue.obj", &out.statue}, {"crate.obj", &out.crate}};
+  for (const MeshJob& job : meshes) {
+    engine::MeshData data;
+    if (!engine::loadMesh(content_dir / "models" / job.file, data, error)) return false;
+    *job.target = engine::uploadMesh(data);
+  }
+  struct TextureJob {
+    const char* file;
+    engine::GpuTexture* target;
+  };
+  const TextureJob textures[] = {{"paving.png", &out.paving}, {"stone.png", &out.stone}, {"crate.png", &out.wood}};
+  for (const TextureJob& job : textures) {
+    engine::ImageData image;
+    if (!engine::loadImage(content_dir / "textures" / job.file, image, error)) return false;
+    *job.target = engine::uploadTexture(image);
+  }
+  return true;
+}
+
+std::filesystem::path shaderDirectory() {
+  if (const char* dir = std::getenv("FLUIDDEMO_SHADER_DIR"); dir != nullptr && *dir != '\0') return dir;
+  return shadersDir();
+}
+
+glm::mat4 bodyMatrix(const engine::BodyState& a, const engine::BodyState& b, float alpha, float scale) {
+  const glm::vec3 position = glm::mix(a.position, b.position, alpha);
+  const glm::quat rotation = glm::slerp(a.rotation, b.rotation, alpha);
+  return glm::translate(glm::mat4(1.0f), position) * glm::mat4_cast(rotation) *
+         glm::scale(glm::mat4(1.0f), glm::vec3(scale));
+}
+
+// Draw list for the current state, interpolated by `alpha` between the last two steps.
+void buildDrawList(const World& world, const SceneAssets& assets, float alpha, std::vector<engine::DrawItem>& items,
+                   std::vector<glm::vec4>& particles) {
+  items.clear();
+  engine::DrawItem ground;
+  ground.mesh = &assets.ground;
+  ground.texture = &assets.paving;
+  ground.specular = 0.05f;
+  ground.casts_shadow = false;
+  items.push_back(ground);
+  engine::DrawItem basin;
+  basin.mesh = &assets.basin;
+  basin.texture = &assets.stone;
+  basin.specular = 0.2f;
+  items.push_back(basin);
+  engine::DrawItem statue = basin;
+  statue.mesh = &assets.statue;
+  statue.tint = glm::vec3(0.95f, 0.97f, 1.0f);
+  items.push_back(statue);
+  if (world.rigid_bodies) {
+    const RigidBodies& bodies = *world.rigid_bodies;
+    for (std::size_t i = 0; i < bodies.crates.size(); ++i) {
+      engine::DrawItem crate;
+      crate.mesh = &assets.crate;
+      crate.texture = &assets.wood;
+      crate.specular = 0.08f;
+      crate.model = bodyMatrix(bodies.previous[i], bodies.current[i], alpha, bodies.params.crate_size);
+      items.push_back(crate);
+    }
+  }
+  particles.clear();
+  if (world.sprite_particles) {
+    const SpriteParticles& s = *world.sprite_particles;
+    const float lifetime = std::max(s.params.lifetime, 1e-3f);
+    for (std::size_t i = 0; i < s.count; ++i) {
+      const glm::vec3 p = glm::mix(s.previous[i], s.position[i], alpha);
+      particles.emplace_back(p, std::clamp(s.age[i] / lifetime, 0.0f, 1.0f));
+    }
+  }
+}
+
+// Overlay window with the scene's tunable parameters; edits world.scene in place.
+// Returns {changed, restart requested}.
+std::pair<bool, bool> drawScenePanel(World& world) {
+  bool changed = false;
+  bool restart = false;
+  ImGui::SetNextWindowPos(ImVec2(std::max(ImGui::GetIO().DisplaySize.x - 390.0f, 400.0f), 10), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Scene")) {
+    ImGui::End();
+    return {false, false};
+  }
+  ImGui::Text("scene '%s', step %llu", world.scene.name.c_str(), static_cast<unsigned long long>(world.steps));
+  if (world.sprite_particles)
+    ImGui::Text("particles: %zu / %zu", world.sprite_particles->count, world.sprite_particles->capacity);
+  if (world.rigid_bodies) {
+    ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*world.rigid_bodies->physics),
+                world.rigid_bodies->thrown);
+  }
+  ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
+  ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);
+  auto edit_section = [&](SectionConfig& section) {
+    const SectionSpec* spec = findSection(section.name);
+    if (spec == nullptr || !ImGui::TreeNodeEx(section.name.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
+    for (const ParamSpec& param : spec->params) {
+      auto it = section.params.find(param.key);
+      if (it == section.params.end()) continue;
+      ParamValue& value = it->second;
+      const std::string label(param.key);
+      bool edited = false;
+      switch (param.type) {
+        case ParamType::number: {
+          const double speed = std::max((param.max - param.min) * 1e-3, std::abs(value.number) * 5e-3);
+          edited = ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value.number, static_cast<float>(speed),
+                                     &param.min, &param.max, "%.3f", ImGuiSliderFlags_AlwaysClamp);
+          break;
+        }
+        case ParamType::integer: {
+          int v = static_cast<int>(value.number);
+          const int lo = static_cast<int>(param.min), hi = static_cast<int>(param.max);
+          edited = ImGui::DragInt(label.c_str(), &v, 1.0f, lo, hi, "%d", ImGuiSliderFlags_AlwaysClamp);
+          value.number = v;
+          break;
+        }
+        case ParamType::boolean:
+          edited = ImGui::Checkbox(label.c_str(), &value.boolean);
+          break;
+        case ParamType::vec3:
+          edited = ImGui::DragFloat3(label.c_str(), &value.vec.x, 0.05f, static_cast<float>(param.min),
+                                     static_cast<float>(param.max), "%.2f", ImGuiSliderFlags_AlwaysClamp);
+          break;
+        case ParamType::text:
+          ImGui::Text("%s: %s", label.c_str(), value.text.c_str());
+          break;
+      }
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%.*s", static_cast<int>(param.doc.size()), param.doc.data());
+      changed |= edited;
+    }
+    ImGui::TreePop();
+  };
+  edit_section(world.scene.camera);
+  for (SectionConfig& effect : world.scene.effects) edit_section(effect);
+  edit_section(world.scene.scene);
+  ImGui::TextDisabled("counts, sizes and scene.* apply on restart");
+  ImGui::PopItemWidth();
+  restart = ImGui::Button("Restart scene with these values");
+  ImGui::End();
+  return {changed, restart};
+}
+
+}  // namespace
+
+int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& report, std::string& error) {
+  report = RunReport{};
+  const std::filesystem::path content_dir = contentDir();
+  World world;
+  if (!buildWorld(scene, content_dir, world, error)) return 1;
+  report.systems_constructed = world.systems;
+
+  engine::PlatformDesc platform_desc;
+  platform_desc.width = options.width;
+  platform_desc.height = options.height;
+  platform_desc.headless = options.headless;
+#ifdef FLUIDDEMO_GL_DEBUG
+  platform_desc.debug_context = true;
+#endif
+  engine::Platform platform;
+  if (!engine::createPlatform(platform_desc, platform, error)) return 1;
+  report.gl_renderer = platform.gl_renderer;
+#ifdef FLUIDDEMO_GL_DEBUG
+  engine::enableDebugOutput();
+#endif
+  int code = 0;
+  {
+    // GL objects live in this scope so they die before the context.
+    const int fb_width = options.headless ? std::clamp(options.width, 64, 8192) : platform.width;
+    const int fb_height = options.headless ? std::clamp(options.height, 64, 8192) : platform.height;
+    engine::Renderer renderer;
+    SceneAssets assets;
+    engine::Overlay overlay;
+    // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
+    const int shadow_size = options.headless ? 1024 : 2048;
+    if (!engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) ||
+        !loadSceneAssets(content_dir, assets, error) || !engine::createOverlay(platform, overlay, error)) {
+      code = 1;
+    } else {
+      overlay.visible = options.show_ui;
+      engine::FixedStepDesc clock_desc;
+      clock_desc.step_seconds = world.step_seconds;
+      clock_desc.substeps = world.substeps;
+      clock_desc.max_steps_per_frame = scene.scene.integer("max_steps_per_frame");
+      engine::FixedStepClock clock = engine::makeFixedStepClock(clock_desc);
+      engine::Profiler profiler;
+      engine::InputState input;
+      engine::Lighting lighting;
+      std::vector<engine::DrawItem> items;
+      std::vector<glm::vec4> particle_scratch;
+      std::vector<std::uint8_t> pixels;
+      auto last_time = std::chrono::steady_clock::now();
+      std::uint64_t steps_done = 0;
+
+      for (int frame = 0; options.frames <= 0 || frame < options.frames; ++frame) {
+        engine::beginFrame(profiler);
+        const auto now = std::chrono::steady_clock::now();
+        const double real_dt = std::chrono::duration<double>(now - last_time).count();
+        last_time = now;
+        const double frame_dt = options.fixed_frame_time ? world.step_seconds : real_dt;
+        {
+          engine::ScopedPhase phase(profiler, engine::Phase::input);
+          engine::pollInput(platform, input, engine::overlayWantsMouse(overlay), engine::overlayWantsKeyboard(overlay),
+                            &engine::overlayProcessEvent);
+          if (input.toggle_ui) overlay.visible = !overlay.visible;
+          engine::CameraInput camera_input;
+          camera_input.forward = (input.forward ? 1.0f : 0.0f) - (input.back ? 1.0f : 0.0f);
+          camera_input.right = (input.right ? 1.0f : 0.0f) - (input.left ? 1.0f : 0.0f);
+          camera_input.up = (input.up ? 1.0f : 0.0f) - (input.down ? 1.0f : 0.0f);
+          camera_input.fast = input.fast;
+          camera_input.look_dx = input.mouse_dx;
+          camera_input.look_dy = input.mouse_dy;
+          engine::updateCamera(world.camera, camera_input, static_cast<float>(frame_dt));
+          if (input.left_click) playerThrow(world);
+          if (input.resized && !options.headless) {
+            std::string resize_error;
+            if (!engine::resizeRenderer(renderer, platform.width, platform.height, resize_error)) {
+              error = resize_error;
+              code = 1;
+            }
+          }
+        }
+        if (input.quit || code != 0) {
+          engine::endFrame(profiler);
+          break;
+        }
+        const int steps = engine::advanceFrame(clock, frame_dt);
+        for (int s = 0; s < steps; ++s) stepWorld(world, &profiler);
+        steps_done += static_cast<std::uint64_t>(steps);
+        // With a fixed frame time the accumulator is always empty: show the newest state.
+        const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));
+
+        const bool last_frame = options.frames > 0 && frame + 1 == options.frames;
+        {
+          engine::ScopedPhase phase(profiler, engine::Phase::render);
+          buildDrawList(world, assets, alpha, items, particle_scratch);
+          engine::FrameView view;
+          view.view = engine::cameraView(world.camera);
+          view.projection = engine::cameraProjection(
+              world.camera, static_cast<float>(renderer.width) / static_cast<float>(renderer.height));
+          view.eye = world.camera.position;
+          engine::ParticleBatch batch;
+          batch.particles = particle_scratch;
+          if (world.sprite_particles) batch.radius = world.sprite_particles->params.size;
+          engine::renderScene(renderer, view, lighting, items, std::span(&batch, 1), true);
+          if (input.screenshot || (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
+            engine::readSceneRgba(renderer, pixels);
+          }
+          if (input.screenshot) {
+            const std::filesystem::path path = engine::nextFreeScreenshotPath(".", "fluiddemo");
+            std::string write_error;
+            if (engine::writePngBottomUp(path, renderer.width, renderer.height, pixels, write_error)) {
+              std::printf("screenshot: %s\n", path.string().c_str());
+            } else {
+              std::fprintf(stderr, "fluiddemo: %s\n", write_error.c_str());
+            }
+          }
+          if (last_frame) {
+            if (!options.screenshot.empty() &&
+                !engine::writePngBottomUp(options.screenshot, renderer.width, renderer.height, pixels, error)) {
+              code = 1;
+            }
+            if (options.capture_last_frame) {
+              report.frame_width = renderer.width;
+              report.frame_height = renderer.height;
+              report.last_frame_rgba = pixels;
+              // The same passes with nothing drawn but the clear, for the smoke test's blank check.
+              engine::renderScene(renderer, view, lighting, {}, {}, false);
+              engine::readSceneRgba(renderer, report.blank_frame_rgba);
+            }
+          }
+          // Headless there is nobody to show the window to; the scene FBO is the output.
+          if (!platform.headless) engine::presentToWindow(renderer, platform.width, platform.height);
+        }
+        {
+          engine::ScopedPhase phase(profiler, engine::Phase::ui);
+          if (overlay.visible) {
+            engine::beginOverlayFrame(overlay);
+            engine::drawProfilerWindow(profiler, world.systems, platform.gl_renderer);
+            const auto [changed, restart] = drawScenePanel(world);
+            engine::endOverlayFrame(overlay);
+            engine::checkGl(renderer.errors, "overlay");
+            if (changed) applyLiveParams(world);
+            if (restart) {
+              const SceneConfig edited = world.scene;
+              const engine::FpsCamera camera = world.camera;
+              std::string rebuild_error;
+              if (buildWorld(edited, content_dir, world, rebuild_error)) {
+                world.camera = camera;
+                report.systems_constructed = world.systems;
+              } else {
+                std::fprintf(stderr, "fluiddemo: restart failed: %s\n", rebuild_error.c_str());
+              }
+            }
+          }
+        }
+        engine::swapWindow(platform);
+        engine::endFrame(profiler);
+        ++report.frames_rendered;
+        if (code != 0) break;
+      }
+      report.simulation_steps = steps_done;
+      report.nonfinite_state = world.nonfinite_state;
+      report.mean_frame_ms = engine::frameMeanMs(profiler);
+      for (int p = 0; p < engine::kPhaseCount; ++p) {
+        const auto phase = static_cast<engine::Phase>(p);
+        PhaseTiming timing;
+        timing.phase = std::string(engine::phaseName(phase));
+        timing.mean_ms = engine::phaseMeanMs(profiler, phase);
+        timing.max_ms = profiler.stats[p].max_ms;
+        timing.samples = profiler.stats[p].frames;
+        report.phases.push_back(timing);
+      }
+      engine::checkGl(renderer.errors, "end of run");
+    }
+    report.gl_errors = renderer.errors.count;
+    if (renderer.errors.count > 0)
+      std::fprintf(stderr, "fluiddemo: first GL error: %s\n", renderer.errors.first.c_str());
+    engine::destroyOverlay(overlay);
+  }
+  engine::destroyPlatform(platform);
+  return code;
+}
+
+}  // namespace game

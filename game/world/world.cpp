@@ -1,0 +1,98 @@
+#include "game/world/world.hpp"
+
+#include <optional>
+
+namespace game {
+namespace {
+
+void applyCamera(const SectionConfig& section, engine::FpsCamera& camera, bool include_pose) {
+  if (include_pose) {
+    camera.position = section.vec3("position");
+    camera.yaw_degrees = static_cast<float>(section.number("yaw_degrees"));
+    camera.pitch_degrees = static_cast<float>(section.number("pitch_degrees"));
+  }
+  camera.fov_degrees = static_cast<float>(section.number("fov_degrees"));
+  camera.move_speed = static_cast<float>(section.number("move_speed"));
+}
+
+glm::vec3 worldGravity(const SceneConfig& scene) {
+  // Particles fall with the rigid bodies' gravity when that effect is present.
+  if (const SectionConfig* rigid = scene.effect("rigid_bodies")) return rigid->vec3("gravity");
+  return {0.0f, -9.81f, 0.0f};
+}
+
+}  // namespace
+
+bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error) {
+  out = World{};
+  out.scene = scene;
+  out.step_seconds = 1.0 / scene.scene.number("step_hz");
+  out.substeps = scene.scene.integer("substeps");
+  const auto seed = static_cast<std::uint32_t>(scene.scene.integer("seed"));
+  applyCamera(scene.camera, out.camera, true);
+
+  // Effects are built in schema order; anything not listed is simply never touched.
+  if (const SectionConfig* section = scene.effect("rigid_bodies")) {
+    auto bodies = std::make_unique<RigidBodies>();
+    if (!buildRigidBodies(rigidParamsFrom(*section), content_dir, seed, *bodies, error)) {
+      error = "rigid_bodies: " + error;
+      return false;
+    }
+    out.rigid_bodies = std::move(bodies);
+    out.systems.emplace_back("rigid_bodies");
+  }
+  if (const SectionConfig* section = scene.effect("sprite_particles")) {
+    auto particles = std::make_unique<SpriteParticles>();
+    initSpriteParticles(*particles, spriteParamsFrom(*section, worldGravity(scene), out.fountain.geometry().nozzle),
+                        static_cast<std::size_t>(section->integer("max_particles")), seed ^ 0x9e3779b9u);
+    out.sprite_particles = std::move(particles);
+    out.systems.emplace_back("sprite_particles");
+  }
+  return true;
+}
+
+void applyLiveParams(World& world) {
+  applyCamera(world.scene.camera, world.camera, false);
+  if (world.rigid_bodies) {
+    if (const SectionConfig* section = world.scene.effect("rigid_bodies")) {
+      const RigidBodyParams fresh = rigidParamsFrom(*section);
+      RigidBodyParams& live = world.rigid_bodies->params;
+      if (fresh.gravity != live.gravity) engine::setGravity(*world.rigid_bodies->physics, fresh.gravity);
+      live.gravity = fresh.gravity;
+      live.throw_speed = fresh.throw_speed;
+    }
+  }
+  if (world.sprite_particles) {
+    if (const SectionConfig* section = world.scene.effect("sprite_particles")) {
+      world.sprite_particles->params =
+          spriteParamsFrom(*section, worldGravity(world.scene), world.fountain.geometry().nozzle);
+    }
+  }
+}
+
+void stepWorld(World& world, engine::Profiler* profiler) {
+  if (world.rigid_bodies) {
+    std::optional<engine::ScopedPhase> scope;
+    if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::physics);
+    stepRigidBodies(*world.rigid_bodies, world.step_seconds, world.substeps);
+  }
+  if (world.sprite_particles) {
+    std::optional<engine::ScopedPhase> scope;
+    if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
+    stepSpriteParticles(*world.sprite_particles, world.fountain, static_cast<float>(world.step_seconds));
+  }
+  ++world.steps;
+  if (world.nonfinite_state.empty()) {
+    std::string bad;
+    if (world.rigid_bodies) bad = findNonFiniteBodyState(*world.rigid_bodies);
+    if (bad.empty() && world.sprite_particles) bad = findNonFiniteParticle(*world.sprite_particles);
+    if (!bad.empty()) world.nonfinite_state = bad + " at step " + std::to_string(world.steps);
+  }
+}
+
+void playerThrow(World& world) {
+  if (!world.rigid_bodies) return;
+  throwCrate(*world.rigid_bodies, world.camera.position, engine::cameraForward(world.camera));
+}
+
+}  // namespace game

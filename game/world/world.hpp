@@ -1,0 +1,50 @@
+#pragma once
+// The game world built from a SceneConfig. One system per listed effect, constructed ONLY when
+// the scene lists it: an unlisted effect's pointer stays null, it allocates nothing, and
+// stepWorld never enters its profiler phase. `systems` lists what was built, in schema order.
+
+#include "engine/camera/camera.hpp"
+#include "engine/profile/profiler.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
+#include "game/world/rigid_bodies.hpp"
+#include "game/world/sprite_particles.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace game {
+
+struct World {
+  SceneConfig scene;                                  // live copy; the overlay edits it
+  std::vector<std::string> systems;                   // effect names constructed, schema order
+  std::unique_ptr<RigidBodies> rigid_bodies;          // "rigid_bodies" only
+  std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only
+  FountainShape fountain;                             // analytic collision shape for particles
+  engine::FpsCamera camera;
+  double step_seconds = 1.0 / 60.0;
+  int substeps = 1;
+  std::uint64_t steps = 0;
+  std::string nonfinite_state;  // first NaN/inf seen (empty while everything is finite)
+};
+
+// Builds the world. `content_dir` is the content/ folder (models for the Bullet meshes).
+// Returns false with a message naming the file/effect on failure.
+bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error);
+
+// Re-reads the live-tunable parameters from world.scene (after the overlay edited them).
+// Parameters fixed at construction (crates, crate_size, max_particles, scene.*) need a rebuild.
+void applyLiveParams(World& world);
+
+// One fixed simulation step of every constructed system, timed into `profiler` (physics for
+// rigid bodies, fluid for particles; may be null). Checks every value for NaN/inf after the
+// step and records the first one in world.nonfinite_state.
+void stepWorld(World& world, engine::Profiler* profiler);
+
+// Throws a crate from the camera along its view (no-op without rigid_bodies).
+void playerThrow(World& world);
+
+}  // namespace game

@@ -1,0 +1,103 @@
+#include "engine/physics/physics_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace {
+
+// A 20 m square floor at y = 0 as two triangles.
+engine::MeshData floorMesh() {
+  engine::MeshData mesh;
+  mesh.positions = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10}};
+  mesh.normals.assign(4, glm::vec3(0, 1, 0));
+  mesh.uvs.assign(4, glm::vec2(0));
+  mesh.indices = {0, 2, 1, 0, 3, 2};
+  return mesh;
+}
+
+engine::BodyDesc box(glm::vec3 position) {
+  engine::BodyDesc desc;
+  desc.mass = 2.0f;
+  desc.position = position;
+  return desc;
+}
+
+TEST(Physics, BoxFallsAndRestsOnAPrimitivePlane) {
+  auto world = engine::createPhysicsWorld({});
+  engine::addStaticPlane(*world, {0, 1, 0}, 0.0f);
+  const engine::BodyId id = engine::addBox(*world, box({0, 3, 0}), glm::vec3(0.25f));
+  engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  EXPECT_LT(engine::bodyState(*world, id).position.y, 3.0f);  // gravity acts
+  for (int i = 0; i < 240; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  const engine::BodyState state = engine::bodyState(*world, id);
+  EXPECT_NEAR(state.position.y, 0.25f, 0.02f);
+  EXPECT_LT(glm::length(state.linear_velocity), 0.05f);
+  EXPECT_EQ(world->steps, 241u * 2u);
+}
+
+TEST(Physics, BoxRestsOnAStaticTriangleMesh) {
+  auto world = engine::createPhysicsWorld({});
+  std::string error;
+  ASSERT_GE(engine::addStaticTriangleMesh(*world, {}, floorMesh(), error), 0) << error;
+  const engine::BodyId id = engine::addBox(*world, box({1, 2, -1}), glm::vec3(0.3f));
+  for (int i = 0; i < 240; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  EXPECT_NEAR(engine::bodyState(*world, id).position.y, 0.3f, 0.03f);
+}
+
+TEST(Physics, TriangleMeshBodiesMustBeStaticAndNonEmpty) {
+  auto world = engine::createPhysicsWorld({});
+  std::string error;
+  engine::BodyDesc dynamic;
+  dynamic.mass = 1.0f;
+  EXPECT_EQ(engine::addStaticTriangleMesh(*world, dynamic, floorMesh(), error), -1);
+  EXPECT_NE(error.find("static"), std::string::npos) << error;
+  error.clear();
+  EXPECT_EQ(engine::addStaticTriangleMesh(*world, {}, engine::MeshData{}, error), -1);
+  EXPECT_NE(error.find("empty"), std::string::npos) << error;
+  EXPECT_EQ(engine::bodyCount(*world), 0);
+}
+
+TEST(Physics, SameInputsGiveBitIdenticalResults) {
+  auto run = [] {
+    auto world = engine::createPhysicsWorld({});
+    engine::addStaticPlane(*world, {0, 1, 0}, 0.0f);
+    std::vector<engine::BodyId> ids;
+    for (int i = 0; i < 5; ++i) {
+      engine::BodyDesc desc = box({0.1f * i, 1.0f + 0.7f * i, 0.05f * i});
+      desc.rotation = glm::angleAxis(0.3f * i, glm::vec3(0, 1, 0));
+      ids.push_back(engine::addBox(*world, desc, glm::vec3(0.3f)));
+    }
+    for (int i = 0; i < 120; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 3);
+    std::vector<engine::BodyState> out;
+    for (engine::BodyId id : ids) out.push_back(engine::bodyState(*world, id));
+    return out;
+  };
+  const auto a = run();
+  const auto b = run();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].position, b[i].position) << "body " << i;
+    EXPECT_EQ(a[i].rotation, b[i].rotation) << "body " << i;
+  }
+}
+
+TEST(Physics, ResetTeleportsAndNonFiniteBodiesAreFound) {
+  auto world = engine::createPhysicsWorld({});
+  engine::addStaticPlane(*world, {0, 1, 0}, 0.0f);
+  const engine::BodyId a = engine::addBox(*world, box({0, 1, 0}), glm::vec3(0.2f));
+  const engine::BodyId b = engine::addSphere(*world, box({2, 1, 0}), 0.2f);
+  engine::BodyState moved;
+  moved.position = {5, 4, 3};
+  moved.linear_velocity = {1, 0, 0};
+  engine::resetBody(*world, a, moved);
+  EXPECT_EQ(engine::bodyState(*world, a).position, moved.position);
+  EXPECT_EQ(engine::findNonFiniteBody(*world), -1);
+  engine::BodyState bad;
+  bad.position = {0, std::numeric_limits<float>::quiet_NaN(), 0};
+  engine::resetBody(*world, b, bad);
+  EXPECT_EQ(engine::findNonFiniteBody(*world), b);
+}
+
+}  // namespace
