@@ -500,6 +500,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform1f(loc(prog, "u_resilience"), params.material.resilience);
   glUniform1f(loc(prog, "u_friction_threshold"), params.material.friction_speed_threshold);
   glUniform1f(loc(prog, "u_skin"), params.skin);
+  glUniform1i(loc(prog, "u_push_out_iterations"), std::clamp(params.push_out_iterations, 0, 8));
   glBindVertexArray(s.empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);

@@ -169,6 +169,11 @@ struct GpuStepParams {
   float particle_mass = 1e-3f;    // m, kg
   fluid::CollisionMaterial material{};
   float skin = 1e-3f;  // m pushed beyond a collider surface
+  // After the §3.3.2 reaction, re-sample the collider at the new position and project again
+  // while still inside (at most this many times; 0 = exactly fluid::collideParticles). Needed
+  // because a nearest-texel depth map is piecewise constant: the push along one texel's normal
+  // can land over a neighbouring texel whose surface is higher. Clamped to [0, 8].
+  int push_out_iterations = 4;
 };
 
 // Flow field for the Stokes drag: a W×H×D grid of velocities (m/s) over an axis-aligned box;

@@ -27,6 +27,7 @@ uniform vec3 u_pose_angular[MAX_COLLIDERS];
 uniform float u_fixed_step;  // kFixedDepthStep, passed as the exact float
 uniform float u_cube_step;   // kCubeRadiusStep
 uniform float u_friction, u_resilience, u_friction_threshold, u_skin;
+uniform int u_push_out_iterations;
 
 const float kFloatMax = 3.402823466e38;
 const uint kFixedBackground = 65535u;
@@ -268,6 +269,13 @@ bool collideAll(vec3 previous, inout vec3 predicted, inout vec3 velocity) {
       vec3 pushed = relative;
       if (normal_speed < 0.0) pushed = relative - 2.0 * normal_speed * n;
       velocity = pushed + collider_velocity;
+    }
+    // Extra projections while the new position is still inside (a neighbouring texel).
+    for (int it = 0; it < u_push_out_iterations; ++it) {
+      float d_again;
+      vec3 n_again;
+      if (!sampleWorld(c, predicted, d_again, n_again) || d_again >= 0.0) break;
+      predicted = predicted + n_again * (u_skin - d_again);
     }
     hit = true;
   }

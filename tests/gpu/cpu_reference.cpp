@@ -271,6 +271,13 @@ bool collide(glm::vec3 previous, glm::vec3& predicted, glm::vec3& velocity, cons
     predicted = r.position;
     velocity = r.velocity;
     hit = true;
+    // Extra push-out (GpuStepParams::push_out_iterations): a push along one texel's normal can
+    // land over another texel that is still inside; repeat the projection there.
+    for (int it = 0; it < std::clamp(d.params.push_out_iterations, 0, 8); ++it) {
+      const fluid::ColliderSample again = c->sampleWorld(predicted);
+      if (!again.valid || again.distance >= 0.0f) break;
+      predicted += again.normal * (d.params.skin - again.distance);
+    }
   }
   return hit;
 }
