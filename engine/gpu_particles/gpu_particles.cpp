@@ -514,31 +514,38 @@ float stokesDragRate(const GpuStepParams& params) {
   return std::isfinite(rate) ? std::max(rate, 0.0f) : 0.0f;
 }
 
-void sortStep(GpuParticles& s, glm::vec3 eye, std::uint32_t passes) {
+void refreshSortKeys(GpuParticles& s, glm::vec3 eye) {
   if (!s.ready) return;
-  if (passes == 0) passes = s.desc.sort_passes_per_frame;
   const auto w = static_cast<GLsizei>(s.desc.width), h = static_cast<GLsizei>(s.desc.height);
   glViewport(0, 0, w, h);
   glDisable(GL_BLEND);
   glDisable(GL_DEPTH_TEST);
   glBindVertexArray(s.empty_vao);
-  // Key refresh.
-  {
-    const GLuint prog = s.sort_key.id;
-    glBindFramebuffer(GL_FRAMEBUFFER, s.sort_fbo[1 - s.sort_current]);
-    glUseProgram(prog);
-    bindTexture(0, GL_TEXTURE_2D, s.sort_tex[s.sort_current]);
-    bindTexture(1, GL_TEXTURE_2D, s.state0[s.current]);
-    bindTexture(2, GL_TEXTURE_2D, s.attributes);
-    glUniform1i(loc(prog, "u_pairs"), 0);
-    glUniform1i(loc(prog, "u_state0"), 1);
-    glUniform1i(loc(prog, "u_attributes"), 2);
-    glUniform3fv(loc(prog, "u_eye"), 1, glm::value_ptr(eye));
-    glUniform1f(loc(prog, "u_time"), s.time);
-    glUniform1i(loc(prog, "u_width"), w);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    s.sort_current = 1 - s.sort_current;
-  }
+  const GLuint prog = s.sort_key.id;
+  glBindFramebuffer(GL_FRAMEBUFFER, s.sort_fbo[1 - s.sort_current]);
+  glUseProgram(prog);
+  bindTexture(0, GL_TEXTURE_2D, s.sort_tex[s.sort_current]);
+  bindTexture(1, GL_TEXTURE_2D, s.state0[s.current]);
+  bindTexture(2, GL_TEXTURE_2D, s.attributes);
+  glUniform1i(loc(prog, "u_pairs"), 0);
+  glUniform1i(loc(prog, "u_state0"), 1);
+  glUniform1i(loc(prog, "u_attributes"), 2);
+  glUniform3fv(loc(prog, "u_eye"), 1, glm::value_ptr(eye));
+  glUniform1f(loc(prog, "u_time"), s.time);
+  glUniform1i(loc(prog, "u_width"), w);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  s.sort_current = 1 - s.sort_current;
+  glBindVertexArray(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void sortPasses(GpuParticles& s, std::uint32_t passes) {
+  if (!s.ready) return;
+  const auto w = static_cast<GLsizei>(s.desc.width), h = static_cast<GLsizei>(s.desc.height);
+  glViewport(0, 0, w, h);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glBindVertexArray(s.empty_vao);
   const GLuint prog = s.sort_pass.id;
   glUseProgram(prog);
   glUniform1i(loc(prog, "u_pairs"), 0);
@@ -559,6 +566,12 @@ void sortStep(GpuParticles& s, glm::vec3 eye, std::uint32_t passes) {
   }
   glBindVertexArray(0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void sortStep(GpuParticles& s, glm::vec3 eye, std::uint32_t passes) {
+  if (!s.ready) return;
+  refreshSortKeys(s, eye);
+  sortPasses(s, passes == 0 ? s.desc.sort_passes_per_frame : passes);
 }
 
 void drawSprites(GpuParticles& s, const glm::mat4& view_projection, float projection_scale_y, int viewport_height) {

@@ -256,6 +256,10 @@ float stokesDragRate(const GpuStepParams& params);
 // §3.3.3: refresh the keys for `eye` and run `passes` merge-sort passes (0 = desc value).
 // Keys sort farthest first (back-to-front); dead slots sort to the end.
 void sortStep(GpuParticles& system, glm::vec3 eye, std::uint32_t passes = 0);
+// The two halves of sortStep: one key-refresh pass (the permutation is kept), and `passes`
+// passes of the network, continuing where the last call stopped and restarting when done.
+void refreshSortKeys(GpuParticles& system, glm::vec3 eye);
+void sortPasses(GpuParticles& system, std::uint32_t passes);
 // Passes of a full sort of the whole texture: ½log²n + ½log n.
 std::uint32_t sortPassCount(std::uint32_t n);
 

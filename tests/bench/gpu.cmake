@@ -1,1 +1,9 @@
 # GPU particle benchmark (owned by the gpu module): particles per ms per pass, 16k…1M.
+# A plain executable (GL passes are timed with glFinish, not by Google Benchmark's loop).
+find_package(SDL2 REQUIRED)
+add_executable(bench_gpu_particles
+  gpu_particles_bench.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/cpu_reference.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/gl_test_context.cpp)
+target_link_libraries(bench_gpu_particles PRIVATE engine SDL2::SDL2 fluiddemo_options)
+target_compile_definitions(bench_gpu_particles PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
