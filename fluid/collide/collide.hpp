@@ -1,0 +1,340 @@
+#pragma once
+// fluid/collide: depth-map colliders with L1 (octahedral) normal indexing.
+//
+// Spec: Kolb, Latta & Rezk-Salama 2004, "Hardware-based Simulation and Collision Detection
+// for Large Particle Systems" (shared/papers/gpu-particles-depthmap-collision_kolb-latta-2004.txt):
+//   §4.1 implicit model = k depth maps, eq. (1) per-map distance, rule (2) combination,
+//        invalid votes and the one-texel background border;
+//   §4.2 eq. (3) L1 parametrization of the unit sphere used as a normal index texture;
+//   §4.3 formats: float, 8-bit fixed, 16-bit front-back, perspective depth cube;
+//   §3.3.2 reaction (fluid/core/collider.hpp, reused here for the batch particle step).
+//
+// The same texels are uploaded to GL by the GPU sprite code and decoded in GLSL, so every
+// encoding below is specified to the bit. All multi-byte values are little-endian in files.
+//
+// ---------------------------------------------------------------------------------------
+// ENCODINGS (normative; the GLSL decoder must follow them exactly)
+//
+// L1 normal index, resolution R (1 <= R <= 65535; default 256):
+//   encode: p = n / (|nx|+|ny|+|nz|); if p.z >= 0: (a,b) = (p.x, p.y)
+//           else (a,b) = (sgnp(p.x)·(1−|p.y|), sgnp(p.y)·(1−|p.x|))   [inverse of eq. (3)]
+//           with sgnp(x) = x >= 0 ? +1 : −1 (so −z maps to the corner (1,1));
+//           (s,t) = (a,b)·0.5 + 0.5 in [0,1]²;
+//           i = min(floor(s·R), R−1), j = min(floor(t·R), R−1)  (float math, then int);
+//           texel index = j·R + i.
+//   decode texel (i,j): (s,t) = ((i+0.5)/R, (j+0.5)/R) (the texel centre, computed in
+//           double then rounded to float), then eq. (3) with (a,b) = 2(s,t)−1, normalised.
+//   The normal index texture is l1NormalTexture(R): R×R texels, row j, column i, RGB float32
+//   = the decoded unit vector. The GPU uploads this array; it never recomputes it, so the
+//   lookup is bit-identical by construction. Fetch with texelFetch(tex, ivec2(i, j), 0).
+//
+// Per-texel formats (DepthMapFormat). "depth" is the depth-map coordinate z' in [0,1]
+// (ortho) or the normalised radial distance r/sqrt(3) in [0,1] (cube):
+//   float32      4 × float32: (nx, ny, nz, depth). Normal is the unit outward normal in
+//                collider space. Background (no surface): depth = −1.0f (any depth < 0).
+//   fixed8       4 × uint8 (RGBA8): R = i, G = j (normal index at R_n <= 256),
+//                B = high byte, A = low byte of q (uint16). depth = float(q) * kFixedDepthStep,
+//                kFixedDepthStep = 1.52590219e-05f (= float(1/65535), bits 0x37800080);
+//                encode q = round-half-away(depth·65535) clamped to [0, 65534].
+//                Background: q = 65535 (R = G = 0xFF, B = A = 0xFF).
+//   front_back16 4 × uint16 (RGBA16UI): R = front normal index, G = back normal index, each
+//                i | (j << 8) (R_n <= 256); B = front depth, A = back depth as IEEE binary16
+//                bits (decode with unpackHalf2x16, exact), encoded round-to-nearest-even.
+//                Background: half −1.0 (0xBC00) in B resp. A; its index is 0xFFFF.
+//   cube8        six faces of fixed8 texels (same bytes as fixed8), face order +X,−X,+Y,−Y,+Z,−Z,
+//                face-local (s,t) as in the OpenGL cube-map table (sc,tc,ma):
+//                +X(−z,−y,x) −X(z,−y,x) +Y(x,z,y) −Y(x,−z,y) +Z(x,−y,z) −Z(−x,−y,z),
+//                s = (sc/|ma| + 1)/2, t = (tc/|ma| + 1)/2, ties pick x before y before z.
+//                depth = r/sqrt(3), r = |P'| of the surface hit in the normalised volume;
+//                decode r = float(q) * kCubeRadiusStep, kCubeRadiusStep = float(sqrt(3)/65535).
+//   Texel (i,j) of an N×N map is stored at index j·N + i (cube: face·N·N + j·N + i).
+//   Texel lookup is nearest: i = floor(u·N) in float, valid iff 0 <= i < N.
+//
+// Map coordinates (§4.1, item 3 and 4): collider_to_map = T_OC→DC (affine, column-major).
+//   ortho: P' = T·P with (P'x, P'y) texture coordinates in [0,1]², P'z the depth in [0,1]
+//          (0 = near plane, increasing along the view direction); z_scale = depth range in
+//          collider units, so eq. (1) gives collider units:
+//            front (LESS):    f = z_scale·(depth − P'z)
+//            back  (GREATER): f = z_scale·(P'z − depth)      (the negation of eq. (1))
+//          A one-texel border of every ortho map stays background (§4.1).
+//   cube:  P' = T·P in the normalised view volume [−1,1]³ (no projection in T, §4.3);
+//          cube_scale = (s_x, s_y, s_z) maps it back to collider units. With L = |P'|,
+//          r = dist(P'), the §4.3 distance along the ray from the centre is
+//            LESS    (centre outside the collider): f = (r − L)·|S·P'| / L
+//            GREATER (centre inside, or the far wall wanted): f = (L − r)·|S·P'| / L
+//          This is the paper's (1 − r/L)|S·P'| with the sign chosen so that points between
+//          the centre and a LESS surface are outside (the paper's "negate" remark, §4.3).
+//
+// Votes (rule (2)): a map votes invalid when P' is outside its view volume or the texel is
+// background. View volume: cube [−1,1]³; ortho (P'x, P'y) in [0,1)², and along z a LESS map
+// up to its far plane (P'z <= 1), a GREATER map from its near plane (P'z >= 0) — the part in
+// front of the near plane is kept because eq. (1) still holds there. An invalid vote is ignored, except for maps whose
+// view volume encloses the whole collider (encloses_collider, set by the baker): there it is
+// "far outside" (+FLT_MAX), as §4.1 allows.
+// ---------------------------------------------------------------------------------------
+
+#include "fluid/core/collider.hpp"
+
+#include <glm/glm.hpp>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+// ---- §4.2, eq. (3): L1 (octahedral) parametrization ----------------------------------
+
+// Unit (or any non-zero) vector -> (s,t) in [0,1]². A zero or non-finite vector gives (0.5,0.5) (+z).
+glm::vec2 l1Encode(glm::vec3 direction);
+// (s,t) in [0,1]² (clamped) -> unit vector (eq. (3) after the affine map, then normalised).
+glm::vec3 l1Decode(glm::vec2 st);
+// Texel (i,j) holding `direction` in an R×R normal index texture (encoding above).
+glm::ivec2 l1Texel(glm::vec3 direction, int resolution);
+// j·R + i.
+std::uint32_t l1TexelIndex(glm::vec3 direction, int resolution);
+// Unit vector stored in texel (i,j): decode of the texel centre.
+glm::vec3 l1TexelNormal(glm::ivec2 texel, int resolution);
+// The whole R×R normal index texture, RGB float32 interleaved, row-major (3·R·R floats).
+std::vector<float> l1NormalTexture(int resolution = 256);
+
+// ---- §4.3 texel encodings (exposed for the GPU upload and its tests) -----------------
+
+inline constexpr float kFixedDepthStep = static_cast<float>(1.0 / 65535.0);
+inline constexpr float kCubeRadiusStep = static_cast<float>(1.7320508075688772 / 65535.0);
+inline constexpr std::uint16_t kFixedBackground = 0xFFFF;
+inline constexpr std::uint16_t kHalfBackground = 0xBC00;  // binary16 −1.0
+
+std::uint16_t encodeFixedDepth(float depth01);  // round(depth·65535) in [0, 65534]
+float decodeFixedDepth(std::uint16_t q);        // q·kFixedDepthStep (q != background)
+std::uint16_t floatToHalf(float value);         // IEEE binary16, round to nearest even
+float halfToFloat(std::uint16_t bits);          // exact
+
+// ---- §4.1 / §4.3 depth maps -----------------------------------------------------------
+
+enum class DepthMapFormat : std::uint32_t { float32 = 1, fixed8 = 2, front_back16 = 3, cube8 = 4 };
+// LESS keeps the nearest surface (front map, or cube whose centre is outside the collider);
+// GREATER the farthest (back map, or cube whose centre is inside). front_back16 holds both.
+enum class DepthCompare : std::uint32_t { less = 0, greater = 1 };
+
+const char* formatName(DepthMapFormat format);
+// "float", "fixed8", "front-back16", "cube8"; false when unknown.
+bool parseFormat(const std::string& name, DepthMapFormat& out);
+
+// Bytes per texel of one map layer (cube8: per face texel).
+std::size_t texelBytes(DepthMapFormat format);
+
+struct DepthMap {
+  DepthMapFormat format = DepthMapFormat::float32;
+  DepthCompare compare = DepthCompare::less;  // ignored for front_back16 (front = less, back = greater)
+  std::uint32_t resolution = 0;               // N: texels per side (per face for cube8)
+  glm::mat4 collider_to_map{1.0f};            // T_OC→DC, see "Map coordinates"
+  float z_scale = 1.0f;                       // ortho only: collider units per unit of P'z
+  glm::vec3 cube_scale{1.0f};                 // cube only: s_x, s_y, s_z
+  bool encloses_collider = false;             // invalid votes count as far outside
+  std::vector<std::uint8_t> texels;           // N·N (·6 for cube8) texels of texelBytes(format)
+};
+
+// A collider: k depth maps in collider space, plus the normal index resolution R_n used by
+// the fixed8/front_back16/cube8 maps (and the decoded texture, rebuilt on load).
+class DepthMapCollider final : public SignedDistanceShape {
+ public:
+  DepthMapCollider() = default;
+  DepthMapCollider(std::vector<DepthMap> maps, int normal_resolution = 256);
+
+  // Rule (2) over all maps, serial (thread-safe: const and allocation-free). Non-finite
+  // points give {distance = FLT_MAX, valid = false}; points no map has an opinion about give
+  // valid = false with distance FLT_MAX; a point that only "far outside" votes claim gives
+  // valid = false too (it is outside and far). Returned normals are unit, collider space.
+  void query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const override;
+  ColliderSample sample(glm::vec3 local_point) const;
+
+  const std::vector<DepthMap>& maps() const { return maps_; }
+  int normalResolution() const { return normal_resolution_; }
+  // Number of single depth maps in the paper's sense (front_back16 = 2, cube8 = 6).
+  int depthMapCount() const;
+  // Texel bytes plus the normal index texture (if any map indexes normals).
+  std::size_t bytes() const;
+
+ private:
+  std::vector<DepthMap> maps_;
+  int normal_resolution_ = 256;
+  std::vector<glm::vec3> normal_table_;  // l1NormalTexture(normal_resolution_)
+};
+
+// ---- Baking (§4.1, §4.3): CPU rasterizer ----------------------------------------------
+
+// Triangle mesh as plain arrays (no assimp here): positions and 3 indices per triangle.
+// Closed meshes with consistent winding; outward is counter-clockwise, and a mesh wound
+// the other way round throughout (negative signed volume) is detected and flipped.
+struct MeshView {
+  std::span<const glm::vec3> positions;
+  std::span<const std::uint32_t> indices;  // size multiple of 3, each < positions.size()
+};
+
+// Orthographic view volume: a box with centre, view direction `forward` (depth grows along
+// it) and `up` (re-orthogonalised); half_extent = (right, up, depth) half sizes, collider units.
+struct OrthoView {
+  glm::vec3 center{0.0f};
+  glm::vec3 forward{0.0f, 0.0f, 1.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  glm::vec3 half_extent{1.0f};
+};
+
+// Depth cube volume: box centre and half sizes (s_x, s_y, s_z).
+struct CubeView {
+  glm::vec3 center{0.0f};
+  glm::vec3 half_extent{1.0f};
+};
+
+enum class MapKind : std::uint32_t { ortho = 0, cube = 1 };
+
+struct MapSpec {
+  MapKind kind = MapKind::ortho;
+  DepthMapFormat format = DepthMapFormat::front_back16;  // cube: always cube8
+  DepthCompare compare = DepthCompare::less;              // ignored for front_back16
+  OrthoView ortho{};
+  CubeView cube{};
+  int resolution = 256;  // texels per side, 4..4096
+};
+
+struct BakeDesc {
+  int normal_resolution = 256;  // R_n for indexed formats, 2..256
+  int threads = 0;              // 0 = all hardware threads
+};
+
+struct BakeStatus {
+  std::string error;        // empty = success; names the bad field/value/triangle
+  std::size_t degenerate_triangles = 0;  // zero-area triangles skipped
+  bool ok() const { return error.empty(); }
+};
+
+// Renders `mesh` into every map of `specs`. Errors (empty mesh, index out of range,
+// non-finite position, bad spec) leave `out` untouched. encloses_collider is set when the
+// map's view volume contains the mesh bounds.
+BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, const BakeDesc& desc,
+                         DepthMapCollider& out);
+
+// Axis-aligned bounds of the mesh (vertices referenced by indices).
+struct Bounds {
+  glm::vec3 lo{0.0f}, hi{0.0f};
+};
+Bounds meshBounds(const MeshView& mesh);
+
+// Default set, §5.2: three front-back pairs along x, y, z in `format` (float32/fixed8 give a
+// LESS and a GREATER map per axis) plus, when with_cube, one depth cube at the bounds centre
+// (GREATER: the centre is assumed inside; pass with_cube = false for shapes where it is not).
+// Volumes are the bounds padded by `padding` (fraction of the largest extent) plus two texels.
+std::vector<MapSpec> defaultMapSpecs(const Bounds& bounds, int resolution,
+                                     DepthMapFormat format = DepthMapFormat::front_back16,
+                                     bool with_cube = false, float padding = 0.05f);
+
+// Parses a --maps SPEC: comma-separated items, each one of
+//   "axes"          three front-back pairs along x,y,z (in the chosen --format)
+//   "x","y","z"     one front-back pair along that axis
+//   "cube"          a GREATER depth cube at the bounds centre over the padded bounds
+//   "cube-less"     a LESS depth cube at the bounds centre
+//   "cube@X:Y:Z:H"  a LESS depth cube centred at (X,Y,Z) with half size H (concave regions)
+// Error names the bad item.
+bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution, DepthMapFormat format,
+                  std::vector<MapSpec>& out, std::string& error);
+
+// ---- Files: "FLDMAPS\0", version, maps, FNV-1a checksum --------------------------------
+
+inline constexpr std::uint32_t kColliderFileVersion = 1;
+
+struct FileStatus {
+  std::string error;  // empty = success; names file and field
+  bool ok() const { return error.empty(); }
+};
+enum class Overwrite { refuse, replace };
+
+FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollider& collider,
+                        Overwrite overwrite = Overwrite::refuse);
+// Rejects wrong magic, version, sizes, truncation, trailing bytes and checksum mismatch.
+FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out);
+// In-memory forms used by the file functions (and the truncation/garbage tests).
+std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider);
+FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name,
+                               DepthMapCollider& out);
+
+// ---- Batch queries and the particle step ----------------------------------------------
+
+struct ParallelDesc {
+  int threads = 0;          // 0 = all hardware threads
+  std::size_t grain = 4096;  // points per task
+};
+
+// Splits the span into chunks and calls shape.query on each, on up to `threads` threads.
+// Results do not depend on the thread count. Returns the number of non-finite input points
+// (their samples are invalid; nothing NaN is written).
+std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm::vec3> local_points,
+                          std::span<ColliderSample> out, const ParallelDesc& desc = {});
+
+// World-space query of a posed collider: points go to collider space (scratch, caller-owned,
+// resized once), normals come back in world space. Returns the non-finite count.
+std::size_t queryWorld(const SignedDistanceShape& shape, const ColliderPose& pose,
+                       std::span<const glm::vec3> world_points, std::span<ColliderSample> out,
+                       std::vector<glm::vec3>& scratch, const ParallelDesc& desc = {});
+
+// Caller-owned scratch for collideParticles (grows once, reused every step).
+struct CollideScratch {
+  std::vector<glm::vec3> local;
+  std::vector<ColliderSample> previous, predicted;
+};
+
+struct CollideDesc {
+  CollisionMaterial material{};
+  float dt = 1.0f / 60.0f;  // s
+  float skin = 1e-3f;       // collider units pushed beyond the surface
+  // Beyond the paper: when > 0, a particle whose step is longer than max_step and whose
+  // predicted position is outside is also sampled along the step every max_step, so it
+  // cannot tunnel through walls thinner than its step (the first inside sample is used as
+  // the predicted one). 0 = the paper's two samples only.
+  float max_step = 0.0f;
+  ParallelDesc parallel{};
+};
+
+struct CollideCounts {
+  std::size_t reacted = 0, pushed_out = 0, non_finite = 0;
+  std::size_t swept = 0;  // collisions found only by the max_step sampling
+};
+
+// §3.3.2 double check for a batch: samples the collider at previous and predicted world
+// positions (moving collider: the pose is applied before the lookup, its velocity is the
+// rest frame of the reaction) and calls resolveCollision; positions/velocities are updated
+// in place. Spans must have equal sizes.
+CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderPose& pose,
+                               std::span<const glm::vec3> previous_positions,
+                               std::span<glm::vec3> predicted_positions, std::span<glm::vec3> predicted_velocities,
+                               const CollideDesc& desc, CollideScratch& scratch);
+
+// ---- Exact reference: signed distance to a closed triangle mesh (BVH) ------------------
+
+// Unsigned distance from a BVH closest-point search; the sign from ray-crossing parity
+// (majority of three fixed rays). Used by tests, the accuracy table and the benchmark.
+class MeshDistance final : public SignedDistanceShape {
+ public:
+  explicit MeshDistance(const MeshView& mesh);
+  void query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const override;
+  ColliderSample sample(glm::vec3 p) const;
+  // Brute force over all triangles (no BVH), for checking the BVH and for the benchmark.
+  ColliderSample sampleBruteForce(glm::vec3 p) const;
+
+ private:
+  struct Node {
+    glm::vec3 lo, hi;
+    std::uint32_t first, count;  // leaf: triangle range; inner: first = right child, count = 0
+  };
+  std::vector<glm::vec3> a_, b_, c_;  // triangles (degenerate ones kept: they still bound)
+  std::vector<Node> nodes_;
+  float closest(glm::vec3 p, glm::vec3& closest_point) const;
+  int crossings(glm::vec3 origin, glm::vec3 dir) const;
+  bool inside(glm::vec3 p) const;
+};
+
+}  // namespace fluid

@@ -1,0 +1,337 @@
+// Depth-map collider queries: eq. (1) per ortho map, the §4.3 depth-cube distance, and rule (2)
+// of Kolb et al. 2004 §4.1 combining the votes. Encodings: see collide.hpp.
+#include "fluid/collide/collide.hpp"
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+namespace fluid {
+
+namespace {
+
+constexpr float kFarOutside = FLT_MAX;
+
+// Winner bookkeeping: which map/texel decided f, so only one normal is decoded per point.
+struct Winner {
+  float f = -FLT_MAX;  // rule (2): start "far inside"
+  const DepthMap* map = nullptr;
+  std::uint32_t texel = 0;  // texel number within the map (cube: face·N·N + ...)
+  std::uint8_t layer = 0;   // front_back16: 0 = front, 1 = back
+  bool any_vote = false;
+};
+
+// Rule (2), order-independent form: f = min of the votes >= 0 if there is one, otherwise the
+// max of the negative votes. (The printed iterative rule treats f_i = 0 as neither case; we
+// count it as outside/on the surface.)
+inline void vote(Winner& w, float fi, const DepthMap* map, std::uint32_t texel, std::uint8_t layer) {
+  w.any_vote = true;
+  const bool take = fi >= 0.0f ? (w.f < 0.0f || fi < w.f) : (w.f < 0.0f && fi > w.f);
+  if (take) {
+    w.f = fi;
+    w.map = map;
+    w.texel = texel;
+    w.layer = layer;
+  }
+}
+
+inline void invalidVote(Winner& w, const DepthMap& map) {
+  if (map.encloses_collider) vote(w, kFarOutside, nullptr, 0, 0);
+}
+
+inline glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) {
+  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
+}
+
+inline std::uint16_t loadU16(const std::uint8_t* p) {
+  std::uint16_t v;
+  std::memcpy(&v, p, 2);
+  return v;
+}
+
+void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
+  const glm::vec3 q = transformPoint(map.collider_to_map, p);
+  const bool two = map.format == DepthMapFormat::front_back16;
+  // Outside the map's footprint: invalid vote (§4.1).
+  if (!(q.x >= 0.0f && q.x < 1.0f && q.y >= 0.0f && q.y < 1.0f)) {
+    if (two) invalidVote(w, map);
+    return invalidVote(w, map);
+  }
+  // Along the view direction a LESS map is valid up to its far plane and a GREATER map from
+  // its near plane on: a point in front of the near plane is still in front of the first
+  // surface, so eq. (1) holds there; behind the far plane it would wrongly read "inside".
+  const bool less_ok = q.z <= 1.0f, greater_ok = q.z >= 0.0f;
+  const int n = static_cast<int>(map.resolution);
+  const float nf = static_cast<float>(n);
+  const int i = std::min(static_cast<int>(q.x * nf), n - 1);
+  const int j = std::min(static_cast<int>(q.y * nf), n - 1);
+  const std::uint32_t texel = static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
+  const std::uint8_t* t = map.texels.data() + texel * texelBytes(map.format);
+  const bool less = map.compare == DepthCompare::less;
+  const float sign_less = less ? 1.0f : -1.0f;
+  switch (map.format) {
+    case DepthMapFormat::float32: {
+      float depth;
+      std::memcpy(&depth, t + 12, 4);
+      if (depth < 0.0f || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
+      return vote(w, sign_less * map.z_scale * (depth - q.z), &map, texel, 0);
+    }
+    case DepthMapFormat::fixed8: {
+      const std::uint16_t code = static_cast<std::uint16_t>((t[2] << 8) | t[3]);
+      if (code == kFixedBackground || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
+      return vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
+    }
+    case DepthMapFormat::front_back16: {
+      const float front = halfToFloat(loadU16(t + 4));
+      const float back = halfToFloat(loadU16(t + 6));
+      if (front < 0.0f || !less_ok) {
+        invalidVote(w, map);
+      } else {
+        vote(w, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
+      }
+      if (back < 0.0f || !greater_ok) {
+        invalidVote(w, map);
+      } else {
+        vote(w, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
+      }
+      return;
+    }
+    case DepthMapFormat::cube8: break;
+  }
+  assert(false && "cube8 handled by cubeVote");
+}
+
+// Cube face and face-local (sc, tc) by the OpenGL cube-map table (collide.hpp).
+inline int cubeFace(glm::vec3 d, float& sc, float& tc, float& ma) {
+  const float ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+  if (ax >= ay && ax >= az) {
+    ma = ax;
+    tc = -d.y;
+    if (d.x >= 0.0f) {
+      sc = -d.z;
+      return 0;
+    }
+    sc = d.z;
+    return 1;
+  }
+  if (ay >= az) {
+    ma = ay;
+    sc = d.x;
+    if (d.y >= 0.0f) {
+      tc = d.z;
+      return 2;
+    }
+    tc = -d.z;
+    return 3;
+  }
+  ma = az;
+  tc = -d.y;
+  if (d.z >= 0.0f) {
+    sc = d.x;
+    return 4;
+  }
+  sc = -d.x;
+  return 5;
+}
+
+void cubeVote(Winner& w, const DepthMap& map, glm::vec3 p) {
+  glm::vec3 q = transformPoint(map.collider_to_map, p);
+  if (!(std::fabs(q.x) <= 1.0f && std::fabs(q.y) <= 1.0f && std::fabs(q.z) <= 1.0f)) return invalidVote(w, map);
+  float length = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+  glm::vec3 dir = length > 0.0f ? q / length : glm::vec3(0.0f, 0.0f, 1.0f);
+  float sc, tc, ma;
+  const int face = cubeFace(length > 0.0f ? q : dir, sc, tc, ma);
+  const int n = static_cast<int>(map.resolution);
+  const float nf = static_cast<float>(n);
+  const float s = (sc / ma + 1.0f) * 0.5f;
+  const float t = (tc / ma + 1.0f) * 0.5f;
+  const int i = std::clamp(static_cast<int>(s * nf), 0, n - 1);
+  const int j = std::clamp(static_cast<int>(t * nf), 0, n - 1);
+  const std::uint32_t texel =
+      static_cast<std::uint32_t>(face) * map.resolution * map.resolution + static_cast<std::uint32_t>(j) * map.resolution +
+      static_cast<std::uint32_t>(i);
+  const std::uint8_t* tx = map.texels.data() + texel * 4u;
+  const std::uint16_t code = static_cast<std::uint16_t>((tx[2] << 8) | tx[3]);
+  if (code == kFixedBackground) return invalidVote(w, map);
+  const float r = static_cast<float>(code) * kCubeRadiusStep;
+  // §4.3: (1 − r/L)·|S·P'| = (L − r)·|S·dir|, signed so a LESS cube calls the centre side outside.
+  const float along = glm::length(map.cube_scale * dir);
+  const float f = (map.compare == DepthCompare::less ? (r - length) : (length - r)) * along;
+  vote(w, f, &map, texel, 0);
+}
+
+}  // namespace
+
+DepthMapCollider::DepthMapCollider(std::vector<DepthMap> maps, int normal_resolution)
+    : maps_(std::move(maps)), normal_resolution_(normal_resolution) {
+  assert(normal_resolution_ >= 1 && normal_resolution_ <= 256);
+  const std::vector<float> rgb = l1NormalTexture(normal_resolution_);
+  normal_table_.resize(rgb.size() / 3);
+  for (std::size_t k = 0; k < normal_table_.size(); ++k) normal_table_[k] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
+}
+
+int DepthMapCollider::depthMapCount() const {
+  int count = 0;
+  for (const DepthMap& m : maps_) {
+    count += m.format == DepthMapFormat::front_back16 ? 2 : m.format == DepthMapFormat::cube8 ? 6 : 1;
+  }
+  return count;
+}
+
+std::size_t DepthMapCollider::bytes() const {
+  std::size_t total = 0;
+  bool indexed = false;
+  for (const DepthMap& m : maps_) {
+    total += m.texels.size();
+    indexed = indexed || m.format != DepthMapFormat::float32;
+  }
+  // The normal index texture as the GPU holds it: RGB float32.
+  if (indexed) total += normal_table_.size() * 3 * sizeof(float);
+  return total;
+}
+
+ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
+  ColliderSample out;
+  out.valid = false;
+  out.distance = FLT_MAX;
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return out;
+  Winner w;
+  for (const DepthMap& map : maps_) {
+    if (map.format == DepthMapFormat::cube8) {
+      cubeVote(w, map, p);
+    } else {
+      orthoVotes(w, map, p);
+    }
+  }
+  if (!w.any_vote || w.map == nullptr) return out;  // no opinion, or only "far outside"
+  out.valid = true;
+  out.distance = w.f;
+  const DepthMap& m = *w.map;
+  const std::uint8_t* t = m.texels.data() + static_cast<std::size_t>(w.texel) * texelBytes(m.format);
+  std::uint32_t index = 0;
+  switch (m.format) {
+    case DepthMapFormat::float32: {
+      float n[3];
+      std::memcpy(n, t, 12);
+      out.normal = {n[0], n[1], n[2]};
+      return out;
+    }
+    case DepthMapFormat::fixed8:
+    case DepthMapFormat::cube8:
+      index = static_cast<std::uint32_t>(t[1]) * static_cast<std::uint32_t>(normal_resolution_) + t[0];
+      break;
+    case DepthMapFormat::front_back16: {
+      const std::uint16_t packed = loadU16(t + 2 * w.layer);
+      index = static_cast<std::uint32_t>(packed >> 8) * static_cast<std::uint32_t>(normal_resolution_) + (packed & 0xFFu);
+      break;
+    }
+  }
+  out.normal = normal_table_[index];
+  return out;
+}
+
+void DepthMapCollider::query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const {
+  assert(local_points.size() == out.size());
+  for (std::size_t k = 0; k < local_points.size(); ++k) out[k] = sample(local_points[k]);
+}
+
+// ---- batch ---------------------------------------------------------------------------
+
+std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm::vec3> points,
+                          std::span<ColliderSample> out, const ParallelDesc& desc) {
+  assert(points.size() == out.size());
+  const int threads = desc.threads > 0 ? desc.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::size_t grain = std::max<std::size_t>(desc.grain, 1);
+  if (threads == 1 || points.size() <= grain) {
+    shape.query(points, out);
+  } else {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), grain),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
+                        });
+    });
+  }
+  std::size_t non_finite = 0;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const glm::vec3 p = points[k];
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+      ++non_finite;
+      out[k] = ColliderSample{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};  // whatever the shape wrote
+    }
+  }
+  return non_finite;
+}
+
+std::size_t queryWorld(const SignedDistanceShape& shape, const ColliderPose& pose, std::span<const glm::vec3> world,
+                       std::span<ColliderSample> out, std::vector<glm::vec3>& scratch, const ParallelDesc& desc) {
+  assert(world.size() == out.size());
+  scratch.resize(world.size());
+  const glm::quat inverse = glm::inverse(pose.rotation);
+  for (std::size_t k = 0; k < world.size(); ++k) scratch[k] = inverse * (world[k] - pose.translation);
+  const std::size_t bad = queryParallel(shape, scratch, out, desc);
+  for (ColliderSample& s : out) {
+    if (s.valid) s.normal = pose.rotation * s.normal;
+  }
+  return bad;
+}
+
+CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderPose& pose,
+                               std::span<const glm::vec3> previous_positions, std::span<glm::vec3> predicted_positions,
+                               std::span<glm::vec3> predicted_velocities, const CollideDesc& desc,
+                               CollideScratch& scratch) {
+  const std::size_t n = previous_positions.size();
+  assert(predicted_positions.size() == n && predicted_velocities.size() == n);
+  scratch.previous.resize(n);
+  scratch.predicted.resize(n);
+  CollideCounts counts;
+  // §3.3.2: the collision test is done twice, at the previous and the expected position.
+  counts.non_finite = queryWorld(shape, pose, previous_positions, scratch.previous, scratch.local, desc.parallel);
+  counts.non_finite += queryWorld(shape, pose, predicted_positions, scratch.predicted, scratch.local, desc.parallel);
+  const glm::quat inverse = glm::inverse(pose.rotation);
+  for (std::size_t k = 0; k < n; ++k) {
+    ColliderSample after = scratch.predicted[k];
+    glm::vec3 predicted = predicted_positions[k];
+    glm::vec3 previous = previous_positions[k];
+    ColliderSample before = scratch.previous[k];
+    const bool outside_after = !after.valid || after.distance >= 0.0f;
+    if (outside_after && desc.max_step > 0.0f) {
+      const glm::vec3 step = predicted - previous;
+      const float length = glm::length(step);
+      if (std::isfinite(length) && length > desc.max_step) {
+        const int samples = static_cast<int>(std::min(std::ceil(length / desc.max_step), 1.0e6f));
+        for (int s = 1; s < samples; ++s) {
+          const glm::vec3 world = previous + step * (static_cast<float>(s) / static_cast<float>(samples));
+          const glm::vec3 local = inverse * (world - pose.translation);
+          ColliderSample hit;
+          shape.query({&local, 1}, {&hit, 1});
+          if (hit.valid && hit.distance < 0.0f) {
+            hit.normal = pose.rotation * hit.normal;
+            after = hit;
+            predicted = world;
+            ++counts.swept;
+            break;
+          }
+        }
+      }
+    }
+    if (!after.valid || after.distance >= 0.0f) continue;
+    const CollisionResult r = resolveCollision(previous, before, predicted, predicted_velocities[k], after,
+                                               colliderVelocityAt(pose, predicted), desc.dt, desc.skin, desc.material);
+    predicted_positions[k] = r.position;
+    predicted_velocities[k] = r.velocity;
+    counts.reacted += r.outcome == CollisionOutcome::reacted;
+    counts.pushed_out += r.outcome == CollisionOutcome::pushed_out;
+  }
+  return counts;
+}
+
+}  // namespace fluid
