@@ -17,10 +17,10 @@ namespace engine {
 
 namespace {
 
-// Exact constants of the collide module's encodings (fluid/collide/collide.hpp):
-// kFixedDepthStep = float(1/65535), kCubeRadiusStep = float(sqrt(3)/65535).
-constexpr float kFixedDepthStep = static_cast<float>(1.0 / 65535.0);
-constexpr float kCubeRadiusStep = static_cast<float>(1.7320508075688772 / 65535.0);
+// The shader decodes fluid/collide's texels; these enums are passed as plain integers.
+static_assert(static_cast<int>(fluid::DepthMapFormat::float32) == 1 && static_cast<int>(fluid::DepthMapFormat::fixed8) == 2 &&
+              static_cast<int>(fluid::DepthMapFormat::front_back16) == 3 && static_cast<int>(fluid::DepthMapFormat::cube8) == 4);
+static_assert(static_cast<int>(fluid::DepthCompare::less) == 0 && static_cast<int>(fluid::DepthCompare::greater) == 1);
 
 GLuint makeTexture2D(GLenum internal_format, GLsizei w, GLsizei h, GLenum format, GLenum type, const void* data) {
   GLuint tex = 0;
@@ -82,6 +82,36 @@ void sortStage(std::uint32_t n, std::uint32_t step, std::uint32_t& p, std::uint3
 }
 
 }  // namespace
+
+GpuDepthMapView gpuDepthMapView(const fluid::DepthMap& map) {
+  GpuDepthMapView v;
+  v.format = static_cast<std::uint32_t>(map.format);
+  v.compare = static_cast<std::uint32_t>(map.compare);
+  v.resolution = map.resolution;
+  v.collider_to_map = map.collider_to_map;
+  v.z_scale = map.z_scale;
+  v.cube_scale = map.cube_scale;
+  v.encloses_collider = map.encloses_collider;
+  v.texels = map.texels;
+  return v;
+}
+
+void describeCollider(const fluid::DepthMapCollider& collider, const fluid::ColliderPose& pose,
+                      std::vector<GpuDepthMapView>& views, std::vector<float>& normal_table, GpuColliderDesc& out) {
+  views.clear();
+  bool indexed = false;
+  for (const fluid::DepthMap& m : collider.maps()) {
+    views.push_back(gpuDepthMapView(m));
+    indexed = indexed || m.format != fluid::DepthMapFormat::float32;
+  }
+  normal_table.clear();
+  if (indexed) normal_table = fluid::l1NormalTexture(collider.normalResolution());
+  out = GpuColliderDesc{};
+  out.maps = views;
+  out.normal_resolution = collider.normalResolution();
+  out.normal_table = normal_table;
+  out.pose = pose;
+}
 
 std::uint32_t sortPassCount(std::uint32_t n) {
   if (n < 2) return 0;
@@ -494,8 +524,8 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform3fv(loc(prog, "u_pose_translation"), kMaxGpuColliders, glm::value_ptr(trans[0]));
   glUniform3fv(loc(prog, "u_pose_linear"), kMaxGpuColliders, glm::value_ptr(lin[0]));
   glUniform3fv(loc(prog, "u_pose_angular"), kMaxGpuColliders, glm::value_ptr(ang[0]));
-  glUniform1f(loc(prog, "u_fixed_step"), kFixedDepthStep);
-  glUniform1f(loc(prog, "u_cube_step"), kCubeRadiusStep);
+  glUniform1f(loc(prog, "u_fixed_step"), fluid::kFixedDepthStep);
+  glUniform1f(loc(prog, "u_cube_step"), fluid::kCubeRadiusStep);
   glUniform1f(loc(prog, "u_friction"), params.material.friction);
   glUniform1f(loc(prog, "u_resilience"), params.material.resilience);
   glUniform1f(loc(prog, "u_friction_threshold"), params.material.friction_speed_threshold);

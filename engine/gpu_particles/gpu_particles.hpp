@@ -21,6 +21,7 @@
 // created the system to be current. A system whose shaders failed to build is `ready == false`
 // and all per-frame calls on it are no-ops: the game keeps running without the effect.
 
+#include "fluid/collide/collide.hpp"
 #include "fluid/core/collider.hpp"
 
 #include <GL/gl.h>
@@ -126,6 +127,9 @@ struct GpuDepthMapView {
   std::span<const std::uint8_t> texels;  // N·N (·6 for cube8) texels of 16/4/8/4 bytes
 };
 
+// The view of one fluid::DepthMap (no copy: the map must outlive the upload call).
+GpuDepthMapView gpuDepthMapView(const fluid::DepthMap& map);
+
 inline constexpr int kMaxGpuColliders = 4;
 inline constexpr int kMaxGpuDepthMaps = 16;  // over all colliders
 
@@ -135,6 +139,12 @@ struct GpuColliderDesc {
   std::span<const float> normal_table;   // 3·R_n·R_n floats: l1NormalTexture(R_n), uploaded as is
   fluid::ColliderPose pose{};
 };
+
+// Describes a fluid/collide collider for setColliders. `views` and `normal_table` are
+// caller-owned storage the description points into (normal_table receives
+// fluid::l1NormalTexture(R_n), the array the collide module decodes with).
+void describeCollider(const fluid::DepthMapCollider& collider, const fluid::ColliderPose& pose,
+                      std::vector<GpuDepthMapView>& views, std::vector<float>& normal_table, GpuColliderDesc& out);
 
 // ---- the system -------------------------------------------------------------------------
 

@@ -78,21 +78,26 @@ vec3 transformPoint(mat4 m, vec3 p) { return m[0].xyz * p.x + m[1].xyz * p.y + m
 void orthoVotes(inout Winner w, int map, vec3 p) {
   vec3 q = transformPoint(u_map_matrix[map], p);
   int format = u_map_info[map].x;
-  if (!(q.x >= 0.0 && q.x < 1.0 && q.y >= 0.0 && q.y < 1.0 && q.z >= 0.0 && q.z <= 1.0)) {
+  // Outside the map's footprint: invalid vote (§4.1).
+  if (!(q.x >= 0.0 && q.x < 1.0 && q.y >= 0.0 && q.y < 1.0)) {
     if (format == 3) invalidVote(w, map);
     invalidVote(w, map);
     return;
   }
+  // Along the view direction a LESS map holds up to its far plane, a GREATER map from its near
+  // plane on (fluid/collide: in front of the near plane eq. (1) still holds).
+  bool less_ok = q.z <= 1.0, greater_ok = q.z >= 0.0;
   int n = u_map_info[map].z;
   float nf = float(n);
   int i = min(int(q.x * nf), n - 1);
   int j = min(int(q.y * nf), n - 1);
   int texel = j * n + i;
-  float sign_less = u_map_info[map].y == 0 ? 1.0 : -1.0;
+  bool less = u_map_info[map].y == 0;
+  float sign_less = less ? 1.0 : -1.0;
   float z_scale = u_map_params[map].x;
   if (format == 1) {
     float depth = uintBitsToFloat(mapWord(map, 4 * texel + 3));
-    if (depth < 0.0) {
+    if (depth < 0.0 || !(less ? less_ok : greater_ok)) {
       invalidVote(w, map);
       return;
     }
@@ -100,7 +105,7 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
   } else if (format == 2) {
     uint word = mapWord(map, texel);
     uint code = (((word >> 16) & 255u) << 8) | (word >> 24);
-    if (code == kFixedBackground) {
+    if (code == kFixedBackground || !(less ? less_ok : greater_ok)) {
       invalidVote(w, map);
       return;
     }
@@ -109,12 +114,12 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
     uint word = mapWord(map, 2 * texel + 1);
     float front = halfToFloat(word & 0xffffu);
     float back = halfToFloat(word >> 16);
-    if (front < 0.0) {
+    if (front < 0.0 || !less_ok) {
       invalidVote(w, map);
     } else {
       vote(w, z_scale * (front - q.z), map, texel, 0);  // eq. (1), LESS
     }
-    if (back < 0.0) {
+    if (back < 0.0 || !greater_ok) {
       invalidVote(w, map);
     } else {
       vote(w, z_scale * (q.z - back), map, texel, 1);  // GREATER: eq. (1) negated

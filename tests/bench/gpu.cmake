@@ -7,3 +7,13 @@ add_executable(bench_gpu_particles
   ${PROJECT_SOURCE_DIR}/tests/gpu/gl_test_context.cpp)
 target_link_libraries(bench_gpu_particles PRIVATE engine SDL2::SDL2 fluiddemo_options)
 target_compile_definitions(bench_gpu_particles PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+
+# Screenshots for docs/gpu.md (not a benchmark, not a test): gpu_screenshot docs/images [--force]
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(GPU_STB REQUIRED IMPORTED_TARGET stb)
+add_executable(gpu_screenshot
+  gpu_screenshot.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/cpu_reference.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/gl_test_context.cpp)
+target_link_libraries(gpu_screenshot PRIVATE engine SDL2::SDL2 PkgConfig::GPU_STB fluiddemo_options)
+target_compile_definitions(gpu_screenshot PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

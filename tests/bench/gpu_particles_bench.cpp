@@ -61,10 +61,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("GL: %s\nmedian of %d repetitions; particles per ms (ms per pass)\n\n", ctx.version.c_str(), reps);
-  std::printf("| particles | update | update + collide (3 maps) | sort key refresh | sort pass | draw (512², points) |\n");
+  std::printf("| particles | update | update + collide (ground 1 map + sphere 3 front-back16 maps) | sort key refresh | sort pass | draw (512², points) |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|\n");
-  const gputest::TestCollider ground = gputest::makeGroundCollider(256);
-  const gputest::TestCollider sphere = gputest::makeSphereCollider({0.0f, 0.6f, 0.0f}, 0.35f, 256, 256);
+  gputest::TestCollider ground = gputest::makeGroundCollider(256);
+  gputest::TestCollider sphere = gputest::makeSphereCollider({0.0f, 0.6f, 0.0f}, 0.35f, 256, fluid::DepthMapFormat::front_back16);
   // FBO for the draw.
   GLuint tex = 0, fbo = 0;
   glGenTextures(1, &tex);
@@ -95,12 +95,7 @@ int main(int argc, char** argv) {
     spawn(s, batch);
     GpuStepParams params;
     const double update = medianMs(reps, [&] { step(s, params); });
-    std::vector<GpuDepthMapView> gv = ground.views(), sv = sphere.views();
-    GpuColliderDesc cols[2];
-    cols[0].maps = gv;
-    cols[1].maps = sv;
-    cols[1].normal_resolution = sphere.normal_resolution;
-    cols[1].normal_table = sphere.normal_table;
+    GpuColliderDesc cols[2] = {ground.gpu(), sphere.gpu()};
     std::string error;
     if (!setColliders(s, cols, error)) {
       std::fprintf(stderr, "%s\n", error.c_str());
