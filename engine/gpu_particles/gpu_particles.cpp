@@ -81,6 +81,21 @@ void sortStage(std::uint32_t n, std::uint32_t step, std::uint32_t& p, std::uint3
   }
 }
 
+GLuint buildUpdateVariant(const std::filesystem::path& dir, unsigned variant, std::string& error) {
+  std::string defines;
+  if (variant & 1u) defines += "#define ATTRACTORS\n";
+  if (variant & 2u) defines += "#define DRAG\n";
+  if (variant & 4u) defines += "#define FLOW\n";
+  if (variant & 8u) defines += "#define COLLIDERS\n";
+  if (variant & 16u) defines += "#define FORMAT_FLOAT32\n";
+  if (variant & 32u) defines += "#define FORMAT_FIXED8\n";
+  if (variant & 64u) defines += "#define FORMAT_FRONT_BACK16\n";
+  if (variant & 128u) defines += "#define FORMAT_CUBE8\n";
+  const std::vector<ShaderStageFiles> stages{{GL_VERTEX_SHADER, {dir / "fullscreen.vert"}},
+                                             {GL_FRAGMENT_SHADER, {dir / "collide.glsl", dir / "update.frag"}}};
+  return buildProgram(stages, defines, error);
+}
+
 }  // namespace
 
 GpuDepthMapView gpuDepthMapView(const fluid::DepthMap& map) {
@@ -143,8 +158,13 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
     id = buildProgram(stages, "", error);
     if (id == 0) out.error += error;
   };
-  program({{GL_VERTEX_SHADER, {dir / "fullscreen.vert"}}, {GL_FRAGMENT_SHADER, {dir / "collide.glsl", dir / "update.frag"}}},
-          out.update.id);
+  // The plain update variant is built now, so a broken update shader disables the system at
+  // creation; the others are built on first use (updateProgram).
+  {
+    std::string error;
+    out.update_variants[0] = buildUpdateVariant(dir, 0, error);
+    if (out.update_variants[0] == 0) out.error += error;
+  }
   program({{GL_VERTEX_SHADER, {dir / "birth.vert"}}, {GL_FRAGMENT_SHADER, {dir / "birth.frag"}}}, out.birth.id);
   program({{GL_VERTEX_SHADER, {dir / "fullscreen.vert"}}, {GL_FRAGMENT_SHADER, {dir / "sort_key.frag"}}},
           out.sort_key.id);
@@ -266,7 +286,11 @@ void destroyGpuParticles(GpuParticles& s) {
     if (*vao != 0) glDeleteVertexArrays(1, vao);
     *vao = 0;
   }
-  for (GpuProgram* p : {&s.update, &s.birth, &s.sort_key, &s.sort_pass, &s.sprite}) {
+  for (GLuint& id : s.update_variants) {
+    if (id != 0) glDeleteProgram(id);
+    id = 0;
+  }
+  for (GpuProgram* p : {&s.birth, &s.sort_key, &s.sort_pass, &s.sprite}) {
     if (p->id != 0) glDeleteProgram(p->id);
     p->id = 0;
   }
@@ -401,6 +425,8 @@ bool setColliders(GpuParticles& s, std::span<const GpuColliderDesc> colliders, s
   glBindBuffer(GL_TEXTURE_BUFFER, 0);
   s.collider_count = static_cast<int>(colliders.size());
   s.map_count = m;
+  s.format_mask = 0;
+  for (int k = 0; k < m; ++k) s.format_mask |= 1u << (next.map_info[static_cast<std::size_t>(4 * k)] - 1);
   s.collider_first_map = next.collider_first_map;
   s.collider_poses = next.collider_poses;
   s.map_info = next.map_info;
@@ -464,7 +490,22 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   const GLsizei rows = activeRows(s);
   const int src = s.current, dst = 1 - s.current;
   if (rows == 0) return;
-  const GLuint prog = s.update.id;
+  const int attractor_count = std::clamp(params.attractor_count, 0, kMaxAttractors);
+  const float drag = stokesDragRate(params);
+  const unsigned variant = (attractor_count > 0 ? 1u : 0u) | (drag > 0.0f ? 2u : 0u) |
+                           (drag > 0.0f && s.flow_enabled ? 4u : 0u) |
+                           (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u);
+  if (s.update_variants[variant] == 0) {
+    std::string error;
+    s.update_variants[variant] = buildUpdateVariant(s.desc.shader_dir / "gpu_particles", variant, error);
+    if (s.update_variants[variant] == 0) {
+      // Shader files changed or a driver rejects a variant: turn the effect off, keep running.
+      s.error = "gpu particles disabled, update shader variant " + std::to_string(variant) + " failed:\n" + error;
+      s.ready = false;
+      return;
+    }
+  }
+  const GLuint prog = s.update_variants[variant];
   glBindFramebuffer(GL_FRAMEBUFFER, s.fbo[dst]);
   glViewport(0, 0, static_cast<GLsizei>(s.desc.width), rows);
   glDisable(GL_BLEND);
@@ -487,7 +528,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform1i(loc(prog, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
   glUniform3fv(loc(prog, "u_gravity"), 1, glm::value_ptr(params.gravity));
   glUniform3fv(loc(prog, "u_wind"), 1, glm::value_ptr(params.wind));
-  const int attractors = std::clamp(params.attractor_count, 0, kMaxAttractors);
+  const int attractors = attractor_count;
   std::array<glm::vec4, kMaxAttractors> att{};
   std::array<float, kMaxAttractors> soft{};
   for (int k = 0; k < attractors; ++k) {
@@ -498,8 +539,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform1i(loc(prog, "u_attractor_count"), attractors);
   glUniform4fv(loc(prog, "u_attractors"), kMaxAttractors, glm::value_ptr(att[0]));
   glUniform1fv(loc(prog, "u_softening"), kMaxAttractors, soft.data());
-  glUniform1f(loc(prog, "u_drag"), stokesDragRate(params));
-  glUniform1i(loc(prog, "u_flow_enabled"), s.flow_enabled ? 1 : 0);
+  glUniform1f(loc(prog, "u_drag"), drag);
   glUniform3fv(loc(prog, "u_flow_origin"), 1, glm::value_ptr(s.flow_origin));
   glUniform3fv(loc(prog, "u_flow_extent"), 1, glm::value_ptr(s.flow_extent));
   // Colliders.

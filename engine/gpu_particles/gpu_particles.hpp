@@ -217,7 +217,10 @@ struct GpuParticles {
   GLuint type_tex = 0, flow_tex = 0;
   GLuint collider_buffer = 0, collider_tbo = 0, normal_buffer = 0, normal_tbo = 0;
   GLuint birth_vbo = 0, birth_vao = 0, empty_vao = 0;
-  GpuProgram update, birth, sort_key, sort_pass, sprite;
+  GpuProgram birth, sort_key, sort_pass, sprite;
+  // Update-pass variants, built on first use: bit 0 attractors, 1 drag, 2 flow field,
+  // 3 colliders, 4..7 depth-map formats present (float32, fixed8, front_back16, cube8).
+  std::array<GLuint, 256> update_variants{};
   float time = 0.0f;  // s since creation, advanced by step()
   IndexAllocator allocator;
   std::vector<std::pair<float, std::uint32_t>> death_queue;  // min-heap on death time
@@ -226,6 +229,7 @@ struct GpuParticles {
   // Colliders uploaded by setColliders.
   int collider_count = 0;
   int map_count = 0;
+  unsigned format_mask = 0;  // bit f-1 set when a map of format f is uploaded
   std::vector<std::uint32_t> collider_words;
   std::array<int, kMaxGpuColliders + 1> collider_first_map{};
   std::array<fluid::ColliderPose, kMaxGpuColliders> collider_poses{};

@@ -95,6 +95,7 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
   bool less = u_map_info[map].y == 0;
   float sign_less = less ? 1.0 : -1.0;
   float z_scale = u_map_params[map].x;
+#ifdef FORMAT_FLOAT32
   if (format == 1) {
     float depth = uintBitsToFloat(mapWord(map, 4 * texel + 3));
     if (depth < 0.0 || !(less ? less_ok : greater_ok)) {
@@ -102,7 +103,10 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
       return;
     }
     vote(w, sign_less * z_scale * (depth - q.z), map, texel, 0);
-  } else if (format == 2) {
+  }
+#endif
+#ifdef FORMAT_FIXED8
+  if (format == 2) {
     uint word = mapWord(map, texel);
     uint code = (((word >> 16) & 255u) << 8) | (word >> 24);
     if (code == kFixedBackground || !(less ? less_ok : greater_ok)) {
@@ -110,7 +114,10 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
       return;
     }
     vote(w, sign_less * z_scale * (float(code) * u_fixed_step - q.z), map, texel, 0);
-  } else if (format == 3) {
+  }
+#endif
+#ifdef FORMAT_FRONT_BACK16
+  if (format == 3) {
     uint word = mapWord(map, 2 * texel + 1);
     float front = halfToFloat(word & 0xffffu);
     float back = halfToFloat(word >> 16);
@@ -125,6 +132,7 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
       vote(w, z_scale * (q.z - back), map, texel, 1);  // GREATER: eq. (1) negated
     }
   }
+#endif
 }
 
 // Cube face and face-local (sc, tc) by the OpenGL cube-map table, ties x before y before z.
@@ -202,27 +210,40 @@ bool sampleCollider(int collider, vec3 p, out float dist, out vec3 normal) {
   if (any(isnan(p)) || any(isinf(p))) return false;
   Winner w = Winner(-kFloatMax, -1, 0, 0, false);
   for (int m = u_collider_first_map[collider]; m < u_collider_first_map[collider + 1]; ++m) {
+    // Only the formats present are compiled in (FORMAT_* defines per program variant).
+#ifdef FORMAT_CUBE8
     if (u_map_info[m].x == 4) {
       cubeVote(w, m, p);
-    } else {
-      orthoVotes(w, m, p);
+      continue;
     }
+#endif
+#if defined(FORMAT_FLOAT32) || defined(FORMAT_FIXED8) || defined(FORMAT_FRONT_BACK16)
+    orthoVotes(w, m, p);
+#endif
   }
   if (!w.any_vote || w.map < 0) return false;
   dist = w.f;
   int format = u_map_info[w.map].x;
+#ifdef FORMAT_FLOAT32
   if (format == 1) {
     int base = 4 * w.texel;
     normal = vec3(uintBitsToFloat(mapWord(w.map, base)), uintBitsToFloat(mapWord(w.map, base + 1)),
                   uintBitsToFloat(mapWord(w.map, base + 2)));
-  } else if (format == 3) {
+    return true;
+  }
+#endif
+#ifdef FORMAT_FRONT_BACK16
+  if (format == 3) {
     uint word = mapWord(w.map, 2 * w.texel);
     uint pk = w.layer == 0 ? (word & 0xffffu) : (word >> 16);
     normal = indexedNormal(collider, pk & 255u, pk >> 8);
-  } else {
-    uint word = mapWord(w.map, w.texel);
-    normal = indexedNormal(collider, word & 255u, (word >> 8) & 255u);
+    return true;
   }
+#endif
+#if defined(FORMAT_FIXED8) || defined(FORMAT_CUBE8)
+  uint word = mapWord(w.map, w.texel);  // fixed8 and cube8: R = i, G = j
+  normal = indexedNormal(collider, word & 255u, (word >> 8) & 255u);
+#endif
   return true;
 }
 

@@ -17,7 +17,6 @@ uniform int u_attractor_count;
 uniform vec4 u_attractors[4];    // xyz position, w strength
 uniform float u_softening[4];
 uniform float u_drag;            // 6πηr/m, 1/s
-uniform int u_flow_enabled;
 uniform sampler3D u_flow;
 uniform vec3 u_flow_origin;
 uniform vec3 u_flow_extent;
@@ -47,19 +46,36 @@ vec3 flowVelocity(vec3 p) {
   return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
 }
 
+// Optional terms are compiled in only when used (ATTRACTORS, DRAG, FLOW, COLLIDERS are
+// #defined per program variant): a software rasteriser such as llvmpipe runs both sides of a
+// branch on a uniform, so "if (count > 0)" would still cost the full price.
 vec3 acceleration(vec3 p, vec3 v) {
   vec3 a = u_gravity + u_wind;
+#ifdef ATTRACTORS
   for (int k = 0; k < u_attractor_count; ++k) {
     vec3 d = u_attractors[k].xyz - p;
     float r2 = dot(d, d) + u_softening[k] * u_softening[k];
     a += u_attractors[k].w * d / (r2 * sqrt(r2));
   }
-  if (u_drag > 0.0) {
-    // Stokes' law, §3.3.2: F = 6πηr(v_{i−1} − v_flow).
-    vec3 flow = u_flow_enabled != 0 ? flowVelocity(p) : vec3(0.0);
-    a -= u_drag * (v - flow);
-  }
+#endif
+#ifdef DRAG
+  // Stokes' law, §3.3.2: F = 6πηr(v_{i−1} − v_flow).
+#ifdef FLOW
+  vec3 flow = flowVelocity(p);
+#else
+  vec3 flow = vec3(0.0);
+#endif
+  a -= u_drag * (v - flow);
+#endif
   return a;
+}
+
+bool collide(vec3 previous, inout vec3 predicted, inout vec3 velocity) {
+#ifdef COLLIDERS
+  return collideAll(previous, predicted, velocity);
+#else
+  return false;
+#endif
 }
 
 void main() {
@@ -80,7 +96,7 @@ void main() {
     vec3 v = s1.xyz;
     next_v = v + acceleration(p, v) * u_dt;
     next_p = p + next_v * u_dt;
-    collideAll(p, next_p, next_v);
+    collide(p, next_p, next_v);
     next_s1 = next_v;
   } else {
     vec3 p2 = s1.xyz;
@@ -88,7 +104,7 @@ void main() {
     next_p = 2.0 * p - p2 + acceleration(p, v) * (u_dt * u_dt);
     next_v = (next_p - p) / u_dt;
     next_s1 = p;
-    if (collideAll(p, next_p, next_v)) next_s1 = next_p - next_v * u_dt;
+    if (collide(p, next_p, next_v)) next_s1 = next_p - next_v * u_dt;
   }
   // NaN/inf never spread: a particle that became non-finite dies here (w = 0).
   bool finite = !(any(isnan(next_p)) || any(isinf(next_p)) || any(isnan(next_s1)) || any(isinf(next_s1)));

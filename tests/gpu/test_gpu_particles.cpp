@@ -534,3 +534,42 @@ TEST_F(GpuParticlesTest, BadColliderInputIsRejectedWithAClearError) {
   EXPECT_FALSE(setFlowField(system_, flow, error));
   EXPECT_NE(error.find("does not match 7 velocities"), std::string::npos) << error;
 }
+
+// Hard cases: zero particles (every pass is a no-op that leaves GL error-free), then a particle
+// count that changes every frame (random births, random lifetimes): each frame the GPU's live
+// flags equal the CPU allocator's, and the active range never exceeds what is live + packed.
+TEST_F(GpuParticlesTest, ZeroParticlesAndACountThatChangesEveryFrame) {
+  ASSERT_NO_FATAL_FAILURE(create(32, 32, Integrator::euler));
+  GpuStepParams params;
+  step(system_, params);
+  sortStep(system_, glm::vec3(0.0f), 4);
+  drawSprites(system_, glm::mat4(1.0f), 1.0f, 64);
+  EXPECT_EQ(spawn(system_, BirthBatch{}), 0u);
+  EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+  std::vector<glm::vec4> gpu;
+  readPositions(system_, gpu);
+  for (const glm::vec4& p : gpu) ASSERT_EQ(p.w, 0.0f);
+  std::mt19937 rng(5);
+  std::size_t max_live = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    BirthBatch b;
+    const int births = static_cast<int>(rng() % 60);
+    for (int k = 0; k < births; ++k) {
+      b.push({0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.02f + 0.3f * static_cast<float>(rng() % 100) / 100.0f, 0, 0.0f);
+    }
+    spawn(system_, b);
+    step(system_, params);
+    sortStep(system_, glm::vec3(0.0f, 0.0f, 3.0f), 2);
+    readPositions(system_, gpu);
+    std::uint32_t live = 0;
+    for (std::uint32_t k = 0; k < system_.capacity; ++k) {
+      const bool cpu_live = system_.allocator.live[k] != 0;
+      ASSERT_EQ(gpu[k].w != 0.0f && k < system_.allocator.active_range, cpu_live) << "frame " << frame << " index " << k;
+      live += cpu_live;
+    }
+    ASSERT_EQ(live, system_.allocator.live_count);
+    max_live = std::max<std::size_t>(max_live, live);
+  }
+  EXPECT_GT(max_live, 100u);
+  EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
