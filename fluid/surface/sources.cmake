@@ -1,2 +1,7 @@
 # Sources of fluid/surface, added to the `fluid` library.
-# target_sources(fluid PRIVATE ${CMAKE_CURRENT_LIST_DIR}/file.cpp)
+target_sources(fluid PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/mc_tables.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/field.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/marching_slices.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/baselines.cpp
+)

@@ -1,0 +1,97 @@
+#pragma once
+// Internal: the paper's field f(r) (§2) and the particle preparation shared by marching slices,
+// the baselines and the dense oracle. Every extractor sums contributions in the same order
+// (particles sorted by (z, input index)) with the same double expressions, so the corner values
+// — and therefore the triangles — agree bit for bit between methods and block sizes.
+
+#include "fluid/surface/marching_slices.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace fluid::detail {
+
+// One particle, prepared. Positions are doubles of the float input.
+struct Particle {
+  double x, y, z;
+  double rc2;                // Rc_i^2: influence iff (dx*dx + dy*dy) + dz*dz < rc2 (in double)
+  std::int64_t anchor[3];    // lattice index floor(p / S) per axis
+  float rest[3];             // float(p - anchor * S) per axis, in [0, S)
+  float k;                   // 1 / (2 Rc_i^2), so u = r^2 k = (r / (sqrt2 Rc_i))^2
+  float strength;            // s_i
+  std::uint32_t index;       // input index (user data)
+};
+
+// The exact-influence predicate. Every lookup structure must return exactly the particles for
+// which this is true at the corner (no more, no fewer).
+inline bool influences(const Particle& p, double cx, double cy, double cz) {
+  const double dx = cx - p.x, dy = cy - p.y, dz = cz - p.z;
+  return (dx * dx + dy * dy) + dz * dz < p.rc2;
+}
+
+// Shared arithmetic of every extractor: the offset from a particle to lattice corner c along an
+// axis is float((c - anchor) * S) - rest, which depends only on the global lattice index (not on
+// any block origin) and stays precise far from the origin. The paper's f(r) is then evaluated in
+// float:  f = s (u - 1/2)^2, u = r^2 k;  df/dc = 4 s (u - 1/2) k (c - p).
+inline float latticeOffset(std::int64_t corner, std::int64_t anchor, float rest, double s) {
+  return float(double(corner - anchor) * s) - rest;
+}
+
+inline float contribution(float dxy2, float dz, float k, float s) {
+  const float w = (dxy2 + dz * dz) * k - 0.5f;
+  return s * (w * w);
+}
+
+inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx,
+                       float& gy, float& gz) {
+  const float w = (dxy2 + dz * dz) * k - 0.5f;
+  value += s * (w * w);
+  const float g = 4.0f * s * w * k;
+  gx += g * dx;
+  gy += g * dy;
+  gz += g * dz;
+}
+
+// Lattice-corner form (oracle, baselines). Caller guarantees influences() is true there.
+inline void accumulate(const Particle& p, std::int64_t i, std::int64_t j, std::int64_t k, double s, float& value,
+                       float& gx, float& gy, float& gz) {
+  const float dx = latticeOffset(i, p.anchor[0], p.rest[0], s), dy = latticeOffset(j, p.anchor[1], p.rest[1], s),
+              dz = latticeOffset(k, p.anchor[2], p.rest[2], s);
+  accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.strength, value, gx, gy, gz);
+}
+
+// Axis permutation used to sweep along the axis nearest the view (paper §5, "rotate the
+// rendering volume"): world axis of local axis a is axis[a], with sign[a] = +1 or -1.
+struct SweepFrame {
+  int axis[3] = {0, 1, 2};
+  int sign[3] = {1, 1, 1};
+  bool flipsWinding() const;
+};
+
+// Prepares particles in sweep-frame coordinates, sorted by (z, index). Fills rcMax with the
+// largest Rc_i. Input must be valid (validateSurface).
+void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
+                      std::vector<Particle>& out, double& rcMax);
+
+// Lattice coordinate helpers: corner k sits at k * S.
+inline std::int64_t floorDiv(double v, double s) { return static_cast<std::int64_t>(std::floor(v / s)); }
+// floor/ceil/round without a libm call (values are far inside the int range here).
+inline int ifloor(double v) {
+  const int i = static_cast<int>(v);
+  return i - (v < double(i));
+}
+inline int iceil(double v) {
+  const int i = static_cast<int>(v);
+  return i + (v > double(i));
+}
+inline int iround(double v) { return ifloor(v + 0.5); }
+
+// Edge key shared by all methods (SurfaceMesh::edgeKeys).
+inline std::uint64_t edgeKey(std::int64_t i, std::int64_t j, std::int64_t k, int axis) {
+  const std::uint64_t m = (1u << 20) - 1;
+  return ((std::uint64_t(i) & m) << 42) | ((std::uint64_t(j) & m) << 22) | ((std::uint64_t(k) & m) << 2) |
+         std::uint64_t(axis);
+}
+
+}  // namespace fluid::detail

@@ -1,0 +1,154 @@
+#pragma once
+// fluid/surface: particles -> indexed triangle mesh by marching slices
+// (Rosenberg & Birdwell 2008, "Real-time particle isosurface extraction"; Algorithm 1 restated
+// in DESIGN.md), with block subdivision (§3), the 2D-projection 1D-lookup particle cache (§6),
+// back-to-front output (§5) and one oneTBB task per block (Janisz thesis §3.2.6).
+//
+// Field (paper §2): f(r) = s_i * ((r/(sqrt2 Rc_i))^4 - (r/(sqrt2 Rc_i))^2 + 1/4) for r < Rc_i,
+// 0 otherwise, with Rc_i = Rc * radiusScale_i and s_i = strength_i. The surface is f = T; a
+// corner is inside when f > T (strictly). Corners lie on the global lattice at integer
+// multiples of S on every axis, so any block size gives the same triangles.
+//
+// Usage (one extractor per caller, reused every frame; it and the mesh keep their capacity, so
+// after the first frames nothing is allocated):
+//   fluid::SurfaceExtractor extractor;
+//   fluid::SurfaceMesh mesh;
+//   fluid::SurfaceStatus st = extractor.extract({xs, ys, zs}, params, mesh);
+//
+// Custom field/vertex routines (paper §7, tentacle texturing) are compile-time policies: see
+// fluid/surface/marching_slices_policy.hpp. The built-in one interpolates a per-particle vec4
+// (colour, uv, ...) weighted by each particle's field contribution when `user` is given.
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+// Particle input, SoA, borrowed for the duration of one extract() call. x, y, z: world units,
+// equal lengths, finite. Optional arrays are empty or have the same length.
+struct SurfaceInput {
+  std::span<const float> x, y, z;
+  std::span<const float> strength;     // s_i > 0, finite; default 1
+  std::span<const float> radiusScale;  // Rc_i = Rc * scale_i, scale_i > 0, finite; default 1
+  std::span<const glm::vec4> user;     // interpolated onto vertices (SurfaceMesh::attributes)
+};
+
+enum class SurfaceOrder : std::uint8_t {
+  none,          // sweep +z, blocks in lattice order
+  backToFront,   // sweep along the axis nearest the view, farthest first (paper §5)
+  frontToBack,   // the reverse, for early-z with opaque surfaces
+};
+
+struct SurfaceParams {
+  float rc = 3.0f;          // cutoff radius Rc, world units, > 0
+  float threshold = 0.2f;   // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
+  float cube = 1.0f;        // cube edge S, world units, > 0
+  // Largest interior cubes per block edge, 0 = auto (max(32, 8 ceil(Rc/S)): margins of ceil(Rc/S)
+  // cubes stay a small share of each block), else [4, 1024]. The particles' lattice extent is
+  // cut into equal blocks no larger than this. It never depends on `threads`, so the output
+  // does not either.
+  int blockCubes = 0;
+  int threads = 0;          // 0 = all hardware threads, else 1..256
+  SurfaceOrder order = SurfaceOrder::none;
+  glm::vec3 eye{0.0f};               // for ordering: eye position (blocks sorted by distance)
+  glm::vec3 viewDir{0.0f, 0.0f, -1.0f};  // for ordering: view direction (need not be unit)
+  bool exactSlabOrder = false;  // with an order: one index range per slab, emitted in sweep order
+  // Output positions are written as float(p - origin); put it near the particles when they sit
+  // far from zero (e.g. 1e5) so float vertices keep their precision. Double precision inside.
+  double originX = 0.0, originY = 0.0, originZ = 0.0;
+};
+
+// Index range [first, first + count) into SurfaceMesh::indices.
+struct IndexRange {
+  std::uint32_t first = 0;
+  std::uint32_t count = 0;
+};
+
+struct SurfaceBlockRange {
+  int bx = 0, by = 0, bz = 0;    // block index in the block grid (sweep frame)
+  glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // interior box, world units minus origin (for culling)
+  IndexRange indices;            // its triangles
+  std::uint32_t firstVertex = 0, vertexCount = 0;
+  std::uint32_t firstSlabRun = 0, slabRunCount = 0;  // into SurfaceMesh::slabRuns
+};
+
+// A run of consecutive triangles of one slab (global slab coordinate along the sweep axis).
+// With exactSlabOrder each block has one run per non-empty slab, in sweep order.
+struct SurfaceSlabRun {
+  std::int32_t slab = 0;
+  IndexRange indices;
+};
+
+struct SurfaceStats {
+  std::uint64_t cubesVisited = 0;     // cubes popped and marked done (margin included)
+  std::uint64_t cornersEvaluated = 0; // field evaluations stored in corner caches
+  std::uint64_t seedEvaluations = 0;  // field evaluations while seeding (not cached)
+  std::uint64_t particlesLookedUp = 0;  // particle contributions summed (exact lookups)
+  std::uint64_t triangles = 0;
+  std::uint64_t vertices = 0;
+  std::uint32_t blocks = 0;
+  std::uint32_t maxActiveSlices = 0;  // most slice caches alive at once in one block
+  std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
+  // Working memory, bytes actually touched: largest single block, and summed over all blocks
+  // processed concurrently (one per worker).
+  std::uint64_t cornerCacheBytesPeakBlock = 0;    // slice caches (index arrays + corner caches)
+  std::uint64_t particleCacheBytesPeakBlock = 0;  // projection slice + column lists + block particles
+  std::uint64_t workingBytesAllWorkers = 0;       // sum over workers of their peak (both caches)
+};
+
+struct SurfaceMesh {
+  std::vector<glm::vec3> positions;  // float(p - origin)
+  std::vector<glm::vec3> normals;    // unit, outward (down the field gradient)
+  std::vector<glm::vec4> attributes; // one per vertex when SurfaceInput::user was given, else empty
+  // Global lattice edge of each vertex: equal keys are the same point (blocks duplicate the
+  // vertices on their seams). Packs corner (i, j, k) mod 2^20 and axis; for welding.
+  std::vector<std::uint64_t> edgeKeys;
+  std::vector<std::uint32_t> indices;  // triangles, counter-clockwise seen from outside
+  std::vector<SurfaceBlockRange> blocks;  // in emission order
+  std::vector<SurfaceSlabRun> slabRuns;
+  SurfaceStats stats;
+  void clear();
+};
+
+// Empty error == success; otherwise a complete message naming the field and value.
+struct SurfaceStatus {
+  std::string error;
+  bool ok() const { return error.empty(); }
+};
+
+// Checks params and input (lengths, NaN/inf, ranges). extract() calls it too.
+SurfaceStatus validateSurface(const SurfaceInput& input, const SurfaceParams& params);
+
+namespace detail {
+struct ExtractorState;
+}
+
+// Owns all scratch (block lists, per-worker slice pools and particle caches, per-block outputs,
+// the oneTBB arena). Not thread-safe: one extract() at a time per extractor.
+class SurfaceExtractor {
+ public:
+  SurfaceExtractor();
+  ~SurfaceExtractor();
+  SurfaceExtractor(SurfaceExtractor&&) noexcept;
+  SurfaceExtractor& operator=(SurfaceExtractor&&) noexcept;
+
+  // Replaces `out`'s contents (keeping its capacity). On error `out` is cleared. The output is
+  // identical for every thread count; for other block sizes it is the same triangle set.
+  SurfaceStatus extract(const SurfaceInput& input, const SurfaceParams& params, SurfaceMesh& out);
+
+  std::unique_ptr<detail::ExtractorState> state;
+};
+
+// Field at lattice corner (i, j, k), i.e. at (i S, j S, k S): the paper's f summed over all
+// particles by brute force, with the same arithmetic as the extractors (for tests and tools).
+float surfaceFieldAtCorner(const SurfaceInput& input, const SurfaceParams& params, std::int64_t i, std::int64_t j,
+                           std::int64_t k);
+
+}  // namespace fluid

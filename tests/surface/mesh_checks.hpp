@@ -1,0 +1,82 @@
+#pragma once
+// Helpers for the surface tests: welding by lattice edge, watertightness, orientation, and a
+// canonical triangle list for comparing meshes from different extractors.
+
+#include "fluid/io/particle_io.hpp"
+#include <glm/glm.hpp>
+#include <stdexcept>
+#include "fluid/surface/marching_slices.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace surface_test {
+
+using Tri = std::array<std::uint64_t, 3>;
+
+// Triangles as edge-key triples, rotated so the smallest key is first (winding kept), sorted.
+inline std::vector<Tri> canonicalTriangles(const fluid::SurfaceMesh& m) {
+  std::vector<Tri> out;
+  out.reserve(m.indices.size() / 3);
+  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+    Tri t = {m.edgeKeys[m.indices[i]], m.edgeKeys[m.indices[i + 1]], m.edgeKeys[m.indices[i + 2]]};
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+struct Topology {
+  std::size_t triangles = 0;
+  std::size_t degenerate = 0;      // triangles with a repeated welded vertex
+  std::size_t badEdges = 0;        // directed edges not matched by exactly one opposite edge
+  std::size_t keyPositionMismatch = 0;  // same edge key, different position
+  double signedVolume = 0;         // > 0 for outward winding
+  double area = 0;
+  std::size_t normalsAgainstFaces = 0;  // vertex normal opposite to its triangle's normal
+};
+
+inline Topology checkTopology(const fluid::SurfaceMesh& m) {
+  Topology t;
+  t.triangles = m.indices.size() / 3;
+  std::unordered_map<std::uint64_t, glm::vec3> pos;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    auto [it, fresh] = pos.emplace(m.edgeKeys[v], m.positions[v]);
+    if (!fresh && it->second != m.positions[v]) ++t.keyPositionMismatch;
+  }
+  std::map<std::pair<std::uint64_t, std::uint64_t>, int> directed;
+  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+    const std::uint64_t k[3] = {m.edgeKeys[m.indices[i]], m.edgeKeys[m.indices[i + 1]], m.edgeKeys[m.indices[i + 2]]};
+    if (k[0] == k[1] || k[1] == k[2] || k[0] == k[2]) ++t.degenerate;
+    for (int e = 0; e < 3; ++e) ++directed[{k[e], k[(e + 1) % 3]}];
+    const glm::dvec3 a = m.positions[m.indices[i]], b = m.positions[m.indices[i + 1]], c = m.positions[m.indices[i + 2]];
+    t.signedVolume += glm::dot(a, glm::cross(b, c)) / 6.0;
+    const glm::dvec3 fn = glm::cross(b - a, c - a);
+    t.area += 0.5 * glm::length(fn);
+    for (int e = 0; e < 3; ++e)
+      if (glm::dot(fn, glm::dvec3(m.normals[m.indices[i + e]])) < 0) ++t.normalsAgainstFaces;
+  }
+  for (const auto& [edge, count] : directed) {
+    auto opp = directed.find({edge.second, edge.first});
+    if (count != 1 || opp == directed.end() || opp->second != 1) ++t.badEdges;
+  }
+  return t;
+}
+
+inline fluid::ParticlePositions loadSet(const std::string& name) {
+  fluid::ParticlePositions p;
+  const fluid::IoStatus st = fluid::readParticleFile(std::string(FLUIDDEMO_TEST_DATA_DIR) + "/" + name, p);
+  if (!st.ok()) throw std::runtime_error(st.error);
+  return p;
+}
+
+inline fluid::SurfaceInput inputOf(const fluid::ParticlePositions& p) { return {p.x, p.y, p.z, {}, {}, {}}; }
+
+}  // namespace surface_test

@@ -1,0 +1,326 @@
+// Marching slices against the dense oracle, watertightness, hard cases, determinism.
+#include "fluid/surface/baselines.hpp"
+#include "fluid/surface/detail/testing.hpp"
+#include "fluid/surface/marching_slices.hpp"
+#include "mesh_checks.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+using namespace surface_test;
+
+namespace {
+
+fluid::SurfaceMesh slices(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p) {
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh m;
+  const fluid::SurfaceStatus st = ex.extract(in, p, m);
+  EXPECT_TRUE(st.ok()) << st.error;
+  return m;
+}
+
+fluid::SurfaceMesh oracle(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p) {
+  fluid::BaselineExtractor ex;
+  fluid::SurfaceMesh m;
+  const fluid::SurfaceStatus st = ex.extract(fluid::BaselineMethod::dense, in, p, m);
+  EXPECT_TRUE(st.ok()) << st.error;
+  return m;
+}
+
+// Closed, consistently oriented outward, and the same triangles as dense MC on the lattice.
+void expectClosedAndEqualToOracle(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p,
+                                  std::size_t minTriangles = 1) {
+  const fluid::SurfaceMesh m = slices(in, p);
+  const fluid::SurfaceMesh ref = oracle(in, p);
+  const Topology t = checkTopology(m);
+  EXPECT_GE(t.triangles, minTriangles);
+  EXPECT_EQ(t.badEdges, 0u);
+  EXPECT_EQ(t.degenerate, 0u);
+  EXPECT_EQ(t.keyPositionMismatch, 0u);
+  if (t.triangles) {
+    EXPECT_GT(t.signedVolume, 0.0);
+  }
+  EXPECT_EQ(m.stats.triangles, ref.stats.triangles);
+  EXPECT_TRUE(canonicalTriangles(m) == canonicalTriangles(ref)) << "triangle sets differ from the dense oracle";
+  // Same vertex positions for the same lattice edges (bitwise: same field sums).
+  std::unordered_map<std::uint64_t, glm::vec3> refPos;
+  for (std::size_t v = 0; v < ref.positions.size(); ++v) refPos[ref.edgeKeys[v]] = ref.positions[v];
+  std::size_t differ = 0;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) differ += refPos.at(m.edgeKeys[v]) != m.positions[v];
+  EXPECT_EQ(differ, 0u);
+}
+
+double loneRadius(double rc, double t) { return std::sqrt(2.0 * (0.5 - std::sqrt(t))) * rc; }
+
+}  // namespace
+
+TEST(MarchingSlices, LoneParticleIsClosedSphereOfAnalyticRadius) {
+  const std::vector<float> x = {0.37f}, y = {-0.21f}, z = {0.05f};
+  fluid::SurfaceParams p;
+  p.cube = 0.1f;
+  const fluid::SurfaceMesh m = slices({x, y, z, {}, {}, {}}, p);
+  const Topology t = checkTopology(m);
+  EXPECT_GT(t.triangles, 500u);
+  EXPECT_EQ(t.badEdges, 0u);
+  const double r = loneRadius(p.rc, p.threshold);
+  EXPECT_NEAR(r, 0.975, 0.001);  // the bench-data README's figure
+  double worst = 0;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const glm::dvec3 d = glm::dvec3(m.positions[v]) - glm::dvec3(x[0], y[0], z[0]);
+    worst = std::max(worst, std::abs(glm::length(d) - r));
+    // Normals point away from the particle.
+    EXPECT_GT(glm::dot(glm::normalize(d), glm::dvec3(m.normals[v])), 0.99);
+  }
+  EXPECT_LT(worst, 0.005);
+  const double sphere = 4.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_NEAR(t.signedVolume / sphere, 1.0, 0.02);
+}
+
+class DataSets : public ::testing::TestWithParam<std::tuple<const char*, float, std::size_t>> {};
+
+TEST_P(DataSets, WatertightAndEqualToDenseOracleWithReadmeTriangleCount) {
+  const auto [name, cube, expected] = GetParam();
+  const fluid::ParticlePositions ps = loadSet(name);
+  fluid::SurfaceParams p;
+  p.cube = cube;
+  const fluid::SurfaceMesh m = slices(inputOf(ps), p);
+  EXPECT_EQ(m.stats.triangles, expected) << name;
+  expectClosedAndEqualToOracle(inputOf(ps), p);
+}
+
+INSTANTIATE_TEST_SUITE_P(BenchData, DataSets,
+                         ::testing::Values(std::make_tuple("fountain.xyz", 1.0f, std::size_t(14164)),
+                                           std::make_tuple("blob.xyz", 0.3f, std::size_t(8288)),
+                                           std::make_tuple("explosion.xyz", 0.6f, std::size_t(32508)),
+                                           std::make_tuple("spray.xyz", 1.0f, std::size_t(100848))));
+
+TEST(MarchingSlices, FountainAtFinerCubesEqualsOracle) {
+  const fluid::ParticlePositions ps = loadSet("fountain.xyz");
+  for (float cube : {0.75f, 0.5f}) {
+    fluid::SurfaceParams p;
+    p.cube = cube;
+    expectClosedAndEqualToOracle(inputOf(ps), p);
+  }
+}
+
+TEST(MarchingSlices, SameTrianglesForEveryBlockSize) {
+  const fluid::ParticlePositions ps = loadSet("explosion.xyz");
+  fluid::SurfaceParams p;
+  p.cube = 0.6f;
+  p.blockCubes = 32;
+  const auto reference = canonicalTriangles(slices(inputOf(ps), p));
+  for (int b : {0, 4, 7, 16, 64, 200}) {
+    p.blockCubes = b;
+    const fluid::SurfaceMesh m = slices(inputOf(ps), p);
+    EXPECT_TRUE(canonicalTriangles(m) == reference) << "blockCubes " << b;
+    EXPECT_EQ(checkTopology(m).badEdges, 0u) << "blockCubes " << b;
+  }
+}
+
+TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
+  const fluid::ParticlePositions ps = loadSet("spray.xyz");
+  fluid::SurfaceParams p;
+  p.blockCubes = 16;
+  p.threads = 1;
+  const fluid::SurfaceMesh one = slices(inputOf(ps), p);
+  for (int threads : {2, 3, 8}) {
+    p.threads = threads;
+    fluid::SurfaceExtractor ex;
+    fluid::SurfaceMesh m;
+    for (int rep = 0; rep < 2; ++rep) {  // and again with warm scratch
+      ASSERT_TRUE(ex.extract(inputOf(ps), p, m).ok());
+      EXPECT_TRUE(m.positions == one.positions) << threads;
+      EXPECT_TRUE(m.normals == one.normals) << threads;
+      EXPECT_TRUE(m.indices == one.indices) << threads;
+      EXPECT_TRUE(m.edgeKeys == one.edgeKeys) << threads;
+      EXPECT_EQ(m.stats.cubesVisited, one.stats.cubesVisited);
+    }
+  }
+}
+
+TEST(MarchingSlices, ParticlesOnCornersAndBlockBoundaries) {
+  // Particles exactly on lattice corners (S = 0.5, coordinates multiples of 0.5); for each block
+  // size, the test checks that some particle sits exactly on a block face, so seams are hit.
+  std::vector<float> x, y, z;
+  for (float a : {-4.0f, -2.5f, 0.0f, 1.5f, 4.0f, 4.5f, 8.0f})
+    for (float b : {-4.0f, -1.0f, 0.0f, 4.0f})
+      for (float c : {0.0f, 2.0f, 4.0f}) {
+        x.push_back(a);
+        y.push_back(b);
+        z.push_back(c);
+      }
+  for (int blockCubes : {4, 5, 6, 8}) {
+    fluid::SurfaceParams p;
+    p.cube = 0.5f;
+    p.blockCubes = blockCubes;
+    const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+    const fluid::SurfaceMesh m = slices(in, p);
+    std::size_t onFace = 0;
+    for (const fluid::SurfaceBlockRange& b : m.blocks)
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const float pc[3] = {x[i], y[i], z[i]};
+        for (int a = 0; a < 3; ++a) onFace += pc[a] == b.boundsMin[a] || pc[a] == b.boundsMax[a];
+      }
+    EXPECT_GT(onFace, 0u) << "no particle on a block face for blockCubes " << blockCubes;
+    EXPECT_GT(m.blocks.size(), 8u);
+    expectClosedAndEqualToOracle(in, p, 100);
+  }
+}
+
+TEST(MarchingSlices, FieldExactlyEqualToThresholdAtCorners) {
+  // Rc = 2, S = 1: a particle on a corner gives u = r^2 / 8 = 1/8 at its 6 axis neighbours, so
+  // f = (1/8 - 1/2)^2 = 0.140625 exactly, a float. With T = 0.140625 those corners sit exactly
+  // on the threshold (outside, since inside is f > T) and vertices land on corners.
+  const std::vector<float> x = {0, 3}, y = {0, 0}, z = {0, 1};
+  fluid::SurfaceParams p;
+  p.rc = 2.0f;
+  p.cube = 1.0f;
+  p.threshold = 0.140625f;
+  const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+  ASSERT_EQ(fluid::surfaceFieldAtCorner({std::span(x).first(1), std::span(y).first(1), std::span(z).first(1), {}, {}, {}},
+                                        p, 1, 0, 0),
+            p.threshold);
+  const fluid::SurfaceMesh m = slices(in, p);
+  const Topology t = checkTopology(m);
+  EXPECT_GT(t.triangles, 0u);
+  EXPECT_EQ(t.badEdges, 0u);
+  const fluid::SurfaceMesh ref = oracle(in, p);
+  EXPECT_TRUE(canonicalTriangles(m) == canonicalTriangles(ref));
+}
+
+TEST(MarchingSlices, CoincidentParticles) {
+  const std::vector<float> x(7, 1.25f), y(7, -2.5f), z(7, 0.75f);
+  fluid::SurfaceParams p;
+  p.cube = 0.25f;
+  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 100);
+}
+
+TEST(MarchingSlices, UprightBowlSeedingFailureCaseOfFigure4b) {
+  // A thin hemispherical bowl open at the top: its inner surface has local minima that no
+  // particle's downward step reaches (paper Fig. 4b); the sweep must still reach them.
+  std::vector<float> x, y, z;
+  for (float th = 0.0f; th < 1.55f; th += 0.09f)
+    for (float ph = 0.0f; ph < 6.28f; ph += 0.09f / std::max(0.09f, std::sin(th))) {
+      x.push_back(16.0f + 8.0f * std::sin(th) * std::cos(ph));
+      y.push_back(16.0f + 8.0f * std::sin(th) * std::sin(ph));
+      z.push_back(-16.0f - 8.0f * std::cos(th));
+    }
+  // One block holds the whole bowl (block seams through its axis would close it off early).
+  fluid::SurfaceParams p;
+  p.cube = 0.5f;
+  p.blockCubes = 64;
+  const fluid::SurfaceMesh m = slices({x, y, z, {}, {}, {}}, p);
+  EXPECT_GT(m.stats.slabReversals, 0u) << "the sweep never reversed; the bowl does not test reversal";
+  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 1000);
+}
+
+TEST(MarchingSlices, FarFromOriginOffsetBy1e5) {
+  fluid::ParticlePositions ps = loadSet("blob.xyz");
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    ps.x[i] += 1e5f;
+    ps.y[i] -= 1e5f;
+    ps.z[i] += 1e5f;
+  }
+  fluid::SurfaceParams p;
+  p.cube = 0.3f;
+  p.originX = 1e5;
+  p.originY = -1e5;
+  p.originZ = 1e5;
+  expectClosedAndEqualToOracle(inputOf(ps), p, 1000);
+  // Local positions stay small and precise (float relative to the origin).
+  const fluid::SurfaceMesh m = slices(inputOf(ps), p);
+  for (const glm::vec3& v : m.positions) EXPECT_LT(glm::length(v), 10.0f);
+}
+
+TEST(MarchingSlices, ZeroAndOneParticle) {
+  fluid::SurfaceParams p;
+  const fluid::SurfaceMesh empty = slices({}, p);
+  EXPECT_TRUE(empty.indices.empty());
+  EXPECT_TRUE(empty.positions.empty());
+  const std::vector<float> x = {5.5f}, y = {5.5f}, z = {5.5f};
+  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 8);
+}
+
+TEST(MarchingSlices, RejectsNonFiniteInputWithClearError) {
+  std::vector<float> x = {0, 1, 2, 3}, y = {0, 0, 0, 0}, z = {0, 0, 0, 0};
+  x[3] = std::numeric_limits<float>::quiet_NaN();
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh m;
+  fluid::SurfaceStatus st = ex.extract({x, y, z, {}, {}, {}}, {}, m);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.error.find("x[3]"), std::string::npos) << st.error;
+  EXPECT_NE(st.error.find("not finite"), std::string::npos) << st.error;
+  x[3] = 3;
+  z[1] = std::numeric_limits<float>::infinity();
+  st = ex.extract({x, y, z, {}, {}, {}}, {}, m);
+  EXPECT_NE(st.error.find("z[1]"), std::string::npos) << st.error;
+  fluid::SurfaceParams bad;
+  bad.cube = -1;
+  z[1] = 0;
+  st = ex.extract({x, y, z, {}, {}, {}}, bad, m);
+  EXPECT_NE(st.error.find("cube"), std::string::npos) << st.error;
+  const std::vector<float> shortY = {0};
+  st = ex.extract({x, shortY, z, {}, {}, {}}, {}, m);
+  EXPECT_NE(st.error.find("different lengths"), std::string::npos) << st.error;
+  EXPECT_TRUE(m.indices.empty());
+}
+
+TEST(ParticleCache, EveryLookupIsExactlyTheBruteForceSet) {
+  std::mt19937 rng(1234);
+  for (int trial = 0; trial < 6; ++trial) {
+    std::uniform_real_distribution<float> u(-6.0f, 6.0f);
+    std::vector<float> x(300), y(300), z(300), scale(300);
+    for (int i = 0; i < 300; ++i) {
+      x[i] = u(rng), y[i] = u(rng), z[i] = u(rng);
+      scale[i] = 0.3f + 0.7f * float(i % 7) / 6.0f;
+    }
+    // Some particles exactly on lattice corners and coincident, to hit boundary cases.
+    for (int i = 0; i < 20; ++i) x[i] = std::round(x[i]), y[i] = std::round(y[i]), z[i] = std::round(z[i]);
+    x[21] = x[20], y[21] = y[20], z[21] = z[20];
+    fluid::SurfaceParams p;
+    p.cube = trial % 2 ? 0.5f : 0.37f;
+    p.rc = trial < 3 ? 3.0f : 1.3f;
+    p.blockCubes = 12;
+    const fluid::SurfaceInput in{x, y, z, {}, trial % 2 ? std::span<const float>(scale) : std::span<const float>(), {}};
+    fluid::detail::SweepFrame frame;
+    std::vector<fluid::detail::Particle> all;
+    double rcMax = 0;
+    fluid::detail::prepareParticles(in, p, frame, all, rcMax);
+    const int bc[3] = {trial % 3 - 1, 0, -1};
+    fluid::detail::BlockCacheProbe probe(in, p, bc[0], bc[1], bc[2]);
+    const std::int64_t g0[3] = {std::int64_t(bc[0]) * p.blockCubes - probe.margin,
+                                std::int64_t(bc[1]) * p.blockCubes - probe.margin,
+                                std::int64_t(bc[2]) * p.blockCubes - probe.margin};
+    std::vector<std::uint32_t> found, expect;
+    std::size_t nonEmpty = 0, lookups = 0;
+    auto check = [&](int cx, int cy, int cz) {
+      probe.lookup(cx, cy, cz, found);
+      expect.clear();
+      const bool boundary = cx == 0 || cy == 0 || cz == 0 || cx == probe.n || cy == probe.n || cz == probe.n;
+      const double px = double(g0[0] + cx) * p.cube, py = double(g0[1] + cy) * p.cube, pz = double(g0[2] + cz) * p.cube;
+      // Brute force over the block's particles: those within Rc of the interior box.
+      const double bs = double(p.blockCubes) * p.cube;
+      for (const auto& q : all) {
+        const double rc = std::sqrt(q.rc2);
+        const double qc[3] = {q.x, q.y, q.z};
+        bool inBlock = true;
+        for (int a = 0; a < 3; ++a)
+          inBlock = inBlock && std::floor((qc[a] - rc) / bs) <= bc[a] && bc[a] <= std::floor((qc[a] + rc) / bs);
+        if (inBlock && !boundary && fluid::detail::influences(q, px, py, pz)) expect.push_back(q.index);
+      }
+      ++lookups;
+      nonEmpty += !expect.empty();
+      ASSERT_EQ(found, expect) << "corner " << cx << "," << cy << "," << cz;  // same set, same (z, index) order
+    };
+    // Sweep order (as marching slices walks), then random order to stress the start pointer.
+    for (int cz = 0; cz <= probe.n; ++cz)
+      for (int cy = 0; cy <= probe.n; cy += 2)
+        for (int cx = 0; cx <= probe.n; cx += 3) check(cx, cy, cz);
+    std::uniform_int_distribution<int> c(0, probe.n);
+    for (int i = 0; i < 3000; ++i) check(c(rng), c(rng), c(rng));
+    EXPECT_GT(nonEmpty, 100u) << "test set too sparse to mean anything";
+  }
+}

@@ -1,0 +1,46 @@
+// No allocation per frame after warm-up (DESIGN.md habit 3). Counts global operator new calls
+// in this executable during repeated extractions of the same-sized input.
+#include "fluid/surface/marching_slices.hpp"
+#include "mesh_checks.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace {
+std::atomic<long> gAllocations{0};
+}
+
+void* operator new(std::size_t size) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+TEST(SurfaceAllocation, NoOperatorNewAfterWarmUp) {
+  const fluid::ParticlePositions ps = surface_test::loadSet("spray.xyz");
+  for (int threads : {1, 2}) {
+    fluid::SurfaceParams p;
+    p.threads = threads;
+    p.blockCubes = 32;
+    fluid::SurfaceExtractor ex;
+    fluid::SurfaceMesh m;
+    // Warm-up: the first frames grow every buffer (which worker takes which block varies, so
+    // give each worker a chance to see the big blocks).
+    for (int i = 0; i < 6; ++i) ASSERT_TRUE(ex.extract(surface_test::inputOf(ps), p, m).ok());
+    const long before = gAllocations.load();
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(ex.extract(surface_test::inputOf(ps), p, m).ok());
+    const long after = gAllocations.load();
+    if (threads == 1) {
+      EXPECT_EQ(after - before, 0) << "allocations in 5 warm frames, 1 thread";
+    } else {
+      // With two workers a block may land on a worker that has not met a block that large yet;
+      // allow a handful, never one per block or per triangle.
+      EXPECT_LT(after - before, 10) << "allocations in 5 warm frames, 2 threads";
+    }
+  }
+}
