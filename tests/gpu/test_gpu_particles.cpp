@@ -144,6 +144,7 @@ TEST_F(GpuParticlesTest, EulerMatchesCpuReference) {
   const Diff d = compare(gpu, cpu, 1e-4f);
   EXPECT_EQ(d.over, 0u) << "max error " << d.max << " m";
   EXPECT_LT(d.max, 1e-4f);
+  std::printf("[ metric ] euler forces, 4096 particles, 60 steps: max GPU−CPU position difference %.3g m\n", d.max);
   // Something moved: the test cannot pass with a pass that does nothing.
   EXPECT_GT(glm::length(glm::vec3(gpu[0]) - births.positions[0]), 0.5f);
 }
@@ -169,6 +170,7 @@ TEST_F(GpuParticlesTest, VerletMatchesCpuReference) {
   const Diff d = compare(gpu, cpu, 1e-3f);
   EXPECT_EQ(d.over, 0u) << "max error " << d.max << " m";
   EXPECT_GT(glm::length(glm::vec3(gpu[0]) - births.positions[0]), 0.5f);
+  std::printf("[ metric ] verlet forces, 4096 particles, 60 steps: max GPU−CPU position difference %.3g m\n", d.max);
 }
 
 // Decoding: particles at rest on a lattice through the ground and a sphere baked by the
