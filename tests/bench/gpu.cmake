@@ -17,3 +17,11 @@ add_executable(gpu_screenshot
   ${PROJECT_SOURCE_DIR}/tests/gpu/gl_test_context.cpp)
 target_link_libraries(gpu_screenshot PRIVATE engine SDL2::SDL2 PkgConfig::GPU_STB fluiddemo_options)
 target_compile_definitions(gpu_screenshot PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+
+# Fluid-render screenshots for docs/gpu.md: gpu_fluid_screenshot docs/images [--force]
+add_executable(gpu_fluid_screenshot
+  gpu_fluid_screenshot.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/fluid_scene.cpp
+  ${PROJECT_SOURCE_DIR}/tests/gpu/gl_test_context.cpp)
+target_link_libraries(gpu_fluid_screenshot PRIVATE engine SDL2::SDL2 PkgConfig::GPU_STB fluiddemo_options)
+target_compile_definitions(gpu_fluid_screenshot PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
