@@ -77,7 +77,7 @@ struct BirthBatch {
   std::vector<glm::vec3> positions;   // world, m
   std::vector<glm::vec3> velocities;  // world, m/s
   std::vector<float> lifetimes;       // s, > 0
-  std::vector<std::uint32_t> types;   // < type count given at creation
+  std::vector<std::uint32_t> types;   // < type count given at creation (larger: the last type)
   std::vector<float> spins;           // sprite rotation speed, rad/s
   void clear();
   std::size_t size() const { return positions.size(); }
