@@ -38,7 +38,8 @@ void setCamera(GLuint prog, const FluidCamera& c, const FluidRenderer& r) {
 }
 
 void setShading(GLuint prog, const WaterParams& p) {
-  const glm::vec3 light = glm::length(p.light_direction) > 0.0f ? glm::normalize(p.light_direction) : glm::vec3(0, 1, 0);
+  const glm::vec3 light =
+      glm::length(p.light_direction) > 0.0f ? glm::normalize(p.light_direction) : glm::vec3(0, 1, 0);
   glUniform3fv(loc(prog, "u_absorption"), 1, glm::value_ptr(p.absorption));
   glUniform1f(loc(prog, "u_refraction"), p.refraction);
   glUniform1f(loc(prog, "u_ior"), std::max(p.ior, 1.0f));
@@ -63,17 +64,19 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   }
   const std::filesystem::path dir = desc.shader_dir / "fluid";
   std::string error;
-  out.water_program = buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
-                                                                 {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "water.frag"}}},
-                                   "", error);
+  out.water_program =
+      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
+                                                 {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "water.frag"}}},
+                   "", error);
   out.error += error;
-  out.goo_program = buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
-                                                               {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "goo.frag"}}},
-                                 "", error);
+  out.goo_program =
+      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
+                                                 {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "goo.frag"}}},
+                   "", error);
   out.error += error;
-  out.blit_program = buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}},
-                                                                {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}},
-                                  "", error);
+  out.blit_program = buildProgram(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}}, {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}},
+      "", error);
   out.error += error;
   if (!out.error.empty()) {
     out.error = "fluid rendering disabled, shader build failed:\n" + out.error;
@@ -183,8 +186,8 @@ bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std
   const std::size_t vbytes = positions.size() * 24, ibytes = indices.size() * 4;
   r.reallocations += ensureCapacity(GL_ARRAY_BUFFER, r.vbo, vbytes, r.vbo_bytes) ? 1u : 0u;
   // Interleave through a mapped range of the (orphaned) buffer: no staging copy on our side.
-  auto* dst = static_cast<float*>(
-      glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(vbytes), GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
+  auto* dst = static_cast<float*>(glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(vbytes),
+                                                   GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
   if (dst == nullptr) {
     error = "fluid mesh: glMapBufferRange failed";
     glBindBuffer(GL_ARRAY_BUFFER, 0);

@@ -21,8 +21,8 @@
 namespace engine {
 
 struct FluidRenderDesc {
-  int width = 256, height = 256;       // scene targets, px (1..8192)
-  std::filesystem::path shader_dir;    // folder holding fluid/*.vert, *.frag
+  int width = 256, height = 256;     // scene targets, px (1..8192)
+  std::filesystem::path shader_dir;  // folder holding fluid/*.vert, *.frag
 };
 
 enum class FluidStyle { water, goo };
@@ -37,9 +37,9 @@ struct FluidCamera {
 struct WaterParams {
   FluidStyle style = FluidStyle::water;
   glm::vec3 absorption{0.9f, 0.25f, 0.12f};  // Beer–Lambert σ per metre, RGB (transmit exp(−σ·d))
-  float refraction = 0.08f;    // screen-uv offset per metre of thickness along the refracted ray
-  float ior = 1.33f;           // index of refraction (water 1.33)
-  float opacity = 0.85f;       // blend alpha of one water layer (Fresnel raises it to 1)
+  float refraction = 0.08f;                  // screen-uv offset per metre of thickness along the refracted ray
+  float ior = 1.33f;                         // index of refraction (water 1.33)
+  float opacity = 0.85f;                     // blend alpha of one water layer (Fresnel raises it to 1)
   glm::vec3 sky_zenith{0.25f, 0.45f, 0.85f};
   glm::vec3 sky_horizon{0.85f, 0.9f, 0.95f};
   glm::vec3 light_direction{0.3f, 1.0f, 0.4f};  // towards the light, world (normalised inside)
@@ -69,8 +69,8 @@ void beginOpaquePass(FluidRenderer& renderer, glm::vec4 clear_colour);
 // orphaned and refilled each frame, and grow geometrically, so sizes that vary frame to frame
 // cause no reallocation churn. False + error (nothing uploaded, previous mesh dropped) when the
 // sizes differ, an index is out of range, or a position/normal is not finite. Empty = no fluid.
-bool uploadFluidMesh(FluidRenderer& renderer, std::span<const glm::vec3> positions,
-                     std::span<const glm::vec3> normals, std::span<const std::uint32_t> indices, std::string& error);
+bool uploadFluidMesh(FluidRenderer& renderer, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                     std::span<const std::uint32_t> indices, std::string& error);
 
 // Copies the scene colour into `target_fbo` (0 = default framebuffer, viewport = desc size)
 // and draws the uploaded mesh: water blended in index order, fragments behind the scene depth

@@ -21,7 +21,8 @@ bool readFile(const std::filesystem::path& path, std::string& out) {
 bool parseNumber(const std::string& s, std::size_t& pos, unsigned long& value) {
   const std::size_t start = pos;
   value = 0;
-  while (pos < s.size() && std::isdigit(static_cast<unsigned char>(s[pos]))) value = value * 10 + static_cast<unsigned long>(s[pos++] - '0');
+  while (pos < s.size() && std::isdigit(static_cast<unsigned char>(s[pos])))
+    value = value * 10 + static_cast<unsigned long>(s[pos++] - '0');
   return pos > start;
 }
 

@@ -18,8 +18,10 @@ namespace engine {
 namespace {
 
 // The shader decodes fluid/collide's texels; these enums are passed as plain integers.
-static_assert(static_cast<int>(fluid::DepthMapFormat::float32) == 1 && static_cast<int>(fluid::DepthMapFormat::fixed8) == 2 &&
-              static_cast<int>(fluid::DepthMapFormat::front_back16) == 3 && static_cast<int>(fluid::DepthMapFormat::cube8) == 4);
+static_assert(static_cast<int>(fluid::DepthMapFormat::float32) == 1 &&
+              static_cast<int>(fluid::DepthMapFormat::fixed8) == 2 &&
+              static_cast<int>(fluid::DepthMapFormat::front_back16) == 3 &&
+              static_cast<int>(fluid::DepthMapFormat::cube8) == 4);
 static_assert(static_cast<int>(fluid::DepthCompare::less) == 0 && static_cast<int>(fluid::DepthCompare::greater) == 1);
 
 GLuint makeTexture2D(GLenum internal_format, GLsizei w, GLsizei h, GLenum format, GLenum type, const void* data) {
@@ -139,8 +141,8 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
   out = GpuParticles{};
   out.desc = desc;
   if (!isPowerOfTwo(desc.width) || !isPowerOfTwo(desc.height) || desc.width > 4096 || desc.height > 4096) {
-    out.error = "gpu particles: width and height must be powers of two up to 4096 (got " +
-                std::to_string(desc.width) + "x" + std::to_string(desc.height) + ")";
+    out.error = "gpu particles: width and height must be powers of two up to 4096 (got " + std::to_string(desc.width) +
+                "x" + std::to_string(desc.height) + ")";
     return;
   }
   if (desc.types.empty() || desc.types.size() > static_cast<std::size_t>(kMaxParticleTypes)) {
@@ -309,8 +311,8 @@ std::size_t spawn(GpuParticles& s, const BirthBatch& batch) {
     const glm::vec3 p = batch.positions[k], v = batch.velocities[k];
     const float life = batch.lifetimes[k], spin = batch.spins[k];
     // Bad content is dropped, never uploaded: NaN/inf or a non-positive lifetime.
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v.x) &&
-          std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(life) && life > 0.0f && std::isfinite(spin))) {
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v.x) && std::isfinite(v.y) &&
+          std::isfinite(v.z) && std::isfinite(life) && life > 0.0f && std::isfinite(spin))) {
       continue;
     }
     std::uint32_t index = 0;
@@ -373,7 +375,10 @@ bool setColliders(GpuParticles& s, std::span<const GpuColliderDesc> colliders, s
     bool indexed = false;
     for (std::size_t k = 0; k < col.maps.size(); ++k, ++m) {
       const GpuDepthMapView& map = col.maps[k];
-      const std::size_t texel_bytes = map.format == 1 ? 16 : map.format == 3 ? 8 : map.format == 2 || map.format == 4 ? 4 : 0;
+      const std::size_t texel_bytes = map.format == 1                      ? 16
+                                      : map.format == 3                    ? 8
+                                      : map.format == 2 || map.format == 4 ? 4
+                                                                           : 0;
       const std::size_t texels = static_cast<std::size_t>(map.resolution) * map.resolution * (map.format == 4 ? 6 : 1);
       const std::string name = "gpu colliders: collider " + std::to_string(c) + " map " + std::to_string(k);
       if (texel_bytes == 0) {
@@ -404,7 +409,8 @@ bool setColliders(GpuParticles& s, std::span<const GpuColliderDesc> colliders, s
     next.normal_res[c] = col.normal_resolution;
     next.normal_offset[c] = static_cast<std::int32_t>(normals.size());
     if (indexed) {
-      const std::size_t need = 3u * static_cast<std::size_t>(col.normal_resolution) * static_cast<std::size_t>(col.normal_resolution);
+      const std::size_t need =
+          3u * static_cast<std::size_t>(col.normal_resolution) * static_cast<std::size_t>(col.normal_resolution);
       if (col.normal_resolution < 1 || col.normal_resolution > 256 || col.normal_table.size() != need) {
         error = "gpu colliders: collider " + std::to_string(c) + ": normal_table has " +
                 std::to_string(col.normal_table.size()) + " floats, normal_resolution " +
@@ -673,7 +679,8 @@ void drawSprites(GpuParticles& s, const glm::mat4& view_projection, float projec
 
 namespace {
 
-void readTexture(GLuint fbo, GLenum attachment, GLsizei w, GLsizei h, GLenum format, int channels, std::vector<float>& out) {
+void readTexture(GLuint fbo, GLenum attachment, GLsizei w, GLsizei h, GLenum format, int channels,
+                 std::vector<float>& out) {
   out.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * static_cast<std::size_t>(channels));
   glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
   glReadBuffer(attachment);

@@ -91,13 +91,13 @@ enum class EmitterKind { spray, mist, splash, debris };
 // One burst the game can fire at any point. Randomness comes from `seed` only (deterministic).
 struct EmitterDesc {
   EmitterKind kind = EmitterKind::spray;
-  glm::vec3 position{0.0f};           // world, m
+  glm::vec3 position{0.0f};               // world, m
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // main direction (normalised inside; zero = up)
-  float speed = 3.0f;                 // mean launch speed, m/s
-  float spread = 0.3f;                // cone half-angle, rad (splash: ring tilt; debris/mist: ignored)
-  float radius = 0.05f;               // launch volume radius, m
+  float speed = 3.0f;                     // mean launch speed, m/s
+  float spread = 0.3f;                    // cone half-angle, rad (splash: ring tilt; debris/mist: ignored)
+  float radius = 0.05f;                   // launch volume radius, m
   std::uint32_t count = 64;
-  float lifetime = 1.5f;              // mean lifetime, s (±25% jitter)
+  float lifetime = 1.5f;  // mean lifetime, s (±25% jitter)
   std::uint32_t type = 0;
   std::uint64_t seed = 1;
 };
@@ -119,11 +119,11 @@ std::size_t emitSprayFromFluid(std::span<const glm::vec3> positions, std::span<c
 struct GpuDepthMapView {
   std::uint32_t format = 1;
   std::uint32_t compare = 0;
-  std::uint32_t resolution = 0;       // N texels per side (per face for cube8)
-  glm::mat4 collider_to_map{1.0f};    // T_OC→DC
-  float z_scale = 1.0f;               // ortho
-  glm::vec3 cube_scale{1.0f};         // cube
-  bool encloses_collider = false;     // invalid votes count as far outside
+  std::uint32_t resolution = 0;          // N texels per side (per face for cube8)
+  glm::mat4 collider_to_map{1.0f};       // T_OC→DC
+  float z_scale = 1.0f;                  // ortho
+  glm::vec3 cube_scale{1.0f};            // cube
+  bool encloses_collider = false;        // invalid votes count as far outside
   std::span<const std::uint8_t> texels;  // N·N (·6 for cube8) texels of 16/4/8/4 bytes
 };
 
@@ -135,8 +135,8 @@ inline constexpr int kMaxGpuDepthMaps = 16;  // over all colliders
 
 struct GpuColliderDesc {
   std::span<const GpuDepthMapView> maps;
-  int normal_resolution = 256;           // R_n of the normal index texture
-  std::span<const float> normal_table;   // 3·R_n·R_n floats: l1NormalTexture(R_n), uploaded as is
+  int normal_resolution = 256;          // R_n of the normal index texture
+  std::span<const float> normal_table;  // 3·R_n·R_n floats: l1NormalTexture(R_n), uploaded as is
   fluid::ColliderPose pose{};
 };
 
@@ -154,9 +154,9 @@ struct GpuParticlesDesc {
   std::uint32_t width = 256, height = 256;  // texture size: capacity = width·height; powers of two (sort)
   Integrator integrator = Integrator::euler;
   std::vector<ParticleTypeDesc> types{ParticleTypeDesc{}};  // 1..kMaxParticleTypes
-  std::filesystem::path shader_dir;          // folder holding gpu_particles/*.glsl, *.vert, *.frag
-  std::uint32_t sort_passes_per_frame = 5;   // §3.3.3: 4–5 per frame for 1024² in the paper
-  float dt = 1.0f / 60.0f;                   // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
+  std::filesystem::path shader_dir;                         // folder holding gpu_particles/*.glsl, *.vert, *.frag
+  std::uint32_t sort_passes_per_frame = 5;                  // §3.3.3: 4–5 per frame for 1024² in the paper
+  float dt = 1.0f / 60.0f;  // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
 };
 
 inline constexpr int kMaxAttractors = 4;
@@ -164,17 +164,17 @@ inline constexpr int kMaxAttractors = 4;
 // Softened point attractor: a = strength·(c − p)/(|c − p|² + softening²)^{3/2}; strength < 0 repels.
 struct Attractor {
   glm::vec3 position{0.0f};
-  float strength = 0.0f;  // m³/s²
+  float strength = 0.0f;   // m³/s²
   float softening = 0.1f;  // m
 };
 
 struct GpuStepParams {
-  glm::vec3 gravity{0.0f, -9.81f, 0.0f};    // m/s²
-  glm::vec3 wind{0.0f};                     // global acceleration, m/s²
+  glm::vec3 gravity{0.0f, -9.81f, 0.0f};  // m/s²
+  glm::vec3 wind{0.0f};                   // global acceleration, m/s²
   std::array<Attractor, kMaxAttractors> attractors{};
   int attractor_count = 0;
   // Stokes drag (§3.3.2): F = 6πηr(v − v_flow); a = −(6πηr/m)(v − v_flow). 0 disables it.
-  float viscosity = 0.0f;        // η, Pa·s
+  float viscosity = 0.0f;         // η, Pa·s
   float particle_radius = 0.01f;  // r, m
   float particle_mass = 1e-3f;    // m, kg
   fluid::CollisionMaterial material{};
@@ -207,7 +207,7 @@ struct GpuParticles {
   // §3.2 double buffers. Euler: state0 = position, state1 = velocity (xyz; w of velocity unused).
   // Verlet: state0 = P_{i-1}, state1 = P_{i-2}. Position w = 1 live, 0 dead.
   std::array<GLuint, 2> state0{}, state1{};
-  GLuint attributes = 0;  // (birth time s, death time s, type, spin rad/s)
+  GLuint attributes = 0;              // (birth time s, death time s, type, spin rad/s)
   std::array<GLuint, 2> fbo{};        // update pass: writes state0[k], state1[k]
   std::array<GLuint, 2> birth_fbo{};  // births: state0[k], state1[k], attributes
   int current = 0;
@@ -280,8 +280,7 @@ std::uint32_t sortPassCount(std::uint32_t n);
 // Draws live particles as rotated point sprites in sorted order into the bound framebuffer.
 // Blending: premultiplied "over". `viewport_height` px and the projection scale turn the world
 // size into gl_PointSize.
-void drawSprites(GpuParticles& system, const glm::mat4& view_projection, float projection_scale_y,
-                 int viewport_height);
+void drawSprites(GpuParticles& system, const glm::mat4& view_projection, float projection_scale_y, int viewport_height);
 
 // Read-backs (tests, tools). Each returns capacity entries (or activeRange() with `active_only`).
 void readPositions(GpuParticles& system, std::vector<glm::vec4>& out);

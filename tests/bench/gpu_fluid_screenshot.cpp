@@ -53,16 +53,18 @@ int main(int argc, char** argv) {
     bool exact;
     FluidStyle style;
   };
-  const Shot shots[] = {{"fluid_unsorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::none, false, FluidStyle::water},
-                        {"fluid_sorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water},
-                        {"fluid_exact_slabs.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, true, FluidStyle::water},
-                        {"fluid_goo.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::frontToBack, false, FluidStyle::goo},
-                        {"fluid_inside.png", {0.05f, 0.5f, 0.0f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water}};
+  const Shot shots[] = {
+      {"fluid_unsorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::none, false, FluidStyle::water},
+      {"fluid_sorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water},
+      {"fluid_exact_slabs.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, true, FluidStyle::water},
+      {"fluid_goo.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::frontToBack, false, FluidStyle::goo},
+      {"fluid_inside.png", {0.05f, 0.5f, 0.0f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water}};
   int status = 0;
   for (const Shot& shot : shots) {
     gputest::FluidScene scene;
     std::string error;
-    if (!gputest::createFluidScene(scene, kW, kH, shot.eye, error) || !gputest::extractMesh(scene, shot.order, shot.exact, error)) {
+    if (!gputest::createFluidScene(scene, kW, kH, shot.eye, error) ||
+        !gputest::extractMesh(scene, shot.order, shot.exact, error)) {
       std::fprintf(stderr, "%s\n", error.c_str());
       return 1;
     }
@@ -79,7 +81,8 @@ int main(int argc, char** argv) {
     }
     std::vector<unsigned char> flipped(px.size());
     for (int y = 0; y < kH; ++y) {
-      std::copy_n(&px[static_cast<std::size_t>(kH - 1 - y) * kW * 4], kW * 4, &flipped[static_cast<std::size_t>(y) * kW * 4]);
+      std::copy_n(&px[static_cast<std::size_t>(kH - 1 - y) * kW * 4], kW * 4,
+                  &flipped[static_cast<std::size_t>(y) * kW * 4]);
     }
     if (stbi_write_png(path.string().c_str(), kW, kH, 4, flipped.data(), kW * 4) == 0) {
       std::fprintf(stderr, "%s: cannot write PNG\n", path.string().c_str());

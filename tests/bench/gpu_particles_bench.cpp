@@ -49,8 +49,8 @@ int main(int argc, char** argv) {
     } else if (a == "--max-side" && k + 1 < argc) {
       max_side = static_cast<std::uint32_t>(std::atoi(argv[++k]));
     } else {
-      std::fprintf(stderr, "bench_gpu_particles: unknown argument '%s'\nusage: %s [--reps N] [--max-side S]\n", a.c_str(),
-                   argv[0]);
+      std::fprintf(stderr, "bench_gpu_particles: unknown argument '%s'\nusage: %s [--reps N] [--max-side S]\n",
+                   a.c_str(), argv[0]);
       return 2;
     }
   }
@@ -61,10 +61,13 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("GL: %s\nmedian of %d repetitions; particles per ms (ms per pass)\n\n", ctx.version.c_str(), reps);
-  std::printf("| particles | update | update + collide (ground 1 map + sphere 3 front-back16 maps) | sort key refresh | sort pass | draw (512², points) |\n");
+  std::printf(
+      "| particles | update | update + collide (ground 1 map + sphere 3 front-back16 maps) | sort key refresh | sort "
+      "pass | draw (512², points) |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|\n");
   gputest::TestCollider ground = gputest::makeGroundCollider(256);
-  gputest::TestCollider sphere = gputest::makeSphereCollider({0.0f, 0.6f, 0.0f}, 0.35f, 256, fluid::DepthMapFormat::front_back16);
+  gputest::TestCollider sphere =
+      gputest::makeSphereCollider({0.0f, 0.6f, 0.0f}, 0.35f, 256, fluid::DepthMapFormat::front_back16);
   // FBO for the draw.
   GLuint tex = 0, fbo = 0;
   glGenTextures(1, &tex);

@@ -6,8 +6,8 @@
 #include "tests/gpu/cpu_reference.hpp"
 #include "tests/gpu/gl_test_context.hpp"
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <stb_image_write.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -29,7 +29,8 @@ bool writePng(const std::filesystem::path& path, bool force, std::string& error)
   std::vector<unsigned char> px(static_cast<std::size_t>(kW) * kH * 4), flipped(px.size());
   glReadPixels(0, 0, kW, kH, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
   for (int y = 0; y < kH; ++y) {
-    std::copy_n(&px[static_cast<std::size_t>(kH - 1 - y) * kW * 4], kW * 4, &flipped[static_cast<std::size_t>(y) * kW * 4]);
+    std::copy_n(&px[static_cast<std::size_t>(kH - 1 - y) * kW * 4], kW * 4,
+                &flipped[static_cast<std::size_t>(y) * kW * 4]);
   }
   if (stbi_write_png(path.string().c_str(), kW, kH, 4, flipped.data(), kW * 4) == 0) {
     error = path.string() + ": cannot write PNG";
@@ -75,7 +76,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   gputest::TestCollider ground = gputest::makeGroundCollider(128);
-  gputest::TestCollider sphere = gputest::makeSphereCollider({0.0f, 0.45f, 0.0f}, 0.35f, 128, fluid::DepthMapFormat::front_back16);
+  gputest::TestCollider sphere =
+      gputest::makeSphereCollider({0.0f, 0.45f, 0.0f}, 0.35f, 128, fluid::DepthMapFormat::front_back16);
   GpuColliderDesc cols[2] = {ground.gpu(), sphere.gpu()};
   std::string error;
   if (!setColliders(s, cols, error)) {
@@ -89,7 +91,15 @@ int main(int argc, char** argv) {
   for (int frame = 0; frame < 75; ++frame) {
     batch.clear();
     if (frame % 3 == 0) {
-      EmitterDesc spray{EmitterKind::spray, {-0.05f, 1.5f, 0.05f}, {0.1f, -1.0f, 0.0f}, 1.5f, 0.25f, 0.05f, 300, 2.5f, 0,
+      EmitterDesc spray{EmitterKind::spray,
+                        {-0.05f, 1.5f, 0.05f},
+                        {0.1f, -1.0f, 0.0f},
+                        1.5f,
+                        0.25f,
+                        0.05f,
+                        300,
+                        2.5f,
+                        0,
                         static_cast<std::uint64_t>(frame)};
       emit(spray, batch);
     }
@@ -100,7 +110,17 @@ int main(int argc, char** argv) {
       emit({EmitterKind::debris, {-0.8f, 0.6f, -0.2f}, {0, 1, 0}, 2.5f, 0.0f, 0.05f, 2500, 1.5f, 3, 99}, batch);
     }
     if (frame % 10 == 0) {
-      emit({EmitterKind::mist, {0.0f, 0.1f, 0.4f}, {1, 0.3f, 0}, 0.5f, 0.0f, 0.4f, 60, 3.0f, 1, static_cast<std::uint64_t>(frame) + 5}, batch);
+      emit({EmitterKind::mist,
+            {0.0f, 0.1f, 0.4f},
+            {1, 0.3f, 0},
+            0.5f,
+            0.0f,
+            0.4f,
+            60,
+            3.0f,
+            1,
+            static_cast<std::uint64_t>(frame) + 5},
+           batch);
     }
     spawn(s, batch);
     step(s, params);

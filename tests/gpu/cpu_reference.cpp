@@ -34,7 +34,8 @@ TestCollider makeGroundCollider(int n) {
     for (int i = 0; i < n; ++i) {
       const bool border = i == 0 || j == 0 || i == n - 1 || j == n - 1;  // §4.1: one background texel
       const float texel[4] = {0.0f, 1.0f, 0.0f, border ? -1.0f : 0.5f};
-      std::memcpy(m.texels.data() + (static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)) * 16,
+      std::memcpy(m.texels.data() +
+                      (static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)) * 16,
                   texel, 16);
     }
   }
@@ -94,7 +95,8 @@ glm::vec3 CpuFlowField::sample(glm::vec3 p) const {
   const glm::ivec3 i1 = glm::min(i0 + 1, size - 1);
   auto at = [&](int x, int y, int z) {
     return velocities[(static_cast<std::size_t>(z) * static_cast<std::size_t>(size.y) + static_cast<std::size_t>(y)) *
-                          static_cast<std::size_t>(size.x) + static_cast<std::size_t>(x)];
+                          static_cast<std::size_t>(size.x) +
+                      static_cast<std::size_t>(x)];
   };
   const glm::vec3 x00 = glm::mix(at(i0.x, i0.y, i0.z), at(i1.x, i0.y, i0.z), f.x);
   const glm::vec3 x10 = glm::mix(at(i0.x, i1.y, i0.z), at(i1.x, i1.y, i0.z), f.x);
@@ -106,8 +108,9 @@ glm::vec3 CpuFlowField::sample(glm::vec3 p) const {
 void cpuSpawn(CpuParticles& p, const engine::BirthBatch& batch, float time, const CpuStepDesc& desc) {
   for (std::size_t k = 0; k < batch.size(); ++k) {
     p.position.push_back(batch.positions[k]);
-    p.state1.push_back(desc.integrator == engine::Integrator::euler ? batch.velocities[k]
-                                                                    : batch.positions[k] - batch.velocities[k] * desc.dt);
+    p.state1.push_back(desc.integrator == engine::Integrator::euler
+                           ? batch.velocities[k]
+                           : batch.positions[k] - batch.velocities[k] * desc.dt);
     p.death.push_back(time + batch.lifetimes[k]);
     p.alive.push_back(1);
   }

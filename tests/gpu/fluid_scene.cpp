@@ -13,15 +13,15 @@ bool createFluidScene(FluidScene& s, int width, int height, glm::vec3 eye, std::
   s.width = width;
   s.height = height;
   const std::filesystem::path dir = std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "shaders" / "fluid";
-  s.backdrop_program = engine::buildProgram(
-      std::vector<engine::ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "backdrop.vert"}},
-                                            {GL_FRAGMENT_SHADER, {dir / "backdrop.frag"}}},
-      "", error);
+  s.backdrop_program =
+      engine::buildProgram(std::vector<engine::ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "backdrop.vert"}},
+                                                                 {GL_FRAGMENT_SHADER, {dir / "backdrop.frag"}}},
+                           "", error);
   if (s.backdrop_program == 0) return false;
   // Wall at x = −1.2 and floor at y = 0 (two quads); the camera looks along −x, across the
   // extractor's default +z sweep, so the unsorted order is really unsorted for it.
-  const float v[] = {-1.2f, -1, -4, -1.2f, -1, 4, -1.2f, 4, 4, -1.2f, -1, -4, -1.2f, 4, 4, -1.2f, 4, -4,
-                     -1.2f, 0,  -4, 4,     0,  -4, 4,    0, 4, -1.2f, 0,  -4, 4,     0, 4, -1.2f, 0, 4};
+  const float v[] = {-1.2f, -1, -4, -1.2f, -1, 4,  -1.2f, 4, 4, -1.2f, -1, -4, -1.2f, 4, 4, -1.2f, 4, -4,
+                     -1.2f, 0,  -4, 4,     0,  -4, 4,     0, 4, -1.2f, 0,  -4, 4,     0, 4, -1.2f, 0, 4};
   glGenVertexArrays(1, &s.backdrop_vao);
   glGenBuffers(1, &s.backdrop_vbo);
   glBindVertexArray(s.backdrop_vao);
@@ -109,7 +109,8 @@ bool writePpm(const std::filesystem::path& path, int w, int h, const std::vector
   out << "P6\n" << w << " " << h << "\n255\n";
   for (int y = h - 1; y >= 0; --y) {  // top row first
     for (int x = 0; x < w; ++x) {
-      const std::size_t k = (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)) * 4;
+      const std::size_t k =
+          (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)) * 4;
       out.write(reinterpret_cast<const char*>(&rgba[k]), 3);
     }
   }
@@ -120,7 +121,8 @@ bool readPpm(const std::filesystem::path& path, int& w, int& h, std::vector<unsi
   std::ifstream in(path, std::ios::binary);
   std::string magic;
   int maxval = 0;
-  if (!(in >> magic >> w >> h >> maxval) || magic != "P6" || maxval != 255 || w <= 0 || h <= 0 || w > 4096 || h > 4096) {
+  if (!(in >> magic >> w >> h >> maxval) || magic != "P6" || maxval != 255 || w <= 0 || h <= 0 || w > 4096 ||
+      h > 4096) {
     error = path.string() + ": not a binary 8-bit PPM (P6 w h 255)";
     return false;
   }

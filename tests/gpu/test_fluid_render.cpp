@@ -18,7 +18,8 @@ using namespace gputest;
 namespace {
 
 constexpr int kW = 128, kH = 96;
-const std::filesystem::path kGolden = std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "tests/gpu/data/fluid_water_128x96.ppm";
+const std::filesystem::path kGolden =
+    std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "tests/gpu/data/fluid_water_128x96.ppm";
 
 class FluidRenderTest : public ::testing::Test {
  protected:
@@ -69,9 +70,12 @@ class FluidRenderTest : public ::testing::Test {
       for (int y = std::max(0, static_cast<int>(lo.y)); y <= std::min(kH - 1, static_cast<int>(hi.y)); ++y) {
         for (int x = std::max(0, static_cast<int>(lo.x)); x <= std::min(kW - 1, static_cast<int>(hi.x)); ++x) {
           const glm::vec2 p(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
-          auto edge = [](glm::vec2 a, glm::vec2 b, glm::vec2 q) { return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x); };
+          auto edge = [](glm::vec2 a, glm::vec2 b, glm::vec2 q) {
+            return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+          };
           const float e0 = edge(s[0], s[1], p), e1 = edge(s[1], s[2], p), e2 = edge(s[2], s[0], p);
-          if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) mask[static_cast<std::size_t>(y) * kW + static_cast<std::size_t>(x)] = 1;
+          if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0))
+            mask[static_cast<std::size_t>(y) * kW + static_cast<std::size_t>(x)] = 1;
         }
       }
     }
@@ -85,7 +89,9 @@ class FluidRenderTest : public ::testing::Test {
 
 int pixelDiff(const std::vector<unsigned char>& a, const std::vector<unsigned char>& b, std::size_t pixel) {
   int d = 0;
-  for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(int(a[pixel * 4 + static_cast<std::size_t>(c)]) - int(b[pixel * 4 + static_cast<std::size_t>(c)])));
+  for (int c = 0; c < 3; ++c)
+    d = std::max(
+        d, std::abs(int(a[pixel * 4 + static_cast<std::size_t>(c)]) - int(b[pixel * 4 + static_cast<std::size_t>(c)])));
   return d;
 }
 
@@ -137,7 +143,8 @@ TEST_F(FluidRenderTest, RefractionShiftsTheBackgroundWhereExpected) {
   }
   EXPECT_GT(shifted, covered / 10) << shifted << " of " << covered << " covered pixels moved";
   EXPECT_EQ(outside, 0u);
-  std::printf("[ metric ] refraction: %zu of %zu covered px changed by > 8/255, %zu outside\n", shifted, covered, outside);
+  std::printf("[ metric ] refraction: %zu of %zu covered px changed by > 8/255, %zu outside\n", shifted, covered,
+              outside);
 }
 
 // Golden image at 128×96: within a tolerance of the committed reference (regenerate with
@@ -163,7 +170,8 @@ TEST_F(FluidRenderTest, GoldenImageWithinTolerance) {
       const std::size_t i = (static_cast<std::size_t>(y) * kW + static_cast<std::size_t>(x)) * 4;
       int d = 0;
       for (int c = 0; c < 3; ++c) {
-        const int e = std::abs(int(image[i + static_cast<std::size_t>(c)]) - int(golden[g + static_cast<std::size_t>(c)]));
+        const int e =
+            std::abs(int(image[i + static_cast<std::size_t>(c)]) - int(golden[g + static_cast<std::size_t>(c)]));
         sum += e;
         d = std::max(d, e);
       }
@@ -183,8 +191,9 @@ TEST_F(FluidRenderTest, SortOrderSwitchCountsOutOfOrderPairs) {
   std::string error;
   OutOfOrder counts[3];
   std::vector<std::vector<unsigned char>> images;
-  const std::pair<fluid::SurfaceOrder, bool> modes[3] = {
-      {fluid::SurfaceOrder::none, false}, {fluid::SurfaceOrder::backToFront, false}, {fluid::SurfaceOrder::backToFront, true}};
+  const std::pair<fluid::SurfaceOrder, bool> modes[3] = {{fluid::SurfaceOrder::none, false},
+                                                         {fluid::SurfaceOrder::backToFront, false},
+                                                         {fluid::SurfaceOrder::backToFront, true}};
   for (int m = 0; m < 3; ++m) {
     ASSERT_TRUE(extractMesh(scene_, modes[m].first, modes[m].second, error)) << error;
     counts[m] = countOutOfOrderPairs(scene_.mesh.positions, scene_.mesh.indices, scene_.camera.eye);
@@ -193,9 +202,10 @@ TEST_F(FluidRenderTest, SortOrderSwitchCountsOutOfOrderPairs) {
   const char* names[3] = {"unsorted", "sorted", "exact per-slab"};
   for (int m = 0; m < 3; ++m) {
     const double all = 0.5 * static_cast<double>(counts[m].triangles) * static_cast<double>(counts[m].triangles - 1);
-    std::printf("[ metric ] %s: %llu triangles, %llu out-of-order pairs (%.2f%% of all pairs), %llu adjacent\n", names[m],
-                static_cast<unsigned long long>(counts[m].triangles), static_cast<unsigned long long>(counts[m].pairs),
-                100.0 * static_cast<double>(counts[m].pairs) / all, static_cast<unsigned long long>(counts[m].adjacent));
+    std::printf("[ metric ] %s: %llu triangles, %llu out-of-order pairs (%.2f%% of all pairs), %llu adjacent\n",
+                names[m], static_cast<unsigned long long>(counts[m].triangles),
+                static_cast<unsigned long long>(counts[m].pairs), 100.0 * static_cast<double>(counts[m].pairs) / all,
+                static_cast<unsigned long long>(counts[m].adjacent));
   }
   EXPECT_LT(counts[1].pairs, counts[0].pairs / 2);
   EXPECT_LE(counts[2].pairs, counts[0].pairs / 2);
@@ -204,8 +214,9 @@ TEST_F(FluidRenderTest, SortOrderSwitchCountsOutOfOrderPairs) {
     std::vector<float> d;
     const auto& m = scene_.mesh;
     for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-      d.push_back(glm::length((m.positions[m.indices[t]] + m.positions[m.indices[t + 1]] + m.positions[m.indices[t + 2]]) / 3.0f -
-                              scene_.camera.eye));
+      d.push_back(glm::length(
+          (m.positions[m.indices[t]] + m.positions[m.indices[t + 1]] + m.positions[m.indices[t + 2]]) / 3.0f -
+          scene_.camera.eye));
     }
     std::uint64_t brute = 0;
     for (std::size_t a = 0; a < d.size(); ++a)
@@ -244,7 +255,8 @@ TEST_F(FluidRenderTest, MeshBuffersGrowWithoutChurn) {
     ASSERT_TRUE(uploadFluidMesh(renderer_, pos, nrm, idx, error)) << error;
   }
   EXPECT_EQ(renderer_.reallocations, after_growth);
-  std::printf("[ metric ] buffer growth: %u reallocations over 200 growing frames, 0 over 100 varying frames\n", after_growth);
+  std::printf("[ metric ] buffer growth: %u reallocations over 200 growing frames, 0 over 100 varying frames\n",
+              after_growth);
 }
 
 TEST_F(FluidRenderTest, BadMeshIsRejectedWithAClearError) {
@@ -311,7 +323,8 @@ TEST_F(FluidRenderTest, MillionTriangleMesh) {
     pos[3 * t] = {x, y, 0.0f};
     pos[3 * t + 1] = {x + 0.002f, y, 0.0f};
     pos[3 * t + 2] = {x, y + 0.001f, 0.0f};
-    for (int c = 0; c < 3; ++c) idx[3 * t + static_cast<std::size_t>(c)] = static_cast<std::uint32_t>(3 * t + static_cast<std::size_t>(c));
+    for (int c = 0; c < 3; ++c)
+      idx[3 * t + static_cast<std::size_t>(c)] = static_cast<std::uint32_t>(3 * t + static_cast<std::size_t>(c));
   }
   std::string error;
   ASSERT_TRUE(uploadFluidMesh(renderer_, pos, nrm, idx, error)) << error;
@@ -329,7 +342,8 @@ TEST(FluidRenderFailure, BrokenShaderDisablesTheEffect) {
   const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "fluid_broken_shaders";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "fluid");
-  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "shaders/fluid")) {
+  for (const auto& e :
+       std::filesystem::directory_iterator(std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "shaders/fluid")) {
     std::filesystem::copy_file(e.path(), dir / "fluid" / e.path().filename());
   }
   {

@@ -275,9 +275,8 @@ void rainOnColliders(GpuParticles& system, Integrator integrator, fluid::DepthMa
 // extra push-out, no particle ends a step inside a collider. Without it (exactly the single
 // §3.3.2 projection) particles can stay inside by less than a texel, because a push along one
 // texel's normal can land over a neighbouring texel whose surface is higher.
-class GpuCollisionTest
-    : public GpuParticlesTest,
-      public ::testing::WithParamInterface<std::tuple<Integrator, fluid::DepthMapFormat, int>> {};
+class GpuCollisionTest : public GpuParticlesTest,
+                         public ::testing::WithParamInterface<std::tuple<Integrator, fluid::DepthMapFormat, int>> {};
 
 TEST_P(GpuCollisionTest, MatchesCpuAndNoParticleEndsInside) {
   const auto [integrator, format, iterations] = GetParam();
@@ -292,10 +291,11 @@ TEST_P(GpuCollisionTest, MatchesCpuAndNoParticleEndsInside) {
   }
   EXPECT_GT(r.hits, 1000u) << "too few particles reached a collider";
   EXPECT_EQ(r.diff.over, 0u) << "max error " << r.diff.max << " m";
-  std::printf("[ metric ] %s, sphere %s, push-out iterations %d: deepest %.3g m inside after any step, %zu of 4096 "
-              "differ from the CPU by more than 1e-4 m (max %.3g m), %zu on colliders\n",
-              integrator == Integrator::euler ? "euler" : "verlet", formatLabel(format), iterations,
-              r.worst < 0.0f ? -r.worst : 0.0f, r.diff.over, r.diff.max, r.hits);
+  std::printf(
+      "[ metric ] %s, sphere %s, push-out iterations %d: deepest %.3g m inside after any step, %zu of 4096 "
+      "differ from the CPU by more than 1e-4 m (max %.3g m), %zu on colliders\n",
+      integrator == Integrator::euler ? "euler" : "verlet", formatLabel(format), iterations,
+      r.worst < 0.0f ? -r.worst : 0.0f, r.diff.over, r.diff.max, r.hits);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -566,7 +566,8 @@ TEST_F(GpuParticlesTest, ZeroParticlesAndACountThatChangesEveryFrame) {
     std::uint32_t live = 0;
     for (std::uint32_t k = 0; k < system_.capacity; ++k) {
       const bool cpu_live = system_.allocator.live[k] != 0;
-      ASSERT_EQ(gpu[k].w != 0.0f && k < system_.allocator.active_range, cpu_live) << "frame " << frame << " index " << k;
+      ASSERT_EQ(gpu[k].w != 0.0f && k < system_.allocator.active_range, cpu_live)
+          << "frame " << frame << " index " << k;
       live += cpu_live;
     }
     ASSERT_EQ(live, system_.allocator.live_count);
