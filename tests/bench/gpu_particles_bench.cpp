@@ -62,9 +62,9 @@ int main(int argc, char** argv) {
   }
   std::printf("GL: %s\nmedian of %d repetitions; particles per ms (ms per pass)\n\n", ctx.version.c_str(), reps);
   std::printf(
-      "| particles | update | update + collide (ground 1 map + sphere 3 front-back16 maps) | sort key refresh | sort "
-      "pass | draw (512², points) |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|\n");
+      "| particles | update | update + collide (ground 1 map + sphere 3 front-back16 maps) | same, push-out 0 | sort "
+      "key refresh | sort pass | draw (512², points) |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
   gputest::TestCollider ground = gputest::makeGroundCollider(256);
   gputest::TestCollider sphere =
       gputest::makeSphereCollider({0.0f, 0.6f, 0.0f}, 0.35f, 256, fluid::DepthMapFormat::front_back16);
@@ -105,6 +105,9 @@ int main(int argc, char** argv) {
       return 1;
     }
     const double collide = medianMs(reps, [&] { step(s, params); });
+    GpuStepParams single = params;
+    single.push_out_iterations = 0;  // exactly the single §3.3.2 projection
+    const double collide0 = medianMs(reps, [&] { step(s, single); });
     const glm::vec3 eye(0.0f, 1.0f, 4.0f);
     const double refresh = medianMs(reps, [&] { refreshSortKeys(s, eye); });
     const double pass = medianMs(reps, [&] { sortPasses(s, 1); });
@@ -117,9 +120,11 @@ int main(int argc, char** argv) {
     });
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const double n = static_cast<double>(side) * side;
-    std::printf("| %u (%u²) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) |\n",
-                side * side, side, n / update, update, n / collide, collide, n / refresh, refresh, n / pass, pass,
-                n / draw, draw);
+    std::printf(
+        "| %u (%u²) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) "
+        "|\n",
+        side * side, side, n / update, update, n / collide, collide, n / collide0, collide0, n / refresh, refresh,
+        n / pass, pass, n / draw, draw);
     std::fflush(stdout);
     destroyGpuParticles(s);
   }
