@@ -47,8 +47,8 @@ vec3 flowVelocity(vec3 p) {
 }
 
 // Optional terms are compiled in only when used (ATTRACTORS, DRAG, FLOW, COLLIDERS are
-// #defined per program variant): a software rasteriser such as llvmpipe runs both sides of a
-// branch on a uniform, so "if (count > 0)" would still cost the full price.
+// #defined per program variant): on llvmpipe an untaken "if (count > 0)" on a uniform still
+// cost most of its body's price (measured, docs/gpu.md).
 vec3 acceleration(vec3 p, vec3 v) {
   vec3 a = u_gravity + u_wind;
 #ifdef ATTRACTORS
