@@ -1,0 +1,118 @@
+// One simulation step per particle texel (Kolb et al. 2004 §3.3.2): forces, integration,
+// the depth-map collision double check (collide.glsl), and the GPU side of death (§3.3.1).
+// Euler:  state0 = position, state1 = velocity.
+// Verlet: state0 = P_{i-1}, state1 = P_{i-2}; P_i = 2P_{i-1} − P_{i-2} + a·dt² (no velocity
+//         texture). A collision reaction is written back as a new P_{i-1} = P_i − v'·dt, the
+//         "position manipulation" the paper asks for.
+
+uniform sampler2D u_state0;
+uniform sampler2D u_state1;
+uniform sampler2D u_attributes;  // birth time, death time, type, spin
+uniform float u_time;            // time at the end of this step, s
+uniform float u_dt;
+uniform int u_verlet;
+uniform vec3 u_gravity;
+uniform vec3 u_wind;
+uniform int u_attractor_count;
+uniform vec4 u_attractors[4];    // xyz position, w strength
+uniform float u_softening[4];
+uniform float u_drag;            // 6πηr/m, 1/s
+uniform sampler3D u_flow;
+uniform vec3 u_flow_origin;
+uniform vec3 u_flow_extent;
+
+layout(location = 0) out vec4 out_state0;
+layout(location = 1) out vec4 out_state1;
+
+// Trilinear flow velocity between cell centres, clamped at the border (texelFetch keeps the
+// weights in full float precision, so the CPU reference can match).
+vec3 flowVelocity(vec3 p) {
+  ivec3 size = textureSize(u_flow, 0);
+  vec3 g = (p - u_flow_origin) / u_flow_extent * vec3(size) - 0.5;
+  g = clamp(g, vec3(0.0), vec3(size - 1));
+  ivec3 i0 = ivec3(floor(g));
+  vec3 f = g - vec3(i0);
+  ivec3 i1 = min(i0 + 1, size - 1);
+  vec3 c000 = texelFetch(u_flow, ivec3(i0.x, i0.y, i0.z), 0).xyz;
+  vec3 c100 = texelFetch(u_flow, ivec3(i1.x, i0.y, i0.z), 0).xyz;
+  vec3 c010 = texelFetch(u_flow, ivec3(i0.x, i1.y, i0.z), 0).xyz;
+  vec3 c110 = texelFetch(u_flow, ivec3(i1.x, i1.y, i0.z), 0).xyz;
+  vec3 c001 = texelFetch(u_flow, ivec3(i0.x, i0.y, i1.z), 0).xyz;
+  vec3 c101 = texelFetch(u_flow, ivec3(i1.x, i0.y, i1.z), 0).xyz;
+  vec3 c011 = texelFetch(u_flow, ivec3(i0.x, i1.y, i1.z), 0).xyz;
+  vec3 c111 = texelFetch(u_flow, ivec3(i1.x, i1.y, i1.z), 0).xyz;
+  vec3 x00 = mix(c000, c100, f.x), x10 = mix(c010, c110, f.x);
+  vec3 x01 = mix(c001, c101, f.x), x11 = mix(c011, c111, f.x);
+  return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+// Optional terms are compiled in only when used (ATTRACTORS, DRAG, FLOW, COLLIDERS are
+// #defined per program variant): on llvmpipe an untaken "if (count > 0)" on a uniform still
+// cost most of its body's price (measured, docs/gpu.md).
+vec3 acceleration(vec3 p, vec3 v) {
+  vec3 a = u_gravity + u_wind;
+#ifdef ATTRACTORS
+  for (int k = 0; k < u_attractor_count; ++k) {
+    vec3 d = u_attractors[k].xyz - p;
+    float r2 = dot(d, d) + u_softening[k] * u_softening[k];
+    a += u_attractors[k].w * d / (r2 * sqrt(r2));
+  }
+#endif
+#ifdef DRAG
+  // Stokes' law, §3.3.2: F = 6πηr(v_{i−1} − v_flow).
+#ifdef FLOW
+  vec3 flow = flowVelocity(p);
+#else
+  vec3 flow = vec3(0.0);
+#endif
+  a -= u_drag * (v - flow);
+#endif
+  return a;
+}
+
+bool collide(vec3 previous, inout vec3 predicted, inout vec3 velocity) {
+#ifdef COLLIDERS
+  return collideAll(previous, predicted, velocity);
+#else
+  return false;
+#endif
+}
+
+void main() {
+  ivec2 texel = ivec2(gl_FragCoord.xy);
+  vec4 s0 = texelFetch(u_state0, texel, 0);
+  vec4 s1 = texelFetch(u_state1, texel, 0);
+  vec4 attributes = texelFetch(u_attributes, texel, 0);
+  // §3.3.1: the GPU finds dead particles by their age; they are flagged (w = 0) and no longer
+  // move, drawn or sorted in front.
+  if (s0.w == 0.0 || u_time >= attributes.y) {
+    out_state0 = vec4(s0.xyz, 0.0);
+    out_state1 = s1;
+    return;
+  }
+  vec3 p = s0.xyz;
+  vec3 next_p, next_v, next_s1;
+  if (u_verlet == 0) {
+    vec3 v = s1.xyz;
+    next_v = v + acceleration(p, v) * u_dt;
+    next_p = p + next_v * u_dt;
+    collide(p, next_p, next_v);
+    next_s1 = next_v;
+  } else {
+    vec3 p2 = s1.xyz;
+    vec3 v = (p - p2) / u_dt;
+    next_p = 2.0 * p - p2 + acceleration(p, v) * (u_dt * u_dt);
+    next_v = (next_p - p) / u_dt;
+    next_s1 = p;
+    if (collide(p, next_p, next_v)) next_s1 = next_p - next_v * u_dt;
+  }
+  // NaN/inf never spread: a particle that became non-finite dies here (w = 0).
+  bool finite = !(any(isnan(next_p)) || any(isinf(next_p)) || any(isnan(next_s1)) || any(isinf(next_s1)));
+  if (!finite) {
+    out_state0 = vec4(0.0);
+    out_state1 = vec4(0.0);
+    return;
+  }
+  out_state0 = vec4(next_p, 1.0);
+  out_state1 = vec4(next_s1, u_verlet == 0 ? 0.0 : 1.0);
+}
