@@ -73,8 +73,8 @@ struct CollisionResult {
 // position, `predicted` the sample at predicted_position = previous_position + v*·dt.
 //  - predicted outside (or invalid): nothing happens.
 //  - previous outside, predicted inside: the particle is about to collide; its velocity gets
-//    the friction/resilience reaction and the position stays at the previous one advanced
-//    by the reflected velocity, clamped to the outside.
+//    the friction/resilience reaction and the predicted position is moved onto the surface
+//    along the normal, plus `skin`.
 //  - previous inside too: the particle is caught; it is pushed out along the normal to the
 //    surface plus `skin`, and its normal velocity is made to head outside (v⊥ − v*, eq. of
 //    §3.3.2 for a particle heading inside).

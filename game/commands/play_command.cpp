@@ -107,6 +107,9 @@ int playCommand(const Args& args) {
   }
   if (!displayAvailable()) options.headless = true;
   if (options.headless && options.frames == 0) options.frames = kDefaultHeadlessFrames;
+  // Headless frames take as long as the software rasterizer needs; feeding the loop one fixed
+  // step per frame keeps a headless run deterministic and independent of the machine's speed.
+  options.fixed_frame_time = options.headless;
   options.screenshot = screenshot;
   options.show_ui = !no_ui;
 
