@@ -1,0 +1,186 @@
+#include "fluid/sph/neighbor_grid.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cassert>
+#include <cmath>
+
+namespace fluid {
+namespace {
+
+// Interleaves the low 2 bits of x, y, z: Morton index inside a 4x4x4 tile.
+constexpr std::uint32_t morton2(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  return (x & 1u) | ((y & 1u) << 1) | ((z & 1u) << 2) | ((x & 2u) << 2) | ((y & 2u) << 3) | ((z & 2u) << 4);
+}
+
+struct Bounds {
+  glm::vec3 lo{1e30f};
+  glm::vec3 hi{-1e30f};
+};
+
+constexpr std::size_t kGrain = 1024;
+
+}  // namespace
+
+glm::ivec3 NeighborGrid::cellOf(glm::vec3 p) const {
+  const glm::vec3 c = (p - origin) / cell_size;
+  glm::ivec3 out;
+  for (int a = 0; a < 3; ++a) {
+    // Clamp in float first: float -> int conversion of out-of-range values is undefined.
+    const float f = std::clamp(std::floor(c[a]), 0.0f, static_cast<float>(dims[a] - 1));
+    out[a] = static_cast<int>(f);
+  }
+  return out;
+}
+
+std::uint32_t NeighborGrid::keyOf(glm::ivec3 cell) const {
+  const auto tx = static_cast<std::uint32_t>(cell.x >> 2), ty = static_cast<std::uint32_t>(cell.y >> 2),
+             tz = static_cast<std::uint32_t>(cell.z >> 2);
+  const std::uint32_t tile = (tz * static_cast<std::uint32_t>(tiles.y) + ty) * static_cast<std::uint32_t>(tiles.x) + tx;
+  return tile * 64u + morton2(static_cast<std::uint32_t>(cell.x), static_cast<std::uint32_t>(cell.y),
+                              static_cast<std::uint32_t>(cell.z));
+}
+
+void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions, float cell_size,
+                       glm::vec3 domain_min, glm::vec3 domain_max) {
+  assert(cell_size > 0.0f);
+  const std::size_t n = positions.size();
+  grid.cell_size = cell_size;
+
+  // Bounding box (min/max are exact and order-independent, so any reduction order is fine).
+  Bounds box = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, kGrain), Bounds{},
+      [&](const tbb::blocked_range<std::size_t>& r, Bounds b) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          b.lo = glm::min(b.lo, positions[i]);
+          b.hi = glm::max(b.hi, positions[i]);
+        }
+        return b;
+      },
+      [](Bounds a, const Bounds& b) {
+        a.lo = glm::min(a.lo, b.lo);
+        a.hi = glm::max(a.hi, b.hi);
+        return a;
+      });
+  if (n == 0) box = Bounds{glm::vec3(0.0f), glm::vec3(0.0f)};
+  box.lo = glm::clamp(box.lo, domain_min, domain_max);
+  box.hi = glm::clamp(box.hi, domain_min, domain_max);
+  box.hi = glm::max(box.hi, box.lo);
+  grid.origin = box.lo;
+  // Bounded key range: at most kMaxCellsPerAxis per axis and about max(2^18, 8n) cells in all. A
+  // box too large for that (stray particles without a domain) gets proportionally larger cells,
+  // which keeps the 27-cell query exact (cells only need to be at least `cell_size` wide).
+  const double budget = std::max(262144.0, 8.0 * static_cast<double>(n));
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    double total = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double cells = std::floor(static_cast<double>(box.hi[a] - box.lo[a]) / grid.cell_size) + 1.0;
+      grid.dims[a] = static_cast<int>(std::clamp(cells, 1.0, static_cast<double>(NeighborGrid::kMaxCellsPerAxis)));
+      grid.tiles[a] = (grid.dims[a] + 3) / 4;
+      total *= grid.dims[a];
+    }
+    if (total <= budget) break;
+    grid.cell_size *= static_cast<float>(std::cbrt(total / budget) * 1.01);
+  }
+  const std::uint32_t key_count = grid.keyCount();
+
+  grid.particle_key.resize(n);
+  grid.order.resize(n);
+  grid.cell_start.assign(key_count + 1, 0u);  // reuses capacity once warmed up
+  grid.cursor.resize(key_count + 1);
+
+  // 1. keys and counts (atomic increments: the counts do not depend on the order).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint32_t key = grid.keyOf(grid.cellOf(positions[i]));
+      grid.particle_key[i] = key;
+      std::atomic_ref<std::uint32_t>(grid.cell_start[key + 1]).fetch_add(1u, std::memory_order_relaxed);
+    }
+  });
+  // 2. exclusive scan -> start of each cell.
+  for (std::uint32_t k = 0; k < key_count; ++k) grid.cell_start[k + 1] += grid.cell_start[k];
+  std::copy(grid.cell_start.begin(), grid.cell_start.end(), grid.cursor.begin());
+  // 3. scatter (slot order inside a cell depends on scheduling) ...
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint32_t slot =
+          std::atomic_ref<std::uint32_t>(grid.cursor[grid.particle_key[i]]).fetch_add(1u, std::memory_order_relaxed);
+      grid.order[slot] = static_cast<std::uint32_t>(i);
+    }
+  });
+  // 4. ... so each cell is sorted by particle index: a stable counting sort, thread-count invariant.
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, key_count, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t b = grid.cell_start[k], e = grid.cell_start[k + 1];
+      if (e - b > 1) std::sort(grid.order.begin() + b, grid.order.begin() + e);
+    }
+  });
+}
+
+void markGridReordered(NeighborGrid& grid) {
+  const std::size_t n = grid.order.size();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t e = r.begin(); e != r.end(); ++e) grid.order[e] = static_cast<std::uint32_t>(e);
+  });
+  // particle_key must follow the permutation too: entries are now in key order.
+  for (std::uint32_t k = 0; k + 1 < grid.cell_start.size(); ++k) {
+    for (std::uint32_t e = grid.cell_start[k]; e < grid.cell_start[k + 1]; ++e) grid.particle_key[e] = k;
+  }
+}
+
+namespace {
+
+// Calls f(j) for every particle j in the 27 cells around particle i's cell, in a fixed order.
+template <typename F>
+inline void forEachCandidate(const NeighborGrid& grid, glm::vec3 p, F&& f) {
+  const glm::ivec3 c = grid.cellOf(p);
+  const glm::ivec3 lo = glm::max(c - 1, glm::ivec3(0));
+  const glm::ivec3 hi = glm::min(c + 1, grid.dims - 1);
+  for (int z = lo.z; z <= hi.z; ++z)
+    for (int y = lo.y; y <= hi.y; ++y)
+      for (int x = lo.x; x <= hi.x; ++x) {
+        const std::uint32_t key = grid.keyOf({x, y, z});
+        for (std::uint32_t e = grid.cell_start[key]; e < grid.cell_start[key + 1]; ++e) f(grid.order[e]);
+      }
+}
+
+}  // namespace
+
+void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius,
+                   NeighborLists& lists) {
+  assert(radius <= grid.cell_size * 1.0001f);
+  const std::size_t n = positions.size();
+  const float r2 = radius * radius;
+  lists.counts.resize(n);
+  lists.offsets.resize(n + 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const glm::vec3 p = positions[i];
+      std::uint32_t count = 0;
+      forEachCandidate(grid, p, [&](std::uint32_t j) {
+        const glm::vec3 d = p - positions[j];
+        count += (j != i && glm::dot(d, d) < r2) ? 1u : 0u;
+      });
+      lists.counts[i] = count;
+    }
+  });
+  lists.offsets[0] = 0;
+  for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
+  lists.indices.resize(lists.offsets[n]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const glm::vec3 p = positions[i];
+      std::uint32_t out = lists.offsets[i];
+      forEachCandidate(grid, p, [&](std::uint32_t j) {
+        const glm::vec3 d = p - positions[j];
+        if (j != i && glm::dot(d, d) < r2) lists.indices[out++] = j;
+      });
+    }
+  });
+}
+
+}  // namespace fluid
