@@ -134,18 +134,39 @@ void markGridReordered(NeighborGrid& grid) {
 
 namespace {
 
-// Calls f(j) for every particle j in the 27 cells around particle i's cell, in a fixed order.
-template <typename F>
-inline void forEachCandidate(const NeighborGrid& grid, glm::vec3 p, F&& f) {
-  const glm::ivec3 c = grid.cellOf(p);
-  const glm::ivec3 lo = glm::max(c - 1, glm::ivec3(0));
-  const glm::ivec3 hi = glm::min(c + 1, grid.dims - 1);
+struct Range {
+  std::uint32_t begin, end;
+};
+
+// The (up to 27) entry ranges of the cells around `cell`, in a fixed order (z, y, x ascending).
+inline int neighbourRanges(const NeighborGrid& grid, glm::ivec3 cell, Range* out) {
+  const glm::ivec3 lo = glm::max(cell - 1, glm::ivec3(0));
+  const glm::ivec3 hi = glm::min(cell + 1, grid.dims - 1);
+  int count = 0;
   for (int z = lo.z; z <= hi.z; ++z)
     for (int y = lo.y; y <= hi.y; ++y)
       for (int x = lo.x; x <= hi.x; ++x) {
         const std::uint32_t key = grid.keyOf({x, y, z});
-        for (std::uint32_t e = grid.cell_start[key]; e < grid.cell_start[key + 1]; ++e) f(grid.order[e]);
+        const Range r{grid.cell_start[key], grid.cell_start[key + 1]};
+        if (r.end > r.begin) out[count++] = r;
       }
+  return count;
+}
+
+// Runs f(i, ranges, count) for every particle, cell by cell (all particles of a cell share the
+// candidate ranges), in parallel over cells.
+template <typename F>
+void forEachParticleByCell(const NeighborGrid& grid, std::span<const glm::vec3> positions, F&& f) {
+  const std::uint32_t keys = grid.keyCount();
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, keys, 64), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    Range ranges[27];
+    for (std::uint32_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t b = grid.cell_start[k], e = grid.cell_start[k + 1];
+      if (b == e) continue;
+      const int count = neighbourRanges(grid, grid.cellOf(positions[grid.order[b]]), ranges);
+      for (std::uint32_t s = b; s < e; ++s) f(grid.order[s], ranges, count);
+    }
+  });
 }
 
 }  // namespace
@@ -157,29 +178,30 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   const float r2 = radius * radius;
   lists.counts.resize(n);
   lists.offsets.resize(n + 1);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const glm::vec3 p = positions[i];
-      std::uint32_t count = 0;
-      forEachCandidate(grid, p, [&](std::uint32_t j) {
+  const std::uint32_t* order = grid.order.data();
+  forEachParticleByCell(grid, positions, [&](std::uint32_t i, const Range* ranges, int count) {
+    const glm::vec3 p = positions[i];
+    std::uint32_t c = 0;
+    for (int q = 0; q < count; ++q)
+      for (std::uint32_t e = ranges[q].begin; e < ranges[q].end; ++e) {
+        const std::uint32_t j = order[e];
         const glm::vec3 d = p - positions[j];
-        count += (j != i && glm::dot(d, d) < r2) ? 1u : 0u;
-      });
-      lists.counts[i] = count;
-    }
+        c += (j != i && glm::dot(d, d) < r2) ? 1u : 0u;
+      }
+    lists.counts[i] = c;
   });
   lists.offsets[0] = 0;
   for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
   lists.indices.resize(lists.offsets[n]);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const glm::vec3 p = positions[i];
-      std::uint32_t out = lists.offsets[i];
-      forEachCandidate(grid, p, [&](std::uint32_t j) {
+  forEachParticleByCell(grid, positions, [&](std::uint32_t i, const Range* ranges, int count) {
+    const glm::vec3 p = positions[i];
+    std::uint32_t out = lists.offsets[i];
+    for (int q = 0; q < count; ++q)
+      for (std::uint32_t e = ranges[q].begin; e < ranges[q].end; ++e) {
+        const std::uint32_t j = order[e];
         const glm::vec3 d = p - positions[j];
         if (j != i && glm::dot(d, d) < r2) lists.indices[out++] = j;
-      });
-    }
+      }
   });
 }
 

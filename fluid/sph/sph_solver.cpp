@@ -21,6 +21,9 @@ namespace {
 // so every floating-point sum below is bit-identical for 1 and N threads.
 constexpr std::size_t kGrain = 256;
 constexpr int kWallTable = 1024;
+// Boundary pressure mirroring: the wall takes the particle's pressure (p_b = p_i, rho_b = rho_i),
+// so its term in the symmetric pressure force has weight 2.
+constexpr float kMirror = 2.0f;
 
 using Clock = std::chrono::steady_clock;
 float msSince(Clock::time_point t0) {
@@ -116,23 +119,37 @@ void ensureInit(SphWorld& world) {
   w.particle_mass = sphParticleMass(world.params);
   tabulateWall(w);
   // Calibration: a particle of a resting lattice at distance r from a plane wall misses exactly the
-  // lattice layers beyond the wall (share f, from the same lattice sum as the mass). The continuous
-  // half-space gives V(r) > f (0.188 vs 0.150 for the cubic spline with H = 2d), which would leave
-  // every wall layer 4 % compressed; shifting the table by delta with V(r + delta) = f removes that.
+  // lattice layers beyond the wall: volume share f and normal gradient g_miss (lattice sums, same
+  // lattice as the mass). The continuous half-space gives V(r) = 0.188 > f = 0.150 and
+  // A(r) = 0.49 < g_miss = 0.51 (H = 2d, in units of d): walls would be over-dense and, worse,
+  // pull wall particles in. We use beta V(s + delta) with beta, delta solving
+  // beta V(r + delta) = f and beta A(r + delta) = g_miss, so a resting lattice at a wall has
+  // exactly rho_0 and a balanced gradient.
   {
     const float d = sphSpacing(world.params);
-    double layer = 0.0;
+    const float r = world.params.particle_radius;
+    double layer = 0.0, grad = 0.0;
     for (int z = -2; z <= -1; ++z)
       for (int y = -2; y <= 2; ++y)
-        for (int x = -2; x <= 2; ++x)
-          layer += w.kernel.value(d * std::sqrt(static_cast<float>(x * x + y * y + z * z)));
-    const float f = static_cast<float>(layer * w.particle_mass / world.params.rest_density);
-    float lo = 0.0f, hi = H;
+        for (int x = -2; x <= 2; ++x) {
+          const float len = d * std::sqrt(static_cast<float>(x * x + y * y + z * z));
+          layer += w.kernel.value(len);
+          grad += -w.kernel.derivative(len) * (-z * d) / len;
+        }
+    const float scale = w.particle_mass / world.params.rest_density;
+    const float f = static_cast<float>(layer * scale), g = static_cast<float>(grad * scale);
+    // V/A decreases with s on (0, H): bisection for V(r + delta) / A(r + delta) = f / g.
+    float lo = 0.0f, hi = H - r;
     for (int it = 0; it < 60; ++it) {
       const float mid = 0.5f * (lo + hi);
-      if (lookup(w.wall_volume, world.params.particle_radius + mid, H) > f) lo = mid; else hi = mid;
+      const float ratio = lookup(w.wall_volume, r + mid, H) / std::max(lookup(w.wall_area, r + mid, H), 1e-30f);
+      if (ratio > f / g) lo = mid; else hi = mid;
     }
     w.wall_shift = 0.5f * (lo + hi);
+    w.wall_neighbours = 9.0f / f;  // a flat wall stands in for 9 lattice neighbours (2 layers at H = 2d)
+    const float beta = f / lookup(w.wall_volume, r + w.wall_shift, H);
+    for (float& v : w.wall_volume) v *= beta;
+    for (float& a : w.wall_area) a *= beta;
   }
   w.initialised = true;
 }
@@ -453,12 +470,22 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         [](float a, float b) { return std::max(a, b); });
   };
   auto chooseDt = [&](float vmax, float amax, bool wcsph) {
+    stats.max_acceleration = amax;
     float t = max_dt;
     const float v = std::max(vmax, collider_speed);
     if (v > 0.0f) t = std::min(t, P.cfl * d / v);
-    if (amax > 0.0f) t = std::min(t, std::sqrt(2.0f * P.cfl * d / amax));
+    // Force condition: a step may compress the fluid by at most ~0.1 % of d (at cfl = 0.4) from the
+    // non-pressure acceleration alone (|a| dt^2 <= 0.0025 cfl d). The pressure solvers stop at a
+    // mean density error tolerance, so a larger per-step compression (a resting column under
+    // gravity, which the CFL velocity bound does not limit) is left partly unresolved every step and
+    // builds up into noise.
+    const float body = glm::length(P.gravity);
+    if (body > 0.0f) t = std::min(t, std::sqrt(0.0025f * P.cfl * d / body));
+    // Explicit viscosity stability (diffusion number): dt <= 0.125 d^2 / nu (Morris et al. 1997).
+    if (P.viscosity > 0.0f) t = std::min(t, 0.125f * d * d / P.viscosity);
     if (wcsph) {
-      // Becker & Teschner 2007 §4: dt <= 0.4 h / (c_s (1 + 0.6 alpha)), dt <= 0.25 sqrt(h / |a|max).
+      // Becker & Teschner 2007 §4: dt <= 0.4 h / (c_s (1 + 0.6 alpha)), dt <= 0.25 sqrt(h / |a|max)
+      // with the total acceleration (pressure included).
       t = std::min(t, 0.4f * h_bt / (cs * (1.0f + 0.6f * alpha_av)));
       if (amax > 0.0f) t = std::min(t, 0.25f * std::sqrt(h_bt / amax));
     }
@@ -478,7 +505,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       const float ratio = S.density[i] / rho0;
       S.pressure[i] = std::max(0.0f, B * (std::pow(ratio, P.tait_exponent) - 1.0f));
     });
-    // Symmetric pressure force (B&T eq. 6) + boundary (Akinci 2012 eq. 10 with the volume map).
+    // Symmetric pressure force (B&T eq. 6) + boundary (the same symmetric term against the wall
+    // volume with the mirrored pressure p_b = p_i, rho_b = rho_i).
     forEach(n, [&](std::size_t i) {
       const float pi = S.pressure[i] / (S.density[i] * S.density[i]);
       glm::vec3 a(0.0f);
@@ -486,7 +514,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         const std::uint32_t j = nbr[k];
         a -= (pi + S.pressure[j] / (S.density[j] * S.density[j])) * G[k];
       }
-      a -= rho0 * pi * w.boundary_gradient[i];
+      a -= 2.0f * rho0 * pi * w.boundary_gradient[i];  // mirrored pressure p_b = p_i
       w.accel[i] += a;
     });
     dt = chooseDt(maxSpeed(), maxAccel(), true);
@@ -496,7 +524,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
   } else {
     // DFSPH. alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_j |m_j grad W_ij|^2)
-    // (Bender & Koschier 2015 eq. 9, with the boundary's share in the first sum).
+    // (Bender & Koschier 2015 eq. 9). The boundary mirrors the particle's pressure (p_b = p_i,
+    // so its term has weight 2 in the velocity update below); it does not move, so it adds
+    // (S + rho_0 g) . (S + 2 rho_0 g) instead of |S|^2 where S = sum_j m_j grad W_ij.
     w.factor.resize(n);
     forEach(n, [&](std::size_t i) {
       glm::vec3 sum = rho0 * w.boundary_gradient[i];
@@ -505,7 +535,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         sum += G[k];
         sq += glm::dot(G[k], G[k]);
       }
-      const float denom = glm::dot(sum, sum) + sq;
+      const float denom = glm::dot(sum, sum + (kMirror - 1.0f) * rho0 * w.boundary_gradient[i]) + sq;
       w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? S.density[i] / denom : 0.0f;
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
@@ -518,10 +548,10 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     kr.resize(n);
     w.kappa_v.assign(n, 0.0f);  // sum over the divergence iterations of kappa^v_i / rho_i
     w.float_tmp.assign(n, 0.0f);  // same for the density iterations
-    // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
+    // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forEach(n, [&](std::size_t i) {
-        glm::vec3 dv = rho0 * kr[i] * w.boundary_gradient[i];
+        glm::vec3 dv = kMirror * rho0 * kr[i] * w.boundary_gradient[i];
         for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) dv += (kr[i] + kr[nbr[k]]) * G[k];
         w.vec_b[i] = V[i] - h * dv;
         total[i] += kr[i];
@@ -534,7 +564,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0.
     if (P.divergence_solver && n > 0) {
       if (P.warm_start) {
-        forEach(n, [&](std::size_t i) { kr[i] = 0.5f * w.warm_kappa_v[i] / dt_prev; });
+        // Warm start (2017 §4.3): in steady flow (a resting column) kappa/rho is the same every
+        // step and independent of dt (it is a pressure acceleration over a gradient), so the last
+        // sum is reused, halved, and only where the particle is compressing now: a one-off push
+        // from the last step must not be repeated on a particle that is already expanding, since
+        // the solver never pulls particles back (only compression is corrected).
+        forEach(n, [&](std::size_t i) { kr[i] = densityRate(i) > 0.0f ? 0.5f * w.warm_kappa_v[i] : 0.0f; });
         applyKappa(dt_prev, w.kappa_v);
       }
       const double eta_v = P.max_divergence_error;
@@ -542,16 +577,21 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         const double err = reduce(
             n, 0.0,
             [&](std::size_t i, double& acc) {
-              const float rate = std::max(0.0f, densityRate(i));  // only compression is corrected
+              // Only compression is corrected, and only for particles with a full enough
+              // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9
+              // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
+              // free surface is pushed outward every step and the fluid creeps apart.
+              const float neighbours = static_cast<float>(off[i + 1] - off[i]) + w.boundary_volume[i] * w.wall_neighbours;
+              const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
               kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
               acc += rate * dt_prev / rho0;
             },
             [](double a, double b) { return a + b; }) / static_cast<double>(n);
-        if ((div_iterations >= 1 && err <= eta_v) || div_iterations >= P.max_iterations) break;
+        if ((div_iterations >= P.min_iterations && err <= eta_v) || div_iterations >= P.max_iterations) break;
         applyKappa(dt_prev, w.kappa_v);
         ++div_iterations;
       }
-      forEach(n, [&](std::size_t i) { w.warm_kappa_v[i] = w.kappa_v[i] * dt_prev; });
+      forEach(n, [&](std::size_t i) { w.warm_kappa_v[i] = w.kappa_v[i]; });
     }
 
     // 4b. Time step, then predicted velocities v* = v + dt a_nonpressure (Algorithm 1).
@@ -565,7 +605,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // 4c. Constant-density solver (§4.2): rho*_i = rho_i + dt Drho/Dt_i -> rho_0.
     if (n > 0) {
       if (P.warm_start) {
-        forEach(n, [&](std::size_t i) { kr[i] = 0.5f * w.warm_kappa[i] / (dt * dt); });
+        forEach(n, [&](std::size_t i) {
+          kr[i] = S.density[i] + dt * densityRate(i) > rho0 ? 0.5f * w.warm_kappa[i] : 0.0f;
+        });
         applyKappa(dt, w.float_tmp);
       }
       const double eta = P.max_density_error;
@@ -583,7 +625,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         ++iterations;
       }
       forEach(n, [&](std::size_t i) {
-        w.warm_kappa[i] = w.float_tmp[i] * dt * dt;
+        w.warm_kappa[i] = w.float_tmp[i];
         // Effective pressure p_i = rho_i^2 (kappa_i / rho_i summed) for output; impulse for coupling.
         S.pressure[i] = S.density[i] * S.density[i] * (w.float_tmp[i] + w.kappa_v[i] * dt_prev / dt);
         w.kappa[i] = dt * w.float_tmp[i] + dt_prev * w.kappa_v[i];
@@ -627,7 +669,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
             const ColliderSample& s = smp[i];
             if (!s.valid || s.distance >= H) return;
             const glm::vec3 grad = boundaryShare(w, s, w.boundary_product[i]);
-            const glm::vec3 f = (m * w.kappa[i] * rho0 / dt) * grad;  // = -m dv / dt, dv = -kappa rho_0 grad
+            const glm::vec3 f = (2.0f * m * w.kappa[i] * rho0 / dt) * grad;  // = -m dv / dt, dv = -2 kappa rho_0 grad
             acc.f += f;
             acc.t += glm::cross(w.old_position[i] - col.pose.translation, f);
           },
@@ -665,6 +707,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           },
           [](std::size_t a, std::size_t b) { return a + b; });
       inside_total += inside;
+      stats.collisions += inside;
       if (inside > 0) {
         const FT ft = reduce(
             n, FT{},
