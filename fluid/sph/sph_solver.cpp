@@ -111,6 +111,22 @@ inline glm::vec3 boundaryShare(const SphScratch& w, const ColliderSample& s, flo
   return (-lookup(w.wall_area, s.distance + w.wall_shift, H) * others) * s.normal;  // grad V_c = -A(s) n
 }
 
+// Unit direction for a coincident pair, u(a, b) = -u(b, a), from a hash of the two ids.
+glm::vec3 coincidentDirection(std::uint32_t a, std::uint32_t b) {
+  const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
+  std::uint32_t h = lo * 0x9E3779B1u ^ (hi + 0x7F4A7C15u) * 0x85EBCA77u;
+  glm::vec3 u;
+  for (int c = 0; c < 3; ++c) {
+    h ^= h >> 15;
+    h *= 0x2C1B3C6Du;
+    h ^= h >> 12;
+    u[c] = static_cast<float>(h & 0xFFFFu) / 32767.5f - 1.0f;
+  }
+  const float len = glm::length(u);
+  u = len > 1e-3f ? u / len : glm::vec3(1.0f, 0.0f, 0.0f);
+  return a < b ? u : -u;
+}
+
 void ensureInit(SphWorld& world) {
   SphScratch& w = world.scratch;
   const float H = sphSupport(world.params);
@@ -421,8 +437,17 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
   // Per-pair m grad W_ij, reused by every solver iteration.
   w.gradients.resize(nbr.size());
+  // Coincident particles have grad W = 0 between them and could never separate; for r below
+  // 1e-6 H we use the kernel's steepest slope along a direction fixed by the two ids (odd in
+  // i <-> j, so momentum is still conserved), which pushes stacked particles apart deterministically.
+  const float steepest = w.kernel.derivative(H / 3.0f);
   forEach(n, [&](std::size_t i) {
-    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) w.gradients[k] = m * w.kernel.gradient(X[i] - X[nbr[k]]);
+    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
+      const glm::vec3 x = X[i] - X[nbr[k]];
+      const float r = glm::length(x);
+      w.gradients[k] = r > 1e-6f * H ? m * w.kernel.gradient(x, r)
+                                     : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
+    }
   });
   const auto& G = w.gradients;
 
@@ -502,7 +527,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // zero so the free surface does not clump (tensile instability).
     const float B = rho0 * cs * cs / P.tait_exponent;
     forEach(n, [&](std::size_t i) {
-      const float ratio = S.density[i] / rho0;
+      // The ratio is clamped to 1.5: real flows stay within a few per cent, and degenerate input
+      // (particles stacked on one point) would otherwise produce pressures of 1e12 B.
+      const float ratio = std::min(S.density[i] / rho0, 1.5f);
       S.pressure[i] = std::max(0.0f, B * (std::pow(ratio, P.tait_exponent) - 1.0f));
     });
     // Symmetric pressure force (B&T eq. 6) + boundary (the same symmetric term against the wall
