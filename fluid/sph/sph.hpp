@@ -110,7 +110,7 @@ struct SphEmitter {
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y
   float speed = 2.0f;          // m/s > 0
   float radius = 0.05f;        // m >= 0 (0 = one particle per layer)
-  float rate = 1000.0f;        // particles per second >= 0
+  float rate = 1000.0f;        // particles per second >= 0; clamped to speed * (particles per layer) / d so layers never overlap
   float start_time = 0.0f;
   float end_time = 1e30f;
   double accumulator = 0.0;    // internal: seconds since the last layer

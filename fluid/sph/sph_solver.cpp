@@ -291,7 +291,9 @@ std::size_t applyEmitters(SphWorld& world) {
     dir = (len > 0.0f && std::isfinite(len)) ? dir / len : glm::vec3(0, 1, 0);
     std::size_t layer = 0;
     forDiscLattice(e, d, dir, [&](glm::vec3) { ++layer; });
-    const double interval = static_cast<double>(layer) / e.rate;
+    // Layers closer than d along the jet would overlap (compressed fluid = stored energy), so the
+    // rate is clamped to speed * layer / d particles per second.
+    const double interval = std::max(static_cast<double>(layer) / e.rate, static_cast<double>(d) / e.speed);
     while (e.accumulator >= interval) {
       e.accumulator -= interval;
       if (world.particles.size() + layer > world.params.max_particles) continue;  // over budget: layer dropped
@@ -588,8 +590,25 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     w.vec_b.resize(n);
     const float dt_prev = world.last_dt > 0.0f ? world.last_dt : max_dt;
 
+    // Each solve may change a particle's velocity by at most d / (2 dt_nominal) per step.
+    // Legit flows stay far below (the CFL bound keeps v dt <= cfl d); heavily overlapped input
+    // (stacked particles, a grid at half spacing) is then separated over a few steps at a bounded
+    // speed instead of being fired apart in one.
+    // The cap uses the velocity-independent step bound, so it cannot grow as the CFL shrinks dt.
+    const float nominal_dt = chooseDt(0.0f, 0.0f, false);
+    auto capChange = [&](float) {
+      const float cap = 0.5f * d / nominal_dt;
+      forEach(n, [&](std::size_t i) {
+        const glm::vec3 dv = V[i] - w.vec_a[i];
+        const float len = glm::length(dv);
+        if (len > cap) V[i] = w.vec_a[i] + dv * (cap / len);
+      });
+    };
+    w.vec_a.resize(n);
+
     // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0.
     if (P.divergence_solver && n > 0) {
+      forEach(n, [&](std::size_t i) { w.vec_a[i] = V[i]; });
       if (P.warm_start) {
         // Warm start (2017 §4.3): in steady flow (a resting column) kappa/rho is the same every
         // step and independent of dt (it is a pressure acceleration over a gradient), so the last
@@ -618,6 +637,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt_prev, w.kappa_v);
         ++div_iterations;
       }
+      capChange(dt_prev);
       forEach(n, [&](std::size_t i) { w.warm_kappa_v[i] = w.kappa_v[i]; });
     }
 
@@ -631,6 +651,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
     // 4c. Constant-density solver (§4.2): rho*_i = rho_i + dt Drho/Dt_i -> rho_0.
     if (n > 0) {
+      forEach(n, [&](std::size_t i) { w.vec_a[i] = V[i]; });
       if (P.warm_start) {
         forEach(n, [&](std::size_t i) {
           kr[i] = S.density[i] + dt * densityRate(i) > rho0 ? 0.5f * w.warm_kappa[i] : 0.0f;
@@ -651,6 +672,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt, w.float_tmp);
         ++iterations;
       }
+      capChange(dt);
       forEach(n, [&](std::size_t i) {
         w.warm_kappa[i] = w.float_tmp[i];
         // Effective pressure p_i = rho_i^2 (kappa_i / rho_i summed) for output; impulse for coupling.
@@ -721,13 +743,27 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           n, std::size_t{0},
           [&](std::size_t i, std::size_t& acc) {
             const ColliderSample& s = w.end_samples[i];
-            if (!s.valid || s.distance >= 0.0f) {
+            const ColliderSample& s0 = w.start_samples[c][i];
+            // Tunnelling through a thin part: outside at both ends of the step but on opposite
+            // sides (the outward normal flipped), e.g. a thin fast wall that moved past the particle.
+            // The particle stays on its side: carried along by the collider, then the §3.3.2
+            // reaction against the side it came from.
+            const bool crossed = s.valid && s0.valid && s.distance >= 0.0f && s0.distance >= 0.0f && s.distance < H &&
+                                 s0.distance < H && glm::dot(s.normal, s0.normal) < 0.0f;
+            if (!crossed && (!s.valid || s.distance >= 0.0f)) {
               w.vec_b[i] = glm::vec3(0.0f);
               return;
             }
             ++acc;
-            const CollisionResult res = resolveCollision(w.old_position[i], w.start_samples[c][i], X[i], V[i], s,
-                                                         colliderVelocityAt(pose, X[i]), dt, skin, col.material);
+            CollisionResult res;
+            if (crossed) {
+              const glm::vec3 vc = colliderVelocityAt(col.pose, w.old_position[i]);
+              res.position = w.old_position[i] + vc * dt + s0.normal * skin;
+              res.velocity = collisionResponse(V[i] - vc, s0.normal, col.material) + vc;
+            } else {
+              res = resolveCollision(w.old_position[i], s0, X[i], V[i], s, colliderVelocityAt(pose, X[i]), dt, skin,
+                                     col.material);
+            }
             w.vec_b[i] = -m * (res.velocity - V[i]) / dt;  // reaction on the collider
             Xmut[i] = res.position;
             V[i] = res.velocity;

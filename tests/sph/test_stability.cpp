@@ -87,7 +87,9 @@ TEST(SphStability, GridAtHalfSpacingRelaxes) {
     ASSERT_TRUE(advanceSph(s.world, 0.5, [&](const SphStepStats&) { peak = std::max(peak, maxSpeed(s.world)); }).ok());
     EXPECT_TRUE(finiteState(s.world));
     EXPECT_TRUE(inside(s));
-    EXPECT_LT(peak, 30.0f) << sphSolverName(solver);
+    // Bounded: DFSPH limits the per-step pressure push; WCSPH's release speed from 50 % (clamped)
+    // compression is of the order of its sound speed.
+    EXPECT_LT(peak, solver == SphSolverKind::dfsph ? 30.0f : 2.0f * s.world.params.sound_speed) << sphSolverName(solver);
     EXPECT_GT(extent(s.world).x, 8 * half * 1.3f) << sphSolverName(solver);  // expanded
   }
 }
@@ -182,7 +184,8 @@ TEST(SphStability, ThinFastWallDoesNotLetParticlesThrough) {
     while (s.world.colliders.back().pose.translation.x < 0.8f) {
       ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
       const float wall_x = s.world.colliders.back().pose.translation.x;
-      for (const glm::vec3& p : s.world.particles.position) ASSERT_GE(p.x, wall_x + 0.002f - 1e-4f) << sphSolverName(solver);
+      for (const glm::vec3& p : s.world.particles.position)
+        ASSERT_GE(p.x, wall_x + 0.002f - 1e-4f) << sphSolverName(solver) << " t = " << s.world.time << " dt = " << s.world.last_dt;
     }
     EXPECT_TRUE(finiteState(s.world));
   }
@@ -217,7 +220,7 @@ TEST(SphStability, RandomisedRunsStayFiniteWithBoundedEnergy) {
     // Energy bound: total energy <= what the emitters brought in (kinetic + potential) + 1 %.
     const double m = sphParticleMass(p);
     double injected = 0.0;
-    for (int step = 0; step < 120; ++step) {
+    for (int step = 0; step < 200; ++step) {
       SphStepStats st;
       const SphStatus status = stepSph(s.world, 0.0f, &st);
       ASSERT_TRUE(status.ok()) << "run " << run << ": " << status.error;
