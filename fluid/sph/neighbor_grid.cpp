@@ -178,15 +178,22 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   const float r2 = radius * radius;
   lists.counts.resize(n);
   lists.offsets.resize(n + 1);
+  lists.slots.resize(n * NeighborLists::kSlots);
   const std::uint32_t* order = grid.order.data();
+  // One pass into fixed per-particle slots (a resting fluid has about 30 neighbours at H = 2d);
+  // only particles with more than kSlots neighbours are searched a second time below.
   forEachParticleByCell(grid, positions, [&](std::uint32_t i, const Range* ranges, int count) {
     const glm::vec3 p = positions[i];
     std::uint32_t c = 0;
+    std::uint32_t* slot = lists.slots.data() + static_cast<std::size_t>(i) * NeighborLists::kSlots;
     for (int q = 0; q < count; ++q)
       for (std::uint32_t e = ranges[q].begin; e < ranges[q].end; ++e) {
         const std::uint32_t j = order[e];
         const glm::vec3 d = p - positions[j];
-        c += (j != i && glm::dot(d, d) < r2) ? 1u : 0u;
+        if (j != i && glm::dot(d, d) < r2) {
+          if (c < NeighborLists::kSlots) slot[c] = j;
+          ++c;
+        }
       }
     lists.counts[i] = c;
   });
@@ -194,8 +201,13 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
   lists.indices.resize(lists.offsets[n]);
   forEachParticleByCell(grid, positions, [&](std::uint32_t i, const Range* ranges, int count) {
-    const glm::vec3 p = positions[i];
     std::uint32_t out = lists.offsets[i];
+    if (lists.counts[i] <= NeighborLists::kSlots) {
+      const std::uint32_t* slot = lists.slots.data() + static_cast<std::size_t>(i) * NeighborLists::kSlots;
+      for (std::uint32_t k = 0; k < lists.counts[i]; ++k) lists.indices[out++] = slot[k];
+      return;
+    }
+    const glm::vec3 p = positions[i];
     for (int q = 0; q < count; ++q)
       for (std::uint32_t e = ranges[q].begin; e < ranges[q].end; ++e) {
         const std::uint32_t j = order[e];

@@ -55,7 +55,9 @@ void markGridReordered(NeighborGrid& grid);
 struct NeighborLists {
   std::vector<std::uint32_t> offsets;
   std::vector<std::uint32_t> indices;
+  static constexpr std::uint32_t kSlots = 48;
   std::vector<std::uint32_t> counts;  // scratch
+  std::vector<std::uint32_t> slots;   // scratch: kSlots per particle
 };
 
 void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius,

@@ -24,6 +24,8 @@ constexpr int kWallTable = 1024;
 // Boundary pressure mirroring: the wall takes the particle's pressure (p_b = p_i, rho_b = rho_i),
 // so its term in the symmetric pressure force has weight 2.
 constexpr float kMirror = 2.0f;
+// Force condition constant: |a_body| dt^2 <= kForceBound cfl d (see chooseDt).
+constexpr float kForceBound = 0.0025f;
 
 using Clock = std::chrono::steady_clock;
 float msSince(Clock::time_point t0) {
@@ -393,7 +395,10 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     }
     // Fastest collider material that could reach a particle within one maximal step: the step is
     // limited so a moving wall advances at most cfl * d per step and cannot jump over a particle.
-    collider_speed = std::max(
+    const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
+                        glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
+    if (moving)
+      collider_speed = std::max(
         collider_speed, reduce(
                             n, 0.0f,
                             [&](std::size_t i, float& acc) {
@@ -408,10 +413,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     const SphCollider& col = world.colliders[c];
     if (!col.boundary_pressure) continue;
     const auto& smp = w.start_samples[c];
+    const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
+                        glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
     forEach(n, [&](std::size_t i) {
       const glm::vec3 grad = boundaryShare(w, smp[i], w.float_tmp[i]);
       w.boundary_gradient[i] += grad;
-      w.boundary_flux[i] += glm::dot(colliderVelocityAt(col.pose, X[i]), grad);
+      if (moving) w.boundary_flux[i] += glm::dot(colliderVelocityAt(col.pose, X[i]), grad);
     });
   }
   forEach(n, [&](std::size_t i) { w.boundary_volume[i] = 1.0f - w.float_tmp[i]; });
@@ -507,7 +514,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // gravity, which the CFL velocity bound does not limit) is left partly unresolved every step and
     // builds up into noise.
     const float body = glm::length(P.gravity);
-    if (body > 0.0f) t = std::min(t, std::sqrt(0.0025f * P.cfl * d / body));
+    if (body > 0.0f) t = std::min(t, std::sqrt(kForceBound * P.cfl * d / body));
     // Explicit viscosity stability (diffusion number): dt <= 0.125 d^2 / nu (Morris et al. 1997).
     if (P.viscosity > 0.0f) t = std::min(t, 0.125f * d * d / P.viscosity);
     if (wcsph) {

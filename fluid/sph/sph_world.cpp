@@ -127,6 +127,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.keep.reserve(capacity);
   w.end_samples.reserve(capacity);
   w.neighbors.counts.reserve(capacity);
+  w.neighbors.slots.reserve(capacity * NeighborLists::kSlots);
   w.neighbors.offsets.reserve(capacity + 1);
   w.grid.order.reserve(capacity);
   w.grid.particle_key.reserve(capacity);
