@@ -592,7 +592,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         w.vec_b[i] = V[i] - h * dv;
         total[i] += kr[i];
       });
-      forEach(n, [&](std::size_t i) { V[i] = w.vec_b[i]; });
+      V.swap(w.vec_b);  // Jacobi: all updates read the old velocities; swapping keeps both buffers
     };
     w.vec_b.resize(n);
     const float dt_prev = world.last_dt > 0.0f ? world.last_dt : max_dt;
