@@ -136,7 +136,15 @@ namespace {
 
 struct Range {
   std::uint32_t begin, end;
+  glm::vec3 lo, hi;  // the cell's box (the border cells' boxes are unbounded outward: clamping)
 };
+
+// Squared distance from p to the box of a cell: cells entirely out of reach are skipped, which
+// removes about a third of the candidates of the 27-cell block.
+inline float boxDistance2(glm::vec3 p, const Range& r) {
+  const glm::vec3 d = glm::max(glm::max(r.lo - p, p - r.hi), glm::vec3(0.0f));
+  return glm::dot(d, d);
+}
 
 // The (up to 27) entry ranges of the cells around `cell`, in a fixed order (z, y, x ascending).
 inline int neighbourRanges(const NeighborGrid& grid, glm::ivec3 cell, Range* out) {
@@ -147,8 +155,15 @@ inline int neighbourRanges(const NeighborGrid& grid, glm::ivec3 cell, Range* out
     for (int y = lo.y; y <= hi.y; ++y)
       for (int x = lo.x; x <= hi.x; ++x) {
         const std::uint32_t key = grid.keyOf({x, y, z});
-        const Range r{grid.cell_start[key], grid.cell_start[key + 1]};
-        if (r.end > r.begin) out[count++] = r;
+        Range r{grid.cell_start[key], grid.cell_start[key + 1], glm::vec3(0.0f), glm::vec3(0.0f)};
+        if (r.end == r.begin) continue;
+        const glm::ivec3 c(x, y, z);
+        for (int a = 0; a < 3; ++a) {
+          // Border cells also hold the clamped particles beyond the grid: open their boxes outward.
+          r.lo[a] = c[a] == 0 ? -3e38f : grid.origin[a] + grid.cell_size * static_cast<float>(c[a]);
+          r.hi[a] = c[a] == grid.dims[a] - 1 ? 3e38f : grid.origin[a] + grid.cell_size * static_cast<float>(c[a] + 1);
+        }
+        out[count++] = r;
       }
   return count;
 }
@@ -186,7 +201,8 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
     const glm::vec3 p = positions[i];
     std::uint32_t c = 0;
     std::uint32_t* slot = lists.slots.data() + static_cast<std::size_t>(i) * NeighborLists::kSlots;
-    for (int q = 0; q < count; ++q)
+    for (int q = 0; q < count; ++q) {
+      if (boxDistance2(p, ranges[q]) >= r2) continue;
       for (std::uint32_t e = ranges[q].begin; e < ranges[q].end; ++e) {
         const std::uint32_t j = order[e];
         const glm::vec3 d = p - positions[j];
@@ -195,6 +211,7 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
           ++c;
         }
       }
+    }
     lists.counts[i] = c;
   });
   lists.offsets[0] = 0;

@@ -424,12 +424,33 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   forEach(n, [&](std::size_t i) { w.boundary_volume[i] = 1.0f - w.float_tmp[i]; });
   forEach(n, [&](std::size_t i) { w.boundary_product[i] = w.float_tmp[i]; });
 
-  // 3. Density (Becker & Teschner 2007 eq. 4 / the SPH sum), plus the boundary volume's share.
+  // 3. One pass over the pairs: density (the SPH sum, Becker & Teschner 2007 eq. 4, plus the
+  // boundary volume's share), the per-pair m grad W_ij reused by every solver iteration, and the
+  // sums DFSPH's factor alpha_i needs (S_i = sum_j m grad W_ij, Q_i = sum_j |m grad W_ij|^2).
+  // Coincident particles have grad W = 0 between them and could never separate; for r below
+  // 1e-6 H we use the kernel's steepest slope along a direction fixed by the two ids (odd in
+  // i <-> j, so momentum is still conserved), which pushes stacked particles apart deterministically.
   const float w0 = w.kernel.value(0.0f);
+  const float steepest = w.kernel.derivative(H / 3.0f);
+  w.gradients.resize(nbr.size());
+  w.vec_b.resize(n);     // S_i
+  w.factor.resize(n);    // Q_i here, alpha_i after the solver-specific part below
   forEach(n, [&](std::size_t i) {
-    float sum = w0;
-    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) sum += w.kernel.value(glm::length(X[i] - X[nbr[k]]));
+    float sum = w0, sq = 0.0f;
+    glm::vec3 grad_sum(0.0f);
+    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
+      const glm::vec3 x = X[i] - X[nbr[k]];
+      const float r = glm::length(x);
+      sum += w.kernel.value(r);
+      const glm::vec3 g = r > 1e-6f * H ? m * w.kernel.gradient(x, r)
+                                        : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
+      w.gradients[k] = g;
+      grad_sum += g;
+      sq += glm::dot(g, g);
+    }
     S.density[i] = m * sum + rho0 * w.boundary_volume[i];
+    w.vec_b[i] = grad_sum;
+    w.factor[i] = sq;
   });
   {
     const SumMax e = reduce(
@@ -443,21 +464,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     stats.avg_density_error = n ? static_cast<float>(e.sum / static_cast<double>(n)) : 0.0f;
     stats.max_density_error = e.max;
   }
-
-  // Per-pair m grad W_ij, reused by every solver iteration.
-  w.gradients.resize(nbr.size());
-  // Coincident particles have grad W = 0 between them and could never separate; for r below
-  // 1e-6 H we use the kernel's steepest slope along a direction fixed by the two ids (odd in
-  // i <-> j, so momentum is still conserved), which pushes stacked particles apart deterministically.
-  const float steepest = w.kernel.derivative(H / 3.0f);
-  forEach(n, [&](std::size_t i) {
-    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
-      const glm::vec3 x = X[i] - X[nbr[k]];
-      const float r = glm::length(x);
-      w.gradients[k] = r > 1e-6f * H ? m * w.kernel.gradient(x, r)
-                                     : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
-    }
-  });
   const auto& G = w.gradients;
 
   // 4. Non-pressure accelerations: gravity + Laplacian viscosity (Monaghan 2005 eq. 6.3 form,
@@ -563,15 +569,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // (Bender & Koschier 2015 eq. 9). The boundary mirrors the particle's pressure (p_b = p_i,
     // so its term has weight 2 in the velocity update below); it does not move, so it adds
     // (S + rho_0 g) . (S + 2 rho_0 g) instead of |S|^2 where S = sum_j m_j grad W_ij.
-    w.factor.resize(n);
     forEach(n, [&](std::size_t i) {
-      glm::vec3 sum = rho0 * w.boundary_gradient[i];
-      float sq = 0.0f;
-      for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
-        sum += G[k];
-        sq += glm::dot(G[k], G[k]);
-      }
-      const float denom = glm::dot(sum, sum + (kMirror - 1.0f) * rho0 * w.boundary_gradient[i]) + sq;
+      const glm::vec3 sum = w.vec_b[i] + rho0 * w.boundary_gradient[i];
+      const float denom = glm::dot(sum, sum + (kMirror - 1.0f) * rho0 * w.boundary_gradient[i]) + w.factor[i];
       w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? S.density[i] / denom : 0.0f;
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
