@@ -141,11 +141,12 @@ struct Snapshot {
   std::vector<glm::vec3> x, v;
   std::vector<std::uint32_t> id;
 };
-Snapshot run(SphSolverKind solver, int threads, int steps) {
+Snapshot run(SphSolverKind solver, int threads, int steps, const std::string& name = "dambreak",
+             const Overrides& o = {{"width", "0.1"}, {"spacing", "0.01"}}) {
   Snapshot out;
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    SphScene s = scene("dambreak", solver, {{"width", "0.1"}, {"spacing", "0.01"}});
+    SphScene s = scene(name, solver, o);
     for (int i = 0; i < steps; ++i) EXPECT_TRUE(stepSph(s.world, 0.0f).ok());
     out.x = s.world.particles.position;
     out.v = s.world.particles.velocity;
@@ -163,6 +164,15 @@ TEST(SphSolvers, BitIdenticalForOneAndManyThreads) {
     EXPECT_EQ(0, std::memcmp(a.v.data(), b.v.data(), a.v.size() * sizeof(glm::vec3))) << sphSolverName(solver);
     EXPECT_EQ(0, std::memcmp(a.x.data(), c.x.data(), a.x.size() * sizeof(glm::vec3))) << sphSolverName(solver);
   }
+}
+
+TEST(SphSolvers, EmittersAndSinksAreThreadCountInvariant) {
+  const Overrides o{{"spacing", "0.04"}, {"budget", "400"}, {"rate", "3000"}, {"basin_size", "0.4"}, {"drain_size", "0.2"}};
+  const Snapshot a = run(SphSolverKind::dfsph, 1, 250, "fountain", o), b = run(SphSolverKind::dfsph, 4, 250, "fountain", o);
+  ASSERT_GT(a.id.size(), 50u);
+  ASSERT_EQ(a.id, b.id);
+  EXPECT_EQ(0, std::memcmp(a.x.data(), b.x.data(), a.x.size() * sizeof(glm::vec3)));
+  EXPECT_EQ(0, std::memcmp(a.v.data(), b.v.data(), a.v.size() * sizeof(glm::vec3)));
 }
 
 TEST(SphSolvers, NoAllocationPerStepAfterWarmUp) {
