@@ -85,7 +85,8 @@ struct ParticleStore {
   std::vector<glm::vec3> position;  // m
   std::vector<glm::vec3> velocity;  // m/s
   std::vector<float> density;       // kg/m^3, computed at the start of each step
-  std::vector<float> pressure;      // Pa (WCSPH); DFSPH: the density solver's kappa_i/rho_i sum (m^2 s^-2 / (kg m^-3))
+  std::vector<float> pressure;      // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
+                                    // over the step's solver iterations (a per-step impulse: average it over steps)
   std::vector<std::uint32_t> id;
 
   std::size_t size() const { return position.size(); }
