@@ -34,6 +34,7 @@ tmp=$(mktemp -d)
   echo "Command: \`$BENCH throughput --steps 20\` (block of water falling in the 4 x 3 x 1.5 m tank, median of 20 steps after 5 warm-up steps)."
   echo
   cat "$tmp/throughput.md"
+  cat tests/bench/sph_docs_tail.md
 } > "$OUT"
 rm -rf "$tmp"
 echo "wrote $OUT"
