@@ -640,7 +640,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
               acc += rate * dt_prev / rho0;
             },
             [](double a, double b) { return a + b; }) / static_cast<double>(n);
-        if ((div_iterations >= P.min_iterations && err <= eta_v) || div_iterations >= P.max_iterations) break;
+        if ((div_iterations >= 1 && err <= eta_v) || div_iterations >= P.max_iterations) break;  // 2017 paper: at least one
         applyKappa(dt_prev, w.kappa_v);
         ++div_iterations;
       }
