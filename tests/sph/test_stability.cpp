@@ -253,6 +253,20 @@ TEST(SphStability, NonFiniteInputIsReportedNotSpread) {
   }
 }
 
+TEST(SphStability, NonFiniteEmitterOrColliderPoseIsRejected) {
+  SphScene s = emptyBox(SphSolverKind::dfsph, 0.2f, 0.01f);
+  SphEmitter e;
+  e.position = glm::vec3(0.1f, std::numeric_limits<float>::quiet_NaN(), 0.1f);
+  s.world.emitters.push_back(e);
+  SphStatus st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("emitter 0"), std::string::npos) << st.error;
+  s.world.emitters.clear();
+  s.world.colliders[0].pose.linear_velocity.x = std::numeric_limits<float>::infinity();
+  st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("collider 0"), std::string::npos) << st.error;
+  EXPECT_EQ(s.world.particles.size(), 0u);
+}
+
 TEST(SphStability, BadParametersAreRejectedWithTheirName) {
   SphScene s = emptyBox(SphSolverKind::dfsph, 0.2f, 0.01f);
   s.world.params.cfl = std::numeric_limits<float>::quiet_NaN();
