@@ -52,7 +52,7 @@ struct SphParams {
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};  // m/s^2
   float viscosity = 0.01f;          // nu of the Laplacian viscosity (Monaghan 2005 form, as in SPlisHSPlasH "standard"), >= 0
   float xsph = 0.0f;                // XSPH velocity smoothing epsilon in [0, 1] (Monaghan 1989), 0 = off
-  float cfl = 0.4f;                 // dt <= cfl * d / v_max, clamped to [0.01, 1]
+  float cfl = 0.4f;                 // in [0.01, 1]: dt <= cfl * d / v_max; DFSPH also |g| dt^2 <= 0.0025 cfl d (force condition)
   float max_time_step = 0.005f;     // s, upper bound of the adaptive step (requested steps above are clamped)
   float min_time_step = 1e-6f;      // s, lower bound (a step never gets shorter, even if CFL asks)
   float max_speed = 0.0f;           // m/s, velocities are clamped to this after each step; 0 = no clamp
@@ -66,11 +66,11 @@ struct SphParams {
   // DFSPH (Bender & Koschier 2015)
   float max_density_error = 0.0005f;    // eta: stop when the mean predicted compression is below this (0.0005 = 0.05 %)
   float max_divergence_error = 0.001f;  // eta_v: mean (Drho/Dt) dt / rho_0 below this
-  int min_iterations = 2;
-  int max_iterations = 100;
+  int min_iterations = 2;           // constant-density solver; the divergence solver does at least 1
+  int max_iterations = 100;         // per solve, >= 1
   bool divergence_solver = true;
-  // Warm start (2017 §4.3). Off by default: in our dam-break tests it added energy (kinetic energy
-  // above the released potential energy at t = 0.2 s), see docs/sph.md.
+  // Warm start (2017 §4.3). Off by default: in a dam-break run during development (a = 0.2 m,
+  // d = 1 cm) it added energy: kinetic energy above the released potential energy at t = 0.2 s.
   bool warm_start = false;
 
   // Neighbour grid extent (the grid clamps stray particles into its border cells).
