@@ -1,0 +1,231 @@
+#pragma once
+// fluid/sph: CPU SPH fluid (no GL, no Bullet). One world = SoA particle store + parameters +
+// colliders + emitters + sinks + caller-visible scratch. Everything runs on oneTBB; results are
+// bit-identical for any thread count (per-particle work is independent and every floating-point
+// reduction uses tbb::parallel_deterministic_reduce with a fixed grain).
+//
+// Solvers (pick with SphParams::solver):
+//  - wcsph: weakly compressible SPH, Becker & Teschner 2007 "Weakly compressible SPH for free
+//    surface flows": Tait equation (eq. 7), symmetric pressure force (eq. 6), artificial
+//    viscosity (eq. 10-11), time step from the CFL and force conditions (§4, eq. 12-13).
+//  - dfsph: Divergence-Free SPH, Bender & Koschier 2015 "Divergence-free smoothed particle
+//    hydrodynamics" (and the 2017 TVCG version): constant-density solver (§4.2) and divergence-free
+//    solver (§4.1) sharing the stiffness factor alpha_i (eq. 8-9), warm starts (§4.3).
+// Boundaries: each collider is a SignedDistanceShape. It acts on the fluid in two ways:
+//  - as a continuous boundary in the SPH sums: the collider side of a particle's kernel support
+//    is treated as a filled half-space (the density-map idea of Koschier & Bender 2017, "Density
+//    maps for improved SPH boundary handling", with the collider locally approximated by its
+//    tangent plane); the volume and its gradient enter the density and pressure terms like
+//    Akinci et al. 2012 boundary particles;
+//  - as a hard constraint after the position update: Kolb et al. 2004 §3.3.2 double check
+//    (fluid::resolveCollision), so no particle ends a step inside a collider.
+// Two-way coupling: each collider reports the force and torque the fluid exerted on it during the
+// last step (pressure from the boundary terms + collision impulses).
+//
+// Units: SI (m, s, kg). Gravity defaults to -y.
+
+#include "fluid/core/collider.hpp"
+#include "fluid/sph/kernels.hpp"
+#include "fluid/sph/neighbor_grid.hpp"
+
+#include <glm/glm.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <type_traits>
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+enum class SphSolverKind { wcsph, dfsph };
+
+// Parses "wcsph" / "dfsph"; returns false for anything else.
+bool parseSphSolver(const std::string& name, SphSolverKind& out);
+const char* sphSolverName(SphSolverKind kind);
+
+struct SphParams {
+  SphSolverKind solver = SphSolverKind::dfsph;
+  float particle_radius = 0.025f;   // r (m) > 0. Spacing d = 2r, kernel support H = 4r.
+  float rest_density = 1000.0f;     // rho_0 (kg/m^3) > 0
+  glm::vec3 gravity{0.0f, -9.81f, 0.0f};  // m/s^2
+  float viscosity = 0.01f;          // nu of the Laplacian viscosity (Monaghan 2005 form, as in SPlisHSPlasH "standard"), >= 0
+  float xsph = 0.0f;                // XSPH velocity smoothing epsilon in [0, 1] (Monaghan 1989), 0 = off
+  float cfl = 0.4f;                 // in [0.01, 1]: dt <= cfl * d / v_max; DFSPH also |g| dt^2 <= 0.0025 cfl d (force condition)
+  float max_time_step = 0.005f;     // s, upper bound of the adaptive step (requested steps above are clamped)
+  float min_time_step = 1e-6f;      // s, lower bound (a step never gets shorter, even if CFL asks)
+  float max_speed = 0.0f;           // m/s, velocities are clamped to this after each step; 0 = no clamp
+  std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count
+
+  // WCSPH (Becker & Teschner 2007)
+  float sound_speed = 20.0f;        // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
+  float tait_exponent = 7.0f;       // gamma of eq. 7
+  float artificial_viscosity = 0.0f;  // alpha of eq. 10, >= 0 (added to `viscosity`)
+
+  // DFSPH (Bender & Koschier 2015)
+  float max_density_error = 0.0005f;    // eta: stop when the mean predicted compression is below this (0.0005 = 0.05 %)
+  float max_divergence_error = 0.001f;  // eta_v: mean (Drho/Dt) dt / rho_0 below this
+  int min_iterations = 2;           // constant-density solver; the divergence solver does at least 1
+  int max_iterations = 100;         // per solve, >= 1
+  bool divergence_solver = true;
+  // Warm start (2017 §4.3). Off by default: in a dam-break run during development (a = 0.2 m,
+  // d = 1 cm) it added energy: kinetic energy above the released potential energy at t = 0.2 s.
+  bool warm_start = false;
+
+  // Neighbour grid extent (the grid clamps stray particles into its border cells).
+  glm::vec3 domain_min{-1e30f};
+  glm::vec3 domain_max{1e30f};
+  float collision_skin = 0.0f;      // m pushed beyond a collider surface; 0 = 0.01 r
+};
+
+// SoA particle store. Index order changes every step (particles are re-sorted by grid cell for
+// locality); `id` is stable and unique for the lifetime of the world.
+struct ParticleStore {
+  std::vector<glm::vec3> position;  // m
+  std::vector<glm::vec3> velocity;  // m/s
+  std::vector<float> density;       // kg/m^3, computed at the start of each step
+  std::vector<float> pressure;      // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
+                                    // over the step's solver iterations (a per-step impulse: average it over steps)
+  std::vector<std::uint32_t> id;
+
+  std::size_t size() const { return position.size(); }
+};
+
+struct SphCollider {
+  std::shared_ptr<const SignedDistanceShape> shape;  // shared, read-only, must be non-null
+  ColliderPose pose;                                  // world placement at the start of the next step
+  CollisionMaterial material;
+  bool boundary_pressure = true;  // also act as SPH boundary (density/pressure), not only as collision
+  bool integrate_pose = true;     // advance pose by its velocities during each step
+  // Two-way coupling outputs: force (N) and torque (N m, about pose.translation) the fluid
+  // exerted on this collider, averaged over the last stepSph/advanceSph call.
+  glm::vec3 force{0.0f};
+  glm::vec3 torque{0.0f};
+};
+
+// A nozzle: emits discs of particles (square lattice of spacing d inside `radius`) along
+// `direction` at `speed`, `rate` particles per second, while start_time <= t < end_time.
+struct SphEmitter {
+  glm::vec3 position{0.0f};
+  glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y
+  float speed = 2.0f;          // m/s > 0
+  float radius = 0.05f;        // m >= 0 (0 = one particle per layer)
+  float rate = 1000.0f;        // particles per second >= 0; clamped to speed * (particles per layer) / d so layers never overlap
+  float start_time = 0.0f;
+  float end_time = 1e30f;
+  double accumulator = 0.0;    // internal: seconds since the last layer
+};
+
+// Drain: particles inside the axis-aligned box [min, max] are removed at the start of a step.
+struct SphSink {
+  glm::vec3 min{0.0f};
+  glm::vec3 max{0.0f};
+};
+
+struct SphStepStats {
+  float dt = 0.0f;                 // s
+  int density_iterations = 0;      // DFSPH constant-density iterations (0 for WCSPH)
+  int divergence_iterations = 0;
+  float avg_density_error = 0.0f;  // mean over particles of max(0, rho/rho_0 - 1), state at step start
+  float max_density_error = 0.0f;  // max over particles of the same
+  float kinetic_energy = 0.0f;     // J, after the step
+  float max_acceleration = 0.0f;   // m/s^2, largest |a| used by the time-step bound
+  float step_ms = 0.0f;            // wall time
+  float neighbor_ms = 0.0f;        // wall time of grid + sort + neighbour lists
+  std::size_t particles = 0;       // after the step
+  std::size_t emitted = 0;
+  std::size_t removed = 0;
+  std::size_t collisions = 0;      // particle-collider reactions (Kolb 2004 §3.3.2) in this step
+  bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
+};
+
+// Empty error == success.
+struct SphStatus {
+  std::string error;
+  bool ok() const { return error.empty(); }
+};
+
+// Caller-visible scratch: every per-step buffer, reused (vectors only grow) so that a warmed-up
+// world does not allocate in stepSph.
+struct SphScratch {
+  CubicSplineKernel kernel;
+  float particle_mass = 0.0f;  // m = rho_0 / (lattice sum of W at spacing d): a resting lattice has rho = rho_0
+  std::vector<float> wall_volume;    // tabulated boundary volume V(s), s in [-H, H]
+  std::vector<float> wall_area;      // tabulated A(s) = -dV/ds
+  float wall_shift = 0.0f;           // calibration offset of s (see ensureInit)
+  float wall_neighbours = 0.0f;      // lattice neighbours per unit boundary volume
+  NeighborGrid grid;
+  NeighborLists neighbors;
+  std::vector<glm::vec3> gradients;  // per neighbour pair: m_j grad W_ij (DFSPH)
+  // per particle
+  std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
+  std::vector<float> factor, kappa, kappa_v, warm_kappa, warm_kappa_v, density_adv, boundary_volume,
+      boundary_flux, boundary_product, float_tmp;
+  std::vector<std::uint32_t> u32_tmp, keep;
+  std::vector<glm::vec3> local_points;
+  std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
+  std::vector<ColliderSample> end_samples;
+  std::vector<glm::vec3> reduce_force, reduce_torque;
+  bool initialised = false;
+};
+
+struct SphWorld {
+  SphParams params;
+  ParticleStore particles;
+  std::vector<SphCollider> colliders;
+  std::vector<SphEmitter> emitters;
+  std::vector<SphSink> sinks;
+  double time = 0.0;          // s
+  std::uint64_t step_count = 0;
+  std::uint32_t next_id = 0;
+  float last_dt = 0.0f;
+  SphScratch scratch;
+};
+
+// Derived quantities of a world's parameters.
+inline float sphSpacing(const SphParams& p) { return 2.0f * p.particle_radius; }
+inline float sphSupport(const SphParams& p) { return 4.0f * p.particle_radius; }
+float sphParticleMass(const SphParams& params);
+
+// Appends a particle (id = world.next_id++). Returns false (and adds nothing) over budget.
+bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity = glm::vec3(0.0f));
+// Fills the box [lo, hi] with a cubic lattice of spacing d starting at lo + r; returns the count added.
+std::size_t addSphBlock(SphWorld& world, glm::vec3 lo, glm::vec3 hi, glm::vec3 velocity = glm::vec3(0.0f));
+// Reserves every per-particle buffer for `capacity` particles (call once to avoid growth later).
+void reserveSph(SphWorld& world, std::size_t capacity);
+
+// Checks parameters (finite, in range); the message names the field and value.
+SphStatus validateSphParams(const SphParams& params);
+
+// One adaptive step of at most max_dt seconds (max_dt <= 0: params.max_time_step). Order:
+// validate input (a non-finite position/velocity is reported with particle id/index and step,
+// and the world is left untouched), sinks, emitters, neighbour grid + re-sort, solver, collisions.
+SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats = nullptr);
+
+// Steps until `duration` seconds have passed (the last step is shortened to land exactly).
+// Collider force/torque become the time average over the substeps. `per_step` (optional) is
+// called with the stats of every step; max_steps bounds the work (error if exceeded).
+template <typename F>
+SphStatus advanceSph(SphWorld& world, double duration, F&& per_step, std::size_t max_steps = 1000000);
+
+// Total kinetic energy (J) and the potential energy m g.h relative to height 0 along -gravity (J).
+double sphKineticEnergy(const SphWorld& world);
+double sphPotentialEnergy(const SphWorld& world);
+// Mean and max over particles of max(0, rho/rho_0 - 1) for the densities stored in the world.
+void sphDensityError(const SphWorld& world, float& mean, float& max);
+// Volume estimate sum_i m / max(rho_i, rho_0): shrinks when the fluid is compressed (m^3).
+double sphCompressedVolume(const SphWorld& world);
+
+// --- implementation of the template ---
+SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, const SphStepStats&), void* ctx,
+                         std::size_t max_steps);
+
+template <typename F>
+SphStatus advanceSph(SphWorld& world, double duration, F&& per_step, std::size_t max_steps) {
+  return advanceSphImpl(
+      world, duration, [](void* c, const SphStepStats& s) { (*static_cast<std::remove_reference_t<F>*>(c))(s); },
+      &per_step, max_steps);
+}
+
+}  // namespace fluid

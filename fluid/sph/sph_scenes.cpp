@@ -1,0 +1,216 @@
+#include "fluid/sph/sph_scenes.hpp"
+
+#include "fluid/sph/analytic_colliders.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+namespace fluid {
+namespace {
+
+struct KeySpec {
+  const char* name;
+  float value;
+  float lo, hi;
+  const char* help;
+};
+
+const KeySpec kDambreak[] = {
+    {"width", 0.2f, 0.01f, 100.0f, "column width a (m)"},
+    {"height_ratio", 2.0f, 0.1f, 10.0f, "column height / a"},
+    {"depth", 0.05f, 0.0f, 100.0f, "thickness along z (m); 0 = 4 particle layers"},
+    {"spacing", 0.0f, 0.0f, 10.0f, "particle spacing d = 2r (m); 0 = a/20"},
+    {"length_ratio", 8.0f, 1.0f, 100.0f, "box length along +x / a (>= 8 for Martin & Moyce)"},
+};
+const KeySpec kColumn[] = {
+    {"width", 0.1f, 0.01f, 100.0f, "column width along x (m)"},
+    {"height", 0.2f, 0.01f, 100.0f, "water height (m)"},
+    {"depth", 0.1f, 0.01f, 100.0f, "column depth along z (m)"},
+    {"spacing", 0.01f, 1e-4f, 10.0f, "particle spacing d = 2r (m)"},
+};
+const KeySpec kFountain[] = {
+    {"spacing", 0.02f, 1e-4f, 10.0f, "particle spacing d = 2r (m)"},
+    {"basin_size", 1.0f, 0.1f, 100.0f, "basin width along x and z (m)"},
+    {"basin_height", 1.5f, 0.1f, 100.0f, "basin wall height (m)"},
+    {"nozzle_speed", 3.5f, 0.01f, 100.0f, "jet speed (m/s)"},
+    {"nozzle_radius", 0.04f, 0.0f, 10.0f, "jet radius (m)"},
+    {"rate", 3000.0f, 0.0f, 1e7f, "particles emitted per second"},
+    {"budget", 10000.0f, 0.0f, 1e8f, "maximum particle count"},
+    {"drain_size", 0.2f, 0.0f, 100.0f, "edge of the square drain in a floor corner (m)"},
+};
+const KeySpec kDambreakBox[] = {
+    {"particle_radius", 1.0f / 60.0f, 1e-4f, 1.0f, "particle radius r (m); block is (1 m - 2r) / 2r particles per side"},
+};
+// Solver knobs, shared by all scenes (defaults: SphParams).
+const KeySpec kSolver[] = {
+    {"cfl", 0.4f, 0.01f, 1.0f, "CFL number: dt <= cfl * d / v_max"},
+    {"max_dt", 0.005f, 1e-7f, 1.0f, "upper bound of the time step (s)"},
+    {"viscosity", 0.01f, 0.0f, 100.0f, "Laplacian viscosity nu"},
+    {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},
+    {"density_error", 0.0005f, 1e-7f, 1.0f, "DFSPH: mean density error tolerance (0.0005 = 0.05 %)"},
+    {"divergence_error", 0.001f, 1e-7f, 1.0f, "DFSPH: divergence error tolerance"},
+    {"max_iterations", 100.0f, 1.0f, 10000.0f, "DFSPH: iteration cap per solve"},
+    {"sound_speed", 0.0f, 0.0f, 1e5f, "WCSPH: c_s (m/s); 0 = 10 x the scene's expected max speed"},
+    {"artificial_viscosity", 0.0f, 0.0f, 10.0f, "WCSPH: B&T alpha"},
+    {"friction", 0.1f, 0.0f, 1.0f, "wall friction (Kolb 2004 nu)"},
+    {"resilience", 0.0f, 0.0f, 1.0f, "wall resilience (Kolb 2004 epsilon)"},
+    {"max_speed", 0.0f, 0.0f, 1e6f, "velocity clamp (m/s), 0 = off"},
+};
+
+std::span<const KeySpec> sceneSpecs(const std::string& scene) {
+  if (scene == "dambreak") return kDambreak;
+  if (scene == "column") return kColumn;
+  if (scene == "fountain") return kFountain;
+  if (scene == "dambreak_box") return kDambreakBox;
+  return {};
+}
+
+std::string joinNames() {
+  std::string s;
+  for (const std::string& n : sphSceneNames()) s += (s.empty() ? "" : "|") + n;
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> sphSceneNames() { return {"dambreak", "column", "fountain", "dambreak_box"}; }
+
+SphStatus sphSceneKeys(const std::string& scene, std::vector<SphSceneKey>& out) {
+  out.clear();
+  const auto specs = sceneSpecs(scene);
+  if (specs.empty()) return {"unknown scene '" + scene + "' (expected " + joinNames() + ")"};
+  for (const KeySpec& k : specs) out.push_back({k.name, k.value, k.help});
+  for (const KeySpec& k : kSolver) out.push_back({k.name, k.value, k.help});
+  return {};
+}
+
+void addSphContainer(SphScene& scene, glm::vec3 lo, glm::vec3 hi, const CollisionMaterial& material) {
+  for (int a = 0; a < 3; ++a) {
+    for (int side = 0; side < 2; ++side) {
+      glm::vec3 n(0.0f);
+      n[a] = side == 0 ? 1.0f : -1.0f;
+      const float offset = side == 0 ? lo[a] : -hi[a];
+      auto shape = std::make_shared<PlaneShape>(n, offset);
+      scene.shapes.push_back(shape);
+      SphCollider c;
+      c.shape = shape;
+      c.material = material;
+      c.integrate_pose = false;
+      scene.world.colliders.push_back(c);
+    }
+  }
+}
+
+float sphSurgeFront(const SphWorld& world) {
+  float front = 0.0f;
+  for (const glm::vec3& p : world.particles.position) front = std::max(front, p.x);
+  return front;
+}
+
+SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
+                       const std::vector<std::pair<std::string, std::string>>& overrides, SphScene& out) {
+  out = SphScene{};
+  out.name = scene;
+  const auto specs = sceneSpecs(scene);
+  if (specs.empty()) return {"unknown scene '" + scene + "' (expected " + joinNames() + ")"};
+  std::vector<KeySpec> keys(specs.begin(), specs.end());
+  keys.insert(keys.end(), std::begin(kSolver), std::end(kSolver));
+  for (const auto& [name, text] : overrides) {
+    auto it = std::find_if(keys.begin(), keys.end(), [&](const KeySpec& k) { return name == k.name; });
+    if (it == keys.end()) {
+      std::string valid;
+      for (const KeySpec& k : keys) valid += (valid.empty() ? "" : ", ") + std::string(k.name);
+      return {"unknown key '" + name + "' for scene " + scene + " (valid: " + valid + ")"};
+    }
+    errno = 0;
+    char* end = nullptr;
+    const float v = std::strtof(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v))
+      return {"key '" + name + "': '" + text + "' is not a finite number"};
+    if (v < it->lo || v > it->hi)
+      return {"key '" + name + "' = " + text + " is out of range [" + std::to_string(it->lo) + ", " +
+              std::to_string(it->hi) + "]"};
+    it->value = v;
+  }
+  auto get = [&](const char* name) {
+    for (const KeySpec& k : keys)
+      if (std::string(k.name) == name) return k.value;
+    return 0.0f;
+  };
+  for (const KeySpec& k : keys) out.keys.push_back({k.name, k.value, k.help});
+
+  SphWorld& w = out.world;
+  SphParams& p = w.params;
+  p.solver = solver;
+  p.cfl = get("cfl");
+  p.max_time_step = get("max_dt");
+  p.min_time_step = std::min(p.min_time_step, p.max_time_step);
+  p.viscosity = get("viscosity");
+  p.xsph = get("xsph");
+  p.max_density_error = get("density_error");
+  p.max_divergence_error = get("divergence_error");
+  p.max_iterations = static_cast<int>(get("max_iterations"));
+  p.min_iterations = std::min(p.min_iterations, p.max_iterations);
+  p.artificial_viscosity = get("artificial_viscosity");
+  p.max_speed = get("max_speed");
+  CollisionMaterial material;
+  material.friction = get("friction");
+  material.resilience = get("resilience");
+  float expected_speed = 1.0f;
+
+  if (scene == "dambreak") {
+    const float a = get("width");
+    const float height = get("height_ratio") * a;
+    const float d = get("spacing") > 0.0f ? get("spacing") : a / 20.0f;
+    const float depth = get("depth") > 0.0f ? get("depth") : 4.0f * d;
+    p.particle_radius = 0.5f * d;
+    out.column_width = a;
+    out.box_min = glm::vec3(0.0f);
+    out.box_max = glm::vec3(get("length_ratio") * a, 1.5f * height, depth);
+    addSphBlock(w, glm::vec3(0.0f), glm::vec3(a, height, depth));
+    expected_speed = std::sqrt(2.0f * 9.81f * height);
+  } else if (scene == "column") {
+    const float d = get("spacing");
+    p.particle_radius = 0.5f * d;
+    out.box_min = glm::vec3(0.0f);
+    out.box_max = glm::vec3(get("width"), 2.0f * get("height"), get("depth"));
+    addSphBlock(w, glm::vec3(0.0f), glm::vec3(get("width"), get("height"), get("depth")));
+    expected_speed = std::sqrt(2.0f * 9.81f * get("height"));
+  } else if (scene == "fountain") {
+    const float d = get("spacing");
+    const float b = get("basin_size");
+    p.particle_radius = 0.5f * d;
+    p.max_particles = static_cast<std::size_t>(get("budget"));
+    out.box_min = glm::vec3(-0.5f * b, 0.0f, -0.5f * b);
+    out.box_max = glm::vec3(0.5f * b, get("basin_height"), 0.5f * b);
+    SphEmitter e;
+    e.position = glm::vec3(0.0f, 2.0f * d, 0.0f);
+    e.direction = glm::vec3(0.0f, 1.0f, 0.0f);
+    e.speed = get("nozzle_speed");
+    e.radius = get("nozzle_radius");
+    e.rate = get("rate");
+    w.emitters.push_back(e);
+    const float ds = get("drain_size");
+    if (ds > 0.0f) w.sinks.push_back({out.box_min - glm::vec3(1.0f), glm::vec3(out.box_min.x + ds, 1.5f * d, out.box_min.z + ds)});
+    expected_speed = e.speed;
+  } else {  // dambreak_box
+    const float r = get("particle_radius");
+    p.particle_radius = r;
+    out.box_min = glm::vec3(0.0f);
+    out.box_max = glm::vec3(4.0f, 3.0f, 1.5f);
+    out.column_width = 1.0f;
+    addSphBlock(w, glm::vec3(0.0f), glm::vec3(1.0f - 2.0f * r));  // 29^3 particles at r = 1/60
+    expected_speed = std::sqrt(2.0f * 9.81f * 1.0f);
+  }
+  p.sound_speed = get("sound_speed") > 0.0f ? get("sound_speed") : 10.0f * expected_speed;
+  const glm::vec3 margin(4.0f * p.particle_radius);
+  p.domain_min = out.box_min - margin;
+  p.domain_max = out.box_max + margin;
+  addSphContainer(out, out.box_min, out.box_max, material);
+  if (SphStatus s = validateSphParams(p); !s.ok()) return s;
+  return {};
+}
+
+}  // namespace fluid

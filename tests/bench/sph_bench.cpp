@@ -1,0 +1,292 @@
+// Benchmarks of fluid/sph (plain executable, not a ctest test). Subcommands:
+//   bench_sph throughput [--steps N]        particle-steps/s for 10k/30k/100k particles, 1 and 2
+//                                           threads, both solvers, with the neighbour-search share
+//   bench_sph dambreak_box [--seconds T]    the SPlisHSPlasH dam break: ms/step, mean dt, mean
+//                                           density error over 30 fps frames, compute s per sim s
+//   bench_sph accuracy [--png FILE]         dam break (a = 0.1 m) for 2 s per solver and knob set:
+//                                           density error, volume change, compute time; PNG plot
+// All tables are printed as markdown on stdout. Timings are wall time of stepSph (steady_clock)
+// and process CPU time; on a loaded machine compare within one run only.
+#include "sph_png.hpp"
+
+#include "fluid/sph/sph_scenes.hpp"
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace fluid;
+using Overrides = std::vector<std::pair<std::string, std::string>>;
+
+double cpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+SphScene makeScene(const std::string& name, SphSolverKind solver, const Overrides& o) {
+  SphScene s;
+  const SphStatus st = makeSphScene(name, solver, o, s);
+  if (!st.ok()) {
+    std::fprintf(stderr, "bench_sph: %s\n", st.error.c_str());
+    std::exit(1);
+  }
+  return s;
+}
+
+int throughput(int steps) {
+  std::printf("| solver | particles | threads | ms per step (median) | particle-steps/s | neighbour search share |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  for (SphSolverKind solver : {SphSolverKind::dfsph, SphSolverKind::wcsph}) {
+    for (int per_side : {22, 31, 46}) {  // 10,648 / 29,791 / 97,336 particles
+      for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+        const float r = 1.0f / (2.0f * (per_side + 1));
+        SphScene s = makeScene("dambreak_box", solver, {{"particle_radius", std::to_string(r)}});
+        reserveSph(s.world, s.world.particles.size());
+        std::vector<double> ms, nb;
+        for (int i = 0; i < steps + 5; ++i) {
+          SphStepStats st;
+          if (!stepSph(s.world, 0.0f, &st).ok()) return 1;
+          if (i >= 5) {  // warm-up steps excluded
+            ms.push_back(st.step_ms);
+            nb.push_back(st.neighbor_ms / st.step_ms);
+          }
+        }
+        const double m = median(ms);
+        std::printf("| %s | %zu | %d | %.2f | %.3g | %.0f %% |\n", sphSolverName(solver), s.world.particles.size(),
+                    threads, m, s.world.particles.size() / (m * 1e-3), 100.0 * median(nb));
+        std::fflush(stdout);
+      }
+    }
+  }
+  return 0;
+}
+
+struct RunResult {
+  std::size_t particles = 0, steps = 0;
+  double sim_seconds = 0, wall_ms = 0, cpu_s = 0, mean_dt = 0, frame_error = 0, max_error = 0, step_error = 0;
+  double volume_change = 0, mean_iterations = 0;
+};
+
+// Runs a scene, sampling the density error at frames every 1/fps s (the first step after a frame
+// starts from the frame's state; its stats describe that state).
+RunResult runScene(SphScene& s, double seconds, double fps) {
+  RunResult r;
+  r.particles = s.world.particles.size();
+  const double v0 = sphCompressedVolume(s.world);
+  double frame_err = 0.0, step_err = 0.0, iters = 0.0;
+  long frames = 0;
+  bool first = false;
+  const double cpu0 = cpuSeconds();
+  const long last = static_cast<long>(std::floor(seconds * fps + 1e-9));
+  for (long i = 0; i < last; ++i) {
+    first = true;
+    const SphStatus st = advanceSph(s.world, 1.0 / fps, [&](const SphStepStats& x) {
+      ++r.steps;
+      r.wall_ms += x.step_ms;
+      r.mean_dt += x.dt;
+      step_err += x.avg_density_error;
+      r.max_error = std::max(r.max_error, static_cast<double>(x.max_density_error));
+      iters += x.density_iterations + x.divergence_iterations;
+      if (first) {
+        frame_err += x.avg_density_error;
+        ++frames;
+        first = false;
+      }
+    });
+    if (!st.ok()) {
+      std::fprintf(stderr, "bench_sph: %s\n", st.error.c_str());
+      std::exit(1);
+    }
+  }
+  // Density of the final state, for the volume measure.
+  SphStepStats x;
+  stepSph(s.world, 1e-6f, &x);
+  r.cpu_s = cpuSeconds() - cpu0;
+  r.sim_seconds = s.world.time;
+  r.mean_dt /= std::max<std::size_t>(r.steps, 1);
+  r.frame_error = frames ? frame_err / frames : 0.0;
+  r.step_error = r.steps ? step_err / r.steps : 0.0;
+  r.mean_iterations = r.steps ? iters / r.steps : 0.0;
+  r.volume_change = sphCompressedVolume(s.world) / v0 - 1.0;
+  return r;
+}
+
+int damBreakBox(double seconds, const std::vector<int>& thread_counts) {
+  std::printf("| solver (threads) | ms per step (wall) | mean time step | mean density error | s compute per simulated s (wall) | CPU s per simulated s |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  struct Config {
+    SphSolverKind solver;
+    Overrides o;
+    const char* label;
+  };
+  const Config configs[] = {
+      {SphSolverKind::dfsph, {}, "DFSPH (eta 0.05 %)"},
+      {SphSolverKind::wcsph, {{"cfl", "0.1"}}, "WCSPH (CFL 0.1, c_s = 44 m/s)"},
+  };
+  for (const Config& c : configs) {
+    for (int threads : thread_counts) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      SphScene s = makeScene("dambreak_box", c.solver, c.o);
+      const RunResult r = runScene(s, seconds, 30.0);
+      std::printf("| %s (%d) | %.1f | %.2f ms | %.3f %% | %.1f | %.1f |\n", c.label, threads, r.wall_ms / r.steps,
+                  1e3 * r.mean_dt, 100.0 * r.frame_error, r.wall_ms / 1e3 / r.sim_seconds, r.cpu_s / r.sim_seconds);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+int accuracy(const std::string& png) {
+  struct Config {
+    SphSolverKind solver;
+    Overrides o;
+  };
+  // Knobs: the CFL number (it also scales the force bound, so it sets DFSPH's step), the DFSPH
+  // tolerance, the WCSPH sound speed (its stiffness), and the particle spacing.
+  const std::vector<Config> configs = {
+      {SphSolverKind::dfsph, {{"cfl", "0.2"}}},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}}},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}}},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}, {"density_error", "0.01"}}},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}, {"spacing", "0.0067"}}},
+      {SphSolverKind::wcsph, {{"sound_speed", "14"}}},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}}},
+      {SphSolverKind::wcsph, {{"sound_speed", "56"}}},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}},
+  };
+  std::printf("| solver | knobs | particles | steps | mean dt (ms) | iterations/step | mean density error (frames) | max density error | volume change after 2 s | ms per simulated s (wall) | CPU s per simulated s |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  struct Point {
+    double x, y;
+    SphSolverKind solver;
+  };
+  std::vector<Point> points;
+  for (const Config& c : configs) {
+    Overrides o{{"width", "0.1"}, {"spacing", "0.01"}};
+    std::string knobs;
+    for (const auto& kv : c.o) {
+      bool replaced = false;
+      for (auto& base : o)
+        if (base.first == kv.first) base.second = kv.second, replaced = true;
+      if (!replaced) o.push_back(kv);
+    }
+    for (const auto& kv : o) knobs += (knobs.empty() ? "" : ", ") + kv.first + "=" + kv.second;
+    SphScene s = makeScene("dambreak", c.solver, o);
+    const RunResult r = runScene(s, 2.0, 30.0);
+    std::printf("| %s | %s | %zu | %zu | %.3f | %.1f | %.4f %% | %.2f %% | %+.3f %% | %.0f | %.2f |\n", sphSolverName(c.solver),
+                knobs.c_str(), r.particles, r.steps, 1e3 * r.mean_dt, r.mean_iterations, 100.0 * r.frame_error,
+                100.0 * r.max_error, 100.0 * r.volume_change, r.wall_ms / r.sim_seconds, r.cpu_s / r.sim_seconds);
+    std::fflush(stdout);
+    points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, c.solver});
+  }
+  if (png.empty()) return 0;
+  // Log-log plot: x = CPU s per simulated s, y = mean density error (%).
+  sphbench::Canvas cv(720, 480);
+  const int L = 90, R = 690, T = 40, B = 400;
+  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+  for (const Point& p : points) {
+    xmin = std::min(xmin, std::log10(std::max(p.x, 1e-6)));
+    xmax = std::max(xmax, std::log10(std::max(p.x, 1e-6)));
+    ymin = std::min(ymin, std::log10(std::max(p.y, 1e-6)));
+    ymax = std::max(ymax, std::log10(std::max(p.y, 1e-6)));
+  }
+  xmin = std::floor(xmin); xmax = std::ceil(xmax + 1e-9); ymin = std::floor(ymin); ymax = std::ceil(ymax + 1e-9);
+  if (xmax <= xmin) xmax = xmin + 1;
+  if (ymax <= ymin) ymax = ymin + 1;
+  auto px = [&](double x) { return L + static_cast<int>((std::log10(std::max(x, 1e-6)) - xmin) / (xmax - xmin) * (R - L)); };
+  auto py = [&](double y) { return B - static_cast<int>((std::log10(std::max(y, 1e-6)) - ymin) / (ymax - ymin) * (B - T)); };
+  cv.rect(L, T, R, B, 0x000000);
+  for (double e = xmin; e <= xmax + 1e-9; e += 1) {
+    const int x = L + static_cast<int>((e - xmin) / (xmax - xmin) * (R - L));
+    cv.line(x, B, x, B + 6, 0x000000);
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", std::pow(10.0, e));
+    cv.text(x - 8, B + 12, buf, 0x000000);
+  }
+  for (double e = ymin; e <= ymax + 1e-9; e += 1) {
+    const int y = B - static_cast<int>((e - ymin) / (ymax - ymin) * (B - T));
+    cv.line(L - 6, y, L, y, 0x000000);
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", std::pow(10.0, e));
+    cv.text(L - 12 - 8 * static_cast<int>(std::strlen(buf)), y - 5, buf, 0x000000);
+  }
+  cv.text(L + 120, B + 40, "CPU S PER SIMULATED S (LOG)", 0x000000);
+  cv.text(20, B - 60, "MEAN DENSITY ERROR % (LOG)", 0x000000, 2, true);
+  cv.text(L + 10, 12, "DAM BREAK 2 S: ERROR AGAINST TIME", 0x000000);
+  for (SphSolverKind solver : {SphSolverKind::dfsph, SphSolverKind::wcsph}) {
+    const std::uint32_t color = solver == SphSolverKind::dfsph ? 0x1f5fd0 : 0xd03020;
+    std::vector<Point> ps;
+    for (const Point& p : points)
+      if (p.solver == solver) ps.push_back(p);
+    std::sort(ps.begin(), ps.end(), [](const Point& a, const Point& b) { return a.x < b.x; });
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      cv.marker(px(ps[i].x), py(ps[i].y), color);
+      if (i) cv.line(px(ps[i - 1].x), py(ps[i - 1].y), px(ps[i].x), py(ps[i].y), color);
+    }
+    const int ly = solver == SphSolverKind::dfsph ? T + 12 : T + 32;
+    cv.marker(R - 120, ly + 4, color);
+    cv.text(R - 110, ly, solver == SphSolverKind::dfsph ? "DFSPH" : "WCSPH", color);
+  }
+  const std::string err = sphbench::writePng(png, cv);
+  if (!err.empty()) {
+    std::fprintf(stderr, "bench_sph: %s\n", err.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "bench_sph: wrote %s\n", png.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] | accuracy [--png FILE]\n");
+    return 2;
+  }
+  const std::string cmd = argv[1];
+  int steps = 20;
+  double seconds = 2.0;
+  std::string png;
+  std::vector<int> threads{1, 2};
+  for (int i = 2; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--steps") steps = std::atoi(v.c_str());
+    else if (k == "--seconds") seconds = std::atof(v.c_str());
+    else if (k == "--png") png = v;
+    else if (k == "--threads") {
+      threads.clear();
+      for (char ch : v)
+        if (ch >= '1' && ch <= '9') threads.push_back(ch - '0');
+    } else {
+      std::fprintf(stderr, "bench_sph: unknown option %s\n", k.c_str());
+      return 2;
+    }
+  }
+  if (steps < 1 || !(seconds > 0.0) || threads.empty()) {
+    std::fprintf(stderr, "bench_sph: --steps must be >= 1, --seconds > 0, --threads non-empty\n");
+    return 2;
+  }
+  if (cmd == "throughput") return throughput(steps);
+  if (cmd == "dambreak_box") return damBreakBox(seconds, threads);
+  if (cmd == "accuracy") return accuracy(png);
+  std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());
+  return 2;
+}

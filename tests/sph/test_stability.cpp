@@ -1,0 +1,281 @@
+// Hard cases that must stay finite and sane (issue 4, "Stability tests"): stacked and
+// compressed particles, a 100 m/s particle, a time step 100x too large, zero and one particle,
+// particles starting inside a collider, a thin fast wall, a randomised sweep, and NaN input.
+#include "fluid/sph/analytic_colliders.hpp"
+#include "fluid/sph/sph_scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using namespace fluid;
+
+constexpr SphSolverKind kSolvers[] = {SphSolverKind::dfsph, SphSolverKind::wcsph};
+
+// A closed box [0, size]^3 with six planes, no particles.
+SphScene emptyBox(SphSolverKind solver, float size, float radius) {
+  SphScene s;
+  s.name = "box";
+  s.world.params.solver = solver;
+  s.world.params.particle_radius = radius;
+  s.world.params.sound_speed = 20.0f;
+  s.box_min = glm::vec3(0.0f);
+  s.box_max = glm::vec3(size);
+  s.world.params.domain_min = glm::vec3(-0.1f);
+  s.world.params.domain_max = glm::vec3(size + 0.1f);
+  CollisionMaterial m;
+  m.resilience = 0.0f;
+  addSphContainer(s, s.box_min, s.box_max, m);
+  return s;
+}
+
+bool finiteState(const SphWorld& w) {
+  for (std::size_t i = 0; i < w.particles.size(); ++i) {
+    const glm::vec3 x = w.particles.position[i], v = w.particles.velocity[i];
+    if (!std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z)) return false;
+  }
+  return true;
+}
+
+float maxSpeed(const SphWorld& w) {
+  float v = 0.0f;
+  for (const glm::vec3& x : w.particles.velocity) v = std::max(v, glm::length(x));
+  return v;
+}
+
+bool inside(const SphScene& s, float tol = 1e-5f) {
+  for (const glm::vec3& p : s.world.particles.position)
+    for (int a = 0; a < 3; ++a)
+      if (!(p[a] >= s.box_min[a] - tol && p[a] <= s.box_max[a] + tol)) return false;
+  return true;
+}
+
+glm::vec3 extent(const SphWorld& w) {
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (const glm::vec3& p : w.particles.position) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  return hi - lo;
+}
+
+TEST(SphStability, TwoHundredParticlesOnOnePointSeparate) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s = emptyBox(solver, 0.3f, 0.01f);
+    for (int i = 0; i < 200; ++i) addSphParticle(s.world, glm::vec3(0.15f, 0.1f, 0.15f));
+    float peak = 0.0f;
+    SphStatus st = advanceSph(s.world, 0.5, [&](const SphStepStats&) { peak = std::max(peak, maxSpeed(s.world)); });
+    ASSERT_TRUE(st.ok()) << st.error;
+    EXPECT_TRUE(finiteState(s.world)) << sphSolverName(solver);
+    EXPECT_TRUE(inside(s)) << sphSolverName(solver);
+    EXPECT_LT(peak, 60.0f) << sphSolverName(solver);                // no explosion
+    EXPECT_GT(extent(s.world).x, 0.04f) << sphSolverName(solver);   // they spread out
+  }
+}
+
+TEST(SphStability, GridAtHalfSpacingRelaxes) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s = emptyBox(solver, 0.3f, 0.01f);
+    const float half = 0.01f;  // spacing d/2 with d = 0.02
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) addSphParticle(s.world, glm::vec3(0.11f) + half * glm::vec3(x, y, z));
+    float peak = 0.0f;
+    ASSERT_TRUE(advanceSph(s.world, 0.5, [&](const SphStepStats&) { peak = std::max(peak, maxSpeed(s.world)); }).ok());
+    EXPECT_TRUE(finiteState(s.world));
+    EXPECT_TRUE(inside(s));
+    // Bounded: DFSPH limits the per-step pressure push; WCSPH's release speed from 50 % (clamped)
+    // compression is of the order of its sound speed.
+    EXPECT_LT(peak, solver == SphSolverKind::dfsph ? 30.0f : 2.0f * s.world.params.sound_speed) << sphSolverName(solver);
+    EXPECT_GT(extent(s.world).x, 8 * half * 1.3f) << sphSolverName(solver);  // expanded
+  }
+}
+
+TEST(SphStability, ParticleInjectedAtHundredMetresPerSecond) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s;
+    ASSERT_TRUE(makeSphScene("column", solver, {{"width", "0.06"}, {"height", "0.06"}, {"depth", "0.06"}}, s).ok());
+    addSphParticle(s.world, glm::vec3(0.03f, 0.09f, 0.03f), glm::vec3(30.0f, -90.0f, 40.0f));  // |v| ~ 103 m/s
+    SphStepStats first;
+    ASSERT_TRUE(stepSph(s.world, 0.0f, &first).ok());
+    EXPECT_LE(first.dt, s.world.params.cfl * 0.01f / 100.0f * 1.01f);  // CFL shrinks the step
+    ASSERT_TRUE(advanceSph(s.world, 0.2, [](const SphStepStats&) {}).ok());
+    EXPECT_TRUE(finiteState(s.world));
+    EXPECT_TRUE(inside(s)) << sphSolverName(solver);
+    EXPECT_LT(maxSpeed(s.world), 110.0f);
+  }
+}
+
+TEST(SphStability, RequestedStepHundredTimesTooLarge) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s;
+    ASSERT_TRUE(makeSphScene("dambreak", solver, {{"width", "0.1"}, {"spacing", "0.02"}}, s).ok());
+    s.world.params.max_time_step = 0.5f;  // 100x the default 5 ms
+    const double pe0 = sphPotentialEnergy(s.world);
+    bool bounded = true;
+    ASSERT_TRUE(advanceSph(s.world, 0.5, [&](const SphStepStats& st) {
+                  bounded = bounded && st.kinetic_energy <= pe0 - sphPotentialEnergy(s.world) + 0.01 * pe0;
+                  EXPECT_LT(st.dt, 0.01f);  // the CFL/force bounds still limit the step
+                }).ok());
+    EXPECT_TRUE(bounded) << sphSolverName(solver);
+    EXPECT_TRUE(finiteState(s.world));
+    EXPECT_TRUE(inside(s));
+  }
+}
+
+TEST(SphStability, ZeroAndOneParticle) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s = emptyBox(solver, 0.2f, 0.01f);
+    SphStepStats st;
+    ASSERT_TRUE(stepSph(s.world, 0.0f, &st).ok());
+    EXPECT_EQ(st.particles, 0u);
+    EXPECT_EQ(st.kinetic_energy, 0.0f);
+    ASSERT_TRUE(advanceSph(s.world, 0.1, [](const SphStepStats&) {}).ok());
+
+    addSphParticle(s.world, glm::vec3(0.1f, 0.15f, 0.1f));
+    ASSERT_TRUE(advanceSph(s.world, 1.0, [](const SphStepStats&) {}).ok());
+    ASSERT_EQ(s.world.particles.size(), 1u);
+    EXPECT_TRUE(finiteState(s.world));
+    EXPECT_TRUE(inside(s));
+    EXPECT_LT(s.world.particles.position[0].y, 0.05f) << sphSolverName(solver);  // fell to the floor
+  }
+}
+
+TEST(SphStability, ParticlesStartingInsideAColliderArePushedOut) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s = emptyBox(solver, 0.4f, 0.01f);
+    s.world.params.gravity = glm::vec3(0.0f);
+    auto ball = std::make_shared<SphereShape>(0.08f);
+    SphCollider c;
+    c.shape = ball;
+    c.pose.translation = glm::vec3(0.2f);
+    s.world.colliders.push_back(c);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-0.07f, 0.07f);
+    for (int i = 0; i < 150; ++i) {
+      glm::vec3 o(u(rng), u(rng), u(rng));
+      if (glm::length(o) < 0.075f) addSphParticle(s.world, glm::vec3(0.2f) + o);
+    }
+    for (int step = 0; step < 3; ++step) ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+    for (const glm::vec3& p : s.world.particles.position)
+      EXPECT_GE(glm::length(p - glm::vec3(0.2f)), 0.08f - 1e-5f) << sphSolverName(solver);
+  }
+}
+
+TEST(SphStability, ThinFastWallDoesNotLetParticlesThrough) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s = emptyBox(solver, 1.0f, 0.01f);
+    s.world.params.gravity = glm::vec3(0.0f);
+    // A 4 mm thick wall (less than the 20 mm spacing) sweeping +x at 20 m/s through a particle slab.
+    auto slab = std::make_shared<BoxShape>(glm::vec3(0.002f, 0.5f, 0.5f));
+    SphCollider wall;
+    wall.shape = slab;
+    wall.boundary_pressure = false;
+    wall.pose.translation = glm::vec3(0.05f, 0.5f, 0.5f);
+    wall.pose.linear_velocity = glm::vec3(20.0f, 0.0f, 0.0f);
+    s.world.colliders.push_back(wall);
+    for (int z = 0; z < 5; ++z)
+      for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x) addSphParticle(s.world, glm::vec3(0.3f, 0.4f, 0.4f) + 0.02f * glm::vec3(x, y, z));
+    // Run while the wall crosses x = 0.3 .. 0.7.
+    while (s.world.colliders.back().pose.translation.x < 0.8f) {
+      ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+      const float wall_x = s.world.colliders.back().pose.translation.x;
+      for (const glm::vec3& p : s.world.particles.position)
+        ASSERT_GE(p.x, wall_x + 0.002f - 1e-4f) << sphSolverName(solver) << " t = " << s.world.time << " dt = " << s.world.last_dt;
+    }
+    EXPECT_TRUE(finiteState(s.world));
+  }
+}
+
+TEST(SphStability, RandomisedRunsStayFiniteWithBoundedEnergy) {
+  // Documented ranges: radius 5..20 mm, viscosity 0..0.05, cfl 0.1..0.6, emitter speed 0.5..4
+  // m/s, rate 200..3000 /s, static sphere/box colliders of 3..10 cm inside a 0.5 m box.
+  std::mt19937 rng(20240521);
+  auto uni = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
+  for (int run = 0; run < 16; ++run) {
+    const SphSolverKind solver = run % 2 ? SphSolverKind::wcsph : SphSolverKind::dfsph;
+    const float r = uni(0.005f, 0.02f);
+    SphScene s = emptyBox(solver, 0.5f, r);
+    SphParams& p = s.world.params;
+    p.viscosity = uni(0.0f, 0.05f);
+    p.cfl = uni(0.1f, 0.6f);
+    p.max_particles = 1500;
+    SphEmitter e;
+    e.position = glm::vec3(uni(0.1f, 0.4f), uni(0.1f, 0.4f), uni(0.1f, 0.4f));
+    e.direction = glm::vec3(uni(-1, 1), uni(-1, 1), uni(-1, 1));
+    e.speed = uni(0.5f, 4.0f);
+    e.radius = uni(0.0f, 3.0f * r);
+    e.rate = uni(200.0f, 3000.0f);
+    s.world.emitters.push_back(e);
+    auto shape = run % 3 ? std::shared_ptr<const SignedDistanceShape>(std::make_shared<SphereShape>(uni(0.03f, 0.1f)))
+                         : std::make_shared<BoxShape>(glm::vec3(uni(0.03f, 0.1f)));
+    SphCollider c;
+    c.shape = shape;
+    c.pose.translation = glm::vec3(uni(0.1f, 0.4f), uni(0.05f, 0.3f), uni(0.1f, 0.4f));
+    s.world.colliders.push_back(c);
+    // Energy bound: total energy <= what the emitters brought in (kinetic + potential) + 1 %.
+    const double m = sphParticleMass(p);
+    double injected = 0.0;
+    for (int step = 0; step < 200; ++step) {
+      SphStepStats st;
+      const SphStatus status = stepSph(s.world, 0.0f, &st);
+      ASSERT_TRUE(status.ok()) << "run " << run << ": " << status.error;
+      injected += st.emitted * m * (0.5 * e.speed * e.speed + 9.81 * (e.position.y + 0.1));
+      ASSERT_TRUE(finiteState(s.world)) << "run " << run << " step " << step;
+      const double energy = st.kinetic_energy + sphPotentialEnergy(s.world);
+      ASSERT_LE(energy, injected * 1.01 + 1e-9) << "run " << run << " step " << step;
+      ASSERT_TRUE(inside(s)) << "run " << run << " step " << step;
+    }
+  }
+}
+
+TEST(SphStability, NonFiniteInputIsReportedNotSpread) {
+  for (SphSolverKind solver : kSolvers) {
+    SphScene s;
+    ASSERT_TRUE(makeSphScene("dambreak", solver, {{"width", "0.1"}, {"spacing", "0.02"}}, s).ok());
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+    const std::size_t victim = 17;
+    const std::uint32_t id = s.world.particles.id[victim];
+    s.world.particles.velocity[victim].y = std::numeric_limits<float>::quiet_NaN();
+    const auto before = s.world.particles.position;
+    const SphStatus st = stepSph(s.world, 0.0f);
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.error.find("particle id " + std::to_string(id)), std::string::npos) << st.error;
+    EXPECT_NE(st.error.find("step 5"), std::string::npos) << st.error;
+    EXPECT_EQ(before, s.world.particles.position);  // nothing moved, nothing spread
+    s.world.particles.velocity[victim].y = 0.0f;
+    s.world.particles.position[3].x = std::numeric_limits<float>::infinity();
+    EXPECT_FALSE(stepSph(s.world, 0.0f).ok());
+  }
+}
+
+TEST(SphStability, NonFiniteEmitterOrColliderPoseIsRejected) {
+  SphScene s = emptyBox(SphSolverKind::dfsph, 0.2f, 0.01f);
+  SphEmitter e;
+  e.position = glm::vec3(0.1f, std::numeric_limits<float>::quiet_NaN(), 0.1f);
+  s.world.emitters.push_back(e);
+  SphStatus st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("emitter 0"), std::string::npos) << st.error;
+  s.world.emitters.clear();
+  s.world.colliders[0].pose.linear_velocity.x = std::numeric_limits<float>::infinity();
+  st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("collider 0"), std::string::npos) << st.error;
+  EXPECT_EQ(s.world.particles.size(), 0u);
+}
+
+TEST(SphStability, BadParametersAreRejectedWithTheirName) {
+  SphScene s = emptyBox(SphSolverKind::dfsph, 0.2f, 0.01f);
+  s.world.params.cfl = std::numeric_limits<float>::quiet_NaN();
+  SphStatus st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("cfl"), std::string::npos) << st.error;
+  s.world.params.cfl = 0.4f;
+  s.world.params.particle_radius = -1.0f;
+  st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("particle_radius"), std::string::npos) << st.error;
+}
+
+}  // namespace
