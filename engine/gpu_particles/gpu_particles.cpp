@@ -689,36 +689,31 @@ void readTexture(GLuint fbo, GLenum attachment, GLsizei w, GLsizei h, GLenum for
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
 }
 
+// Reads one float attachment of the particle textures into `out`, one element per texel.
+template <typename Vec>
+void readParticleTexture(const GpuParticles& s, GLuint fbo, GLenum attachment, GLenum format, std::vector<Vec>& out) {
+  out.clear();
+  if (!s.ready) return;
+  constexpr int kComponents = static_cast<int>(sizeof(Vec) / sizeof(float));
+  std::vector<float> raw;
+  readTexture(fbo, attachment, static_cast<GLsizei>(s.desc.width), static_cast<GLsizei>(s.desc.height), format,
+              kComponents, raw);
+  out.resize(s.capacity);
+  std::memcpy(out.data(), raw.data(), raw.size() * sizeof(float));
+}
+
 }  // namespace
 
 void readPositions(GpuParticles& s, std::vector<glm::vec4>& out) {
-  out.clear();
-  if (!s.ready) return;
-  std::vector<float> raw;
-  readTexture(s.fbo[s.current], GL_COLOR_ATTACHMENT0, static_cast<GLsizei>(s.desc.width),
-              static_cast<GLsizei>(s.desc.height), GL_RGBA, 4, raw);
-  out.resize(s.capacity);
-  std::memcpy(out.data(), raw.data(), raw.size() * sizeof(float));
+  readParticleTexture(s, s.fbo[s.current], GL_COLOR_ATTACHMENT0, GL_RGBA, out);
 }
 
 void readState1(GpuParticles& s, std::vector<glm::vec4>& out) {
-  out.clear();
-  if (!s.ready) return;
-  std::vector<float> raw;
-  readTexture(s.fbo[s.current], GL_COLOR_ATTACHMENT1, static_cast<GLsizei>(s.desc.width),
-              static_cast<GLsizei>(s.desc.height), GL_RGBA, 4, raw);
-  out.resize(s.capacity);
-  std::memcpy(out.data(), raw.data(), raw.size() * sizeof(float));
+  readParticleTexture(s, s.fbo[s.current], GL_COLOR_ATTACHMENT1, GL_RGBA, out);
 }
 
 void readSortPairs(GpuParticles& s, std::vector<glm::vec2>& out) {
-  out.clear();
-  if (!s.ready) return;
-  std::vector<float> raw;
-  readTexture(s.sort_fbo[s.sort_current], GL_COLOR_ATTACHMENT0, static_cast<GLsizei>(s.desc.width),
-              static_cast<GLsizei>(s.desc.height), GL_RG, 2, raw);
-  out.resize(s.capacity);
-  std::memcpy(out.data(), raw.data(), raw.size() * sizeof(float));
+  readParticleTexture(s, s.sort_fbo[s.sort_current], GL_COLOR_ATTACHMENT0, GL_RG, out);
 }
 
 }  // namespace engine
