@@ -385,49 +385,58 @@ class BlockMesher {
         const double dz = cz[z] - pz;
         return dxy + dz * dz < rc2;
       };
+      // Lowest min_z and highest max_z over this particle's non-empty elements (for the window).
+      int lowest = mid, highest = mid;
+      const std::int64_t xBase = g0_[0] - p.anchor[0];
+      const float restX = p.rest[0];
       int y0, y1;
       discRows(p, inv, y0, y1);
       for (int y = y0; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
         const double dy2 = r.dy * r.dy;
         const float ey = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
+        std::uint32_t* rowCursor = cursor + std::size_t(y) * stride;
         for (int x = r.x0; x <= r.x1; ++x) {
           const double dx = cx[x] - px;
           const double dxy = dx * dx + dy2;
-          int lo = 1, hi = 0;
+          int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
           if (dxy < rc2) {
             const double h = std::sqrt(rc2 - dxy) * inv;
             const double zlo = fz - h, zhi = fz + h;
-            lo = std::clamp(iceil(zlo), 1, zmax);
-            hi = std::clamp(ifloor(zhi), 1, zmax);
+            // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+            const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+            const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+            int l = std::clamp(c, 1, zmax), u = std::clamp(f, 1, zmax);
             // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-            // bound is within 1e-6 of a lattice slice, settle it with the predicate itself.
-            if (std::abs(zlo - double(iround(zlo))) < 1e-6) [[unlikely]] {
-              if (lo > 1 && inside(dxy, lo - 1)) {
-                do --lo;
-                while (lo > 1 && inside(dxy, lo - 1));
+            // bound is within 1e-6 of a lattice slice (the nearest integer is c or c - 1, resp.
+            // f or f + 1), settle it with the predicate itself.
+            if (double(c) - zlo < 1e-6 || zlo - double(c - 1) < 1e-6) [[unlikely]] {
+              if (l > 1 && inside(dxy, l - 1)) {
+                do --l;
+                while (l > 1 && inside(dxy, l - 1));
               } else {
-                while (lo <= hi && !inside(dxy, lo)) ++lo;
+                while (l <= u && !inside(dxy, l)) ++l;
               }
             }
-            if (std::abs(zhi - double(iround(zhi))) < 1e-6) [[unlikely]] {
-              if (hi < zmax && inside(dxy, hi + 1)) {
-                do ++hi;
-                while (hi < zmax && inside(dxy, hi + 1));
+            if (zhi - double(f) < 1e-6 || double(f + 1) - zhi < 1e-6) [[unlikely]] {
+              if (u < zmax && inside(dxy, u + 1)) {
+                do ++u;
+                while (u < zmax && inside(dxy, u + 1));
               } else {
-                while (hi >= lo && !inside(dxy, hi)) --hi;
+                while (u >= l && !inside(dxy, u)) --u;
               }
             }
-            if (lo <= hi) {
-              window = mid - lo > window ? mid - lo : window;
-              window = hi - mid > window ? hi - mid : window;
+            if (l <= u) {
+              lo = l;
+              hi = u;
+              lowest = std::min(lowest, l);
+              highest = std::max(highest, u);
             }
           }
-          ColumnEntry& e = entries[cursor[std::size_t(y) * stride + std::size_t(x)]++];
-          const float ex = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
-          // An empty range is stored as [-32000, -32000], which no corner (z >= 0) falls in.
-          e.minZ = std::int16_t(lo <= hi ? lo : -32000);
-          e.maxZ = std::int16_t(lo <= hi ? hi : -32000);
+          ColumnEntry& e = entries[rowCursor[x]++];
+          const float ex = float(double(xBase + x) * su_.s) - restX;  // latticeOffset(g0 + x, ...)
+          e.minZ = std::int16_t(lo);
+          e.maxZ = std::int16_t(hi);
           e.midZ = mid16;
           e.pad = 0;
           e.dxy2 = ex * ex + ey * ey;
@@ -439,6 +448,7 @@ class BlockMesher {
           e.particle = li;
         }
       }
+      window = std::max({window, mid - lowest, highest - mid});
     }
     window_ = window;
     // Per-column reach bounds (see ColumnEntry).
