@@ -80,7 +80,8 @@ struct Vec4Policy {
 // reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
 // would return, in the same order, without stepping over the window's misses at either end.
 struct ColumnEntry {
-  std::int16_t minZ, maxZ, midZ, pad;
+  std::int16_t minZ, maxZ, midZ;
+  std::uint16_t span;  // max_z - min_z (0 for the empty range)
   std::int16_t reachMax, reachMin;
   float dxy2;  // dx * dx + dy * dy, exactly as the field sum would form it
   float restZ, k, s;
@@ -438,7 +439,7 @@ class BlockMesher {
           e.minZ = std::int16_t(lo);
           e.maxZ = std::int16_t(hi);
           e.midZ = mid16;
-          e.pad = 0;
+          e.span = std::uint16_t(hi - lo);
           e.dxy2 = ex * ex + ey * ey;
           e.restZ = p.rest[2];
           e.k = p.k;
@@ -490,7 +491,7 @@ class BlockMesher {
       const ColumnEntry& en = e[i];
       if (en.reachMin > z) break;
       // min_z <= z <= max_z as one unsigned compare (an empty range never passes).
-      if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
+      if (unsigned(z - en.minZ) > en.span) continue;
       f(en, zoff[-en.midZ] - en.restZ);
     }
   }
@@ -565,7 +566,11 @@ class BlockMesher {
           joined = true;
           break;
         }
-        if (!(fieldAt(x, y, below) > t)) {
+        // As at the start: the particle's own term above T proves the corner inside.
+        const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
+        const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
+                              contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
+        if (!ownBelow && !(fieldAt(x, y, below) > t)) {
           pushTodo(below, x, y);
           joined = true;
           break;
