@@ -620,10 +620,11 @@ class BlockMesher {
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
 
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, int x, int y, int z) {
-    const SliceCell& cell = slice.cells[col(x, y)];
-    if (cell.corner) [[likely]]
-      return cell.corner - 1;
+  // cells == slice.cells.data() and c == col(x, y) (the caller keeps them at hand).
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, const SliceCell* cells, std::size_t c, int x, int y, int z) {
+    const std::uint32_t id = cells[c].corner;
+    if (id) [[likely]]
+      return id - 1;
     return evaluateInto(slice, x, y, z);
   }
 
@@ -656,28 +657,36 @@ class BlockMesher {
       Slice<Policy>* above = ensureSlice(z + 1);
       auto& list = w_.todo[z];
       const bool interiorSlab = z >= ia && z < ibz;
+      // The index arrays never move while the slices are active; the corner arrays may grow
+      // (evaluateInto), so corner pointers are taken after the cube's evaluations.
+      SliceCell* const cellsB = below->cells.data();
+      SliceCell* const cellsA = above->cells.data();
+      const std::size_t sy = std::size_t(stride_);
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
         const int x = int(item & 0xffff), y = int(item >> 16);
-        SliceCell& cb = below->cells[col(x, y)];
-        SliceCell& ca = above->cells[col(x, y)];
+        const std::size_t c0 = col(x, y);
+        SliceCell& cb = cellsB[c0];
+        SliceCell& ca = cellsA[c0];
         if (cb.doneAbove || ca.doneBelow) continue;
         cb.doneAbove = 1;
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEval(*below, x, y, z);
-        ci[1] = lookupOrEval(*below, x + 1, y, z);
-        ci[2] = lookupOrEval(*below, x, y + 1, z);
-        ci[3] = lookupOrEval(*below, x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, x, y, z + 1);
-        ci[5] = lookupOrEval(*above, x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEval(*below, cellsB, c0, x, y, z);
+        ci[1] = lookupOrEval(*below, cellsB, c0 + 1, x + 1, y, z);
+        ci[2] = lookupOrEval(*below, cellsB, c0 + sy, x, y + 1, z);
+        ci[3] = lookupOrEval(*below, cellsB, c0 + sy + 1, x + 1, y + 1, z);
+        ci[4] = lookupOrEval(*above, cellsA, c0, x, y, z + 1);
+        ci[5] = lookupOrEval(*above, cellsA, c0 + 1, x + 1, y, z + 1);
+        ci[6] = lookupOrEval(*above, cellsA, c0 + sy, x, y + 1, z + 1);
+        ci[7] = lookupOrEval(*above, cellsA, c0 + sy + 1, x + 1, y + 1, z + 1);
+        Corner<Policy>* const cornersB = below->corners.data();
+        Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
-        for (int i = 0; i < 4; ++i) cp[i] = &below->corners[ci[i]];
-        for (int i = 4; i < 8; ++i) cp[i] = &above->corners[ci[i]];
+        for (int i = 0; i < 4; ++i) cp[i] = cornersB + ci[i];
+        for (int i = 4; i < 8; ++i) cp[i] = cornersA + ci[i];
         unsigned cube = 0;
         for (int i = 0; i < 8; ++i) cube |= unsigned(cp[i]->value > t) << i;
         if (cube == 0 || cube == 255) continue;
@@ -685,10 +694,10 @@ class BlockMesher {
         if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
-        if ((f & 1) && !below->cells[col(x - 1, y)].doneAbove) list.push_back(item - 1);
-        if ((f & 2) && !below->cells[col(x + 1, y)].doneAbove) list.push_back(item + 1);
-        if ((f & 4) && !below->cells[col(x, y - 1)].doneAbove) list.push_back(item - (1u << 16));
-        if ((f & 8) && !below->cells[col(x, y + 1)].doneAbove) list.push_back(item + (1u << 16));
+        if ((f & 1) && !cellsB[c0 - 1].doneAbove) list.push_back(item - 1);
+        if ((f & 2) && !cellsB[c0 + 1].doneAbove) list.push_back(item + 1);
+        if ((f & 4) && !cellsB[c0 - sy].doneAbove) list.push_back(item - (1u << 16));
+        if ((f & 8) && !cellsB[c0 + sy].doneAbove) list.push_back(item + (1u << 16));
         if ((f & 16) && !cb.doneBelow) {
           assert(z > 0);
           w_.todo[z - 1].push_back(item);
