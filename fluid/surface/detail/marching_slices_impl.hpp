@@ -526,8 +526,10 @@ class BlockMesher {
   }
 
   bool interiorCorner(int x, int y, int z) const {
+    // m <= v <= m + b per axis, as one unsigned compare each.
     const int m = su_.m;
-    return x >= m && x <= m + su_.b[0] && y >= m && y <= m + su_.b[1] && z >= m && z <= m + su_.b[2];
+    return (unsigned(x - m) <= unsigned(su_.b[0])) & (unsigned(y - m) <= unsigned(su_.b[1])) &
+           (unsigned(z - m) <= unsigned(su_.b[2]));
   }
 
   // Seeding (§4): snap each particle to its nearest corner and step down -z until the field is
