@@ -409,9 +409,10 @@ class BlockMesher {
             const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
             int l = std::clamp(c, 1, zmax), u = std::clamp(f, 1, zmax);
             // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-            // bound is within 1e-6 of a lattice slice (the nearest integer is c or c - 1, resp.
-            // f or f + 1), settle it with the predicate itself.
-            if (double(c) - zlo < 1e-6 || zlo - double(c - 1) < 1e-6) [[unlikely]] {
+            // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+            // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+            // so where exactly the 1e-6 cut falls does not matter.
+            if (std::abs(double(c) - zlo - 0.5) > 0.5 - 1e-6) [[unlikely]] {
               if (l > 1 && inside(dxy, l - 1)) {
                 do --l;
                 while (l > 1 && inside(dxy, l - 1));
@@ -419,7 +420,7 @@ class BlockMesher {
                 while (l <= u && !inside(dxy, l)) ++l;
               }
             }
-            if (zhi - double(f) < 1e-6 || double(f + 1) - zhi < 1e-6) [[unlikely]] {
+            if (std::abs(zhi - double(f) - 0.5) > 0.5 - 1e-6) [[unlikely]] {
               if (u < zmax && inside(dxy, u + 1)) {
                 do ++u;
                 while (u < zmax && inside(dxy, u + 1));
