@@ -4,3 +4,7 @@ add_executable(bench_surface ${CMAKE_CURRENT_LIST_DIR}/surface_bench.cpp)
 target_link_libraries(bench_surface PRIVATE fluid fluiddemo_options)
 target_include_directories(bench_surface PRIVATE ${PROJECT_SOURCE_DIR}/tests/surface)
 target_compile_definitions(bench_surface PRIVATE FLUIDDEMO_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data")
+
+# Single-set, single-thread driver for callgrind instruction counts (header of surface_count.cpp).
+add_executable(bench_surface_count ${CMAKE_CURRENT_LIST_DIR}/surface_count.cpp)
+target_link_libraries(bench_surface_count PRIVATE fluid fluiddemo_options)

@@ -70,14 +70,25 @@ struct Vec4Policy {
 // One element of a column list of the projection slice (§6): the particle influences corners
 // min_z..max_z of this column; mid_z is the slab holding its centre. Lists are stored as
 // contiguous z-sorted arrays (CSR) instead of doubly linked lists: the same walk, better locality.
-// Each element carries the particle's x/y offsets to its column; the rest is in BlockParticle.
+// Each element carries everything the field sum needs (x/y offsets to its column, their squared
+// length, the particle's z rest offset, 1/(2 Rc_i^2) and strength), so the walk reads one
+// contiguous array; `particle` (into the block's particle array) is only for user data.
+//
+// Lookup bounds: reachMax is the largest max_z of this and every earlier element of the column,
+// reachMin the smallest min_z of this and every later one (empty ranges left out). Both are
+// non-decreasing along the list, so the walk for corner z can start at the first element with
+// reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
+// would return, in the same order, without stepping over the window's misses at either end.
 struct ColumnEntry {
+  std::int16_t minZ, maxZ, midZ;
+  std::uint16_t span;  // max_z - min_z (0 for the empty range)
+  std::int16_t reachMax, reachMin;
+  float dxy2;  // dx * dx + dy * dy, exactly as the field sum would form it
+  float restZ, k, s;
   float dx, dy;
-  std::int16_t minZ, maxZ, midZ, pad;
-  std::uint32_t particle;  // into the block's particle array
+  std::uint32_t particle;
 };
 struct BlockParticle {
-  float restZ, k, s;
   std::uint32_t index;  // input index (user data)
 };
 
@@ -287,7 +298,7 @@ class BlockMesher {
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
-    forEachInfluencing(x, y, z, [&](const ColumnEntry&, const BlockParticle& q, float) { found.push_back(q.index); });
+    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float) { found.push_back(w_.local[e.particle].index); });
   }
 
  private:
@@ -314,94 +325,157 @@ class BlockMesher {
   // §6: particles arrive sorted by (z, index); insert one element per column of the projection
   // slice within Rc_i. Skip boundary columns and clamp min_z/max_z to [1, Nz-1] so the field is
   // zero on the outer boundary of the expanded block (§3) and every surface is closed.
-  // Two passes over the same disc (count, then fill in place) build the CSR arrays directly.
-  template <class F>
-  void forEachColumn(const Particle& p, F&& f) const {
-    const double inv = 1.0 / su_.s, rc = std::sqrt(p.rc2);
-    // Column range from the disc, widened by 1e-6 cubes against rounding; callers apply the
-    // exact predicate (an element whose z range comes out empty is never returned).
-    const int y0 = std::max(1, iceil((p.y - rc) * inv - double(g0_[1]) - 1e-6));
-    const int y1 = std::min(ny_ - 1, ifloor((p.y + rc) * inv - double(g0_[1]) + 1e-6));
-    for (int y = y0; y <= y1; ++y) {
-      const double dy = w_.cy[y] - p.y;
-      const double hx = std::sqrt(std::max(0.0, p.rc2 - dy * dy));
-      const int x0 = std::max(1, iceil((p.x - hx) * inv - double(g0_[0]) - 1e-6));
-      const int x1 = std::min(nx_ - 1, ifloor((p.x + hx) * inv - double(g0_[0]) + 1e-6));
-      for (int x = x0; x <= x1; ++x) f(x, y, dy);
-    }
+  // Two passes over the same disc rows (count, then fill in place) build the CSR arrays directly.
+  //
+  // The column range of one row of the disc, widened by 1e-6 cubes against rounding; the fill
+  // pass applies the exact predicate (an element whose z range comes out empty is never returned).
+  struct DiscRow {
+    int x0, x1;
+    double dy;
+  };
+  DiscRow discRow(const Particle& p, int y, double inv) const {
+    const double dy = w_.cy[y] - p.y;
+    const double hx = std::sqrt(std::max(0.0, p.rc2 - dy * dy));
+    return {std::max(1, iceil((p.x - hx) * inv - double(g0_[0]) - 1e-6)),
+            std::min(nx_ - 1, ifloor((p.x + hx) * inv - double(g0_[0]) + 1e-6)), dy};
+  }
+  void discRows(const Particle& p, double inv, int& y0, int& y1) const {
+    const double rc = std::sqrt(p.rc2);
+    y0 = std::max(1, iceil((p.y - rc) * inv - double(g0_[1]) - 1e-6));
+    y1 = std::min(ny_ - 1, ifloor((p.y + rc) * inv - double(g0_[1]) + 1e-6));
   }
 
   void buildParticleCache(std::span<const Particle> particles) {
     const std::size_t cols = w_.columns();
-    std::fill(w_.colStart.begin(), w_.colStart.end(), 0u);
-    for (const Particle& p : particles) forEachColumn(p, [&](int x, int y, double) { ++w_.colStart[col(x, y) + 1]; });
-    for (std::size_t c = 0; c < cols; ++c) w_.colStart[c + 1] += w_.colStart[c];
-    for (std::size_t c = 0; c < cols; ++c) w_.cursor[c] = w_.colStart[c];
-    w_.entries.resize(w_.colStart[cols]);
-    w_.local.resize(particles.size());
-    window_ = 0;
+    const std::size_t stride = std::size_t(stride_);
     const double inv = 1.0 / su_.s;
+    // Count pass as a difference array along x (two updates per disc row), then prefix sums.
+    std::uint32_t* start = w_.colStart.data();
+    std::fill(start, start + cols + 1, 0u);
+    for (const Particle& p : particles) {
+      int y0, y1;
+      discRows(p, inv, y0, y1);
+      for (int y = y0; y <= y1; ++y) {
+        const DiscRow r = discRow(p, y, inv);
+        if (r.x0 > r.x1) continue;
+        ++start[std::size_t(y) * stride + std::size_t(r.x0) + 1];
+        --start[std::size_t(y) * stride + std::size_t(r.x1) + 2];  // x1 + 1 <= nx: same row
+      }
+    }
+    for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // per-column counts
+    for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // CSR starts
+    std::uint32_t* cursor = w_.cursor.data();
+    std::copy(start, start + cols, cursor);
+    w_.entries.resize(start[cols]);
+    w_.local.resize(particles.size());
+    ColumnEntry* entries = w_.entries.data();
+    const double* cx = w_.cx.data();
+    const double* cz = w_.cz.data();
+    const int zmax = nz_ - 1;
+    int window = 0;
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
-      w_.local[li] = BlockParticle{p.rest[2], p.k, p.strength, p.index};
+      w_.local[li] = BlockParticle{p.index};
       const double fz = p.z * inv - double(g0_[2]);
+      const double px = p.x, pz = p.z, rc2 = p.rc2;
       const int mid = int(p.anchor[2] - g0_[2]);
-      forEachColumn(p, [&](int x, int y, double dy) {
-        const double dx = w_.cx[x] - p.x;
-        const double dxy = dx * dx + dy * dy;
-        // Candidate range from the closed form, then corrected with the exact predicate
-        // (influences()) so the cache returns precisely the particles within Rc_i.
-        auto inside = [&](int z) {
-          const double dz = w_.cz[z] - p.z;
-          return dxy + dz * dz < p.rc2;
-        };
-        int lo = 1, hi = 0;
-        if (dxy < p.rc2) {
-          const double h = std::sqrt(p.rc2 - dxy) * inv;
-          const double zlo = fz - h, zhi = fz + h;
-          lo = std::clamp(iceil(zlo), 1, nz_ - 1);
-          hi = std::clamp(ifloor(zhi), 1, nz_ - 1);
-          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-          // bound is within 1e-6 of a lattice slice, settle it with the predicate itself.
-          if (std::abs(zlo - double(iround(zlo))) < 1e-6) {
-            if (lo > 1 && inside(lo - 1)) {
-              do --lo;
-              while (lo > 1 && inside(lo - 1));
-            } else {
-              while (lo <= hi && !inside(lo)) ++lo;
+      const std::int16_t mid16 = std::int16_t(std::clamp(mid, -32000, 32000));
+      // Candidate z range from the closed form, then corrected with the exact predicate
+      // (influences()) so the cache returns precisely the particles within Rc_i.
+      auto inside = [&](double dxy, int z) {
+        const double dz = cz[z] - pz;
+        return dxy + dz * dz < rc2;
+      };
+      // Lowest min_z and highest max_z over this particle's non-empty elements (for the window).
+      int lowest = mid, highest = mid;
+      const std::int64_t xBase = g0_[0] - p.anchor[0];
+      const float restX = p.rest[0];
+      int y0, y1;
+      discRows(p, inv, y0, y1);
+      for (int y = y0; y <= y1; ++y) {
+        const DiscRow r = discRow(p, y, inv);
+        const double dy2 = r.dy * r.dy;
+        const float ey = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
+        std::uint32_t* rowCursor = cursor + std::size_t(y) * stride;
+        for (int x = r.x0; x <= r.x1; ++x) {
+          const double dx = cx[x] - px;
+          const double dxy = dx * dx + dy2;
+          int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+          if (dxy < rc2) {
+            const double h = std::sqrt(rc2 - dxy) * inv;
+            const double zlo = fz - h, zhi = fz + h;
+            // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+            const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+            const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+            int l = std::clamp(c, 1, zmax), u = std::clamp(f, 1, zmax);
+            // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+            // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+            // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+            // so where exactly the 1e-6 cut falls does not matter.
+            if (std::abs(double(c) - zlo - 0.5) > 0.5 - 1e-6) [[unlikely]] {
+              if (l > 1 && inside(dxy, l - 1)) {
+                do --l;
+                while (l > 1 && inside(dxy, l - 1));
+              } else {
+                while (l <= u && !inside(dxy, l)) ++l;
+              }
+            }
+            if (std::abs(zhi - double(f) - 0.5) > 0.5 - 1e-6) [[unlikely]] {
+              if (u < zmax && inside(dxy, u + 1)) {
+                do ++u;
+                while (u < zmax && inside(dxy, u + 1));
+              } else {
+                while (u >= l && !inside(dxy, u)) --u;
+              }
+            }
+            if (l <= u) {
+              lo = l;
+              hi = u;
+              lowest = std::min(lowest, l);
+              highest = std::max(highest, u);
             }
           }
-          if (std::abs(zhi - double(iround(zhi))) < 1e-6) {
-            if (hi < nz_ - 1 && inside(hi + 1)) {
-              do ++hi;
-              while (hi < nz_ - 1 && inside(hi + 1));
-            } else {
-              while (hi >= lo && !inside(hi)) --hi;
-            }
-          }
-          if (lo <= hi) {
-            window_ = mid - lo > window_ ? mid - lo : window_;
-            window_ = hi - mid > window_ ? hi - mid : window_;
-          }
+          ColumnEntry& e = entries[rowCursor[x]++];
+          const float ex = float(double(xBase + x) * su_.s) - restX;  // latticeOffset(g0 + x, ...)
+          e.minZ = std::int16_t(lo);
+          e.maxZ = std::int16_t(hi);
+          e.midZ = mid16;
+          e.span = std::uint16_t(hi - lo);
+          e.dxy2 = ex * ex + ey * ey;
+          e.restZ = p.rest[2];
+          e.k = p.k;
+          e.s = p.strength;
+          e.dx = ex;
+          e.dy = ey;
+          e.particle = li;
         }
-        ColumnEntry& e = w_.entries[w_.cursor[col(x, y)]++];
-        e.dx = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
-        e.dy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
-        // An empty range is stored as [-32000, -32000], which no corner (z >= 0) falls in.
-        e.minZ = std::int16_t(lo <= hi ? lo : -32000);
-        e.maxZ = std::int16_t(lo <= hi ? hi : -32000);
-        e.midZ = std::int16_t(std::clamp(mid, -32000, 32000));
-        e.pad = 0;
-        e.particle = li;
-      });
+      }
+      window = std::max({window, mid - lowest, highest - mid});
     }
-    for (std::size_t c = 0; c < cols; ++c) w_.cursor[c] = w_.colStart[c];
+    window_ = window;
+    // Per-column reach bounds (see ColumnEntry).
+    for (std::size_t c = 0; c < cols; ++c) {
+      const std::uint32_t b = start[c], en = start[c + 1];
+      if (b == en) continue;
+      std::int16_t run = -32000;
+      for (std::uint32_t i = b; i < en; ++i) {
+        run = std::max(run, entries[i].maxZ);
+        entries[i].reachMax = run;
+      }
+      run = 32000;
+      for (std::uint32_t i = en; i-- > b;) {
+        if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
+        entries[i].reachMin = run;
+      }
+    }
+    std::copy(start, start + cols, cursor);
     w_.zOffset.resize(std::size_t(2 * window_ + 1));
     for (int d = -window_; d <= window_; ++d) w_.zOffset[std::size_t(d + window_)] = float(double(d) * su_.s);
   }
 
-  // §6 lookup: from the column's start pointer find the bottom-most entry with
-  // mid_z >= z - window, walk up while mid_z <= z + window, keep min_z <= z <= max_z, and leave
+  // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
+  // (reachMax >= z; the paper's mid_z >= z - window, tightened), walk up while entries can still
+  // reach it (reachMin <= z; the paper's mid_z <= z + window), keep min_z <= z <= max_z, and leave
   // the start pointer at the first entry found. f(entry, dz) is called in (z, index) order.
   template <class F>
   void forEachInfluencing(int x, int y, int z, F&& f) {
@@ -409,19 +483,17 @@ class BlockMesher {
     const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
     if (begin == end) return;
     std::uint32_t cur = w_.cursor[k];
-    const int lo = z - window_, hi = z + window_;
     const ColumnEntry* e = w_.entries.data();
-    while (cur > begin && e[cur - 1].midZ >= lo) --cur;
-    while (cur < end && e[cur].midZ < lo) ++cur;
+    while (cur > begin && e[cur - 1].reachMax >= z) --cur;
+    while (cur < end && e[cur].reachMax < z) ++cur;
     w_.cursor[k] = cur;
     const float* zoff = w_.zOffset.data() + window_ + z;  // zoff[-mid] = float((z - mid) S)
-    const BlockParticle* bp = w_.local.data();
     for (std::uint32_t i = cur; i < end; ++i) {
-      if (e[i].midZ > hi) break;
+      const ColumnEntry& en = e[i];
+      if (en.reachMin > z) break;
       // min_z <= z <= max_z as one unsigned compare (an empty range never passes).
-      if (unsigned(z - e[i].minZ) > unsigned(e[i].maxZ - e[i].minZ)) continue;
-      const BlockParticle& q = bp[e[i].particle];
-      f(e[i], q, zoff[-e[i].midZ] - q.restZ);
+      if (unsigned(z - en.minZ) > en.span) continue;
+      f(en, zoff[-en.midZ] - en.restZ);
     }
   }
 
@@ -430,15 +502,14 @@ class BlockMesher {
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, const BlockParticle& q, float dz) {
+    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) {
       ++looked;
-      const float dxy2 = e.dx * e.dx + e.dy * e.dy;
       if constexpr (kGradient || Policy::kHasUser) {
         const float before = v;
-        accumulate(e.dx, e.dy, dxy2, dz, q.k, q.s, v, gx, gy, gz);
-        if constexpr (Policy::kHasUser) pol_.add(c.user, q.index, v - before);
+        accumulate(e.dx, e.dy, e.dxy2, dz, e.k, e.s, v, gx, gy, gz);
+        if constexpr (Policy::kHasUser) pol_.add(c.user, w_.local[e.particle].index, v - before);
       } else {
-        v += contribution(dxy2, dz, q.k, q.s);
+        v += contribution(e.dxy2, dz, e.k, e.s);
       }
     });
     out_.stats.particlesLookedUp += looked;
@@ -450,16 +521,16 @@ class BlockMesher {
 
   float fieldAt(int x, int y, int z) {
     float v = 0;
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, const BlockParticle& q, float dz) {
-      v += contribution(e.dx * e.dx + e.dy * e.dy, dz, q.k, q.s);
-    });
+    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) { v += contribution(e.dxy2, dz, e.k, e.s); });
     ++out_.stats.seedEvaluations;
     return v;
   }
 
   bool interiorCorner(int x, int y, int z) const {
+    // m <= v <= m + b per axis, as one unsigned compare each.
     const int m = su_.m;
-    return x >= m && x <= m + su_.b[0] && y >= m && y <= m + su_.b[1] && z >= m && z <= m + su_.b[2];
+    return (unsigned(x - m) <= unsigned(su_.b[0])) & (unsigned(y - m) <= unsigned(su_.b[1])) &
+           (unsigned(z - m) <= unsigned(su_.b[2]));
   }
 
   // Seeding (§4): snap each particle to its nearest corner and step down -z until the field is
@@ -498,7 +569,11 @@ class BlockMesher {
           joined = true;
           break;
         }
-        if (!(fieldAt(x, y, below) > t)) {
+        // As at the start: the particle's own term above T proves the corner inside.
+        const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
+        const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
+                              contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
+        if (!ownBelow && !(fieldAt(x, y, below) > t)) {
           pushTodo(below, x, y);
           joined = true;
           break;
@@ -548,10 +623,11 @@ class BlockMesher {
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
 
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, int x, int y, int z) {
-    const SliceCell& cell = slice.cells[col(x, y)];
-    if (cell.corner) [[likely]]
-      return cell.corner - 1;
+  // cells == slice.cells.data() and c == col(x, y) (the caller keeps them at hand).
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, const SliceCell* cells, std::size_t c, int x, int y, int z) {
+    const std::uint32_t id = cells[c].corner;
+    if (id) [[likely]]
+      return id - 1;
     return evaluateInto(slice, x, y, z);
   }
 
@@ -584,28 +660,36 @@ class BlockMesher {
       Slice<Policy>* above = ensureSlice(z + 1);
       auto& list = w_.todo[z];
       const bool interiorSlab = z >= ia && z < ibz;
+      // The index arrays never move while the slices are active; the corner arrays may grow
+      // (evaluateInto), so corner pointers are taken after the cube's evaluations.
+      SliceCell* const cellsB = below->cells.data();
+      SliceCell* const cellsA = above->cells.data();
+      const std::size_t sy = std::size_t(stride_);
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
         const int x = int(item & 0xffff), y = int(item >> 16);
-        SliceCell& cb = below->cells[col(x, y)];
-        SliceCell& ca = above->cells[col(x, y)];
+        const std::size_t c0 = col(x, y);
+        SliceCell& cb = cellsB[c0];
+        SliceCell& ca = cellsA[c0];
         if (cb.doneAbove || ca.doneBelow) continue;
         cb.doneAbove = 1;
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEval(*below, x, y, z);
-        ci[1] = lookupOrEval(*below, x + 1, y, z);
-        ci[2] = lookupOrEval(*below, x, y + 1, z);
-        ci[3] = lookupOrEval(*below, x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, x, y, z + 1);
-        ci[5] = lookupOrEval(*above, x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEval(*below, cellsB, c0, x, y, z);
+        ci[1] = lookupOrEval(*below, cellsB, c0 + 1, x + 1, y, z);
+        ci[2] = lookupOrEval(*below, cellsB, c0 + sy, x, y + 1, z);
+        ci[3] = lookupOrEval(*below, cellsB, c0 + sy + 1, x + 1, y + 1, z);
+        ci[4] = lookupOrEval(*above, cellsA, c0, x, y, z + 1);
+        ci[5] = lookupOrEval(*above, cellsA, c0 + 1, x + 1, y, z + 1);
+        ci[6] = lookupOrEval(*above, cellsA, c0 + sy, x, y + 1, z + 1);
+        ci[7] = lookupOrEval(*above, cellsA, c0 + sy + 1, x + 1, y + 1, z + 1);
+        Corner<Policy>* const cornersB = below->corners.data();
+        Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
-        for (int i = 0; i < 4; ++i) cp[i] = &below->corners[ci[i]];
-        for (int i = 4; i < 8; ++i) cp[i] = &above->corners[ci[i]];
+        for (int i = 0; i < 4; ++i) cp[i] = cornersB + ci[i];
+        for (int i = 4; i < 8; ++i) cp[i] = cornersA + ci[i];
         unsigned cube = 0;
         for (int i = 0; i < 8; ++i) cube |= unsigned(cp[i]->value > t) << i;
         if (cube == 0 || cube == 255) continue;
@@ -613,10 +697,10 @@ class BlockMesher {
         if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
-        if ((f & 1) && !below->cells[col(x - 1, y)].doneAbove) list.push_back(item - 1);
-        if ((f & 2) && !below->cells[col(x + 1, y)].doneAbove) list.push_back(item + 1);
-        if ((f & 4) && !below->cells[col(x, y - 1)].doneAbove) list.push_back(item - (1u << 16));
-        if ((f & 8) && !below->cells[col(x, y + 1)].doneAbove) list.push_back(item + (1u << 16));
+        if ((f & 1) && !cellsB[c0 - 1].doneAbove) list.push_back(item - 1);
+        if ((f & 2) && !cellsB[c0 + 1].doneAbove) list.push_back(item + 1);
+        if ((f & 4) && !cellsB[c0 - sy].doneAbove) list.push_back(item - (1u << 16));
+        if ((f & 8) && !cellsB[c0 + sy].doneAbove) list.push_back(item + (1u << 16));
         if ((f & 16) && !cb.doneBelow) {
           assert(z > 0);
           w_.todo[z - 1].push_back(item);

@@ -1,0 +1,45 @@
+// bench_surface_count: runs approach 1 (marching slices) on one particle set, single-threaded,
+// for instruction counting with callgrind (repeatable on a loaded machine, unlike timings):
+//
+//   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*extractImpl*'
+//       build/dev/tests/bench/bench_surface_count tests/data/fountain.xyz 1.0
+//
+// One warm-up extract (allocations), then `reps` measured ones (default 1); prints the triangle
+// count so a run can be checked against docs/surface.md.
+#include "fluid/io/particle_io.hpp"
+#include "fluid/surface/marching_slices.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: bench_surface_count FILE CUBE [REPS]\n");
+    return 2;
+  }
+  fluid::ParticlePositions ps;
+  const fluid::IoStatus io = fluid::readParticleFile(argv[1], ps);
+  if (!io.ok()) {
+    std::fprintf(stderr, "%s\n", io.error.c_str());
+    return 1;
+  }
+  fluid::SurfaceParams params;
+  params.cube = float(std::atof(argv[2]));
+  params.threads = 1;
+  const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
+  fluid::SurfaceExtractor extractor;
+  fluid::SurfaceMesh mesh;
+  const fluid::SurfaceInput in{ps.x, ps.y, ps.z, {}, {}, {}};
+  for (int r = 0; r <= reps; ++r) {
+    const fluid::SurfaceStatus st = extractor.extract(in, params, mesh);
+    if (!st.ok()) {
+      std::fprintf(stderr, "%s\n", st.error.c_str());
+      return 1;
+    }
+  }
+  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu\n", mesh.indices.size() / 3,
+              mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
+              (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp);
+  return 0;
+}
