@@ -4,6 +4,7 @@
 
 #include "engine/assets/assets.hpp"
 #include "engine/camera/camera.hpp"
+#include "engine/fluid_render/fluid_render.hpp"
 #include "engine/gl/gl.hpp"
 #include "engine/loop/fixed_step.hpp"
 #include "engine/platform/platform.hpp"
@@ -179,6 +180,74 @@ std::pair<bool, bool> drawScenePanel(World& world) {
   return {changed, restart};
 }
 
+// The water renderer exists only while the world has a fluid_surface (created on first need,
+// recreated when the framebuffer size changes). A renderer whose shaders failed stays
+// `ready == false`: the game runs on without the water, and the error is printed once.
+struct WaterPass {
+  engine::FluidRenderer renderer;
+  bool created = false;
+};
+
+void releaseWaterPass(WaterPass& pass) {
+  if (pass.created) engine::destroyFluidRenderer(pass.renderer);
+  pass.created = false;
+}
+
+void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, const engine::FrameView& view) {
+  if (!world.fluid_surface) {
+    releaseWaterPass(pass);
+    return;
+  }
+  if (pass.created && (pass.renderer.desc.width != renderer.width || pass.renderer.desc.height != renderer.height))
+    releaseWaterPass(pass);
+  if (!pass.created) {
+    engine::FluidRenderDesc desc;
+    desc.width = renderer.width;
+    desc.height = renderer.height;
+    desc.shader_dir = shaderDirectory();
+    engine::createFluidRenderer(desc, pass.renderer);
+    pass.created = true;
+    if (!pass.renderer.ready)
+      std::fprintf(stderr, "fluiddemo: fluid_surface renderer unavailable: %s\n", pass.renderer.error.c_str());
+  }
+  if (!pass.renderer.ready) return;
+  const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+  std::string upload_error;
+  if (!engine::uploadFluidMesh(pass.renderer, mesh.positions, mesh.normals, mesh.indices, upload_error)) {
+    std::fprintf(stderr, "fluiddemo: fluid mesh upload: %s\n", upload_error.c_str());
+    return;
+  }
+  // The opaque scene (colour + depth) is the water's background: copy it into the fluid
+  // renderer's scene targets (same size, DEPTH24 both), then draw the water back into the
+  // scene FBO so screenshots and the window blit see it.
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, renderer.scene_fbo.id());
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, pass.renderer.scene_fbo);
+  glBlitFramebuffer(0, 0, renderer.width, renderer.height, 0, 0, renderer.width, renderer.height,
+                    GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  engine::FluidCamera camera;
+  camera.view = view.view;
+  camera.projection = view.projection;
+  camera.eye = view.eye;
+  camera.near_plane = world.camera.near_plane;
+  camera.far_plane = world.camera.far_plane;
+  const FluidSurfaceParams& p = world.fluid_surface->params;
+  engine::WaterParams water;
+  water.refraction = p.refraction;
+  water.opacity = p.opacity;
+  water.absorption = p.absorption;
+  // Sky reflected by the water: the renderer's own sky colours, so the water matches the scene.
+  const engine::Lighting lighting;
+  water.sky_zenith = lighting.sky_zenith;
+  water.sky_horizon = lighting.sky_horizon;
+  water.light_direction = lighting.sun_direction;
+  // Keep the scene's alpha at 1: the PNG output would otherwise turn see-through under water.
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
+  engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  engine::checkGl(renderer.errors, "fluid surface");
+}
+
 }  // namespace
 
 int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& report, std::string& error) {
@@ -209,6 +278,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     engine::Renderer renderer;
     SceneAssets assets;
     engine::Overlay overlay;
+    WaterPass water_pass;
     // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
     const int shadow_size = options.headless ? 1024 : 2048;
     if (!engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) ||
@@ -268,6 +338,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         // With a fixed frame time the accumulator is always empty: show the newest state.
         const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));
 
+        meshWorld(world, &profiler);  // meshing phase; no-op without fluid_surface
+
         const bool last_frame = options.frames > 0 && frame + 1 == options.frames;
         {
           engine::ScopedPhase phase(profiler, engine::Phase::render);
@@ -281,6 +353,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           batch.particles = particle_scratch;
           if (world.sprite_particles) batch.radius = world.sprite_particles->params.size;
           engine::renderScene(renderer, view, lighting, items, std::span(&batch, 1), true);
+          drawWater(water_pass, renderer, world, view);
           if (input.screenshot || (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
             engine::readSceneRgba(renderer, pixels);
           }
@@ -351,6 +424,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       }
       engine::checkGl(renderer.errors, "end of run");
     }
+    releaseWaterPass(water_pass);
     report.gl_errors = renderer.errors.count;
     if (renderer.errors.count > 0)
       std::fprintf(stderr, "fluiddemo: first GL error: %s\n", renderer.errors.first.c_str());

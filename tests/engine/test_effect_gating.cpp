@@ -1,6 +1,7 @@
 // A system not listed in the scene is never constructed: checked through the world's list and
 // null pointers, through the profiler (its phase never runs), and through Bullet's allocator
-// (no Bullet object is ever allocated when rigid_bodies is absent).
+// (no Bullet object is ever allocated when rigid_bodies is absent), and through a counting
+// global operator new (without sph_fluid/fluid_surface, stepping and meshing allocate nothing).
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
@@ -9,6 +10,27 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <new>
+
+// GCC 12 flags free() on memory from the replaced operator new below; both use malloc/free.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+namespace {
+std::atomic<bool> g_count_new{false};
+std::atomic<long> g_new_calls{0};
+}  // namespace
+
+// Counting replacement of the global operator new/delete (the array and sized forms forward
+// here by default). Counts only while g_count_new is set.
+void* operator new(std::size_t size) {
+  if (g_count_new.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -121,6 +143,128 @@ TEST(EffectGating, MissingModelIsNamed) {
   std::string error;
   EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {}}})"), "/nonexistent/content", world, error));
   EXPECT_NE(error.find("/nonexistent/content/models/basin.obj"), std::string::npos) << error;
+}
+
+// Counts global operator new calls made while it is alive.
+struct NewCounter {
+  NewCounter() {
+    g_new_calls = 0;
+    g_count_new = true;
+  }
+  ~NewCounter() { g_count_new = false; }
+  long count() const { return g_new_calls.load(); }
+};
+
+void runFrames(game::World& world, engine::Profiler& profiler, int frames) {
+  for (int i = 0; i < frames; ++i) {
+    engine::beginFrame(profiler);
+    game::stepWorld(world, &profiler);
+    game::meshWorld(world, &profiler);
+    engine::endFrame(profiler);
+  }
+}
+
+TEST(EffectGating, WithoutTheFluidEffectsNothingFluidIsBuiltOrRun) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"sprite_particles": {"rate": 300}}})"), game::contentDir(), world, error))
+      << error;
+  engine::Profiler profiler;
+  runFrames(world, profiler, 5);  // warm-up
+  long allocations = 0;
+  {
+    NewCounter counter;
+    runFrames(world, profiler, 30);
+    allocations = counter.count();
+  }
+  EXPECT_EQ(world.sph_fluid, nullptr);
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  EXPECT_EQ(allocations, 0) << "stepping/meshing allocated although no fluid effect is listed";
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
+}
+
+TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 400},
+                                                    "fluid_surface": {}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  EXPECT_EQ(world.systems, (std::vector<std::string>{"sph_fluid", "fluid_surface"}));
+  ASSERT_NE(world.sph_fluid, nullptr);
+  ASSERT_NE(world.fluid_surface, nullptr);
+  EXPECT_EQ(world.sprite_particles, nullptr);
+  EXPECT_EQ(world.rigid_bodies, nullptr);
+  engine::Profiler profiler;
+  // The positive control of the allocation check above: the fluid does allocate (its mesh).
+  long allocations = 0;
+  {
+    NewCounter counter;
+    runFrames(world, profiler, 60);
+    allocations = counter.count();
+  }
+  EXPECT_GT(allocations, 0);
+  EXPECT_EQ(world.nonfinite_state, "");
+  const std::size_t n = world.sph_fluid->world.particles.size();
+  EXPECT_GT(n, 100u);
+  EXPECT_LE(n, 400u);
+  EXPECT_GT(world.fluid_surface->mesh.indices.size(), 0u);
+  EXPECT_EQ(world.fluid_surface->meshes, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 0u);
+  // The jet rises from the nozzle: the highest particle is above the spire top.
+  float top = 0.0f;
+  for (const glm::vec3& p : world.sph_fluid->world.particles.position) top = std::max(top, p.y);
+  EXPECT_GT(top, world.fountain.geometry().spire_top);
+}
+
+TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200, "solver": "wcsph"}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  engine::Profiler profiler;
+  runFrames(world, profiler, 20);
+  EXPECT_EQ(world.sph_fluid->world.params.solver, fluid::SphSolverKind::wcsph);
+  EXPECT_GT(world.sph_fluid->world.particles.size(), 0u);
+  EXPECT_EQ(world.nonfinite_state, "");
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 20u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
+}
+
+TEST(EffectGating, FluidSurfaceWithoutSphFluidIsAnErrorNamingFileAndEffect) {
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "surface_only_scene.json";
+  {
+    std::ofstream out(file);
+    out << R"({"effects": {"fluid_surface": {}}})";
+  }
+  game::SceneConfig scene;
+  const game::SceneStatus status = game::loadSceneFile(file, scene);
+  ASSERT_TRUE(status.ok()) << status.error;
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(scene, game::contentDir(), world, error));
+  EXPECT_NE(error.find(file.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("fluid_surface requires effect sph_fluid"), std::string::npos) << error;
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  std::filesystem::remove(file);
+}
+
+TEST(EffectGating, UnknownSolverAndOrderAreNamed) {
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"solver": "flip"}}})"), game::contentDir(), world,
+                                error));
+  EXPECT_NE(error.find("sph_fluid.solver"), std::string::npos) << error;
+  EXPECT_NE(error.find("flip"), std::string::npos) << error;
+  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})"),
+                                game::contentDir(), world, error));
+  EXPECT_NE(error.find("fluid_surface.order"), std::string::npos) << error;
+  EXPECT_NE(error.find("random"), std::string::npos) << error;
 }
 
 }  // namespace
