@@ -69,6 +69,15 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   }
   // Whatever escapes the basin onto the ground is drained too (it would only pile up there).
   out.world.sinks.push_back({{-100.0f, -1.0f, -100.0f}, {100.0f, 0.12f, 100.0f}});
+  // Strays (a particle flung off the rim at the speed cap) are removed once they leave the
+  // fountain's neighbourhood: above the jet's reach or 0.8 m beyond the basin on any side.
+  const float reach = g.basin_outer_radius + 0.8f, far = 1000.0f;
+  const float top = g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
+  out.world.sinks.push_back({{-far, top, -far}, {far, far, far}});
+  out.world.sinks.push_back({{reach, -far, -far}, {far, far, far}});
+  out.world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}});
+  out.world.sinks.push_back({{-far, -far, reach}, {far, far, far}});
+  out.world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}});
   fluid::reserveSph(out.world, params.max_particles);
   return true;
 }
