@@ -2,6 +2,7 @@
 // null pointers, through the profiler (its phase never runs), and through Bullet's allocator
 // (no Bullet object is ever allocated when rigid_bodies is absent), and through a counting
 // global operator new (without sph_fluid/fluid_surface, stepping and meshing allocate nothing).
+#include "engine/fluid_render/fluid_render.hpp"
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
@@ -9,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -265,6 +267,38 @@ TEST(EffectGating, UnknownSolverAndOrderAreNamed) {
                                 game::contentDir(), world, error));
   EXPECT_NE(error.find("fluid_surface.order"), std::string::npos) << error;
   EXPECT_NE(error.find("random"), std::string::npos) << error;
+}
+
+TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
+  // The same particles meshed with order sorted/exact and unsorted: the sorted meshes have far
+  // fewer triangle pairs out of back-to-front order for the camera's eye than the plain sweep.
+  auto outOfOrder = [](const char* order, std::uint64_t& triangles) {
+    game::World world;
+    std::string error;
+    // Camera behind the fountain looking along +z: the plain +z sweep is then front-to-back.
+    const std::string text =
+        std::string(R"({"camera": {"position": [0.3, 3, -8], "yaw_degrees": 88, "pitch_degrees": -5},
+                        "effects": {"sph_fluid": {"max_particles": 400}, "fluid_surface": {"order": ")") +
+        order + R"("}}})";
+    EXPECT_TRUE(game::buildWorld(parse(text), game::contentDir(), world, error)) << error;
+    engine::Profiler profiler;
+    runFrames(world, profiler, 45);
+    const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+    const engine::OutOfOrder o = engine::countOutOfOrderPairs(mesh.positions, mesh.indices, world.camera.position);
+    triangles = o.triangles;
+    return static_cast<double>(o.pairs) / std::max<double>(1.0, 0.5 * double(o.triangles) * double(o.triangles));
+  };
+  std::uint64_t t_sorted = 0, t_unsorted = 0, t_exact = 0;
+  const double sorted = outOfOrder("sorted", t_sorted);
+  const double unsorted = outOfOrder("unsorted", t_unsorted);
+  const double exact = outOfOrder("exact", t_exact);
+  std::printf("out-of-order pair fraction: sorted %.4f exact %.4f unsorted %.4f (%llu triangles)\n", sorted, exact,
+              unsorted, static_cast<unsigned long long>(t_sorted));
+  ASSERT_GT(t_sorted, 50u);
+  EXPECT_EQ(t_sorted, t_unsorted);  // same particles, same triangles, other order
+  EXPECT_EQ(t_sorted, t_exact);
+  EXPECT_LT(sorted, 0.5 * unsorted) << "sorted " << sorted << " unsorted " << unsorted;
+  EXPECT_LT(exact, 0.5 * unsorted) << "exact " << exact << " unsorted " << unsorted;
 }
 
 }  // namespace
