@@ -4,6 +4,7 @@
 
 #include "engine/assets/assets.hpp"
 #include "engine/camera/camera.hpp"
+#include "engine/fluid_render/fluid_render.hpp"
 #include "engine/gl/gl.hpp"
 #include "engine/loop/fixed_step.hpp"
 #include "engine/platform/platform.hpp"
@@ -179,6 +180,142 @@ std::pair<bool, bool> drawScenePanel(World& world) {
   return {changed, restart};
 }
 
+// The water renderer exists only while the world has a fluid_surface (created on first need,
+// recreated when the framebuffer size changes). A renderer whose shaders failed stays
+// `ready == false`: the game runs on without the water, and the error is printed once.
+struct WaterPass {
+  engine::FluidRenderer renderer;
+  bool created = false;
+  // Depth-only full-screen triangle at a constant depth (see drawWater).
+  engine::GlProgram backdrop;
+  engine::GlVertexArray empty_vao;
+};
+
+void releaseWaterPass(WaterPass& pass) {
+  if (pass.created) engine::destroyFluidRenderer(pass.renderer);
+  pass.backdrop = {};
+  pass.empty_vao = {};
+  pass.created = false;
+}
+
+constexpr const char* kBackdropVertex = R"(#version 330 core
+uniform float u_ndc_z;
+void main() {
+  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(p * 2.0 - 1.0, u_ndc_z, 1.0);
+}
+)";
+constexpr const char* kBackdropFragment = R"(#version 330 core
+void main() {}
+)";
+
+engine::GlProgram makeBackdropProgram(std::string& error) {
+  engine::GlShader vs = engine::compileShader(GL_VERTEX_SHADER, kBackdropVertex, "water_backdrop.vert", error);
+  if (vs.id() == 0) return {};
+  engine::GlShader fs = engine::compileShader(GL_FRAGMENT_SHADER, kBackdropFragment, "water_backdrop.frag", error);
+  if (fs.id() == 0) return {};
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs.id());
+  glAttachShader(program, fs.id());
+  glLinkProgram(program);
+  GLint linked = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (linked == 0) {
+    error = "water_backdrop: link failed";
+    glDeleteProgram(program);
+    return {};
+  }
+  return engine::GlProgram(program);
+}
+
+void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, const engine::FrameView& view) {
+  if (!world.fluid_surface) {
+    releaseWaterPass(pass);
+    return;
+  }
+  if (pass.created && (pass.renderer.desc.width != renderer.width || pass.renderer.desc.height != renderer.height))
+    releaseWaterPass(pass);
+  if (!pass.created) {
+    engine::FluidRenderDesc desc;
+    desc.width = renderer.width;
+    desc.height = renderer.height;
+    desc.shader_dir = shaderDirectory();
+    engine::createFluidRenderer(desc, pass.renderer);
+    pass.created = true;
+    if (!pass.renderer.ready)
+      std::fprintf(stderr, "fluiddemo: fluid_surface renderer unavailable: %s\n", pass.renderer.error.c_str());
+    std::string backdrop_error;
+    pass.backdrop = makeBackdropProgram(backdrop_error);
+    if (pass.backdrop.id() == 0) std::fprintf(stderr, "fluiddemo: %s\n", backdrop_error.c_str());
+    GLuint vao = 0;
+    glGenVertexArrays(1, &vao);
+    pass.empty_vao = engine::GlVertexArray(vao);
+  }
+  if (!pass.renderer.ready) return;
+  const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+  std::string upload_error;
+  if (!engine::uploadFluidMesh(pass.renderer, mesh.positions, mesh.normals, mesh.indices, upload_error)) {
+    std::fprintf(stderr, "fluiddemo: fluid mesh upload: %s\n", upload_error.c_str());
+    return;
+  }
+  // The opaque scene (colour + depth) is the water's background: copy it into the fluid
+  // renderer's scene targets (same size, DEPTH24 both), then draw the water back into the
+  // scene FBO so screenshots and the window blit see it.
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, renderer.scene_fbo.id());
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, pass.renderer.scene_fbo);
+  glBlitFramebuffer(0, 0, renderer.width, renderer.height, 0, 0, renderer.width, renderer.height,
+                    GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  // The water shader measures thickness from its surface to the scene depth behind it, so water
+  // seen against the sky (depth = far plane, 400 m) would absorb to black. Pull the background
+  // depth in to a plane just behind the fountain: a depth-only triangle with GL_LESS writes it
+  // only where the scene is farther (sky, distant ground); nearer geometry keeps its depth.
+  if (pass.backdrop.id() != 0) {
+    const glm::vec3 forward = engine::cameraForward(world.camera);
+    const glm::vec3 centre(0.0f, world.fountain.geometry().nozzle.y, 0.0f);
+    const float backdrop_distance = glm::dot(centre - view.eye, forward) + world.fountain.geometry().basin_inner_radius * 0.25f;
+    if (backdrop_distance > world.camera.near_plane * 2.0f) {
+      const glm::vec4 clip = view.projection * glm::vec4(0.0f, 0.0f, -backdrop_distance, 1.0f);
+      const float ndc_z = std::clamp(clip.z / clip.w, -1.0f, 1.0f);
+      glBindFramebuffer(GL_FRAMEBUFFER, pass.renderer.scene_fbo);
+      glViewport(0, 0, renderer.width, renderer.height);
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_LESS);
+      glDepthMask(GL_TRUE);
+      glUseProgram(pass.backdrop.id());
+      engine::setUniform(pass.backdrop.id(), "u_ndc_z", ndc_z);
+      glBindVertexArray(pass.empty_vao.id());
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glBindVertexArray(0);
+      glUseProgram(0);
+      glDisable(GL_DEPTH_TEST);
+      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    }
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  engine::FluidCamera camera;
+  camera.view = view.view;
+  camera.projection = view.projection;
+  camera.eye = view.eye;
+  camera.near_plane = world.camera.near_plane;
+  camera.far_plane = world.camera.far_plane;
+  const FluidSurfaceParams& p = world.fluid_surface->params;
+  engine::WaterParams water;
+  water.refraction = p.refraction;
+  water.opacity = p.opacity;
+  water.absorption = p.absorption;
+  // Sky reflected by the water: the renderer's own sky colours, so the water matches the scene.
+  const engine::Lighting lighting;
+  water.sky_zenith = lighting.sky_zenith;
+  water.sky_horizon = lighting.sky_horizon;
+  water.light_direction = lighting.sun_direction;
+  // Keep the scene's alpha at 1: the PNG output would otherwise turn see-through under water.
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
+  engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  engine::checkGl(renderer.errors, "fluid surface");
+}
+
 }  // namespace
 
 int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& report, std::string& error) {
@@ -209,6 +346,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     engine::Renderer renderer;
     SceneAssets assets;
     engine::Overlay overlay;
+    WaterPass water_pass;
     // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
     const int shadow_size = options.headless ? 1024 : 2048;
     if (!engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) ||
@@ -268,6 +406,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         // With a fixed frame time the accumulator is always empty: show the newest state.
         const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));
 
+        meshWorld(world, &profiler);  // meshing phase; no-op without fluid_surface
+
         const bool last_frame = options.frames > 0 && frame + 1 == options.frames;
         {
           engine::ScopedPhase phase(profiler, engine::Phase::render);
@@ -281,6 +421,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           batch.particles = particle_scratch;
           if (world.sprite_particles) batch.radius = world.sprite_particles->params.size;
           engine::renderScene(renderer, view, lighting, items, std::span(&batch, 1), true);
+          drawWater(water_pass, renderer, world, view);
           if (input.screenshot || (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
             engine::readSceneRgba(renderer, pixels);
           }
@@ -351,6 +492,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       }
       engine::checkGl(renderer.errors, "end of run");
     }
+    releaseWaterPass(water_pass);
     report.gl_errors = renderer.errors.count;
     if (renderer.errors.count > 0)
       std::fprintf(stderr, "fluiddemo: first GL error: %s\n", renderer.errors.first.c_str());

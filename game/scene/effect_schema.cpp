@@ -10,6 +10,8 @@ namespace {
 ParamValue num(double value) { return {ParamType::number, value, false, {}, {}}; }
 ParamValue integer(int value) { return {ParamType::integer, static_cast<double>(value), false, {}, {}}; }
 ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false, {x, y, z}, {}}; }
+ParamValue flag(bool value) { return {ParamType::boolean, 0.0, value, {}, {}}; }
+ParamValue word(const char* value) { return {ParamType::text, 0.0, false, {}, value}; }
 
 const std::array kSceneParams = {
     ParamSpec{"step_hz", ParamType::number, 30.0, 240.0, num(60.0), "fixed simulation steps per second"},
@@ -44,12 +46,38 @@ const std::array kSpriteParticleParams = {
     ParamSpec{"restitution", ParamType::number, 0.0, 1.0, num(0.3), "bounce off ground and basin"},
 };
 
+const std::array kSphFluidParams = {
+    ParamSpec{"solver", ParamType::text, 0.0, 0.0, word("dfsph"), "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)"},
+    ParamSpec{"max_particles", ParamType::integer, 1, 50000, integer(2500),
+              "particle budget (fixed at construction; the jet pauses at it)"},
+    ParamSpec{"particle_radius", ParamType::number, 0.01, 0.2, num(0.04), "r (m); spacing 2r (fixed at construction)"},
+    ParamSpec{"jet_speed", ParamType::number, 0.1, 20.0, num(4.5), "speed of the jet at the nozzle (m/s)"},
+    ParamSpec{"nozzle_radius", ParamType::number, 0.0, 0.5, num(0.12), "radius of the nozzle disc (m); particles per layer = lattice points inside"},
+    ParamSpec{"rate", ParamType::number, 0.0, 50000.0, num(500.0), "particles emitted per second (capped: layers never overlap)"},
+    ParamSpec{"viscosity", ParamType::number, 0.0, 1.0, num(0.02), "kinematic viscosity nu (m^2/s)"},
+    ParamSpec{"drain", ParamType::boolean, 0.0, 0.0, flag(true), "four drains at the basin wall recycle the water"},
+};
+
+const std::array kFluidSurfaceParams = {
+    ParamSpec{"order", ParamType::text, 0.0, 0.0, word("sorted"),
+              "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)"},
+    ParamSpec{"smoothing", ParamType::number, 1.0, 4.0, num(2.0), "field cutoff Rc in particle spacings"},
+    ParamSpec{"cube", ParamType::number, 0.2, 2.0, num(0.5), "marching cube edge in particle spacings"},
+    ParamSpec{"threshold", ParamType::number, 0.01, 0.24, num(0.2), "iso level T of the particle field"},
+    ParamSpec{"refraction", ParamType::number, 0.0, 1.0, num(0.08), "screen offset per metre of water; 0 = off"},
+    ParamSpec{"opacity", ParamType::number, 0.0, 1.0, num(0.85), "blend alpha of one water layer"},
+    ParamSpec{"absorption", ParamType::vec3, 0.0, 50.0, vec(1.6f, 0.45f, 0.25f), "Beer-Lambert sigma per metre, RGB"},
+};
+
 const std::array kSections = {
     SectionSpec{"scene", false, "simulation clock", kSceneParams},
     SectionSpec{"camera", false, "first-person camera", kCameraParams},
     SectionSpec{"rigid_bodies", true, "Bullet world: ground, basin, statue, crates", kRigidBodyParams},
     SectionSpec{"sprite_particles", true, "fountain jet of gravity particles drawn as point sprites",
                 kSpriteParticleParams},
+    SectionSpec{"sph_fluid", true, "SPH water (CPU): nozzle jet, fountain colliders, drains", kSphFluidParams},
+    SectionSpec{"fluid_surface", true, "marching-slices mesh of sph_fluid drawn as refractive water (needs sph_fluid)",
+                kFluidSurfaceParams},
 };
 
 }  // namespace

@@ -3,6 +3,8 @@ target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/fountain.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sprite_particles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rigid_bodies.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/sph_fluid.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/fluid_surface.cpp
   ${CMAKE_CURRENT_LIST_DIR}/world.cpp
   ${CMAKE_CURRENT_LIST_DIR}/../run_scene.cpp
 )

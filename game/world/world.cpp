@@ -31,6 +31,11 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
   const auto seed = static_cast<std::uint32_t>(scene.scene.integer("seed"));
   applyCamera(scene.camera, out.camera, true);
 
+  if (scene.has("fluid_surface") && !scene.has("sph_fluid")) {
+    const std::string file = scene.source.empty() ? scene.name : scene.source.string();
+    error = file + ": effect fluid_surface requires effect sph_fluid (list sph_fluid too, or remove fluid_surface)";
+    return false;
+  }
   // Effects are built in schema order; anything not listed is simply never touched.
   if (const SectionConfig* section = scene.effect("rigid_bodies")) {
     auto bodies = std::make_unique<RigidBodies>();
@@ -47,6 +52,22 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
                         static_cast<std::size_t>(section->integer("max_particles")), seed ^ 0x9e3779b9u);
     out.sprite_particles = std::move(particles);
     out.systems.emplace_back("sprite_particles");
+  }
+  if (const SectionConfig* section = scene.effect("sph_fluid")) {
+    SphFluidParams params;
+    auto fluid = std::make_unique<SphFluid>();
+    if (!sphParamsFrom(*section, params, error) ||
+        !initSphFluid(*fluid, params, out.fountain.geometry(), worldGravity(scene), error)) {
+      return false;
+    }
+    out.sph_fluid = std::move(fluid);
+    out.systems.emplace_back("sph_fluid");
+  }
+  if (const SectionConfig* section = scene.effect("fluid_surface")) {
+    auto surface = std::make_unique<FluidSurface>();
+    if (!surfaceParamsFrom(*section, surface->params, error)) return false;
+    out.fluid_surface = std::move(surface);
+    out.systems.emplace_back("fluid_surface");
   }
   return true;
 }
@@ -68,6 +89,29 @@ void applyLiveParams(World& world) {
           spriteParamsFrom(*section, worldGravity(world.scene), world.fountain.geometry().nozzle);
     }
   }
+  if (world.sph_fluid) {
+    SphFluidParams fresh;
+    std::string ignored;  // the solver name was validated at construction; it needs a rebuild
+    if (const SectionConfig* section = world.scene.effect("sph_fluid"); section && sphParamsFrom(*section, fresh, ignored)) {
+      SphFluid& f = *world.sph_fluid;
+      f.params.jet_speed = fresh.jet_speed;
+      f.params.rate = fresh.rate;
+      f.params.viscosity = fresh.viscosity;
+      f.world.params.viscosity = fresh.viscosity;
+      for (fluid::SphEmitter& e : f.world.emitters) {
+        e.speed = fresh.jet_speed;
+        e.rate = fresh.rate;
+      }
+    }
+  }
+  if (world.fluid_surface) {
+    FluidSurfaceParams fresh;
+    std::string ignored;  // text edits are not offered by the overlay
+    if (const SectionConfig* section = world.scene.effect("fluid_surface");
+        section && surfaceParamsFrom(*section, fresh, ignored)) {
+      world.fluid_surface->params = fresh;
+    }
+  }
 }
 
 void stepWorld(World& world, engine::Profiler* profiler) {
@@ -81,12 +125,29 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
     stepSpriteParticles(*world.sprite_particles, world.fountain, static_cast<float>(world.step_seconds));
   }
+  if (world.sph_fluid) {
+    std::optional<engine::ScopedPhase> scope;
+    if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
+    stepSphFluid(*world.sph_fluid, world.step_seconds);
+  }
   ++world.steps;
   if (world.nonfinite_state.empty()) {
     std::string bad;
     if (world.rigid_bodies) bad = findNonFiniteBodyState(*world.rigid_bodies);
     if (bad.empty() && world.sprite_particles) bad = findNonFiniteParticle(*world.sprite_particles);
+    if (bad.empty() && world.sph_fluid) bad = findNonFiniteSph(*world.sph_fluid);
     if (!bad.empty()) world.nonfinite_state = bad + " at step " + std::to_string(world.steps);
+  }
+}
+
+void meshWorld(World& world, engine::Profiler* profiler) {
+  if (!world.fluid_surface || !world.sph_fluid) return;
+  std::optional<engine::ScopedPhase> scope;
+  if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::meshing);
+  if (!meshFluidSurface(*world.fluid_surface, *world.sph_fluid, world.camera.position,
+                        engine::cameraForward(world.camera)) &&
+      world.nonfinite_state.empty()) {
+    world.nonfinite_state = world.fluid_surface->error + " at step " + std::to_string(world.steps);
   }
 }
 

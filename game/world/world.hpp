@@ -6,8 +6,10 @@
 #include "engine/camera/camera.hpp"
 #include "engine/profile/profiler.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/fluid_surface.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/rigid_bodies.hpp"
+#include "game/world/sph_fluid.hpp"
 #include "game/world/sprite_particles.hpp"
 
 #include <cstdint>
@@ -23,6 +25,8 @@ struct World {
   std::vector<std::string> systems;                   // effect names constructed, schema order
   std::unique_ptr<RigidBodies> rigid_bodies;          // "rigid_bodies" only
   std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only
+  std::unique_ptr<SphFluid> sph_fluid;                // "sph_fluid" only
+  std::unique_ptr<FluidSurface> fluid_surface;        // "fluid_surface" only (needs sph_fluid)
   FountainShape fountain;                             // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
@@ -32,17 +36,24 @@ struct World {
 };
 
 // Builds the world. `content_dir` is the content/ folder (models for the Bullet meshes).
-// Returns false with a message naming the file/effect on failure.
+// Returns false with a message naming the file/effect on failure (also when fluid_surface is
+// listed without sph_fluid).
 bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error);
 
 // Re-reads the live-tunable parameters from world.scene (after the overlay edited them).
-// Parameters fixed at construction (crates, crate_size, max_particles, scene.*) need a rebuild.
+// Parameters fixed at construction (crates, crate_size, max_particles, particle_radius, solver,
+// drain, scene.*) need a rebuild.
 void applyLiveParams(World& world);
 
 // One fixed simulation step of every constructed system, timed into `profiler` (physics for
 // rigid bodies, fluid for particles; may be null). Checks every value for NaN/inf after the
 // step and records the first one in world.nonfinite_state.
 void stepWorld(World& world, engine::Profiler* profiler);
+
+// Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the
+// profiler's meshing phase (may be null). Call once per rendered frame, after stepping.
+// A failed extraction leaves an empty mesh and records the error in world.nonfinite_state.
+void meshWorld(World& world, engine::Profiler* profiler);
 
 // Throws a crate from the camera along its view (no-op without rigid_bodies).
 void playerThrow(World& world);

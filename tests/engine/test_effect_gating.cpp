@@ -1,6 +1,8 @@
 // A system not listed in the scene is never constructed: checked through the world's list and
 // null pointers, through the profiler (its phase never runs), and through Bullet's allocator
-// (no Bullet object is ever allocated when rigid_bodies is absent).
+// (no Bullet object is ever allocated when rigid_bodies is absent), and through a counting
+// global operator new (without sph_fluid/fluid_surface, stepping and meshing allocate nothing).
+#include "engine/fluid_render/fluid_render.hpp"
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
@@ -8,7 +10,33 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <new>
+
+// GCC 12 flags free() on memory from the replaced operator new below; both use malloc/free.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+namespace {
+std::atomic<bool> g_count_new{false};
+std::atomic<long> g_new_calls{0};
+}  // namespace
+
+// Counting replacement of the global operator new/delete (the array and sized forms forward
+// here by default). Counts only while g_count_new is set.
+void* operator new(std::size_t size) {
+  if (g_count_new.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (g_count_new.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1, std::memory_order_relaxed);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -121,6 +149,160 @@ TEST(EffectGating, MissingModelIsNamed) {
   std::string error;
   EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {}}})"), "/nonexistent/content", world, error));
   EXPECT_NE(error.find("/nonexistent/content/models/basin.obj"), std::string::npos) << error;
+}
+
+// Counts global operator new calls made while it is alive.
+struct NewCounter {
+  NewCounter() {
+    g_new_calls = 0;
+    g_count_new = true;
+  }
+  ~NewCounter() { g_count_new = false; }
+  long count() const { return g_new_calls.load(); }
+};
+
+void runFrames(game::World& world, engine::Profiler& profiler, int frames) {
+  for (int i = 0; i < frames; ++i) {
+    engine::beginFrame(profiler);
+    game::stepWorld(world, &profiler);
+    game::meshWorld(world, &profiler);
+    engine::endFrame(profiler);
+  }
+}
+
+TEST(EffectGating, WithoutTheFluidEffectsNothingFluidIsBuiltOrRun) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"sprite_particles": {"rate": 300}}})"), game::contentDir(), world, error))
+      << error;
+  engine::Profiler profiler;
+  runFrames(world, profiler, 5);  // warm-up
+  long allocations = 0;
+  {
+    NewCounter counter;
+    runFrames(world, profiler, 30);
+    allocations = counter.count();
+  }
+  EXPECT_EQ(world.sph_fluid, nullptr);
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  EXPECT_EQ(allocations, 0) << "stepping/meshing allocated although no fluid effect is listed";
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
+}
+
+TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 400},
+                                                    "fluid_surface": {}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  EXPECT_EQ(world.systems, (std::vector<std::string>{"sph_fluid", "fluid_surface"}));
+  ASSERT_NE(world.sph_fluid, nullptr);
+  ASSERT_NE(world.fluid_surface, nullptr);
+  EXPECT_EQ(world.sprite_particles, nullptr);
+  EXPECT_EQ(world.rigid_bodies, nullptr);
+  engine::Profiler profiler;
+  // The positive control of the allocation check above: the fluid does allocate (its mesh).
+  long allocations = 0;
+  {
+    NewCounter counter;
+    runFrames(world, profiler, 60);
+    allocations = counter.count();
+  }
+  EXPECT_GT(allocations, 0);
+  EXPECT_EQ(world.nonfinite_state, "");
+  const std::size_t n = world.sph_fluid->world.particles.size();
+  EXPECT_GT(n, 100u);
+  EXPECT_LE(n, 400u);
+  EXPECT_GT(world.fluid_surface->mesh.indices.size(), 0u);
+  EXPECT_EQ(world.fluid_surface->meshes, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 60u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 0u);
+  // The jet rises from the nozzle: the highest particle is above the spire top.
+  float top = 0.0f;
+  for (const glm::vec3& p : world.sph_fluid->world.particles.position) top = std::max(top, p.y);
+  EXPECT_GT(top, world.fountain.geometry().spire_top);
+}
+
+TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200, "solver": "wcsph"}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  engine::Profiler profiler;
+  runFrames(world, profiler, 20);
+  EXPECT_EQ(world.sph_fluid->world.params.solver, fluid::SphSolverKind::wcsph);
+  EXPECT_GT(world.sph_fluid->world.particles.size(), 0u);
+  EXPECT_EQ(world.nonfinite_state, "");
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 20u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
+}
+
+TEST(EffectGating, FluidSurfaceWithoutSphFluidIsAnErrorNamingFileAndEffect) {
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "surface_only_scene.json";
+  {
+    std::ofstream out(file);
+    out << R"({"effects": {"fluid_surface": {}}})";
+  }
+  game::SceneConfig scene;
+  const game::SceneStatus status = game::loadSceneFile(file, scene);
+  ASSERT_TRUE(status.ok()) << status.error;
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(scene, game::contentDir(), world, error));
+  EXPECT_NE(error.find(file.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("fluid_surface requires effect sph_fluid"), std::string::npos) << error;
+  EXPECT_EQ(world.fluid_surface, nullptr);
+  std::filesystem::remove(file);
+}
+
+TEST(EffectGating, UnknownSolverAndOrderAreNamed) {
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"solver": "flip"}}})"), game::contentDir(), world,
+                                error));
+  EXPECT_NE(error.find("sph_fluid.solver"), std::string::npos) << error;
+  EXPECT_NE(error.find("flip"), std::string::npos) << error;
+  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})"),
+                                game::contentDir(), world, error));
+  EXPECT_NE(error.find("fluid_surface.order"), std::string::npos) << error;
+  EXPECT_NE(error.find("random"), std::string::npos) << error;
+}
+
+TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
+  // The same particles meshed with order sorted/exact and unsorted: the sorted meshes have far
+  // fewer triangle pairs out of back-to-front order for the camera's eye than the plain sweep.
+  auto outOfOrder = [](const char* order, std::uint64_t& triangles) {
+    game::World world;
+    std::string error;
+    // Camera behind the fountain looking along +z: the plain +z sweep is then front-to-back.
+    const std::string text =
+        std::string(R"({"camera": {"position": [0.3, 3, -8], "yaw_degrees": 88, "pitch_degrees": -5},
+                        "effects": {"sph_fluid": {"max_particles": 400}, "fluid_surface": {"order": ")") +
+        order + R"("}}})";
+    EXPECT_TRUE(game::buildWorld(parse(text), game::contentDir(), world, error)) << error;
+    engine::Profiler profiler;
+    runFrames(world, profiler, 45);
+    const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+    const engine::OutOfOrder o = engine::countOutOfOrderPairs(mesh.positions, mesh.indices, world.camera.position);
+    triangles = o.triangles;
+    return static_cast<double>(o.pairs) / std::max<double>(1.0, 0.5 * double(o.triangles) * double(o.triangles));
+  };
+  std::uint64_t t_sorted = 0, t_unsorted = 0, t_exact = 0;
+  const double sorted = outOfOrder("sorted", t_sorted);
+  const double unsorted = outOfOrder("unsorted", t_unsorted);
+  const double exact = outOfOrder("exact", t_exact);
+  std::printf("out-of-order pair fraction: sorted %.4f exact %.4f unsorted %.4f (%llu triangles)\n", sorted, exact,
+              unsorted, static_cast<unsigned long long>(t_sorted));
+  ASSERT_GT(t_sorted, 50u);
+  EXPECT_EQ(t_sorted, t_unsorted);  // same particles, same triangles, other order
+  EXPECT_EQ(t_sorted, t_exact);
+  EXPECT_LT(sorted, 0.5 * unsorted) << "sorted " << sorted << " unsorted " << unsorted;
+  EXPECT_LT(exact, 0.5 * unsorted) << "exact " << exact << " unsorted " << unsorted;
 }
 
 }  // namespace

@@ -1,0 +1,47 @@
+#pragma once
+// The `fluid_surface` effect: each frame, marching slices (fluid/surface, Rosenberg & Birdwell
+// 2008) turn the `sph_fluid` particles into a triangle mesh, emitted back-to-front for the
+// camera (paper §5) so the water renderer (engine/fluid_render) can blend it in index order.
+// Requires sph_fluid (buildWorld refuses a scene listing it alone). This part is CPU only; the
+// GL side (engine::FluidRenderer) lives with the renderer in run_scene.cpp.
+
+#include "fluid/surface/marching_slices.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/sph_fluid.hpp"
+
+#include <glm/glm.hpp>
+
+#include <string>
+#include <vector>
+
+namespace game {
+
+enum class SurfaceOrderChoice { sorted, unsorted, exact };
+
+struct FluidSurfaceParams {
+  SurfaceOrderChoice order = SurfaceOrderChoice::sorted;
+  float smoothing = 2.0f;   // Rc in particle spacings
+  float cube = 0.5f;        // lattice cube edge S in particle spacings
+  float threshold = 0.2f;   // iso level T in (0, 0.25)
+  float refraction = 0.08f; // engine::WaterParams::refraction; 0 = off
+  float opacity = 0.85f;
+  glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
+};
+
+// Reads the "fluid_surface" section. False + error naming the field for an unknown `order`.
+bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error);
+
+struct FluidSurface {
+  FluidSurfaceParams params;
+  fluid::SurfaceExtractor extractor;
+  fluid::SurfaceMesh mesh;
+  std::vector<float> xs, ys, zs;  // SoA copy of the particle positions, reused every frame
+  std::uint64_t meshes = 0;       // frames meshed
+  std::string error;              // last extraction error (mesh cleared then)
+};
+
+// Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`.
+// Returns false with surface.error set when extraction refuses the input.
+bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir);
+
+}  // namespace game
