@@ -11,14 +11,6 @@
 #include <cstdlib>
 #include <fstream>
 
-#if defined(__SANITIZE_ADDRESS__)
-// LeakSanitizer is off for this binary only: creating and destroying one SDL offscreen GL
-// context leaks inside the Mesa/LLVM driver (a bare C program doing just that reports 7059
-// bytes in 257 allocations under ASan), and the driver is dlclose()d before LSan runs, so its
-// frames cannot be symbolised or suppressed. ASan's other checks stay on; the engine's
-// non-GL code is leak-checked by unit_engine.
-extern "C" const char* __lsan_default_options() { return "detect_leaks=0"; }
-#endif
 
 namespace {
 
