@@ -13,6 +13,9 @@ ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false,
 ParamValue flag(bool value) { return {ParamType::boolean, 0.0, value, {}, {}}; }
 ParamValue word(const char* value) { return {ParamType::text, 0.0, false, {}, value}; }
 
+constexpr std::string_view kSolverChoices[] = {"dfsph", "wcsph"};
+constexpr std::string_view kOrderChoices[] = {"sorted", "unsorted", "exact"};
+
 const std::array kSceneParams = {
     ParamSpec{"step_hz", ParamType::number, 30.0, 240.0, num(60.0), "fixed simulation steps per second"},
     ParamSpec{"substeps", ParamType::integer, 1, 16, integer(1), "physics substeps per simulation step"},
@@ -47,7 +50,8 @@ const std::array kSpriteParticleParams = {
 };
 
 const std::array kSphFluidParams = {
-    ParamSpec{"solver", ParamType::text, 0.0, 0.0, word("dfsph"), "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)"},
+    ParamSpec{"solver", ParamType::text, 0.0, 0.0, word("dfsph"), "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)",
+              kSolverChoices},
     ParamSpec{"max_particles", ParamType::integer, 1, 50000, integer(2500),
               "particle budget (fixed at construction; the jet pauses at it)"},
     ParamSpec{"particle_radius", ParamType::number, 0.01, 0.2, num(0.04), "r (m); spacing 2r (fixed at construction)"},
@@ -60,7 +64,8 @@ const std::array kSphFluidParams = {
 
 const std::array kFluidSurfaceParams = {
     ParamSpec{"order", ParamType::text, 0.0, 0.0, word("sorted"),
-              "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)"},
+              "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)",
+              kOrderChoices},
     ParamSpec{"smoothing", ParamType::number, 1.0, 4.0, num(2.0), "field cutoff Rc in particle spacings"},
     ParamSpec{"cube", ParamType::number, 0.2, 2.0, num(0.5), "marching cube edge in particle spacings"},
     ParamSpec{"threshold", ParamType::number, 0.01, 0.24, num(0.2), "iso level T of the particle field"},

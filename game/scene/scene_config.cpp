@@ -25,6 +25,13 @@ std::string_view typeName(ParamType type) {
   return "?";
 }
 
+// Appends ", item" (or "item" first). Written out because `"" + std::string` trips a GCC 12
+// -Wrestrict false positive.
+void appendListItem(std::string& list, std::string_view item) {
+  if (!list.empty()) list += ", ";
+  list += item;
+}
+
 std::string formatNumber(double value) {
   std::ostringstream out;
   out << value;
@@ -73,6 +80,12 @@ std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::s
     case ParamType::text:
       if (!value.is_string()) return where + "expected " + std::string(typeName(spec.type)) + got;
       out.text = value.get<std::string>();
+      if (!spec.choices.empty() &&
+          std::find(spec.choices.begin(), spec.choices.end(), out.text) == spec.choices.end()) {
+        std::string expected;
+        for (std::string_view choice : spec.choices) appendListItem(expected, choice);
+        return where + "value \"" + out.text + "\" is not one of: " + expected;
+      }
       return {};
     case ParamType::vec3: {
       if (!value.is_array() || value.size() != 3) return where + "expected " + std::string(typeName(spec.type)) + got;
@@ -86,13 +99,6 @@ std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::s
     }
   }
   return where + "unsupported type";
-}
-
-// Appends ", item" (or "item" first). Written out because `"" + std::string` trips a GCC 12
-// -Wrestrict false positive.
-void appendListItem(std::string& list, std::string_view item) {
-  if (!list.empty()) list += ", ";
-  list += item;
 }
 
 SectionConfig defaultSection(const SectionSpec& spec) {

@@ -43,6 +43,7 @@ struct ParamSpec {
   double max = 0.0;
   ParamValue default_value;
   std::string_view doc;
+  std::span<const std::string_view> choices = {};  // text: the only accepted values (empty = any)
 };
 
 struct SectionSpec {

@@ -261,16 +261,25 @@ TEST(EffectGating, FluidSurfaceWithoutSphFluidIsAnErrorNamingFileAndEffect) {
 }
 
 TEST(EffectGating, UnknownSolverAndOrderAreNamed) {
-  game::World world;
-  std::string error;
-  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"solver": "flip"}}})"), game::contentDir(), world,
-                                error));
-  EXPECT_NE(error.find("sph_fluid.solver"), std::string::npos) << error;
+  // The schema lists the accepted words, so a bad one is refused when the scene is read,
+  // before any system is built, with the file, the key and the value named.
+  game::SceneConfig scene;
+  std::string error = game::parseSceneText(R"({"effects": {"sph_fluid": {"solver": "flip"}}})", "s.json", scene).error;
+  EXPECT_NE(error.find("s.json: effects.sph_fluid.solver"), std::string::npos) << error;
   EXPECT_NE(error.find("flip"), std::string::npos) << error;
-  EXPECT_FALSE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})"),
-                                game::contentDir(), world, error));
-  EXPECT_NE(error.find("fluid_surface.order"), std::string::npos) << error;
+  error = game::parseSceneText(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})", "o.json", scene)
+              .error;
+  EXPECT_NE(error.find("o.json: effects.fluid_surface.order"), std::string::npos) << error;
   EXPECT_NE(error.find("random"), std::string::npos) << error;
+
+  scene = parse(R"({"effects": {"sph_fluid": {}, "fluid_surface": {}}})");
+  scene.name = "t";
+  error = game::applyOverride(scene, "fluid_surface.order=random").error;
+  EXPECT_NE(error.find("is not one of: sorted, unsorted, exact"), std::string::npos) << error;
+  EXPECT_EQ(scene.effect("fluid_surface")->text("order"), "sorted");  // a refused override changes nothing
+  EXPECT_TRUE(game::applyOverride(scene, "sph_fluid.solver=wcsph").ok());
+  game::World world;
+  EXPECT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
 }
 
 TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
