@@ -186,46 +186,11 @@ std::pair<bool, bool> drawScenePanel(World& world) {
 struct WaterPass {
   engine::FluidRenderer renderer;
   bool created = false;
-  // Depth-only full-screen triangle at a constant depth (see drawWater).
-  engine::GlProgram backdrop;
-  engine::GlVertexArray empty_vao;
 };
 
 void releaseWaterPass(WaterPass& pass) {
   if (pass.created) engine::destroyFluidRenderer(pass.renderer);
-  pass.backdrop = {};
-  pass.empty_vao = {};
   pass.created = false;
-}
-
-constexpr const char* kBackdropVertex = R"(#version 330 core
-uniform float u_ndc_z;
-void main() {
-  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-  gl_Position = vec4(p * 2.0 - 1.0, u_ndc_z, 1.0);
-}
-)";
-constexpr const char* kBackdropFragment = R"(#version 330 core
-void main() {}
-)";
-
-engine::GlProgram makeBackdropProgram(std::string& error) {
-  engine::GlShader vs = engine::compileShader(GL_VERTEX_SHADER, kBackdropVertex, "water_backdrop.vert", error);
-  if (vs.id() == 0) return {};
-  engine::GlShader fs = engine::compileShader(GL_FRAGMENT_SHADER, kBackdropFragment, "water_backdrop.frag", error);
-  if (fs.id() == 0) return {};
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs.id());
-  glAttachShader(program, fs.id());
-  glLinkProgram(program);
-  GLint linked = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &linked);
-  if (linked == 0) {
-    error = "water_backdrop: link failed";
-    glDeleteProgram(program);
-    return {};
-  }
-  return engine::GlProgram(program);
 }
 
 void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, const engine::FrameView& view) {
@@ -244,12 +209,6 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, 
     pass.created = true;
     if (!pass.renderer.ready)
       std::fprintf(stderr, "fluiddemo: fluid_surface renderer unavailable: %s\n", pass.renderer.error.c_str());
-    std::string backdrop_error;
-    pass.backdrop = makeBackdropProgram(backdrop_error);
-    if (pass.backdrop.id() == 0) std::fprintf(stderr, "fluiddemo: %s\n", backdrop_error.c_str());
-    GLuint vao = 0;
-    glGenVertexArrays(1, &vao);
-    pass.empty_vao = engine::GlVertexArray(vao);
   }
   if (!pass.renderer.ready) return;
   const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
@@ -265,33 +224,6 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, 
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, pass.renderer.scene_fbo);
   glBlitFramebuffer(0, 0, renderer.width, renderer.height, 0, 0, renderer.width, renderer.height,
                     GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-  // The water shader measures thickness from its surface to the scene depth behind it, so water
-  // seen against the sky (depth = far plane, 400 m) would absorb to black. Pull the background
-  // depth in to a plane just behind the fountain: a depth-only triangle with GL_LESS writes it
-  // only where the scene is farther (sky, distant ground); nearer geometry keeps its depth.
-  if (pass.backdrop.id() != 0) {
-    const glm::vec3 forward = engine::cameraForward(world.camera);
-    const glm::vec3 centre(0.0f, world.fountain.geometry().nozzle.y, 0.0f);
-    const float backdrop_distance = glm::dot(centre - view.eye, forward) + world.fountain.geometry().basin_inner_radius * 0.25f;
-    if (backdrop_distance > world.camera.near_plane * 2.0f) {
-      const glm::vec4 clip = view.projection * glm::vec4(0.0f, 0.0f, -backdrop_distance, 1.0f);
-      const float ndc_z = std::clamp(clip.z / clip.w, -1.0f, 1.0f);
-      glBindFramebuffer(GL_FRAMEBUFFER, pass.renderer.scene_fbo);
-      glViewport(0, 0, renderer.width, renderer.height);
-      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-      glEnable(GL_DEPTH_TEST);
-      glDepthFunc(GL_LESS);
-      glDepthMask(GL_TRUE);
-      glUseProgram(pass.backdrop.id());
-      engine::setUniform(pass.backdrop.id(), "u_ndc_z", ndc_z);
-      glBindVertexArray(pass.empty_vao.id());
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-      glBindVertexArray(0);
-      glUseProgram(0);
-      glDisable(GL_DEPTH_TEST);
-      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    }
-  }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   engine::FluidCamera camera;
   camera.view = view.view;

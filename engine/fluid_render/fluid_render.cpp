@@ -69,6 +69,10 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
                                                  {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "water.frag"}}},
                    "", error);
   out.error += error;
+  out.water_extent_program = buildProgram(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}}, {GL_FRAGMENT_SHADER, {dir / "water_extent.frag"}}},
+      "", error);
+  out.error += error;
   out.goo_program =
       buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
                                                  {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "goo.frag"}}},
@@ -97,7 +101,18 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glGenTextures(1, &out.water_extent);
+  glBindTexture(GL_TEXTURE_2D, out.water_extent);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, desc.width, desc.height, 0, GL_RG, GL_FLOAT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glBindTexture(GL_TEXTURE_2D, 0);
+  glGenFramebuffers(1, &out.water_extent_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, out.water_extent_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, out.water_extent, 0);
+  const bool extent_complete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
   glGenFramebuffers(1, &out.scene_fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, out.scene_fbo);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, out.scene_colour, 0);
@@ -117,7 +132,7 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glGenVertexArrays(1, &out.empty_vao);
-  if (!complete || glGetError() != GL_NO_ERROR) {
+  if (!complete || !extent_complete || glGetError() != GL_NO_ERROR) {
     out.error = "fluid rendering disabled: scene colour/depth framebuffer not supported";
     return;
   }
@@ -125,11 +140,14 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
 }
 
 void destroyFluidRenderer(FluidRenderer& r) {
-  for (GLuint* t : {&r.scene_colour, &r.scene_depth}) {
+  for (GLuint* t : {&r.scene_colour, &r.scene_depth, &r.water_extent}) {
     if (*t != 0) glDeleteTextures(1, t);
     *t = 0;
   }
-  if (r.scene_fbo != 0) glDeleteFramebuffers(1, &r.scene_fbo);
+  for (GLuint* f : {&r.scene_fbo, &r.water_extent_fbo}) {
+    if (*f != 0) glDeleteFramebuffers(1, f);
+    *f = 0;
+  }
   for (GLuint* b : {&r.vbo, &r.ibo}) {
     if (*b != 0) glDeleteBuffers(1, b);
     *b = 0;
@@ -138,11 +156,10 @@ void destroyFluidRenderer(FluidRenderer& r) {
     if (*v != 0) glDeleteVertexArrays(1, v);
     *v = 0;
   }
-  for (GLuint* p : {&r.water_program, &r.goo_program, &r.blit_program}) {
+  for (GLuint* p : {&r.water_program, &r.water_extent_program, &r.goo_program, &r.blit_program}) {
     if (*p != 0) glDeleteProgram(*p);
     *p = 0;
   }
-  r.scene_fbo = 0;
   r.ready = false;
 }
 
@@ -231,6 +248,30 @@ void drawFluid(FluidRenderer& r, GLuint target_fbo, const FluidCamera& camera, c
     glBindVertexArray(0);
     glDisable(GL_DEPTH_TEST);
   }
+  if (params.style == FluidStyle::water && r.index_count > 0) {
+    // The water's extent along each pixel (water_extent.frag): MAX blending keeps the nearest
+    // entry (as its negative) and the farthest surface in front of the scene depth.
+    glBindFramebuffer(GL_FRAMEBUFFER, r.water_extent_fbo);
+    glViewport(0, 0, r.desc.width, r.desc.height);
+    GLfloat caller_clear[4];
+    glGetFloatv(GL_COLOR_CLEAR_VALUE, caller_clear);
+    glClearColor(-1e30f, 0.0f, 0.0f, 0.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glClearColor(caller_clear[0], caller_clear[1], caller_clear[2], caller_clear[3]);
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_MAX);
+    glUseProgram(r.water_extent_program);
+    setCamera(r.water_extent_program, camera, r);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, r.scene_depth);
+    glUniform1i(loc(r.water_extent_program, "u_scene_depth"), 0);
+    glBindVertexArray(r.vao);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.index_count), GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(0);
+    glBlendEquation(GL_FUNC_ADD);
+    glDisable(GL_BLEND);
+  }
   // Scene colour into the target.
   glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
   glViewport(0, 0, r.desc.width, r.desc.height);
@@ -254,8 +295,11 @@ void drawFluid(FluidRenderer& r, GLuint target_fbo, const FluidCamera& camera, c
     glBindTexture(GL_TEXTURE_2D, r.scene_colour);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, r.scene_depth);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, r.water_extent);
     glUniform1i(loc(r.water_program, "u_scene_colour"), 0);
     glUniform1i(loc(r.water_program, "u_scene_depth"), 1);
+    glUniform1i(loc(r.water_program, "u_water_extent"), 2);
     glBindVertexArray(r.vao);
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.index_count), GL_UNSIGNED_INT, nullptr);
     glDisable(GL_BLEND);

@@ -52,11 +52,14 @@ struct FluidRenderer {
   std::string error;
   FluidRenderDesc desc;
   GLuint scene_fbo = 0, scene_colour = 0, scene_depth = 0;  // opaque pass: RGBA8 + DEPTH24
+  // Water only: per pixel, -(nearest entry) and the farthest water surface in front of the
+  // scene, metres (RG32F), from which each fragment's water thickness is taken.
+  GLuint water_extent_fbo = 0, water_extent = 0;
   GLuint vao = 0, vbo = 0, ibo = 0, empty_vao = 0;
   std::size_t vbo_bytes = 0, ibo_bytes = 0;  // buffer capacities
   std::uint32_t index_count = 0;
   std::uint32_t reallocations = 0;  // capacity growths so far (geometric: ×1.5 + what is needed)
-  GLuint water_program = 0, goo_program = 0, blit_program = 0;
+  GLuint water_program = 0, water_extent_program = 0, goo_program = 0, blit_program = 0;
 };
 
 void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out);
@@ -74,7 +77,9 @@ bool uploadFluidMesh(FluidRenderer& renderer, std::span<const glm::vec3> positio
 
 // Copies the scene colour into `target_fbo` (0 = default framebuffer, viewport = desc size)
 // and draws the uploaded mesh: water blended in index order, fragments behind the scene depth
-// discarded; goo into the scene with depth test first, then copied.
+// discarded, each absorbing through the water's own extent along its pixel (a first pass of the
+// mesh records the nearest entry and farthest surface in front of the scene), not up to the
+// scene behind; goo into the scene with depth test first, then copied.
 void drawFluid(FluidRenderer& renderer, GLuint target_fbo, const FluidCamera& camera, const WaterParams& params);
 
 // Triangle pairs (s, t), s drawn before t, where t's centroid is farther from `eye` than s's:

@@ -184,6 +184,58 @@ TEST_F(FluidRenderTest, GoldenImageWithinTolerance) {
   std::printf("[ metric ] golden: mean |diff| %.3f /255 per channel, %zu px off by > 16\n", mean, off);
 }
 
+// Water absorbs through its own thickness only: over a plain background (no geometry, so no
+// refraction pattern), the water looks the same whether the background's depth is the far plane
+// (sky) or a plane just behind the blob. When the thickness ran to the scene depth, the sky case
+// absorbed through 20 m and went dark.
+TEST_F(FluidRenderTest, WaterAbsorbsThroughItselfNotToTheBackground) {
+  float farthest = 0.0f;  // view-space distance of the mesh's farthest vertex
+  for (const glm::vec3& p : scene_.mesh.positions)
+    farthest = std::max(farthest, -(scene_.camera.view * glm::vec4(p, 1.0f)).z);
+  const glm::vec4 clip = scene_.camera.projection * glm::vec4(0.0f, 0.0f, -(farthest + 0.3f), 1.0f);
+  const double near_background_depth = clip.z / clip.w * 0.5 + 0.5;
+  ASSERT_LT(near_background_depth, 1.0);
+  auto renderOver = [&](double background_depth, bool mesh) {
+    beginOpaquePass(renderer_, glm::vec4(0.8f, 0.85f, 0.9f, 1.0f));
+    glClearDepth(background_depth);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glClearDepth(1.0);
+    std::string error;
+    if (mesh) {
+      EXPECT_TRUE(uploadFluidMesh(renderer_, scene_.mesh.positions, scene_.mesh.normals, scene_.mesh.indices, error));
+    } else {
+      EXPECT_TRUE(uploadFluidMesh(renderer_, {}, {}, {}, error));
+    }
+    drawFluid(renderer_, target_, scene_.camera, WaterParams{});
+    std::vector<unsigned char> px(static_cast<std::size_t>(kW) * kH * 4);
+    glBindFramebuffer(GL_FRAMEBUFFER, target_);
+    glReadPixels(0, 0, kW, kH, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return px;
+  };
+  const auto background = renderOver(1.0, false);
+  const auto sky = renderOver(1.0, true);
+  const auto near_wall = renderOver(near_background_depth, true);
+  const auto mask = coverage();
+  std::size_t covered = 0, differ = 0;
+  double red_sky = 0.0, red_background = 0.0;
+  for (std::size_t p = 0; p < mask.size(); ++p) {
+    if (!mask[p]) continue;
+    ++covered;
+    differ += pixelDiff(sky, near_wall, p) > 3;
+    red_sky += sky[p * 4];
+    red_background += background[p * 4];
+  }
+  ASSERT_GT(covered, 500u);
+  EXPECT_LE(differ, covered / 100) << differ << " of " << covered << " covered pixels depend on the background depth";
+  // Red is absorbed most (0.9 per metre); through a blob well under a metre thick, most of it
+  // survives (a 20 m path would leave exp(-18) of it).
+  EXPECT_GT(red_sky, 0.4 * red_background);
+  std::printf("[ metric ] water over sky vs over a wall 0.3 m behind: %zu of %zu covered px differ by > 3/255; "
+              "red kept %.2f of the background's\n",
+              differ, covered, red_sky / red_background);
+}
+
 // The sort-order switch: out-of-order triangle pairs (inversions of the centroid distances)
 // for unsorted, back-to-front sorted and exact per-slab output, and the blended images differ
 // where water layers overlap.
