@@ -1,6 +1,6 @@
 #include "engine/fluid_render/fluid_render.hpp"
 
-#include "engine/gpu_particles/gl_program.hpp"
+#include "engine/gl/gl.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
 

@@ -2,6 +2,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -59,14 +60,18 @@ long parseNumber(std::string_view s, std::size_t& pos) {
   return value;
 }
 
-std::string formatLine(std::string_view line, const std::string& file_label) {
+std::string formatLine(std::string_view line, std::span<const std::string> names) {
   std::size_t pos = 0;
   std::string_view prefix_word;
   if (line.starts_with("ERROR: "))
     prefix_word = "error: ", pos = 7;
   else if (line.starts_with("WARNING: "))
     prefix_word = "warning: ", pos = 9;
-  if (parseNumber(line, pos) >= 0 && pos < line.size()) {
+  const long source = parseNumber(line, pos);
+  const std::string& file_label = names[source >= 0 && static_cast<std::size_t>(source) < names.size()
+                                            ? static_cast<std::size_t>(source)
+                                            : names.size() - 1];
+  if (source >= 0 && pos < line.size()) {
     long number = -1, column = -1;
     std::size_t p = pos;
     if (line[p] == ':') {  // Mesa "0:12(7): msg" or "ERROR: 0:12: msg"
@@ -101,6 +106,12 @@ std::string formatLine(std::string_view line, const std::string& file_label) {
 }  // namespace
 
 std::string formatShaderLog(std::string_view log, const std::string& file_label) {
+  return formatShaderLog(log, std::span<const std::string>(&file_label, 1));
+}
+
+std::string formatShaderLog(std::string_view log, std::span<const std::string> source_names) {
+  static const std::string kUnnamed = "<shader>";
+  if (source_names.empty()) source_names = std::span<const std::string>(&kUnnamed, 1);
   std::string out;
   while (!log.empty()) {
     const std::size_t end = log.find('\n');
@@ -108,12 +119,12 @@ std::string formatShaderLog(std::string_view log, const std::string& file_label)
     while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\0')) line.remove_suffix(1);
     if (!line.empty()) {
       if (!out.empty()) out += '\n';
-      out += formatLine(line, file_label);
+      out += formatLine(line, source_names);
     }
     if (end == std::string_view::npos) break;
     log.remove_prefix(end + 1);
   }
-  if (out.empty()) out = file_label + ": failed without a log";
+  if (out.empty()) out = source_names.back() + ": failed without a log";
   return out;
 }
 
@@ -187,6 +198,65 @@ GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view 
     return {};
   }
   return program;
+}
+
+GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string& prelude, std::string& error) {
+  error.clear();
+  GlProgram program(glCreateProgram());
+  std::vector<GlShader> shaders;
+  for (const ShaderStageFiles& stage : stages) {
+    // Source string 0 is the version line + prelude; the files follow. Each file starts with
+    // "#line 1 N" (N = its source-string number) so drivers that report positions in the
+    // concatenated text (Mesa) still name the right file and line.
+    std::vector<std::string> texts{"#version 330 core\n" + prelude + "\n"};
+    std::vector<std::string> names{"<prelude>"};
+    bool read_all = true;
+    for (const std::filesystem::path& file : stage.files) {
+      std::string text, read_error;
+      if (!readText(file, text, read_error)) {
+        error += read_error + "\n";
+        read_all = false;
+        continue;
+      }
+      texts.push_back("#line 1 " + std::to_string(texts.size()) + "\n" + text + "\n");
+      names.push_back(file.string());
+    }
+    if (!read_all) continue;
+    std::vector<const char*> pointers;
+    for (const std::string& t : texts) pointers.push_back(t.c_str());
+    GlShader shader(glCreateShader(stage.stage));
+    glShaderSource(shader.id(), static_cast<GLsizei>(pointers.size()), pointers.data(), nullptr);
+    glCompileShader(shader.id());
+    GLint status = GL_FALSE;
+    glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &status);
+    if (status != GL_TRUE) {
+      GLint length = 0;
+      glGetShaderiv(shader.id(), GL_INFO_LOG_LENGTH, &length);
+      std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+      glGetShaderInfoLog(shader.id(), length, nullptr, log.data());
+      error += formatShaderLog(log, names) + "\n";
+      continue;
+    }
+    glAttachShader(program.id(), shader.id());
+    shaders.push_back(std::move(shader));
+  }
+  if (!error.empty()) return 0;
+  glLinkProgram(program.id());
+  for (const GlShader& shader : shaders) glDetachShader(program.id(), shader.id());
+  GLint linked = GL_FALSE;
+  glGetProgramiv(program.id(), GL_LINK_STATUS, &linked);
+  if (linked != GL_TRUE) {
+    GLint length = 0;
+    glGetProgramiv(program.id(), GL_INFO_LOG_LENGTH, &length);
+    std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+    glGetProgramInfoLog(program.id(), length, nullptr, log.data());
+    std::string files;
+    for (const ShaderStageFiles& stage : stages)
+      for (const std::filesystem::path& file : stage.files) files += (files.empty() ? "" : " + ") + file.string();
+    error = formatShaderLog(log, files + " (link)") + "\n";
+    return 0;
+  }
+  return program.release();
 }
 
 void setUniform(GLuint program, const char* name, int value) {

@@ -9,9 +9,11 @@
 #include <glm/glm.hpp>
 
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace engine {
 
@@ -37,6 +39,8 @@ class GlHandle {
     id_ = 0;
   }
   GLuint id() const { return id_; }
+  // Hands the name to the caller, who then deletes it.
+  [[nodiscard]] GLuint release() { return std::exchange(id_, 0); }
   explicit operator bool() const { return id_ != 0; }
 
  private:
@@ -70,8 +74,11 @@ int checkGl(GlErrorLog& log, std::string_view where);
 const char* glErrorName(GLenum error);
 
 // Rewrites a driver's info log so every message starts with "file:line:". Understands Mesa
-// ("0:12(7): error: ...") and NVIDIA/AMD ("0(12) : error ...", "ERROR: 0:12: ...") forms;
-// lines it cannot parse are kept and prefixed with the file name.
+// ("0:12(7): error: ...") and NVIDIA/AMD ("0(12) : error ...", "ERROR: 0:12: ...") forms.
+// The leading number is the source string: `source_names[N]` names string N (a number past the
+// end takes the last name). Lines it cannot parse are kept and prefixed with the last name.
+std::string formatShaderLog(std::string_view log, std::span<const std::string> source_names);
+// The same for a shader compiled from one source string.
 std::string formatShaderLog(std::string_view log, const std::string& file_label);
 
 // Compiles one stage from `source`; on failure returns 0-handle and sets `error`
@@ -83,6 +90,20 @@ GlShader compileShader(GLenum stage, const std::string& source, const std::strin
 // names the file (and line for compile errors).
 GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view vertex_name,
                       std::string_view fragment_name, std::string& error);
+
+// One stage built from several files (e.g. a shared .glsl library, then the stage's own file).
+// The files carry no #version line: buildProgram() puts "#version 330 core" and the prelude
+// first, each file as its own source string.
+struct ShaderStageFiles {
+  GLenum stage = GL_VERTEX_SHADER;
+  std::vector<std::filesystem::path> files;
+};
+
+// Builds and links a program from per-stage file lists. Returns 0 and fills `error` (one
+// "file:line[:column]: message" per driver message, see formatShaderLog) when a file is missing
+// or unreadable, or compiling/linking fails. `prelude` (e.g. #defines) follows the version
+// line and is reported as "<prelude>". The caller owns the returned program.
+GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string& prelude, std::string& error);
 
 // Uniform setters by name (looked up every call; the programs here are small).
 void setUniform(GLuint program, const char* name, int value);

@@ -1,7 +1,7 @@
 // GPU state-preserving particles, Kolb, Latta & Rezk-Salama 2004 §3. See gpu_particles.hpp.
 #include "engine/gpu_particles/gpu_particles.hpp"
 
-#include "engine/gpu_particles/gl_program.hpp"
+#include "engine/gl/gl.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
 

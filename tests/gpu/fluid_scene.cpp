@@ -1,6 +1,6 @@
 #include "tests/gpu/fluid_scene.hpp"
 
-#include "engine/gpu_particles/gl_program.hpp"
+#include "engine/gl/gl.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>

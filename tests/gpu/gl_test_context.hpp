@@ -1,22 +1,22 @@
 #pragma once
-// Headless GL context for the GPU tests: SDL2's offscreen driver (EGL pbuffer), core profile
-// 4.5, else 3.3. Kept local to the tests until the engine's platform layer is on this branch.
+// Headless GL context for the GPU tests and their bench tools: the engine's platform layer
+// (engine/platform) with SDL's offscreen driver forced, so results do not depend on whether a
+// display is present (golden images compare llvmpipe output with llvmpipe output).
+
+#include "engine/platform/platform.hpp"
 
 #include <string>
-
-struct SDL_Window;
 
 namespace gputest {
 
 struct GlContext {
-  SDL_Window* window = nullptr;
-  void* context = nullptr;
+  engine::Platform platform;
   std::string error;    // why creation failed
-  std::string version;  // GL_VERSION / GL_RENDERER
-  bool ok() const { return context != nullptr; }
+  std::string version;  // "GL_VERSION / GL_RENDERER"
+  bool ok() const { return platform.context != nullptr; }
 };
 
-// Creates and makes current; check ok().
+// Creates a 64x64 hidden offscreen context (4.5 core, else 3.3) and makes it current; check ok().
 void createContext(GlContext& out);
 void destroyContext(GlContext& ctx);
 

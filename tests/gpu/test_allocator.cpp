@@ -1,5 +1,4 @@
 // CPU side of the GPU particles: the §3.3.1 index allocator and the emitters (no GL needed).
-#include "engine/gpu_particles/gl_program.hpp"
 #include "engine/gpu_particles/gpu_particles.hpp"
 
 #include <gtest/gtest.h>
@@ -100,16 +99,6 @@ TEST(GpuEmitters, SprayFromFastFluidParticlesOnly) {
   EXPECT_EQ(batch.velocities[1], vel[2]);
   BirthBatch capped;
   EXPECT_EQ(emitSprayFromFluid(pos, vel, 0.0f, 0.0f, 1.0f, 0, 1, 1, capped), 1u);
-}
-
-TEST(GpuShaderLog, MapsMesaAndNvidiaSourceNumbersToFiles) {
-  const std::vector<std::string> names{"<prelude>", "collide.glsl", "update.frag"};
-  EXPECT_EQ(mapShaderLog("0:12(5): error: syntax error, unexpected IDENTIFIER\n", names),
-            "<prelude>:12: error: syntax error, unexpected IDENTIFIER\n");
-  EXPECT_EQ(mapShaderLog("2:7(1): warning: unused\n", names), "update.frag:7: warning: unused\n");
-  EXPECT_EQ(mapShaderLog("1(33) : error C0000: bad\n", names), "collide.glsl:33: error C0000: bad\n");
-  EXPECT_EQ(mapShaderLog("ERROR: 2:4: 'x' : undeclared\n", names), "update.frag:4: ERROR: 'x' : undeclared\n");
-  EXPECT_EQ(mapShaderLog("something else\n", names), "something else\n");
 }
 
 TEST(GpuSort, PassCountIsHalfLogSquaredPlusHalfLog) {

@@ -505,7 +505,7 @@ TEST_F(GpuParticlesTest, ShaderCompileFailureIsReportedAndTheSystemIsInert) {
   d.shader_dir = dir / "nowhere";
   createGpuParticles(d, system_);
   EXPECT_FALSE(system_.ready);
-  EXPECT_NE(system_.error.find("cannot read shader file"), std::string::npos) << system_.error;
+  EXPECT_NE(system_.error.find("cannot open shader file"), std::string::npos) << system_.error;
   std::filesystem::remove_all(dir);
 }
 
