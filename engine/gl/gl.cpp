@@ -128,6 +128,27 @@ std::string formatShaderLog(std::string_view log, std::span<const std::string> s
   return out;
 }
 
+namespace {
+
+// The driver's info log of a shader or program (glGet*iv + glGet*InfoLog).
+std::string shaderInfoLog(GLuint shader) {
+  GLint length = 0;
+  glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+  std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+  glGetShaderInfoLog(shader, length, nullptr, log.data());
+  return log;
+}
+
+std::string programInfoLog(GLuint program) {
+  GLint length = 0;
+  glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+  std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+  glGetProgramInfoLog(program, length, nullptr, log.data());
+  return log;
+}
+
+}  // namespace
+
 GlShader compileShader(GLenum stage, const std::string& source, const std::string& file_label, std::string& error) {
   GlShader shader(glCreateShader(stage));
   if (!shader) {
@@ -141,11 +162,7 @@ GlShader compileShader(GLenum stage, const std::string& source, const std::strin
   GLint ok = GL_FALSE;
   glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &ok);
   if (ok != GL_TRUE) {
-    GLint log_length = 0;
-    glGetShaderiv(shader.id(), GL_INFO_LOG_LENGTH, &log_length);
-    std::string log(static_cast<std::size_t>(std::max(log_length, 1)), '\0');
-    glGetShaderInfoLog(shader.id(), log_length, nullptr, log.data());
-    error = formatShaderLog(log, file_label);
+    error = formatShaderLog(shaderInfoLog(shader.id()), file_label);
     return {};
   }
   return shader;
@@ -190,11 +207,7 @@ GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view 
   GLint ok = GL_FALSE;
   glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
   if (ok != GL_TRUE) {
-    GLint log_length = 0;
-    glGetProgramiv(program.id(), GL_INFO_LOG_LENGTH, &log_length);
-    std::string log(static_cast<std::size_t>(std::max(log_length, 1)), '\0');
-    glGetProgramInfoLog(program.id(), log_length, nullptr, log.data());
-    error = formatShaderLog(log, vertex_path.string() + " + " + fragment_path.string() + " (link)");
+    error = formatShaderLog(programInfoLog(program.id()), vertex_path.string() + " + " + fragment_path.string() + " (link)");
     return {};
   }
   return program;
@@ -230,11 +243,7 @@ GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string&
     GLint status = GL_FALSE;
     glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &status);
     if (status != GL_TRUE) {
-      GLint length = 0;
-      glGetShaderiv(shader.id(), GL_INFO_LOG_LENGTH, &length);
-      std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-      glGetShaderInfoLog(shader.id(), length, nullptr, log.data());
-      error += formatShaderLog(log, names) + "\n";
+      error += formatShaderLog(shaderInfoLog(shader.id()), names) + "\n";
       continue;
     }
     glAttachShader(program.id(), shader.id());
@@ -246,17 +255,27 @@ GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string&
   GLint linked = GL_FALSE;
   glGetProgramiv(program.id(), GL_LINK_STATUS, &linked);
   if (linked != GL_TRUE) {
-    GLint length = 0;
-    glGetProgramiv(program.id(), GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program.id(), length, nullptr, log.data());
     std::string files;
     for (const ShaderStageFiles& stage : stages)
       for (const std::filesystem::path& file : stage.files) files += (files.empty() ? "" : " + ") + file.string();
-    error = formatShaderLog(log, files + " (link)") + "\n";
+    error = formatShaderLog(programInfoLog(program.id()), files + " (link)") + "\n";
     return 0;
   }
   return program.release();
+}
+
+GLuint createTexture2D(GLenum internal_format, GLsizei width, GLsizei height, GLenum format, GLenum type,
+                       const void* data, GLint filter) {
+  GLuint texture = 0;
+  glGenTextures(1, &texture);
+  glBindTexture(GL_TEXTURE_2D, texture);
+  glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal_format), width, height, 0, format, type, data);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  return texture;
 }
 
 void setUniform(GLuint program, const char* name, int value) {

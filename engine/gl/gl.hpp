@@ -105,6 +105,11 @@ struct ShaderStageFiles {
 // line and is reported as "<prelude>". The caller owns the returned program.
 GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string& prelude, std::string& error);
 
+// A 2D texture (one level, clamped at the edges, `filter` for min and mag) holding `data`
+// (may be null: uninitialised). The caller owns it; the texture binding is left at 0.
+GLuint createTexture2D(GLenum internal_format, GLsizei width, GLsizei height, GLenum format, GLenum type,
+                       const void* data, GLint filter = GL_NEAREST);
+
 // Uniform setters by name (looked up every call; the programs here are small).
 void setUniform(GLuint program, const char* name, int value);
 void setUniform(GLuint program, const char* name, float value);

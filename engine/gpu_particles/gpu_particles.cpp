@@ -24,19 +24,6 @@ static_assert(static_cast<int>(fluid::DepthMapFormat::float32) == 1 &&
               static_cast<int>(fluid::DepthMapFormat::cube8) == 4);
 static_assert(static_cast<int>(fluid::DepthCompare::less) == 0 && static_cast<int>(fluid::DepthCompare::greater) == 1);
 
-GLuint makeTexture2D(GLenum internal_format, GLsizei w, GLsizei h, GLenum format, GLenum type, const void* data) {
-  GLuint tex = 0;
-  glGenTextures(1, &tex);
-  glBindTexture(GL_TEXTURE_2D, tex);
-  glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal_format), w, h, 0, format, type, data);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glBindTexture(GL_TEXTURE_2D, 0);
-  return tex;
-}
-
 bool makeFramebuffer(std::span<const GLuint> colour, GLuint& fbo) {
   glGenFramebuffers(1, &fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
@@ -182,17 +169,17 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
   out.capacity = desc.width * desc.height;
   std::vector<float> zeros(static_cast<std::size_t>(out.capacity) * 4, 0.0f);
   for (int k = 0; k < 2; ++k) {
-    out.state0[k] = makeTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
-    out.state1[k] = makeTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
+    out.state0[k] = createTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
+    out.state1[k] = createTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
   }
-  out.attributes = makeTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
+  out.attributes = createTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, zeros.data());
   // Identity permutation, every key "dead" until the first key refresh.
   std::vector<float> pairs(static_cast<std::size_t>(out.capacity) * 2);
   for (std::uint32_t i = 0; i < out.capacity; ++i) {
     pairs[2 * i] = 3.0e38f;
     pairs[2 * i + 1] = static_cast<float>(i);
   }
-  for (int k = 0; k < 2; ++k) out.sort_tex[k] = makeTexture2D(GL_RG32F, w, h, GL_RG, GL_FLOAT, pairs.data());
+  for (int k = 0; k < 2; ++k) out.sort_tex[k] = createTexture2D(GL_RG32F, w, h, GL_RG, GL_FLOAT, pairs.data());
   bool complete = true;
   for (int k = 0; k < 2; ++k) {
     complete &= makeFramebuffer(std::array<GLuint, 2>{out.state0[k], out.state1[k]}, out.fbo[k]);
@@ -210,7 +197,7 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
       size[0] = std::max(0.0f, key.size);
     }
   }
-  out.type_tex = makeTexture2D(GL_RGBA32F, kParticleKeyframes, static_cast<GLsizei>(2 * desc.types.size()), GL_RGBA,
+  out.type_tex = createTexture2D(GL_RGBA32F, kParticleKeyframes, static_cast<GLsizei>(2 * desc.types.size()), GL_RGBA,
                                GL_FLOAT, table.data());
   // A 1³ flow field so the sampler is always complete.
   glGenTextures(1, &out.flow_tex);
