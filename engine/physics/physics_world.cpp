@@ -2,6 +2,7 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 
@@ -115,9 +116,33 @@ void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps) {
   const btScalar h = static_cast<btScalar>(step_seconds / substeps);
   // maxSubSteps = 0 makes Bullet take exactly one step of h: no internal accumulator.
   for (int i = 0; i < substeps; ++i) {
+    for (std::size_t b = 0; b < world.external_force.size(); ++b) {
+      if (world.external_force[b] == glm::vec3(0.0f) && world.external_torque[b] == glm::vec3(0.0f)) continue;
+      world.bodies[b]->applyCentralForce(bt(world.external_force[b]));
+      world.bodies[b]->applyTorque(bt(world.external_torque[b]));
+    }
     world.world->stepSimulation(h, 0);
     ++world.steps;
   }
+  std::fill(world.external_force.begin(), world.external_force.end(), glm::vec3(0.0f));
+  std::fill(world.external_torque.begin(), world.external_torque.end(), glm::vec3(0.0f));
+}
+
+bool setExternalForce(PhysicsWorld& world, BodyId id, glm::vec3 force, glm::vec3 torque) {
+  assert(id >= 0 && id < bodyCount(world));
+  const auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!finite(force) || !finite(torque)) return false;
+  const auto index = static_cast<std::size_t>(id);
+  if (world.external_force.size() < world.bodies.size()) {
+    world.external_force.resize(world.bodies.size(), glm::vec3(0.0f));
+    world.external_torque.resize(world.bodies.size(), glm::vec3(0.0f));
+  }
+  btRigidBody& body = *world.bodies[index];
+  if (body.getInvMass() == 0.0f) return true;  // static: nothing moves it
+  world.external_force[index] = force;
+  world.external_torque[index] = torque;
+  if (force != glm::vec3(0.0f) || torque != glm::vec3(0.0f)) body.activate();
+  return true;
 }
 
 int bodyCount(const PhysicsWorld& world) { return static_cast<int>(world.bodies.size()); }

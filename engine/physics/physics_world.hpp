@@ -64,6 +64,9 @@ struct PhysicsWorld {
   std::vector<std::unique_ptr<std::vector<int>>> mesh_indices;
   std::vector<std::unique_ptr<btDefaultMotionState>> motion_states;
   std::vector<std::unique_ptr<btRigidBody>> bodies;  // index = BodyId
+  // External force (N, at the centre of mass) and torque (N m) per body for the next
+  // stepPhysics call (every substep), then zeroed; sized lazily by setExternalForce.
+  std::vector<glm::vec3> external_force, external_torque;
   std::uint64_t steps = 0;                           // substeps taken
 };
 
@@ -76,6 +79,12 @@ BodyId addStaticPlane(PhysicsWorld& world, glm::vec3 normal, float offset, float
 // Static concave body from a mesh (copied; `mesh` may be freed afterwards). Returns -1 and
 // sets `error` if the mesh is empty or desc.mass != 0 (Bullet's BVH meshes are static only).
 BodyId addStaticTriangleMesh(PhysicsWorld& world, const BodyDesc& desc, const MeshData& mesh, std::string& error);
+
+// Holds `force` (N, through the centre of mass) and `torque` (N m) on a dynamic body during the
+// next stepPhysics call, in every substep (Bullet clears its own accumulators after each one);
+// they are zeroed afterwards. Wakes the body when the force is non-zero. Non-finite values are
+// refused (returns false, nothing is applied).
+bool setExternalForce(PhysicsWorld& world, BodyId id, glm::vec3 force, glm::vec3 torque);
 
 // Advances exactly `substeps` internal steps of step_seconds / substeps each (no Bullet
 // interpolation, so the result depends only on the inputs).

@@ -60,6 +60,8 @@ const std::array kSphFluidParams = {
     ParamSpec{"rate", ParamType::number, 0.0, 50000.0, num(500.0), "particles emitted per second (capped: layers never overlap)"},
     ParamSpec{"viscosity", ParamType::number, 0.0, 1.0, num(0.02), "kinematic viscosity nu (m^2/s)"},
     ParamSpec{"drain", ParamType::boolean, 0.0, 0.0, flag(true), "four drains at the basin wall recycle the water"},
+    ParamSpec{"couple_bodies", ParamType::boolean, 0.0, 0.0, flag(true),
+              "crates and water push each other, two-way (only when rigid_bodies is listed too; fixed at construction)"},
 };
 
 const std::array kFluidSurfaceParams = {

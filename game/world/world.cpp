@@ -62,6 +62,14 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
     }
     out.sph_fluid = std::move(fluid);
     out.systems.emplace_back("sph_fluid");
+    if (out.rigid_bodies && section->boolean("couple_bodies")) {
+      // Crates couple while their centre is within a crate's reach of the fluid's grid domain.
+      fluid::SphWorld& sph = out.sph_fluid->world;
+      const glm::vec3 half(0.5f * out.rigid_bodies->params.crate_size);
+      const glm::vec3 reach(glm::length(half));
+      out.body_coupling = std::make_unique<BodyFluidCoupling>();
+      initBodyFluidCoupling(*out.body_coupling, sph, half, sph.params.domain_min - reach, sph.params.domain_max + reach);
+    }
   }
   if (const SectionConfig* section = scene.effect("fluid_surface")) {
     auto surface = std::make_unique<FluidSurface>();
@@ -125,10 +133,18 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
     stepSpriteParticles(*world.sprite_particles, world.fountain, static_cast<float>(world.step_seconds));
   }
+  std::string coupling_error;
   if (world.sph_fluid) {
     std::optional<engine::ScopedPhase> scope;
     if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
+    // Staggered two-way coupling: the crates as they are after this physics step push the water;
+    // the water's push on them acts during the next physics step.
+    if (world.body_coupling)
+      collidersFromBodies(*world.body_coupling, *world.rigid_bodies->physics, world.rigid_bodies->crates,
+                          world.sph_fluid->world);
     stepSphFluid(*world.sph_fluid, world.step_seconds);
+    if (world.body_coupling)
+      coupling_error = forcesToBodies(*world.body_coupling, world.sph_fluid->world, *world.rigid_bodies->physics);
   }
   ++world.steps;
   if (world.nonfinite_state.empty()) {
@@ -136,6 +152,7 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (world.rigid_bodies) bad = findNonFiniteBodyState(*world.rigid_bodies);
     if (bad.empty() && world.sprite_particles) bad = findNonFiniteParticle(*world.sprite_particles);
     if (bad.empty() && world.sph_fluid) bad = findNonFiniteSph(*world.sph_fluid);
+    if (bad.empty()) bad = coupling_error;
     if (!bad.empty()) world.nonfinite_state = bad + " at step " + std::to_string(world.steps);
   }
 }

@@ -6,6 +6,7 @@
 #include "engine/camera/camera.hpp"
 #include "engine/profile/profiler.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/body_fluid_coupling.hpp"
 #include "game/world/fluid_surface.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/rigid_bodies.hpp"
@@ -27,6 +28,8 @@ struct World {
   std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only
   std::unique_ptr<SphFluid> sph_fluid;                // "sph_fluid" only
   std::unique_ptr<FluidSurface> fluid_surface;        // "fluid_surface" only (needs sph_fluid)
+  // Crates <-> water, two-way: only with both rigid_bodies and sph_fluid (sph_fluid.couple_bodies).
+  std::unique_ptr<BodyFluidCoupling> body_coupling;
   FountainShape fountain;                             // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
@@ -46,7 +49,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
 void applyLiveParams(World& world);
 
 // One fixed simulation step of every constructed system, timed into `profiler` (physics for
-// rigid bodies, fluid for particles; may be null). Checks every value for NaN/inf after the
+// rigid bodies, fluid for particles and the crate <-> water coupling; may be null). Checks every value for NaN/inf after the
 // step and records the first one in world.nonfinite_state.
 void stepWorld(World& world, engine::Profiler* profiler);
 

@@ -315,3 +315,56 @@ TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
 }
 
 }  // namespace
+
+// Crates and water push each other only when a scene lists both effects (and does not turn
+// sph_fluid.couple_bodies off). A crate dropped onto the jet becomes an SPH collider: the jet
+// pushes it up, and no water ends up inside it.
+TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
+  std::string error;
+  {
+    game::World fluid_only, switched_off;
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200}}})"), game::contentDir(),
+                                 fluid_only, error))
+        << error;
+    EXPECT_EQ(fluid_only.body_coupling, nullptr);
+    ASSERT_TRUE(game::buildWorld(
+        parse(R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"max_particles": 200, "couple_bodies": false}}})"),
+        game::contentDir(), switched_off, error))
+        << error;
+    EXPECT_EQ(switched_off.body_coupling, nullptr);
+  }
+  game::World world;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.4},
+                                                    "sph_fluid": {"max_particles": 800}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  ASSERT_NE(world.body_coupling, nullptr);
+  engine::Profiler profiler;
+  runFrames(world, profiler, 40);  // the jet is up
+  EXPECT_EQ(world.body_coupling->forces_applied, 0u);  // no crate yet
+  const glm::vec3 nozzle = world.fountain.geometry().nozzle;
+  game::throwCrate(*world.rigid_bodies, nozzle + glm::vec3(0.0f, 1.2f, 0.0f), glm::vec3(0.0f, -1.0f, 0.0f));
+  double upward_impulse = 0.0;
+  int coupled_steps = 0;
+  for (int i = 0; i < 40; ++i) {
+    game::stepWorld(world, &profiler);
+    const game::BodyFluidCoupling& c = *world.body_coupling;
+    if (c.coupled.size() == 1) {
+      ++coupled_steps;
+      upward_impulse += world.sph_fluid->world.colliders[c.first_collider].force.y * world.step_seconds;
+    }
+  }
+  EXPECT_EQ(world.nonfinite_state, "");
+  EXPECT_GT(coupled_steps, 10);
+  EXPECT_GT(world.body_coupling->forces_applied, 0u);
+  EXPECT_GT(upward_impulse, 0.0) << "the jet pushes the crate up";
+  const engine::BodyState crate = engine::bodyState(*world.rigid_bodies->physics, world.rigid_bodies->crates.back());
+  std::size_t inside = 0;
+  for (const glm::vec3& x : world.sph_fluid->world.particles.position) {
+    const glm::vec3 local = glm::inverse(crate.rotation) * (x - crate.position);
+    inside += glm::all(glm::lessThan(glm::abs(local), glm::vec3(0.2f - 1e-3f)));
+  }
+  EXPECT_EQ(inside, 0u);
+  std::printf("[ metric ] crate on the jet: coupled %d of 40 steps, upward impulse %.2f N s, forces capped %llu times\n",
+              coupled_steps, upward_impulse, static_cast<unsigned long long>(world.body_coupling->clamped));
+}
