@@ -9,11 +9,11 @@ namespace game {
 
 using Args = std::vector<std::string>;
 
-int playCommand(const Args& args);            // game/commands/play_command.cpp
-int smokeCommand(const Args& args);           // game/commands/play_command.cpp
-int meshCommand(const Args& args);            // game/commands/mesh_command.cpp (fluid/surface)
-int simulateCommand(const Args& args);        // game/commands/simulate_command.cpp (fluid/sph)
-int bakeColliderCommand(const Args& args);    // game/commands/collider_commands.cpp (fluid/collide)
-int queryColliderCommand(const Args& args);   // game/commands/collider_commands.cpp (fluid/collide)
+int playCommand(const Args& args);           // game/commands/play_command.cpp
+int smokeCommand(const Args& args);          // game/commands/play_command.cpp
+int meshCommand(const Args& args);           // game/commands/mesh_command.cpp (fluid/surface)
+int simulateCommand(const Args& args);       // game/commands/simulate_command.cpp (fluid/sph)
+int bakeColliderCommand(const Args& args);   // game/commands/collider_commands.cpp (fluid/collide)
+int queryColliderCommand(const Args& args);  // game/commands/collider_commands.cpp (fluid/collide)
 
 }  // namespace game

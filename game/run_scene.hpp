@@ -13,12 +13,12 @@
 namespace game {
 
 struct RunOptions {
-  int width = 1280;            // framebuffer size in pixels, clamped to [64, 8192]
+  int width = 1280;  // framebuffer size in pixels, clamped to [64, 8192]
   int height = 720;
-  bool headless = false;       // no window: SDL offscreen/EGL context, render into an FBO only
-  int frames = 0;              // render this many frames then exit; 0 = until the window is closed
+  bool headless = false;             // no window: SDL offscreen/EGL context, render into an FBO only
+  int frames = 0;                    // render this many frames then exit; 0 = until the window is closed
   std::filesystem::path screenshot;  // if set, the last frame is written here as PNG
-  bool show_ui = true;         // ImGui overlay (toggled at run time with a key)
+  bool show_ui = true;               // ImGui overlay (toggled at run time with a key)
   bool capture_last_frame = false;   // fill RunReport::last_frame_rgba / blank_frame_rgba
   bool fixed_frame_time = false;     // headless runs feed the loop exactly one step per frame
 };
@@ -37,9 +37,9 @@ struct RunReport {
   std::vector<std::string> systems_constructed;  // effect names whose systems were built, in order
   std::vector<PhaseTiming> phases;
   double mean_frame_ms = 0.0;
-  std::string gl_renderer;           // GL_RENDERER string of the context used
-  int gl_errors = 0;                 // GL errors seen by the engine's checks
-  std::string nonfinite_state;       // empty, or which system/value went NaN/inf at which step
+  std::string gl_renderer;      // GL_RENDERER string of the context used
+  int gl_errors = 0;            // GL errors seen by the engine's checks
+  std::string nonfinite_state;  // empty, or which system/value went NaN/inf at which step
   // Filled when RunOptions::capture_last_frame: RGBA8, bottom row first, width*height*4 bytes.
   int frame_width = 0;
   int frame_height = 0;

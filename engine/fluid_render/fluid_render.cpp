@@ -69,9 +69,10 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
                                                  {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "water.frag"}}},
                    "", error);
   out.error += error;
-  out.water_extent_program = buildProgram(
-      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}}, {GL_FRAGMENT_SHADER, {dir / "water_extent.frag"}}},
-      "", error);
+  out.water_extent_program =
+      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
+                                                 {GL_FRAGMENT_SHADER, {dir / "water_extent.frag"}}},
+                   "", error);
   out.error += error;
   out.goo_program =
       buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},

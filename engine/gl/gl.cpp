@@ -68,9 +68,9 @@ std::string formatLine(std::string_view line, std::span<const std::string> names
   else if (line.starts_with("WARNING: "))
     prefix_word = "warning: ", pos = 9;
   const long source = parseNumber(line, pos);
-  const std::string& file_label = names[source >= 0 && static_cast<std::size_t>(source) < names.size()
-                                            ? static_cast<std::size_t>(source)
-                                            : names.size() - 1];
+  const std::string& file_label =
+      names[source >= 0 && static_cast<std::size_t>(source) < names.size() ? static_cast<std::size_t>(source)
+                                                                           : names.size() - 1];
   if (source >= 0 && pos < line.size()) {
     long number = -1, column = -1;
     std::size_t p = pos;
@@ -207,7 +207,8 @@ GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view 
   GLint ok = GL_FALSE;
   glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
   if (ok != GL_TRUE) {
-    error = formatShaderLog(programInfoLog(program.id()), vertex_path.string() + " + " + fragment_path.string() + " (link)");
+    error = formatShaderLog(programInfoLog(program.id()),
+                            vertex_path.string() + " + " + fragment_path.string() + " (link)");
     return {};
   }
   return program;

@@ -198,7 +198,7 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
     }
   }
   out.type_tex = createTexture2D(GL_RGBA32F, kParticleKeyframes, static_cast<GLsizei>(2 * desc.types.size()), GL_RGBA,
-                               GL_FLOAT, table.data());
+                                 GL_FLOAT, table.data());
   // A 1³ flow field so the sampler is always complete.
   glGenTextures(1, &out.flow_tex);
   glBindTexture(GL_TEXTURE_3D, out.flow_tex);

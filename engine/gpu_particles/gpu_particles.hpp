@@ -154,9 +154,9 @@ struct GpuParticlesDesc {
   std::uint32_t width = 256, height = 256;  // texture size: capacity = width·height; powers of two (sort)
   Integrator integrator = Integrator::euler;
   std::vector<ParticleTypeDesc> types = std::vector<ParticleTypeDesc>(1);  // 1..kMaxParticleTypes
-  std::filesystem::path shader_dir;                         // folder holding gpu_particles/*.glsl, *.vert, *.frag
-  std::uint32_t sort_passes_per_frame = 5;                  // §3.3.3: 4–5 per frame for 1024² in the paper
-  float dt = 1.0f / 60.0f;  // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
+  std::filesystem::path shader_dir;         // folder holding gpu_particles/*.glsl, *.vert, *.frag
+  std::uint32_t sort_passes_per_frame = 5;  // §3.3.3: 4–5 per frame for 1024² in the paper
+  float dt = 1.0f / 60.0f;                  // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
 };
 
 inline constexpr int kMaxAttractors = 4;

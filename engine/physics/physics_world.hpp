@@ -67,7 +67,7 @@ struct PhysicsWorld {
   // External force (N, at the centre of mass) and torque (N m) per body for the next
   // stepPhysics call (every substep), then zeroed; sized lazily by setExternalForce.
   std::vector<glm::vec3> external_force, external_torque;
-  std::uint64_t steps = 0;                           // substeps taken
+  std::uint64_t steps = 0;  // substeps taken
 };
 
 std::unique_ptr<PhysicsWorld> createPhysicsWorld(const PhysicsDesc& desc);

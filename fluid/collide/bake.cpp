@@ -2,8 +2,8 @@
 // orthographic maps with depth compare LESS (front) / GREATER (back), front-back pairs in one
 // texture, and perspective depth cubes from the view-volume centre. Ortho maps are rasterized
 // conservatively (every texel the triangle touches; depth at the texel centre or the nearest
-// point of the triangle), cube texels by the ray through the texel centre; double precision, triangles in index order, strict compare:
-// the result is deterministic and independent of the thread count.
+// point of the triangle), cube texels by the ray through the texel centre; double precision, triangles in index order,
+// strict compare: the result is deterministic and independent of the thread count.
 #include "fluid/collide/collide.hpp"
 
 #include <oneapi/tbb/parallel_for.h>
@@ -60,9 +60,7 @@ glm::mat4 cubeMatrix(const CubeView& v) {
   return m;
 }
 
-dvec3 apply(const glm::mat4& m, glm::vec3 p) {
-  return dvec3(glm::dvec4(m * glm::vec4(p, 1.0f)));
-}
+dvec3 apply(const glm::mat4& m, glm::vec3 p) { return dvec3(glm::dvec4(m * glm::vec4(p, 1.0f))); }
 
 // Per-texel result of the depth test: depth and the winning triangle.
 struct Buffer {
@@ -80,12 +78,12 @@ struct FaceBasis {
 };
 constexpr int kFaces = 6;
 const FaceBasis kFaceBasis[kFaces] = {
-    {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},  // +X: sc = −z, tc = −y
-    {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},  // −X: sc = z, tc = −y
-    {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},    // +Y: sc = x, tc = z
-    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},  // −Y: sc = x, tc = −z
-    {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},   // +Z: sc = x, tc = −y
-    {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}}, // −Z: sc = −x, tc = −y
+    {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},   // +X: sc = −z, tc = −y
+    {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},   // −X: sc = z, tc = −y
+    {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},     // +Y: sc = x, tc = z
+    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},   // −Y: sc = x, tc = −z
+    {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},    // +Z: sc = x, tc = −y
+    {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}},  // −Z: sc = −x, tc = −y
 };
 
 struct TexelBox {
@@ -549,7 +547,8 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
               }
               break;
             }
-            case DepthMapFormat::cube8: break;
+            case DepthMapFormat::cube8:
+              break;
           }
         }
       } else {

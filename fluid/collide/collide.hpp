@@ -211,7 +211,7 @@ enum class MapKind : std::uint32_t { ortho = 0, cube = 1 };
 struct MapSpec {
   MapKind kind = MapKind::ortho;
   DepthMapFormat format = DepthMapFormat::front_back16;  // cube: always cube8
-  DepthCompare compare = DepthCompare::less;              // ignored for front_back16
+  DepthCompare compare = DepthCompare::less;             // ignored for front_back16
   OrthoView ortho{};
   CubeView cube{};
   int resolution = 256;  // texels per side, 4..4096
@@ -223,7 +223,7 @@ struct BakeDesc {
 };
 
 struct BakeStatus {
-  std::string error;        // empty = success; names the bad field/value/triangle
+  std::string error;                     // empty = success; names the bad field/value/triangle
   std::size_t degenerate_triangles = 0;  // zero-area triangles skipped
   bool ok() const { return error.empty(); }
 };
@@ -245,8 +245,8 @@ Bounds meshBounds(const MeshView& mesh);
 // (GREATER: the centre is assumed inside; pass with_cube = false for shapes where it is not).
 // Volumes are the bounds padded by `padding` (fraction of the largest extent) plus two texels.
 std::vector<MapSpec> defaultMapSpecs(const Bounds& bounds, int resolution,
-                                     DepthMapFormat format = DepthMapFormat::front_back16,
-                                     bool with_cube = false, float padding = 0.05f);
+                                     DepthMapFormat format = DepthMapFormat::front_back16, bool with_cube = false,
+                                     float padding = 0.05f);
 
 // Parses a --maps SPEC: comma-separated items, each one of
 //   "axes"          three front-back pairs along x,y,z (in the chosen --format)
@@ -274,13 +274,12 @@ FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollide
 FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out);
 // In-memory forms used by the file functions (and the truncation/garbage tests).
 std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider);
-FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name,
-                               DepthMapCollider& out);
+FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out);
 
 // ---- Batch queries and the particle step ----------------------------------------------
 
 struct ParallelDesc {
-  int threads = 0;          // 0 = the calling TBB arena (all threads by default); n > 0: an arena of n threads
+  int threads = 0;           // 0 = the calling TBB arena (all threads by default); n > 0: an arena of n threads
   std::size_t grain = 4096;  // points per task
 };
 
@@ -324,9 +323,9 @@ struct CollideCounts {
 // rest frame of the reaction) and calls resolveCollision; positions/velocities are updated
 // in place. Spans must have equal sizes.
 CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderPose& pose,
-                               std::span<const glm::vec3> previous_positions,
-                               std::span<glm::vec3> predicted_positions, std::span<glm::vec3> predicted_velocities,
-                               const CollideDesc& desc, CollideScratch& scratch);
+                               std::span<const glm::vec3> previous_positions, std::span<glm::vec3> predicted_positions,
+                               std::span<glm::vec3> predicted_velocities, const CollideDesc& desc,
+                               CollideScratch& scratch);
 
 // ---- Exact reference: signed distance to a closed triangle mesh (BVH) ------------------
 

@@ -116,7 +116,8 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
     if (format < 1 || format > 4) return fail(where + "unknown format " + std::to_string(format));
     if (compare > 1) return fail(where + "bad compare " + std::to_string(compare));
     if (encloses > 1) return fail(where + "bad encloses flag " + std::to_string(encloses));
-    if (m.resolution < 4 || m.resolution > 4096) return fail(where + "resolution " + std::to_string(m.resolution) + " out of range 4..4096");
+    if (m.resolution < 4 || m.resolution > 4096)
+      return fail(where + "resolution " + std::to_string(m.resolution) + " out of range 4..4096");
     m.format = static_cast<DepthMapFormat>(format);
     m.compare = static_cast<DepthCompare>(compare);
     m.encloses_collider = encloses == 1;
@@ -133,9 +134,11 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
     if (!in.get(size)) return fail(where + "truncated texel size");
     const std::uint64_t want = static_cast<std::uint64_t>(m.resolution) * m.resolution *
                                (m.format == DepthMapFormat::cube8 ? 6u : 1u) * texelBytes(m.format);
-    if (size != want) return fail(where + "texel byte count " + std::to_string(size) + ", expected " + std::to_string(want));
+    if (size != want)
+      return fail(where + "texel byte count " + std::to_string(size) + ", expected " + std::to_string(want));
     if (bytes.size() - in.at < size + 8) return fail(where + "truncated texel data");
-    m.texels.assign(bytes.begin() + static_cast<std::ptrdiff_t>(in.at), bytes.begin() + static_cast<std::ptrdiff_t>(in.at + size));
+    m.texels.assign(bytes.begin() + static_cast<std::ptrdiff_t>(in.at),
+                    bytes.begin() + static_cast<std::ptrdiff_t>(in.at + size));
     in.at += size;
     maps.push_back(std::move(m));
   }

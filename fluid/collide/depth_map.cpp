@@ -114,7 +114,8 @@ void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
       }
       return;
     }
-    case DepthMapFormat::cube8: break;
+    case DepthMapFormat::cube8:
+      break;
   }
   assert(false && "cube8 handled by cubeVote");
 }
@@ -165,9 +166,8 @@ void cubeVote(Winner& w, const DepthMap& map, glm::vec3 p) {
   const float t = (tc / ma + 1.0f) * 0.5f;
   const int i = std::clamp(static_cast<int>(s * nf), 0, n - 1);
   const int j = std::clamp(static_cast<int>(t * nf), 0, n - 1);
-  const std::uint32_t texel =
-      static_cast<std::uint32_t>(face) * map.resolution * map.resolution + static_cast<std::uint32_t>(j) * map.resolution +
-      static_cast<std::uint32_t>(i);
+  const std::uint32_t texel = static_cast<std::uint32_t>(face) * map.resolution * map.resolution +
+                              static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
   const std::uint8_t* tx = map.texels.data() + texel * 4u;
   const std::uint16_t code = static_cast<std::uint16_t>((tx[2] << 8) | tx[3]);
   if (code == kFixedBackground) return invalidVote(w, map);
@@ -185,7 +185,8 @@ DepthMapCollider::DepthMapCollider(std::vector<DepthMap> maps, int normal_resolu
   assert(normal_resolution_ >= 1 && normal_resolution_ <= 256);
   const std::vector<float> rgb = l1NormalTexture(normal_resolution_);
   normal_table_.resize(rgb.size() / 3);
-  for (std::size_t k = 0; k < normal_table_.size(); ++k) normal_table_[k] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
+  for (std::size_t k = 0; k < normal_table_.size(); ++k)
+    normal_table_[k] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
 }
 
 int DepthMapCollider::depthMapCount() const {
@@ -234,7 +235,8 @@ ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
       break;
     case DepthMapFormat::front_back16: {
       const std::uint16_t packed = loadU16(t + 2 * w.layer);
-      index = static_cast<std::uint32_t>(packed >> 8) * static_cast<std::uint32_t>(normal_resolution_) + (packed & 0xFFu);
+      index =
+          static_cast<std::uint32_t>(packed >> 8) * static_cast<std::uint32_t>(normal_resolution_) + (packed & 0xFFu);
       break;
     }
   }

@@ -50,8 +50,7 @@ glm::ivec2 l1Texel(glm::vec3 direction, int resolution) {
 
 std::uint32_t l1TexelIndex(glm::vec3 direction, int resolution) {
   const glm::ivec2 ij = l1Texel(direction, resolution);
-  return static_cast<std::uint32_t>(ij.y) * static_cast<std::uint32_t>(resolution) +
-         static_cast<std::uint32_t>(ij.x);
+  return static_cast<std::uint32_t>(ij.y) * static_cast<std::uint32_t>(resolution) + static_cast<std::uint32_t>(ij.x);
 }
 
 glm::vec3 l1TexelNormal(glm::ivec2 texel, int resolution) {
@@ -136,17 +135,21 @@ float halfToFloat(std::uint16_t bits) {
 
 const char* formatName(DepthMapFormat format) {
   switch (format) {
-    case DepthMapFormat::float32: return "float";
-    case DepthMapFormat::fixed8: return "fixed8";
-    case DepthMapFormat::front_back16: return "front-back16";
-    case DepthMapFormat::cube8: return "cube8";
+    case DepthMapFormat::float32:
+      return "float";
+    case DepthMapFormat::fixed8:
+      return "fixed8";
+    case DepthMapFormat::front_back16:
+      return "front-back16";
+    case DepthMapFormat::cube8:
+      return "cube8";
   }
   return "unknown";
 }
 
 bool parseFormat(const std::string& name, DepthMapFormat& out) {
-  for (DepthMapFormat f : {DepthMapFormat::float32, DepthMapFormat::fixed8, DepthMapFormat::front_back16,
-                           DepthMapFormat::cube8}) {
+  for (DepthMapFormat f :
+       {DepthMapFormat::float32, DepthMapFormat::fixed8, DepthMapFormat::front_back16, DepthMapFormat::cube8}) {
     if (name == formatName(f)) {
       out = f;
       return true;

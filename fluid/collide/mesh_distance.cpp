@@ -83,7 +83,8 @@ MeshDistance::MeshDistance(const MeshView& mesh) {
   std::vector<glm::vec3> centroid(tris);
   for (std::size_t t = 0; t < tris; ++t) {
     centroid[t] = (mesh.positions[mesh.indices[3 * t]] + mesh.positions[mesh.indices[3 * t + 1]] +
-                   mesh.positions[mesh.indices[3 * t + 2]]) / 3.0f;
+                   mesh.positions[mesh.indices[3 * t + 2]]) /
+                  3.0f;
   }
   // Recursive median split on the longest axis; leaves of up to 4 triangles.
   struct Job {
@@ -115,7 +116,8 @@ MeshDistance::MeshDistance(const MeshView& mesh) {
       const glm::vec3 ext = chi - clo;
       const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
       const std::uint32_t half = job.count / 2;
-      std::nth_element(order.begin() + job.first, order.begin() + job.first + half, order.begin() + job.first + job.count,
+      std::nth_element(order.begin() + job.first, order.begin() + job.first + half,
+                       order.begin() + job.first + job.count,
                        [&](std::uint32_t x, std::uint32_t y) { return centroid[x][axis] < centroid[y][axis]; });
       const std::uint32_t left = static_cast<std::uint32_t>(nodes_.size());
       nodes_.push_back({});
@@ -182,7 +184,8 @@ int MeshDistance::crossings(glm::vec3 o, glm::vec3 d) const {
     const Node& node = nodes_[stack[--top]];
     if (!rayHitsBox(o, inv, node.lo, node.hi)) continue;
     if (node.count > 0) {
-      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) hits += rayHitsTriangle(o, d, a_[k], b_[k], c_[k]);
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
+        hits += rayHitsTriangle(o, d, a_[k], b_[k], c_[k]);
       continue;
     }
     stack[top++] = node.first;

@@ -31,8 +31,8 @@ glm::vec3 collisionResponse(glm::vec3 velocity, glm::vec3 outward_normal, const 
 
 CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSample& previous,
                                  glm::vec3 predicted_position, glm::vec3 predicted_velocity,
-                                 const ColliderSample& predicted, glm::vec3 collider_velocity,
-                                 float dt, float skin, const CollisionMaterial& material) {
+                                 const ColliderSample& predicted, glm::vec3 collider_velocity, float dt, float skin,
+                                 const CollisionMaterial& material) {
   (void)previous_position;
   (void)dt;
   CollisionResult result{predicted_position, predicted_velocity, CollisionOutcome::none};

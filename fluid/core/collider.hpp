@@ -51,8 +51,8 @@ class SignedDistanceShape {
 
 // Collision material, Kolb et al. §3.3.2. Values are clamped to [0, 1] where used.
 struct CollisionMaterial {
-  float friction = 0.1f;                 // ν: fraction of tangential velocity removed
-  float resilience = 0.3f;               // ε: fraction of normal velocity kept (bounce)
+  float friction = 0.1f;                   // ν: fraction of tangential velocity removed
+  float resilience = 0.3f;                 // ε: fraction of normal velocity kept (bounce)
   float friction_speed_threshold = 0.05f;  // below this speed friction is not applied (m/s)
 };
 
@@ -81,7 +81,7 @@ struct CollisionResult {
 // Velocities are taken relative to `collider_velocity` so moving colliders push particles.
 CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSample& previous,
                                  glm::vec3 predicted_position, glm::vec3 predicted_velocity,
-                                 const ColliderSample& predicted, glm::vec3 collider_velocity,
-                                 float dt, float skin, const CollisionMaterial& material);
+                                 const ColliderSample& predicted, glm::vec3 collider_velocity, float dt, float skin,
+                                 const CollisionMaterial& material);
 
 }  // namespace fluid

@@ -16,7 +16,8 @@ namespace fluid {
 namespace {
 
 std::string lowercase(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return text;
 }
 
@@ -125,8 +126,8 @@ IoStatus parseLines(std::istream& in, bool comma, const std::string& name, Parti
 
 struct PlyProperty {
   std::string name;
-  std::string type;       // scalar type, or the item type of a list
-  std::string count_type; // non-empty for list properties
+  std::string type;        // scalar type, or the item type of a list
+  std::string count_type;  // non-empty for list properties
 };
 
 struct PlyElement {
@@ -138,7 +139,8 @@ struct PlyElement {
 std::size_t plyTypeSize(const std::string& type) {
   if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
   if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32") return 4;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32")
+    return 4;
   if (type == "double" || type == "float64") return 8;
   return 0;
 }
@@ -171,7 +173,8 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     out.clear();
     return IoStatus{where(name, line) + message};
   };
-  if (!std::getline(in, line_text) || trim(line_text) != "ply") return fail("not a PLY file (first line must be 'ply')");
+  if (!std::getline(in, line_text) || trim(line_text) != "ply")
+    return fail("not a PLY file (first line must be 'ply')");
   ++line;
   std::string format;
   std::vector<PlyElement> elements;
@@ -235,7 +238,9 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     for (std::size_t item = 0; item < element.count; ++item) {
       std::vector<double> values(element.properties.size(), 0.0);
       if (ascii) {
-        if (!std::getline(in, line_text)) return fail("file ends after " + std::to_string(item) + " of " + std::to_string(element.count) + " " + element.name + " lines");
+        if (!std::getline(in, line_text))
+          return fail("file ends after " + std::to_string(item) + " of " + std::to_string(element.count) + " " +
+                      element.name + " lines");
         ++line;
         std::istringstream words{line_text};
         for (std::size_t i = 0; i < element.properties.size(); ++i) {
@@ -255,7 +260,8 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
           unsigned char bytes[8];
           if (!property.count_type.empty()) {
             const std::size_t count_size = plyTypeSize(property.count_type);
-            if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(count_size))) return fail("file ends inside " + element.name + " " + std::to_string(item));
+            if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(count_size)))
+              return fail("file ends inside " + element.name + " " + std::to_string(item));
             const double count = readPlyValue(property.count_type, bytes, big_endian);
             if (count < 0) return fail("negative list count");
             in.ignore(static_cast<std::streamsize>(count) * static_cast<std::streamsize>(plyTypeSize(property.type)));
@@ -264,13 +270,15 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
           const std::size_t size = plyTypeSize(property.type);
           if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(size))) {
             out.clear();
-            return {name + ": binary data ends inside " + element.name + " " + std::to_string(item) + " of " + std::to_string(element.count)};
+            return {name + ": binary data ends inside " + element.name + " " + std::to_string(item) + " of " +
+                    std::to_string(element.count)};
           }
           values[i] = readPlyValue(property.type, bytes, big_endian);
         }
       }
       if (is_vertex) {
-        const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])], values[static_cast<std::size_t>(column_of[1])],
+        const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])],
+                               values[static_cast<std::size_t>(column_of[1])],
                                values[static_cast<std::size_t>(column_of[2])]};
         const std::string location = ascii ? where(name, line) : name + ": vertex " + std::to_string(item) + ": ";
         if (std::string error = storeParticle(xyz, location, out); !error.empty()) {
@@ -320,7 +328,8 @@ IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& 
   return parseLines(in, extension == ".csv", name, out);
 }
 
-IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePositions& particles, OverwritePolicy overwrite) {
+IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePositions& particles,
+                          OverwritePolicy overwrite) {
   std::ofstream file;
   if (IoStatus status = openForWrite(path, overwrite, file, false); !status.ok()) return status;
   std::string text;
@@ -337,7 +346,8 @@ IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePosit
   return {};
 }
 
-IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePositions& particles, OverwritePolicy overwrite) {
+IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePositions& particles,
+                          OverwritePolicy overwrite) {
   std::ofstream file;
   if (IoStatus status = openForWrite(path, overwrite, file, true); !status.ok()) return status;
   file << "ply\nformat binary_little_endian 1.0\ncomment written by fluiddemo\nelement vertex " << particles.size()

@@ -27,8 +27,16 @@ struct ParticlePositions {
 
   std::size_t size() const { return x.size(); }
   bool empty() const { return x.empty(); }
-  void clear() { x.clear(); y.clear(); z.clear(); }
-  void push_back(glm::vec3 p) { x.push_back(p.x); y.push_back(p.y); z.push_back(p.z); }
+  void clear() {
+    x.clear();
+    y.clear();
+    z.clear();
+  }
+  void push_back(glm::vec3 p) {
+    x.push_back(p.x);
+    y.push_back(p.y);
+    z.push_back(p.z);
+  }
   glm::vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
 };
 

@@ -6,10 +6,10 @@
 #include "fluid/collide/collide.hpp"
 #include "fluid/io/particle_io.hpp"
 
-#include <CLI/CLI.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <CLI/CLI.hpp>
+#include <assimp/Importer.hpp>
 
 #include <cfloat>
 #include <cmath>
@@ -34,9 +34,8 @@ bool loadModel(const std::string& path, LoadedMesh& out, std::string& error) {
     return false;
   }
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
-                aiProcess_SortByPType);
+  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                     aiProcess_PreTransformVertices | aiProcess_SortByPType);
   if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
     error = path + ": cannot load model: " + importer.GetErrorString();
     return false;
@@ -136,9 +135,10 @@ int bakeColliderCommand(const Args& args) {
 }
 
 int queryColliderCommand(const Args& args) {
-  CLI::App app{"Signed distance (negative inside) and unit outward normal per point, one line `d nx ny nz` per input "
-               "point in order. Points no depth map has a distance for (outside the collider) print `inf 0 0 0`.",
-               "fluiddemo query-collider"};
+  CLI::App app{
+      "Signed distance (negative inside) and unit outward normal per point, one line `d nx ny nz` per input "
+      "point in order. Points no depth map has a distance for (outside the collider) print `inf 0 0 0`.",
+      "fluiddemo query-collider"};
   std::string collider_path, points_path;
   int threads = 0;
   app.add_option("FILE", collider_path, "collider file from bake-collider")->required();

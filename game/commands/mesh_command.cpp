@@ -12,10 +12,10 @@
 
 #include <algorithm>
 #include <cctype>
-#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 namespace game {
@@ -108,10 +108,12 @@ int meshCommand(const Args& args) {
     const fluid::SurfaceStats& s = mesh.stats;
     std::printf("particles            %zu\n", particles.size());
     std::printf("triangles            %llu\n", static_cast<unsigned long long>(s.triangles));
-    std::printf("vertices             %llu (before welding block seams)\n", static_cast<unsigned long long>(s.vertices));
+    std::printf("vertices             %llu (before welding block seams)\n",
+                static_cast<unsigned long long>(s.vertices));
     std::printf("blocks               %u\n", s.blocks);
     std::printf("cubes visited        %llu\n", static_cast<unsigned long long>(s.cubesVisited));
-    std::printf("corners evaluated    %llu (+%llu while seeding)\n", static_cast<unsigned long long>(s.cornersEvaluated),
+    std::printf("corners evaluated    %llu (+%llu while seeding)\n",
+                static_cast<unsigned long long>(s.cornersEvaluated),
                 static_cast<unsigned long long>(s.seedEvaluations));
     std::printf("particles looked up  %llu\n", static_cast<unsigned long long>(s.particlesLookedUp));
     std::printf("slices alive (max)   %u, sweep reversals %llu\n", s.maxActiveSlices,

@@ -16,7 +16,8 @@ namespace {
 
 bool displayAvailable() {
   const char* driver = std::getenv("SDL_VIDEODRIVER");
-  if (driver != nullptr && (std::string_view(driver) == "offscreen" || std::string_view(driver) == "dummy")) return false;
+  if (driver != nullptr && (std::string_view(driver) == "offscreen" || std::string_view(driver) == "dummy"))
+    return false;
   const char* x11 = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
   return (x11 != nullptr && *x11 != '\0') || (wayland != nullptr && *wayland != '\0');
@@ -189,8 +190,8 @@ int smokeCommand(const Args& args) {
       } else if (report.frames_rendered != frames) {
         failure = "rendered " + std::to_string(report.frames_rendered) + " of " + std::to_string(frames) + " frames";
       } else {
-        const FrameCheck check = checkFrame(report.last_frame_rgba, report.blank_frame_rgba, report.frame_width,
-                                            report.frame_height);
+        const FrameCheck check =
+            checkFrame(report.last_frame_rgba, report.blank_frame_rgba, report.frame_width, report.frame_height);
         failure = check.failure;
       }
     }

@@ -5,8 +5,8 @@
 #include "fluid/io/particle_io.hpp"
 #include "fluid/sph/sph_scenes.hpp"
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -28,7 +28,8 @@ std::string keyHelp() {
     text += "  " + scene + ":\n";
     for (const auto& k : keys) {
       char line[256];
-      std::snprintf(line, sizeof line, "    %-20s %-10g %s\n", k.name.c_str(), static_cast<double>(k.value), k.help.c_str());
+      std::snprintf(line, sizeof line, "    %-20s %-10g %s\n", k.name.c_str(), static_cast<double>(k.value),
+                    k.help.c_str());
       text += line;
     }
   }
@@ -38,9 +39,10 @@ std::string keyHelp() {
 }  // namespace
 
 int simulateCommand(const Args& args) {
-  CLI::App app{"Run an SPH scene without a window: frames DIR/frame_00000.xyz (time i/F, one particle per line "
-               "as x y z) and per-step statistics DIR/stats.csv.",
-               "fluiddemo simulate"};
+  CLI::App app{
+      "Run an SPH scene without a window: frames DIR/frame_00000.xyz (time i/F, one particle per line "
+      "as x y z) and per-step statistics DIR/stats.csv.",
+      "fluiddemo simulate"};
   std::string scene_name;
   double seconds = 0.0;
   std::string solver_name = "dfsph";
@@ -129,7 +131,8 @@ int simulateCommand(const Args& args) {
     char name[64];
     std::snprintf(name, sizeof name, "frame_%05ld.xyz", index);
     const fluid::IoStatus st = fluid::writeParticleXyz(dir / name, frame, policy);
-    if (!st.ok()) std::fprintf(stderr, "fluiddemo simulate: %s%s\n", st.error.c_str(), force ? "" : " (pass --force to replace)");
+    if (!st.ok())
+      std::fprintf(stderr, "fluiddemo simulate: %s%s\n", st.error.c_str(), force ? "" : " (pass --force to replace)");
     return st.ok();
   };
 
@@ -187,7 +190,8 @@ int simulateCommand(const Args& args) {
                 100.0 * max_err, wall);
   }
   if (scene->column_width > 0.0f)
-    std::printf("surge front %.4f m = %.3f a\n", fluid::sphSurgeFront(world), fluid::sphSurgeFront(world) / scene->column_width);
+    std::printf("surge front %.4f m = %.3f a\n", fluid::sphSurgeFront(world),
+                fluid::sphSurgeFront(world) / scene->column_width);
   return 0;
 }
 

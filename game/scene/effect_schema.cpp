@@ -50,24 +50,26 @@ const std::array kSpriteParticleParams = {
 };
 
 const std::array kSphFluidParams = {
-    ParamSpec{"solver", ParamType::text, 0.0, 0.0, word("dfsph"), "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)",
-              kSolverChoices},
+    ParamSpec{"solver", ParamType::text, 0.0, 0.0, word("dfsph"),
+              "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)", kSolverChoices},
     ParamSpec{"max_particles", ParamType::integer, 1, 50000, integer(2500),
               "particle budget (fixed at construction; the jet pauses at it)"},
     ParamSpec{"particle_radius", ParamType::number, 0.01, 0.2, num(0.04), "r (m); spacing 2r (fixed at construction)"},
     ParamSpec{"jet_speed", ParamType::number, 0.1, 20.0, num(4.5), "speed of the jet at the nozzle (m/s)"},
-    ParamSpec{"nozzle_radius", ParamType::number, 0.0, 0.5, num(0.12), "radius of the nozzle disc (m); particles per layer = lattice points inside"},
-    ParamSpec{"rate", ParamType::number, 0.0, 50000.0, num(500.0), "particles emitted per second (capped: layers never overlap)"},
+    ParamSpec{"nozzle_radius", ParamType::number, 0.0, 0.5, num(0.12),
+              "radius of the nozzle disc (m); particles per layer = lattice points inside"},
+    ParamSpec{"rate", ParamType::number, 0.0, 50000.0, num(500.0),
+              "particles emitted per second (capped: layers never overlap)"},
     ParamSpec{"viscosity", ParamType::number, 0.0, 1.0, num(0.02), "kinematic viscosity nu (m^2/s)"},
     ParamSpec{"drain", ParamType::boolean, 0.0, 0.0, flag(true), "four drains at the basin wall recycle the water"},
-    ParamSpec{"couple_bodies", ParamType::boolean, 0.0, 0.0, flag(true),
-              "crates and water push each other, two-way (only when rigid_bodies is listed too; fixed at construction)"},
+    ParamSpec{
+        "couple_bodies", ParamType::boolean, 0.0, 0.0, flag(true),
+        "crates and water push each other, two-way (only when rigid_bodies is listed too; fixed at construction)"},
 };
 
 const std::array kFluidSurfaceParams = {
     ParamSpec{"order", ParamType::text, 0.0, 0.0, word("sorted"),
-              "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)",
-              kOrderChoices},
+              "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)", kOrderChoices},
     ParamSpec{"smoothing", ParamType::number, 1.0, 4.0, num(2.0), "field cutoff Rc in particle spacings"},
     ParamSpec{"cube", ParamType::number, 0.2, 2.0, num(0.5), "marching cube edge in particle spacings"},
     ParamSpec{"threshold", ParamType::number, 0.01, 0.24, num(0.2), "iso level T of the particle field"},

@@ -16,11 +16,16 @@ using Json = nlohmann::json;
 
 std::string_view typeName(ParamType type) {
   switch (type) {
-    case ParamType::number: return "a number";
-    case ParamType::integer: return "an integer";
-    case ParamType::boolean: return "true or false";
-    case ParamType::vec3: return "an array of 3 numbers";
-    case ParamType::text: return "a string";
+    case ParamType::number:
+      return "a number";
+    case ParamType::integer:
+      return "an integer";
+    case ParamType::boolean:
+      return "true or false";
+    case ParamType::vec3:
+      return "an array of 3 numbers";
+    case ParamType::text:
+      return "a string";
   }
   return "?";
 }
@@ -90,7 +95,8 @@ std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::s
     case ParamType::vec3: {
       if (!value.is_array() || value.size() != 3) return where + "expected " + std::string(typeName(spec.type)) + got;
       for (int i = 0; i < 3; ++i) {
-        if (!value[static_cast<std::size_t>(i)].is_number()) return where + "expected " + std::string(typeName(spec.type)) + got;
+        if (!value[static_cast<std::size_t>(i)].is_number())
+          return where + "expected " + std::string(typeName(spec.type)) + got;
         const double component = value[static_cast<std::size_t>(i)].get<double>();
         if (std::string error = checkNumber(spec, component, where); !error.empty()) return error;
         out.vec[i] = static_cast<float>(component);
@@ -289,8 +295,8 @@ SceneStatus applyOverride(SceneConfig& scene, std::string_view assignment) {
 
   const SectionSpec* spec = findSection(section_name);
   if (spec == nullptr) {
-    return {label + ": unknown section '" + std::string(section_name) + "' (scene, camera, or an effect: " +
-            knownEffects() + ")"};
+    return {label + ": unknown section '" + std::string(section_name) +
+            "' (scene, camera, or an effect: " + knownEffects() + ")"};
   }
   SectionConfig* section = findConfigSection(scene, section_name);
   if (section == nullptr) {

@@ -30,7 +30,7 @@ enum class ParamType { number, integer, boolean, vec3, text };
 
 struct ParamValue {
   ParamType type = ParamType::number;
-  double number = 0.0;   // number and integer
+  double number = 0.0;  // number and integer
   bool boolean = false;
   glm::vec3 vec{0.0f};
   std::string text;
@@ -39,7 +39,7 @@ struct ParamValue {
 struct ParamSpec {
   std::string_view key;
   ParamType type;
-  double min = 0.0;        // range for number/integer (inclusive); each component for vec3
+  double min = 0.0;  // range for number/integer (inclusive); each component for vec3
   double max = 0.0;
   ParamValue default_value;
   std::string_view doc;
@@ -48,7 +48,7 @@ struct ParamSpec {
 
 struct SectionSpec {
   std::string_view name;
-  bool is_effect;          // effects are constructed only when listed; other sections always exist
+  bool is_effect;  // effects are constructed only when listed; other sections always exist
   std::string_view doc;
   std::span<const ParamSpec> params;
 };
@@ -71,8 +71,8 @@ struct SectionConfig {
 };
 
 struct SceneConfig {
-  std::string name;                    // file stem, e.g. "fountain"
-  std::filesystem::path source;        // the file it came from ("" if parsed from text)
+  std::string name;              // file stem, e.g. "fountain"
+  std::filesystem::path source;  // the file it came from ("" if parsed from text)
   std::string description;
   SectionConfig scene;                 // "scene" section (step, substeps, seed)
   SectionConfig camera;                // "camera" section

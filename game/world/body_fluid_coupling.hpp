@@ -32,9 +32,9 @@ namespace game {
 struct BodyFluidCoupling {
   std::shared_ptr<const fluid::SignedDistanceShape> box_shape;  // one shape, shared by every box
   fluid::CollisionMaterial material;
-  float force_limit = 4.0f;  // x full-submersion buoyancy (rho_0 |g| V of one box)
-  float max_force = 0.0f, max_torque = 0.0f;  // N, N m (from force_limit, set by init)
-  float reach = 0.0f;                          // half diagonal of a box (m)
+  float force_limit = 4.0f;                      // x full-submersion buoyancy (rho_0 |g| V of one box)
+  float max_force = 0.0f, max_torque = 0.0f;     // N, N m (from force_limit, set by init)
+  float reach = 0.0f;                            // half diagonal of a box (m)
   glm::vec3 region_min{0.0f}, region_max{0.0f};  // world AABB the box centres must be in
   std::size_t first_collider = 0;                // SPH colliders before this one are the scene's own
   std::vector<engine::BodyId> coupled;           // body of collider first_collider + k, last SPH step

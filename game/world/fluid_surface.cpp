@@ -48,8 +48,8 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   sp.threshold = s.params.threshold;
   // Paper §5: sweep along the axis nearest the view, farthest blocks first, so blending the
   // triangles in index order composites back-to-front.
-  sp.order = s.params.order == SurfaceOrderChoice::unsorted ? fluid::SurfaceOrder::none
-                                                             : fluid::SurfaceOrder::backToFront;
+  sp.order =
+      s.params.order == SurfaceOrderChoice::unsorted ? fluid::SurfaceOrder::none : fluid::SurfaceOrder::backToFront;
   sp.exactSlabOrder = s.params.order == SurfaceOrderChoice::exact;
   sp.eye = eye;
   sp.viewDir = view_dir;

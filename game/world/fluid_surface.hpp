@@ -20,10 +20,10 @@ enum class SurfaceOrderChoice { sorted, unsorted, exact };
 
 struct FluidSurfaceParams {
   SurfaceOrderChoice order = SurfaceOrderChoice::sorted;
-  float smoothing = 2.0f;   // Rc in particle spacings
-  float cube = 0.5f;        // lattice cube edge S in particle spacings
-  float threshold = 0.2f;   // iso level T in (0, 0.25)
-  float refraction = 0.08f; // engine::WaterParams::refraction; 0 = off
+  float smoothing = 2.0f;    // Rc in particle spacings
+  float cube = 0.5f;         // lattice cube edge S in particle spacings
+  float threshold = 0.2f;    // iso level T in (0, 0.25)
+  float refraction = 0.08f;  // engine::WaterParams::refraction; 0 = off
   float opacity = 0.85f;
   glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
 };

@@ -72,7 +72,8 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   // Strays (a particle flung off the rim at the speed cap) are removed once they leave the
   // fountain's neighbourhood: above the jet's reach or 0.8 m beyond the basin on any side.
   const float reach = g.basin_outer_radius + 0.8f, far = 1000.0f;
-  const float top = g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
+  const float top =
+      g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
   out.world.sinks.push_back({{-far, top, -far}, {far, far, far}});
   out.world.sinks.push_back({{reach, -far, -far}, {far, far, far}});
   out.world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}});
@@ -85,7 +86,8 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
 bool stepSphFluid(SphFluid& f, double dt) {
   if (!f.error.empty()) return false;
   std::uint64_t sub = 0;
-  const fluid::SphStatus st = fluid::advanceSph(f.world, dt, [&](const fluid::SphStepStats&) { ++sub; }, 10000);
+  const fluid::SphStatus st = fluid::advanceSph(
+      f.world, dt, [&](const fluid::SphStepStats&) { ++sub; }, 10000);
   f.solver_steps += sub;
   ++f.steps;
   if (!st.ok()) {

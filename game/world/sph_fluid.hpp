@@ -32,16 +32,16 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
 struct SphFluid {
   SphFluidParams params;
   fluid::SphWorld world;
-  std::uint64_t steps = 0;          // game steps taken
-  std::uint64_t solver_steps = 0;   // adaptive SPH steps taken
-  std::string error;                // first solver error; the system stops stepping after one
+  std::uint64_t steps = 0;         // game steps taken
+  std::uint64_t solver_steps = 0;  // adaptive SPH steps taken
+  std::string error;               // first solver error; the system stops stepping after one
 };
 
 // Builds the SPH world: parameters, the fountain collider, the nozzle emitter at `nozzle`
 // (pointing up), the drains; reserves every buffer for max_particles. False + error (naming
 // the field and value) on invalid parameters.
-bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry,
-                  glm::vec3 gravity, std::string& error);
+bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
+                  std::string& error);
 
 // Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step).
 // Returns false and sets fluid.error when the solver refuses a step.

@@ -68,7 +68,8 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
       const glm::vec3 half(0.5f * out.rigid_bodies->params.crate_size);
       const glm::vec3 reach(glm::length(half));
       out.body_coupling = std::make_unique<BodyFluidCoupling>();
-      initBodyFluidCoupling(*out.body_coupling, sph, half, sph.params.domain_min - reach, sph.params.domain_max + reach);
+      initBodyFluidCoupling(*out.body_coupling, sph, half, sph.params.domain_min - reach,
+                            sph.params.domain_max + reach);
     }
   }
   if (const SectionConfig* section = scene.effect("fluid_surface")) {
@@ -100,7 +101,8 @@ void applyLiveParams(World& world) {
   if (world.sph_fluid) {
     SphFluidParams fresh;
     std::string ignored;  // the solver name was validated at construction; it needs a rebuild
-    if (const SectionConfig* section = world.scene.effect("sph_fluid"); section && sphParamsFrom(*section, fresh, ignored)) {
+    if (const SectionConfig* section = world.scene.effect("sph_fluid");
+        section && sphParamsFrom(*section, fresh, ignored)) {
       SphFluid& f = *world.sph_fluid;
       f.params.jet_speed = fresh.jet_speed;
       f.params.rate = fresh.rate;

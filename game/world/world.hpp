@@ -30,7 +30,7 @@ struct World {
   std::unique_ptr<FluidSurface> fluid_surface;        // "fluid_surface" only (needs sph_fluid)
   // Crates <-> water, two-way: only with both rigid_bodies and sph_fluid (sph_fluid.couple_bodies).
   std::unique_ptr<BodyFluidCoupling> body_coupling;
-  FountainShape fountain;                             // analytic collision shape for particles
+  FountainShape fountain;  // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
   int substeps = 1;
@@ -49,8 +49,8 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
 void applyLiveParams(World& world);
 
 // One fixed simulation step of every constructed system, timed into `profiler` (physics for
-// rigid bodies, fluid for particles and the crate <-> water coupling; may be null). Checks every value for NaN/inf after the
-// step and records the first one in world.nonfinite_state.
+// rigid bodies, fluid for particles and the crate <-> water coupling; may be null). Checks every value for NaN/inf
+// after the step and records the first one in world.nonfinite_state.
 void stepWorld(World& world, engine::Profiler* profiler);
 
 // Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the

@@ -52,11 +52,16 @@ int main(int argc, char** argv) {
   int threads = 2, res = 256, reps = 5;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--points") count = std::strtoull(argv[i + 1], nullptr, 10);
-    else if (a == "--threads") threads = std::atoi(argv[i + 1]);
-    else if (a == "--res") res = std::atoi(argv[i + 1]);
-    else if (a == "--reps") reps = std::atoi(argv[i + 1]);
-    else if (a == "--brute") brute = std::strtoull(argv[i + 1], nullptr, 10);
+    if (a == "--points")
+      count = std::strtoull(argv[i + 1], nullptr, 10);
+    else if (a == "--threads")
+      threads = std::atoi(argv[i + 1]);
+    else if (a == "--res")
+      res = std::atoi(argv[i + 1]);
+    else if (a == "--reps")
+      reps = std::atoi(argv[i + 1]);
+    else if (a == "--brute")
+      brute = std::strtoull(argv[i + 1], nullptr, 10);
     else {
       std::fprintf(stderr, "usage: %s [--points N] [--threads T] [--res R] [--reps K] [--brute N]\n", argv[0]);
       return 2;
@@ -72,13 +77,15 @@ int main(int argc, char** argv) {
   } shapes[] = {{"sphere", collide_test::makeSphere(1.0f, 48, 96)},
                 {"torus", collide_test::makeTorus(1.0f, 0.35f, 96, 32)},
                 {"basin", collide_test::makeBasin(96)}};
-  std::printf("%zu points (seeded, uniform in the bounds padded by 10%%), %d threads, %d² maps (three front-back16 "
-              "textures), %d alternating runs: depth maps on all points, exact BVH on the first 100000; medians; "
-              "speedup = median (and min) of the per-run BVH/depth ratios; plain loop once on the first %zu points; "
-              "misclass against the exact BVH answer on all points\n\n",
-              count, threads, res, reps, brute);
-  std::printf("| shape | triangles | depth maps | depth-map ns/query | exact BVH ns/query | exact plain loop ns/query | "
-              "speedup vs BVH | speedup vs plain loop | misclass %% |\n|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "%zu points (seeded, uniform in the bounds padded by 10%%), %d threads, %d² maps (three front-back16 "
+      "textures), %d alternating runs: depth maps on all points, exact BVH on the first 100000; medians; "
+      "speedup = median (and min) of the per-run BVH/depth ratios; plain loop once on the first %zu points; "
+      "misclass against the exact BVH answer on all points\n\n",
+      count, threads, res, reps, brute);
+  std::printf(
+      "| shape | triangles | depth maps | depth-map ns/query | exact BVH ns/query | exact plain loop ns/query | "
+      "speedup vs BVH | speedup vs plain loop | misclass %% |\n|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& shape : shapes) {
     const fluid::Bounds b = fluid::meshBounds(shape.mesh.view());
     const glm::vec3 ext = b.hi - b.lo;
@@ -86,7 +93,8 @@ int main(int argc, char** argv) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     std::vector<glm::vec3> points(count);
-    for (glm::vec3& p : points) p = b.lo - glm::vec3(pad) + (ext + glm::vec3(2 * pad)) * glm::vec3(u(rng), u(rng), u(rng));
+    for (glm::vec3& p : points)
+      p = b.lo - glm::vec3(pad) + (ext + glm::vec3(2 * pad)) * glm::vec3(u(rng), u(rng), u(rng));
     fluid::DepthMapCollider collider;
     const fluid::BakeStatus st = fluid::bakeDepthMaps(
         shape.mesh.view(), fluid::defaultMapSpecs(b, res, fluid::DepthMapFormat::front_back16), {}, collider);
@@ -120,7 +128,8 @@ int main(int argc, char** argv) {
     }
     std::printf("| %s | %zu | %d | %.1f | %.0f | %.0f | %.0fx (min %.0fx) | %.0fx | %.3f |\n", shape.name,
                 shape.mesh.indices.size() / 3, collider.depthMapCount(), depth_ns, bvh_ns, plain_ns, median(ratios),
-                *std::min_element(ratios.begin(), ratios.end()), plain_ns / depth_ns, 100.0 * double(wrong) / double(count));
+                *std::min_element(ratios.begin(), ratios.end()), plain_ns / depth_ns,
+                100.0 * double(wrong) / double(count));
     std::fflush(stdout);
   }
   return 0;

@@ -30,9 +30,10 @@ double angleDeg(glm::vec3 a, glm::vec3 b) {
 
 void l1Table(int samples) {
   std::printf("### L1 normal index: angular error of the stored texel normal\n\n");
-  std::printf("%d seeded uniform random unit vectors (std::mt19937 seed 1, normalised Gaussians); error = angle "
-              "between the vector and l1TexelNormal(l1Texel(v, R), R).\n\n",
-              samples);
+  std::printf(
+      "%d seeded uniform random unit vectors (std::mt19937 seed 1, normalised Gaussians); error = angle "
+      "between the vector and l1TexelNormal(l1Texel(v, R), R).\n\n",
+      samples);
   std::printf("| resolution | texels | max error (deg) | mean error (deg) | max·R (deg) |\n|---|---|---|---|---|\n");
   for (int r : {64, 128, 256, 512, 1024}) {
     std::mt19937 rng(1);
@@ -101,18 +102,20 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
                                {"torus", collide_test::makeTorus(1.0f, 0.35f, 96, 32)},
                                {"basin", collide_test::makeBasin(96)}};
   std::printf("### Accuracy against time\n\n");
-  std::printf("Per shape: %zu seeded random points (std::mt19937 seed 42) uniform in the mesh bounds padded by 10%% "
-              "of the largest extent on every side; reference = exact signed distance to the same mesh "
-              "(BVH closest point, crossing-parity sign). *misclass* = inside/outside differs (an invalid sample "
-              "counts as outside), over all points. *|Δd|* and *normal error* over the near-surface band "
-              "|d_exact| < 5%% of the largest extent, valid samples only (normal reference = direction of the "
-              "exact distance gradient). *ns/query* = serial rule-(2) query, median of 3 runs, one thread. "
-              "*bytes* = texels of all maps (the 768 KiB normal index texture at 256² is shared and not "
-              "counted). Shapes: sphere r=1 (48×96 UV), torus R=1 r=0.35 (96×32), fountain basin (96 segments, "
-              "rim overhanging its cavity; tests/collide/collide_meshes.cpp).\n\n",
-              count);
-  std::printf("| shape | maps | depth maps | res | misclass %% | mean \\|Δd\\| | max \\|Δd\\| | mean normal err (deg) | "
-              "max normal err (deg) | ns/query | bytes | bake ms |\n");
+  std::printf(
+      "Per shape: %zu seeded random points (std::mt19937 seed 42) uniform in the mesh bounds padded by 10%% "
+      "of the largest extent on every side; reference = exact signed distance to the same mesh "
+      "(BVH closest point, crossing-parity sign). *misclass* = inside/outside differs (an invalid sample "
+      "counts as outside), over all points. *|Δd|* and *normal error* over the near-surface band "
+      "|d_exact| < 5%% of the largest extent, valid samples only (normal reference = direction of the "
+      "exact distance gradient). *ns/query* = serial rule-(2) query, median of 3 runs, one thread. "
+      "*bytes* = texels of all maps (the 768 KiB normal index texture at 256² is shared and not "
+      "counted). Shapes: sphere r=1 (48×96 UV), torus R=1 r=0.35 (96×32), fountain basin (96 segments, "
+      "rim overhanging its cavity; tests/collide/collide_meshes.cpp).\n\n",
+      count);
+  std::printf(
+      "| shape | maps | depth maps | res | misclass %% | mean \\|Δd\\| | max \\|Δd\\| | mean normal err (deg) | "
+      "max normal err (deg) | ns/query | bytes | bake ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Shape& shape : shapes) {
     const fluid::Bounds b = fluid::meshBounds(shape.mesh.view());
@@ -158,10 +161,10 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
             max_n = std::max(max_n, dn);
           }
         }
-        std::printf("| %s | %s | %d | %d² | %.3f | %.4f | %.3f | %.2f | %.1f | %.0f | %zu | %.0f |\n", shape.name.c_str(),
-                    config.name.c_str(), collider.depthMapCount(), res, 100.0 * double(wrong) / double(count),
-                    band ? sum_d / double(band) : 0.0, max_d, band ? sum_n / double(band) : 0.0, max_n, median(times),
-                    collider.bytes(), bake_ms);
+        std::printf("| %s | %s | %d | %d² | %.3f | %.4f | %.3f | %.2f | %.1f | %.0f | %zu | %.0f |\n",
+                    shape.name.c_str(), config.name.c_str(), collider.depthMapCount(), res,
+                    100.0 * double(wrong) / double(count), band ? sum_d / double(band) : 0.0, max_d,
+                    band ? sum_n / double(band) : 0.0, max_n, median(times), collider.bytes(), bake_ms);
         std::fflush(stdout);
       }
     }

@@ -121,7 +121,8 @@ int main(int argc, char** argv) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const double n = static_cast<double>(side) * side;
     std::printf(
-        "| %u (%u²) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) "
+        "| %u (%u²) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f ms) | %.0f (%.2f "
+        "ms) "
         "|\n",
         side * side, side, n / update, update, n / collide, collide, n / collide0, collide0, n / refresh, refresh,
         n / pass, pass, n / draw, draw);

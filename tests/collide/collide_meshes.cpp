@@ -45,7 +45,8 @@ Mesh makeTorus(float major_radius, float minor_radius, int major_segments, int m
 Mesh makeBox(glm::vec3 lo, glm::vec3 hi) {
   Mesh m;
   for (int k = 0; k < 8; ++k) m.positions.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
-  const std::uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const std::uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                     {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : faces) m.indices.insert(m.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
   return m;
 }
@@ -81,8 +82,8 @@ Mesh makeLathe(const std::vector<glm::vec2>& profile, int segments) {
 Mesh makeBasin(int segments) {
   // Profile from the bottom centre, out along the base, up the outer wall, over the rim,
   // down the overhanging inner wall and across the floor back to the axis.
-  const std::vector<glm::vec2> profile = {{0.0f, 0.0f},  {1.0f, 0.0f},  {1.2f, 0.6f},  {1.0f, 1.0f},
-                                          {0.8f, 1.0f},  {1.0f, 0.6f},  {0.85f, 0.15f}, {0.0f, 0.15f}};
+  const std::vector<glm::vec2> profile = {{0.0f, 0.0f}, {1.0f, 0.0f}, {1.2f, 0.6f},   {1.0f, 1.0f},
+                                          {0.8f, 1.0f}, {1.0f, 0.6f}, {0.85f, 0.15f}, {0.0f, 0.15f}};
   return makeLathe(profile, segments);
 }
 

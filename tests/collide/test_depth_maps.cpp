@@ -366,7 +366,7 @@ TEST(DepthMap, MovingColliderPoseAndParticleStep) {
   fluid::queryWorld(c, pose, world, out, scratch);
   EXPECT_TRUE(isInside(out[0]));
   EXPECT_NEAR(out[1].distance, 0.4f, 1e-3f);
-  EXPECT_GT(out[1].normal.y, 0.999f);  // world-space normal
+  EXPECT_GT(out[1].normal.y, 0.999f);         // world-space normal
   EXPECT_NEAR(out[2].distance, 1.9f, 1e-3f);  // below the plate's other face
   EXPECT_LT(out[2].normal.y, -0.999f);
 
@@ -422,7 +422,8 @@ namespace {
 TEST(TestMeshes, ConvexOnesAreWoundOutwardConsistently) {
   for (const Mesh& m : {collide_test::makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)), sphere()}) {
     for (std::size_t t = 0; t < m.indices.size(); t += 3) {
-      const glm::vec3 a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]], c = m.positions[m.indices[t + 2]];
+      const glm::vec3 a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]],
+                      c = m.positions[m.indices[t + 2]];
       const glm::vec3 n = glm::cross(b - a, c - a);
       ASSERT_GT(glm::dot(n, (a + b + c) / 3.0f), 0.0f) << t / 3;
     }

@@ -118,9 +118,9 @@ TEST(L1Normal, AngularErrorAt256IsBounded) {
     max_error = std::max(max_error, e);
     sum += e;
   }
-  EXPECT_LT(max_error, worstCaseDeg(256));  // 0.98°
+  EXPECT_LT(max_error, worstCaseDeg(256));         // 0.98°
   EXPECT_GT(max_error, 0.5f * worstCaseDeg(256));  // and the bound is not vacuous
-  EXPECT_LT(sum / count, 0.36);  // measured 0.334° (table)
+  EXPECT_LT(sum / count, 0.36);                    // measured 0.334° (table)
   // Every texel decodes to a unit vector that encodes back to the same texel.
   for (int j = 0; j < 256; ++j) {
     for (int i = 0; i < 256; ++i) {

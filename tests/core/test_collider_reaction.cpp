@@ -30,27 +30,27 @@ TEST(CollisionResponse, SkipsFrictionBelowSpeedThreshold) {
 }
 
 TEST(ResolveCollision, NoCollisionWhenPredictedOutsideOrInvalid) {
-  const auto outside = fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, 0.5f}, {0, 0, -1}, sample(0.5f), {}, 0.5f,
-                                               0.01f, {});
+  const auto outside =
+      fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, 0.5f}, {0, 0, -1}, sample(0.5f), {}, 0.5f, 0.01f, {});
   EXPECT_EQ(outside.outcome, fluid::CollisionOutcome::none);
   EXPECT_EQ(outside.position, glm::vec3(0, 0, 0.5f));
-  const auto invalid = fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, -0.5f}, {0, 0, -1}, fluid::ColliderSample{},
-                                               {}, 0.5f, 0.01f, {});
+  const auto invalid = fluid::resolveCollision({0, 0, 1}, sample(1.0f), {0, 0, -0.5f}, {0, 0, -1},
+                                               fluid::ColliderSample{}, {}, 0.5f, 0.01f, {});
   EXPECT_EQ(invalid.outcome, fluid::CollisionOutcome::none);
 }
 
 TEST(ResolveCollision, AboutToCollideReactsAndEndsOutside) {
   const fluid::CollisionMaterial material{0.0f, 0.5f, 0.0f};
-  const auto result = fluid::resolveCollision({0, 0, 0.1f}, sample(0.1f), {0, 0, -0.2f}, {0, 0, -3.0f}, sample(-0.2f), {},
-                                              0.1f, 0.01f, material);
+  const auto result = fluid::resolveCollision({0, 0, 0.1f}, sample(0.1f), {0, 0, -0.2f}, {0, 0, -3.0f}, sample(-0.2f),
+                                              {}, 0.1f, 0.01f, material);
   EXPECT_EQ(result.outcome, fluid::CollisionOutcome::reacted);
   EXPECT_NEAR(result.position.z, 0.01f, 1e-6f);
   EXPECT_NEAR(result.velocity.z, 1.5f, 1e-6f);
 }
 
 TEST(ResolveCollision, CaughtParticleIsPushedOutHeadingOutside) {
-  const auto result = fluid::resolveCollision({0, 0, -0.3f}, sample(-0.3f), {0, 0, -0.4f}, {1.0f, 0, -1.0f}, sample(-0.4f),
-                                              {}, 0.1f, 0.0f, {});
+  const auto result = fluid::resolveCollision({0, 0, -0.3f}, sample(-0.3f), {0, 0, -0.4f}, {1.0f, 0, -1.0f},
+                                              sample(-0.4f), {}, 0.1f, 0.0f, {});
   EXPECT_EQ(result.outcome, fluid::CollisionOutcome::pushed_out);
   EXPECT_GE(result.position.z, 0.0f);
   EXPECT_GT(result.velocity.z, 0.0f);

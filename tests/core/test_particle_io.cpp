@@ -9,13 +9,13 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratchDir() {
-  fs::path dir = fs::temp_directory_path() / ("fluiddemo_io_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                              "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  fs::path dir =
+      fs::temp_directory_path() / ("fluiddemo_io_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                                   "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
 }
-
 
 TEST(ParticleIo, ParsesXyzWithCommentsAndBlankLines) {
   fluid::ParticlePositions particles;
@@ -114,9 +114,12 @@ TEST(ParticleIo, GarbagePlyHeaderIsRejected) {
   fluid::ParticlePositions particles;
   EXPECT_FALSE(fluid::parseParticleText("ply\nformat ascii 1.0\nelement vertex 3\n", "ply", "t.ply", particles).ok());
   EXPECT_FALSE(fluid::parseParticleText("plx\n", "ply", "t.ply", particles).ok());
-  EXPECT_FALSE(fluid::parseParticleText("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "ply", "t.ply", particles).ok());
+  EXPECT_FALSE(
+      fluid::parseParticleText("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "ply", "t.ply", particles)
+          .ok());
   const auto status = fluid::parseParticleText(
-      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n",
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 "
+      "3\n",
       "ply", "t.ply", particles);
   EXPECT_NE(status.error.find("file ends after 1 of 2 vertex lines"), std::string::npos) << status.error;
 }

@@ -267,8 +267,9 @@ TEST(EffectGating, UnknownSolverAndOrderAreNamed) {
   std::string error = game::parseSceneText(R"({"effects": {"sph_fluid": {"solver": "flip"}}})", "s.json", scene).error;
   EXPECT_NE(error.find("s.json: effects.sph_fluid.solver"), std::string::npos) << error;
   EXPECT_NE(error.find("flip"), std::string::npos) << error;
-  error = game::parseSceneText(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})", "o.json", scene)
-              .error;
+  error =
+      game::parseSceneText(R"({"effects": {"sph_fluid": {}, "fluid_surface": {"order": "random"}}})", "o.json", scene)
+          .error;
   EXPECT_NE(error.find("o.json: effects.fluid_surface.order"), std::string::npos) << error;
   EXPECT_NE(error.find("random"), std::string::npos) << error;
 
@@ -328,19 +329,21 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
         << error;
     EXPECT_EQ(fluid_only.body_coupling, nullptr);
     ASSERT_TRUE(game::buildWorld(
-        parse(R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"max_particles": 200, "couple_bodies": false}}})"),
+        parse(
+            R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"max_particles": 200, "couple_bodies": false}}})"),
         game::contentDir(), switched_off, error))
         << error;
     EXPECT_EQ(switched_off.body_coupling, nullptr);
   }
   game::World world;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.4},
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.4},
                                                     "sph_fluid": {"max_particles": 800}}})"),
-                               game::contentDir(), world, error))
+                       game::contentDir(), world, error))
       << error;
   ASSERT_NE(world.body_coupling, nullptr);
   engine::Profiler profiler;
-  runFrames(world, profiler, 40);  // the jet is up
+  runFrames(world, profiler, 40);                      // the jet is up
   EXPECT_EQ(world.body_coupling->forces_applied, 0u);  // no crate yet
   const glm::vec3 nozzle = world.fountain.geometry().nozzle;
   game::throwCrate(*world.rigid_bodies, nozzle + glm::vec3(0.0f, 1.2f, 0.0f), glm::vec3(0.0f, -1.0f, 0.0f));
@@ -365,6 +368,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
     inside += glm::all(glm::lessThan(glm::abs(local), glm::vec3(0.2f - 1e-3f)));
   }
   EXPECT_EQ(inside, 0u);
-  std::printf("[ metric ] crate on the jet: coupled %d of 40 steps, upward impulse %.2f N s, forces capped %llu times\n",
-              coupled_steps, upward_impulse, static_cast<unsigned long long>(world.body_coupling->clamped));
+  std::printf(
+      "[ metric ] crate on the jet: coupled %d of 40 steps, upward impulse %.2f N s, forces capped %llu times\n",
+      coupled_steps, upward_impulse, static_cast<unsigned long long>(world.body_coupling->clamped));
 }

@@ -11,7 +11,6 @@
 #include <cstdlib>
 #include <fstream>
 
-
 namespace {
 
 namespace fs = std::filesystem;

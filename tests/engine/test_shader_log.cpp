@@ -32,7 +32,8 @@ TEST(ShaderLog, SourceNumbersNameTheirFiles) {
   EXPECT_EQ(engine::formatShaderLog("0:12(5): error: syntax error\n", names), "<prelude>:12:5: error: syntax error");
   EXPECT_EQ(engine::formatShaderLog("2:7(1): warning: unused\n", names), "update.frag:7:1: warning: unused");
   EXPECT_EQ(engine::formatShaderLog("1(33) : error C0000: bad\n", names), "collide.glsl:33: error C0000: bad");
-  EXPECT_EQ(engine::formatShaderLog("ERROR: 1:4: 'x' : undeclared\n", names), "collide.glsl:4: error: 'x' : undeclared");
+  EXPECT_EQ(engine::formatShaderLog("ERROR: 1:4: 'x' : undeclared\n", names),
+            "collide.glsl:4: error: 'x' : undeclared");
   EXPECT_EQ(engine::formatShaderLog("9:3(2): error: odd\n", names), "update.frag:3:2: error: odd");
   EXPECT_EQ(engine::formatShaderLog("something else\n", names), "update.frag: something else");
 }

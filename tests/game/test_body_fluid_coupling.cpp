@@ -69,7 +69,8 @@ float settle(Tank& t, double seconds, bool coupled) {
       if (s >= steps - tail) sum += engine::bodyState(*t.physics, t.box).position.y;
       continue;
     }
-    const fluid::SphStatus st = fluid::advanceSph(t.sph, dt, [](const fluid::SphStepStats&) {}, 100000);
+    const fluid::SphStatus st = fluid::advanceSph(
+        t.sph, dt, [](const fluid::SphStepStats&) {}, 100000);
     EXPECT_TRUE(st.ok()) << st.error;
     if (!st.ok()) return NAN;
     EXPECT_EQ(game::forcesToBodies(t.coupling, t.sph, *t.physics), "");

@@ -231,9 +231,10 @@ TEST_F(FluidRenderTest, WaterAbsorbsThroughItselfNotToTheBackground) {
   // Red is absorbed most (0.9 per metre); through a blob well under a metre thick, most of it
   // survives (a 20 m path would leave exp(-18) of it).
   EXPECT_GT(red_sky, 0.4 * red_background);
-  std::printf("[ metric ] water over sky vs over a wall 0.3 m behind: %zu of %zu covered px differ by > 3/255; "
-              "red kept %.2f of the background's\n",
-              differ, covered, red_sky / red_background);
+  std::printf(
+      "[ metric ] water over sky vs over a wall 0.3 m behind: %zu of %zu covered px differ by > 3/255; "
+      "red kept %.2f of the background's\n",
+      differ, covered, red_sky / red_background);
 }
 
 // The sort-order switch: out-of-order triangle pairs (inversions of the centroid distances)
