@@ -5,6 +5,9 @@
 //                                           density error over 30 fps frames, compute s per sim s
 //   bench_sph accuracy [--png FILE]         dam break (a = 0.1 m) for 2 s per solver and knob set:
 //                                           density error, volume change, compute time; PNG plot
+//   bench_sph steps [--solver S] [--steps N] [--threads T]
+//                                           N steps of dambreak_box from t = 0 (a fixed, short
+//                                           workload for callgrind instruction counts)
 // All tables are printed as markdown on stdout. Timings are wall time of stepSph (steady_clock)
 // and process CPU time; on a loaded machine compare within one run only.
 #include "sph_png.hpp"
@@ -17,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <string>
@@ -75,6 +79,26 @@ int throughput(int steps) {
       }
     }
   }
+  return 0;
+}
+
+// A fixed workload for profiles: N steps of dambreak_box from t = 0 on T threads.
+int fixedSteps(SphSolverKind solver, int steps, int threads, const Overrides& extra) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  SphScene s = makeScene("dambreak_box", solver, extra);
+  reserveSph(s.world, s.world.particles.size());
+  double ms = 0.0, nb = 0.0, iters = 0.0;
+  for (int i = 0; i < steps; ++i) {
+    SphStepStats st;
+    if (!stepSph(s.world, 0.0f, &st).ok()) return 1;
+    ms += st.step_ms;
+    nb += st.neighbor_ms;
+    iters += st.density_iterations + st.divergence_iterations;
+    if (std::getenv("SPH_BENCH_VERBOSE")) std::printf("step %d: dt %.3f ms, density it %d, divergence it %d, avg err %.4f %%, %.2f ms\n", i, 1e3 * st.dt, st.density_iterations, st.divergence_iterations, 100.0 * st.avg_density_error, st.step_ms);
+  }
+  std::printf("%s: %zu particles, %d steps to t = %.4f s, %.2f ms/step (neighbour search %.2f ms), %.2f iterations/step\n",
+              sphSolverName(solver), s.world.particles.size(), steps, s.world.time, ms / steps, nb / steps,
+              iters / steps);
   return 0;
 }
 
@@ -258,19 +282,35 @@ int accuracy(const std::string& png) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] | accuracy [--png FILE]\n");
+    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] | accuracy [--png FILE] | steps [--solver S] [--steps N] [--threads T] [--set key=value ...]\n");
     return 2;
   }
   const std::string cmd = argv[1];
   int steps = 20;
   double seconds = 2.0;
   std::string png;
+  SphSolverKind solver = SphSolverKind::dfsph;
+  Overrides extra;  // --set key=value, applied after each configuration's own keys
   std::vector<int> threads{1, 2};
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--steps") steps = std::atoi(v.c_str());
     else if (k == "--seconds") seconds = std::atof(v.c_str());
     else if (k == "--png") png = v;
+    else if (k == "--set") {
+      const auto eq = v.find('=');
+      if (eq == std::string::npos) {
+        std::fprintf(stderr, "bench_sph: --set expects key=value, got %s\n", v.c_str());
+        return 2;
+      }
+      extra.emplace_back(v.substr(0, eq), v.substr(eq + 1));
+    }
+    else if (k == "--solver") {
+      if (!parseSphSolver(v, solver)) {
+        std::fprintf(stderr, "bench_sph: unknown solver %s\n", v.c_str());
+        return 2;
+      }
+    }
     else if (k == "--threads") {
       threads.clear();
       for (char ch : v)
@@ -287,6 +327,7 @@ int main(int argc, char** argv) {
   if (cmd == "throughput") return throughput(steps);
   if (cmd == "dambreak_box") return damBreakBox(seconds, threads);
   if (cmd == "accuracy") return accuracy(png);
+  if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
   std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());
   return 2;
 }
