@@ -365,7 +365,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
   // 1. Neighbour grid, re-sort of the particle data by cell (locality), neighbour lists.
   const auto t_nb = Clock::now();
-  buildNeighborGrid(w.grid, S.position, H, P.domain_min, P.domain_max);
+  buildNeighborGrid(w.grid, S.position, 0.5f * H, P.domain_min, P.domain_max);
   gather(S.position, w.vec_a, w.grid.order);
   gather(S.velocity, w.vec_a, w.grid.order);
   gather(S.id, w.u32_tmp, w.grid.order);
