@@ -180,20 +180,27 @@ ColliderPose advancedPose(const ColliderPose& pose, float dt) {
   return out;
 }
 
-// Queries collider c at `points` (world) with `pose`; samples get world-space normals.
+// Queries collider c at `points` (world) with `pose`; samples get world-space normals. One pass
+// in chunks: transform to collider space, batch query (thread-safe on disjoint output ranges per
+// the contract), normals back to world space. An unrotated pose (the common static case: box
+// walls, the fountain) skips both rotations.
 void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& pose, const std::vector<glm::vec3>& points,
                    std::vector<ColliderSample>& out) {
   const std::size_t n = points.size();
   w.local_points.resize(n);
   out.resize(n);
   const glm::quat inv = glm::inverse(pose.rotation);
-  forEach(n, [&](std::size_t i) { w.local_points[i] = inv * (points[i] - pose.translation); });
-  // Batch query in chunks (thread-safe on disjoint output ranges per the contract).
+  const bool rotated = !(pose.rotation.w == 1.0f && pose.rotation.x == 0.0f && pose.rotation.y == 0.0f &&
+                         pose.rotation.z == 0.0f);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (rotated)
+      for (std::size_t i = r.begin(); i != r.end(); ++i) w.local_points[i] = inv * (points[i] - pose.translation);
+    else
+      for (std::size_t i = r.begin(); i != r.end(); ++i) w.local_points[i] = points[i] - pose.translation;
     col.shape->query(std::span<const glm::vec3>(w.local_points.data() + r.begin(), r.size()),
                      std::span<ColliderSample>(out.data() + r.begin(), r.size()));
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      out[i].normal = pose.rotation * out[i].normal;
+      if (rotated) out[i].normal = pose.rotation * out[i].normal;
       if (!std::isfinite(out[i].distance)) out[i].valid = false;  // never let a bad shape spread NaN
     }
   });
