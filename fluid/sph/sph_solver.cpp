@@ -8,6 +8,10 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -204,6 +208,50 @@ void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& po
       if (!std::isfinite(out[i].distance)) out[i].valid = false;  // never let a bad shape spread NaN
     }
   });
+}
+
+// The two pair loops of every solver iteration (Bender & Koschier 2015 eq. 9 / 13), on the
+// per-pair gradients G[k] = m_j grad W_ij. With SSE2 (every x86-64) a pair's three components
+// are one vector operation; the sums run in the same pair order for every thread count.
+#if defined(__SSE2__)
+inline __m128 load3(const glm::vec3& v) {
+  // x, y through one 64-bit load (__m64 may alias), z separately: never reads past the element.
+  return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&v.x)), _mm_load_ss(&v.z));
+}
+inline glm::vec3 store3(__m128 a) {
+  alignas(16) float f[4];
+  _mm_store_ps(f, a);
+  return {f[0], f[1], f[2]};
+}
+#endif
+
+// sum_k (v_i - v_j(k)) . G[k]
+inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b,
+                            std::uint32_t e, glm::vec3 vi) {
+#if defined(__SSE2__)
+  __m128 acc = _mm_setzero_ps();
+  const __m128 v = load3(vi);
+  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), load3(G[k])));
+  const glm::vec3 c = store3(acc);
+  return c.x + c.y + c.z;
+#else
+  glm::vec3 acc(0.0f);
+  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * G[k];
+  return acc.x + acc.y + acc.z;
+#endif
+}
+
+// start + sum_k (k_i + k_j(k)) G[k]
+inline glm::vec3 pairKappaSum(const float* kr, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e,
+                              float ki, glm::vec3 start) {
+#if defined(__SSE2__)
+  __m128 acc = load3(start);
+  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), load3(G[k])));
+  return store3(acc);
+#else
+  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * G[k];
+  return start;
+#endif
 }
 
 template <typename T>
@@ -591,8 +639,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
     auto densityRate = [&](std::size_t i) {
-      float r = 0.0f;
-      for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) r += glm::dot(V[i] - V[nbr[k]], G[k]);
+      const float r = pairDivergence(V, G.data(), nbr.data(), off[i], off[i + 1], V[i]);
       return r + rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
     };
     auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
@@ -602,8 +649,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forEach(n, [&](std::size_t i) {
-        glm::vec3 dv = kMirror * rho0 * kr[i] * w.boundary_gradient[i];
-        for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) dv += (kr[i] + kr[nbr[k]]) * G[k];
+        const glm::vec3 dv =
+            pairKappaSum(kr.data(), G.data(), nbr.data(), off[i], off[i + 1], kr[i], kMirror * rho0 * kr[i] * w.boundary_gradient[i]);
         w.vec_b[i] = V[i] - h * dv;
         total[i] += kr[i];
       });
