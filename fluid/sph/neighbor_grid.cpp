@@ -25,8 +25,9 @@ glm::ivec3 NeighborGrid::cellOf(glm::vec3 p) const {
   const glm::vec3 c = (p - origin) / cell_size;
   glm::ivec3 out;
   for (int a = 0; a < 3; ++a) {
-    // Clamp in float first: float -> int conversion of out-of-range values is undefined.
-    const float f = std::clamp(std::floor(c[a]), 0.0f, static_cast<float>(dims[a] - 1));
+    // Clamp in float first (float -> int conversion of out-of-range values is undefined); on the
+    // clamped, non-negative value truncation equals floor, without a libm call.
+    const float f = std::clamp(c[a], 0.0f, static_cast<float>(dims[a] - 1));
     out[a] = static_cast<int>(f);
   }
   return out;
