@@ -202,7 +202,7 @@ RunResult runScene(SphScene& s, double seconds, double fps) {
   return r;
 }
 
-int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Overrides& extra) {
+int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Overrides& extra, const SphSolverKind* only) {
   std::printf("| solver (threads) | ms per step (wall) | mean time step | mean density error | s compute per simulated s (wall) | CPU s per simulated s |\n");
   std::printf("|---|---|---|---|---|---|\n");
   struct Config {
@@ -218,6 +218,7 @@ int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Ove
       {SphSolverKind::wcsph, {{"cfl", "0.1"}, {"sound_speed", "28"}}, "WCSPH (CFL 0.1, c_s = 28 m/s)"},
   };
   for (const Config& c : configs) {
+    if (only && c.solver != *only) continue;
     for (int threads : thread_counts) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
       Overrides o = c.o;
@@ -337,7 +338,7 @@ int accuracy(const std::string& png) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] | accuracy [--png FILE] | fountain [--threads 1,2] | steps [--solver S] [--steps N] [--threads T] [--set key=value ...]\n");
+    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] [--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | steps [--solver S] [--steps N] [--threads T] [--set key=value ...]\n");
     return 2;
   }
   const std::string cmd = argv[1];
@@ -345,6 +346,7 @@ int main(int argc, char** argv) {
   double seconds = 2.0;
   std::string png;
   SphSolverKind solver = SphSolverKind::dfsph;
+  bool solver_given = false;  // dambreak_box: only that solver's rows
   Overrides extra;  // --set key=value, applied after each configuration's own keys
   std::vector<int> threads{1, 2};
   for (int i = 2; i + 1 < argc; i += 2) {
@@ -361,6 +363,7 @@ int main(int argc, char** argv) {
       extra.emplace_back(v.substr(0, eq), v.substr(eq + 1));
     }
     else if (k == "--solver") {
+      solver_given = true;
       if (!parseSphSolver(v, solver)) {
         std::fprintf(stderr, "bench_sph: unknown solver %s\n", v.c_str());
         return 2;
@@ -380,7 +383,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (cmd == "throughput") return throughput(steps);
-  if (cmd == "dambreak_box") return damBreakBox(seconds, threads, extra);
+  if (cmd == "dambreak_box") return damBreakBox(seconds, threads, extra, solver_given ? &solver : nullptr);
   if (cmd == "accuracy") return accuracy(png);
   if (cmd == "fountain") return fountain(threads, extra);
   if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
