@@ -87,8 +87,8 @@ struct SphParams {
   float collision_skin = 0.0f;      // m pushed beyond a collider surface; 0 = 0.01 r
 };
 
-// SoA particle store. Index order changes every step (particles are re-sorted by grid cell for
-// locality); `id` is stable and unique for the lifetime of the world.
+// SoA particle store. Index order may change at every step (particles are re-sorted by grid cell
+// for locality); `id` is stable and unique for the lifetime of the world.
 struct ParticleStore {
   std::vector<glm::vec3> position;  // m
   std::vector<glm::vec3> velocity;  // m/s
@@ -165,6 +165,11 @@ struct SphScratch {
   float wall_neighbours = 0.0f;      // lattice neighbours per unit boundary volume
   NeighborGrid grid;
   NeighborLists neighbors;
+  // WCSPH Verlet list (radius H + skin) and the positions it was built at (see stepSph).
+  NeighborLists verlet;
+  std::vector<glm::vec3> verlet_position;
+  float verlet_radius = 0.0f;
+  bool verlet_valid = false;
   std::vector<glm::vec3> gradients;  // per neighbour pair: m_j grad W_ij (DFSPH)
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;

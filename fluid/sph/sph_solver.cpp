@@ -30,6 +30,8 @@ constexpr int kWallTable = 1024;
 constexpr float kMirror = 2.0f;
 // Share of the last step's summed stiffness that warm-starts the constant-density solve.
 constexpr float kWarmShare = 0.4f;
+// WCSPH Verlet-list skin as a fraction of the support H (see the neighbour search in stepSph).
+constexpr float kWcsphSkin = 0.2f;
 
 using Clock = std::chrono::steady_clock;
 float msSince(Clock::time_point t0) {
@@ -419,14 +421,69 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const std::size_t nc = world.colliders.size();
 
   // 1. Neighbour grid, re-sort of the particle data by cell (locality), neighbour lists.
+  // WCSPH keeps a Verlet list (Verlet 1967; radius H + skin) over several steps: its step is
+  // bounded by the sound speed, so a particle moves about 0.4 d v/c_s <= 0.04 d per step (Mach 0.1),
+  // and the lists (and the data order) are rebuilt only once some particle has moved skin/2 since
+  // the last build: no pair within H can be missing before that. Each step filters the Verlet list
+  // to the exact list (|x_ij| < H), so the solver sees the same pairs as with a fresh search, in a
+  // fixed order. DFSPH moves up to cfl d per step and rebuilds every step (skin 0).
   const auto t_nb = Clock::now();
-  buildNeighborGrid(w.grid, S.position, 0.5f * H, P.domain_min, P.domain_max);
-  gather(S.position, w.vec_a, w.grid.order);
-  gather(S.velocity, w.vec_a, w.grid.order);
-  gather(S.id, w.u32_tmp, w.grid.order);
-  gather(w.warm_kappa, w.float_tmp, w.grid.order);
-  markGridReordered(w.grid);
-  findNeighbors(w.grid, S.position, H, w.neighbors);
+  const float verlet_skin = P.solver == SphSolverKind::wcsph ? kWcsphSkin * H : 0.0f;
+  bool rebuild = verlet_skin == 0.0f || !w.verlet_valid || stats.emitted > 0 || stats.removed > 0 ||
+                 w.verlet_position.size() != n || w.verlet_radius != H + verlet_skin;
+  if (!rebuild) {
+    const float moved = reduce(
+        n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(S.position[i] - w.verlet_position[i])); },
+        [](float a, float b) { return std::max(a, b); });
+    rebuild = !(2.0f * moved < verlet_skin);
+  }
+  if (rebuild) {
+    buildNeighborGrid(w.grid, S.position, 0.5f * (H + verlet_skin), P.domain_min, P.domain_max);
+    gather(S.position, w.vec_a, w.grid.order);
+    gather(S.velocity, w.vec_a, w.grid.order);
+    gather(S.id, w.u32_tmp, w.grid.order);
+    gather(w.warm_kappa, w.float_tmp, w.grid.order);
+    markGridReordered(w.grid);
+    if (verlet_skin > 0.0f) {
+      findNeighbors(w.grid, S.position, H + verlet_skin, w.verlet);
+      w.verlet_position.resize(n);
+      forEach(n, [&](std::size_t i) { w.verlet_position[i] = S.position[i]; });
+      w.verlet_radius = H + verlet_skin;
+      w.verlet_valid = true;
+    } else {
+      findNeighbors(w.grid, S.position, H, w.neighbors);
+      w.verlet_valid = false;
+    }
+  }
+  if (verlet_skin > 0.0f) {
+    // Exact lists from the Verlet list: count, prefix sum, fill (same order as the Verlet list).
+    const auto& vo = w.verlet.offsets;
+    const auto& vi = w.verlet.indices;
+    auto& nb = w.neighbors;
+    const float h2 = H * H;
+    nb.counts.resize(n);
+    nb.offsets.resize(n + 1);
+    forEach(n, [&](std::size_t i) {
+      std::uint32_t c = 0;
+      const glm::vec3 p = S.position[i];
+      for (std::uint32_t k = vo[i]; k < vo[i + 1]; ++k) {
+        const glm::vec3 dx = p - S.position[vi[k]];
+        c += glm::dot(dx, dx) < h2 ? 1u : 0u;
+      }
+      nb.counts[i] = c;
+    });
+    nb.offsets[0] = 0;
+    for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + nb.counts[i];
+    nb.indices.resize(nb.offsets[n]);
+    forEach(n, [&](std::size_t i) {
+      std::uint32_t out = nb.offsets[i];
+      const glm::vec3 p = S.position[i];
+      for (std::uint32_t k = vo[i]; k < vo[i + 1]; ++k) {
+        const glm::vec3 dx = p - S.position[vi[k]];
+        if (glm::dot(dx, dx) < h2) nb.indices[out++] = vi[k];
+      }
+    });
+  }
   stats.neighbor_ms = msSince(t_nb);
   const auto& off = w.neighbors.offsets;
   const auto& nbr = w.neighbors.indices;

@@ -130,6 +130,10 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.neighbors.counts.reserve(capacity);
   w.neighbors.slots.reserve(capacity * NeighborLists::kSlots);
   w.neighbors.offsets.reserve(capacity + 1);
+  w.verlet.counts.reserve(capacity);
+  w.verlet.slots.reserve(capacity * NeighborLists::kSlots);
+  w.verlet.offsets.reserve(capacity + 1);
+  w.verlet_position.reserve(capacity);
   w.grid.order.reserve(capacity);
   w.grid.particle_key.reserve(capacity);
 }
