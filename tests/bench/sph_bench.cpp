@@ -225,7 +225,9 @@ int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Ove
       o.insert(o.end(), extra.begin(), extra.end());
       SphScene s = makeScene("dambreak_box", c.solver, o);
       const RunResult r = runScene(s, seconds, 30.0);
-      std::printf("| %s (%d) | %.1f | %.2f ms | %.3f %% | %.1f | %.1f |\n", c.label, threads, r.wall_ms / r.steps,
+      std::string label = c.label;
+      for (const auto& kv : extra) label += ", " + kv.first + "=" + kv.second;  // --set keys (override the label's)
+      std::printf("| %s (%d) | %.1f | %.2f ms | %.3f %% | %.1f | %.1f |\n", label.c_str(), threads, r.wall_ms / r.steps,
                   1e3 * r.mean_dt, 100.0 * r.frame_error, r.wall_ms / 1e3 / r.sim_seconds, r.cpu_s / r.sim_seconds);
       std::fflush(stdout);
     }
