@@ -778,8 +778,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         // one-off push from the last step must not be repeated on a particle that already
         // expands, since the solver never pulls particles back (only compression is corrected).
         // The share is 0.4 rather than the paper's full kappa: with 0.5 the randomised stability
-        // test (a jet against a collider) gains energy; 0.4 passes it and still saves about a
-        // third of the iterations on dambreak_box (bench_sph steps --set warm_start=0|1).
+        // test (a jet against a collider) gains energy; 0.4 passes it and still saves 21-33 % of
+        // the iterations on dambreak_box (see SphParams::warm_start).
         forEach(n, [&](std::size_t i) {
           kr[i] = S.density[i] + dt * densityRate(i) > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
         });
