@@ -46,6 +46,8 @@ const KeySpec kDambreakBox[] = {
 // Solver knobs, shared by all scenes (defaults: SphParams).
 const KeySpec kSolver[] = {
     {"cfl", 0.4f, 0.01f, 1.0f, "CFL number: dt <= cfl * d / v_max"},
+    {"force_bound", 0.0025f, 0.0f, 1.0f, "DFSPH force condition |g| dt^2 <= force_bound * cfl * d; 0 = off"},
+    {"warm_start", 1.0f, 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)"},
     {"max_dt", 0.005f, 1e-7f, 1.0f, "upper bound of the time step (s)"},
     {"viscosity", 0.01f, 0.0f, 100.0f, "Laplacian viscosity nu"},
     {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},
@@ -145,6 +147,8 @@ SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
   SphParams& p = w.params;
   p.solver = solver;
   p.cfl = get("cfl");
+  p.force_bound = get("force_bound");
+  p.warm_start = get("warm_start") != 0.0f;
   p.max_time_step = get("max_dt");
   p.min_time_step = std::min(p.min_time_step, p.max_time_step);
   p.viscosity = get("viscosity");

@@ -62,6 +62,7 @@ SphStatus validateSphParams(const SphParams& p) {
       {"viscosity", p.viscosity, 0.0f, 100.0f, "0 .. 100"},
       {"xsph", p.xsph, 0.0f, 1.0f, "0 .. 1"},
       {"cfl", p.cfl, 0.01f, 1.0f, "0.01 .. 1"},
+      {"force_bound", p.force_bound, 0.0f, 1.0f, "0 (off) .. 1"},
       {"max_time_step", p.max_time_step, 1e-7f, 1.0f, "1e-7 .. 1 s"},
       {"min_time_step", p.min_time_step, 1e-9f, p.max_time_step, "1e-9 s .. max_time_step"},
       {"max_speed", p.max_speed, 0.0f, 1e6f, "0 (off) .. 1e6 m/s"},
@@ -120,7 +121,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel, &w.local_points})
     v->reserve(capacity);
-  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.warm_kappa_v, &w.density_adv, &w.boundary_volume,
+  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume,
                   &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
   w.u32_tmp.reserve(capacity);
@@ -129,6 +130,10 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.neighbors.counts.reserve(capacity);
   w.neighbors.slots.reserve(capacity * NeighborLists::kSlots);
   w.neighbors.offsets.reserve(capacity + 1);
+  w.verlet.counts.reserve(capacity);
+  w.verlet.slots.reserve(capacity * NeighborLists::kSlots);
+  w.verlet.offsets.reserve(capacity + 1);
+  w.verlet_position.reserve(capacity);
   w.grid.order.reserve(capacity);
   w.grid.particle_key.reserve(capacity);
 }

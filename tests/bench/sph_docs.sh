@@ -12,6 +12,15 @@ tmp=$(mktemp -d)
 "$BENCH" accuracy --png docs/sph_accuracy.png > "$tmp/accuracy.md"
 "$BENCH" throughput --steps 20 > "$tmp/throughput.md"
 "$BENCH" dambreak_box --seconds "$BOX_SECONDS" --threads 12 > "$tmp/box.md"
+"$BENCH" fountain --threads 12 > "$tmp/fountain.md"
+# How much CPU a two-thread run gets on this machine right now (200 % = two idle cores).
+share=$( { /usr/bin/time -f %P "$BENCH" steps --steps 20 --threads 2 > /dev/null; } 2>&1 | tail -1 )
+# Load-independent cost: instructions of 8 dambreak_box steps (1 thread) under callgrind.
+if command -v valgrind > /dev/null; then
+  valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" --toggle-collect='fluid::stepSph*' \
+    "$BENCH" steps --steps 8 --threads 1 > "$tmp/cg.txt" 2> "$tmp/cg.err"
+  instructions=$(sed -n 's/.*Collected : *\([0-9]*\).*/\1/p' "$tmp/cg.err")
+fi
 {
   cat tests/bench/sph_docs_head.md
   echo
@@ -28,6 +37,19 @@ tmp=$(mktemp -d)
   echo "Command: \`$BENCH dambreak_box --seconds $BOX_SECONDS --threads 12\` (simulated 0 -> $BOX_SECONDS s; density error sampled at 30 fps frames)."
   echo
   cat "$tmp/box.md"
+  echo
+  echo "## Game aim: 10k-particle fountain"
+  echo
+  echo "Command: \`$BENCH fountain --threads 12\` (fountain scene, budget 10,000, filled once with 2 threads, then 60 frames of 1/60 s per row; the \"force_bound=0\" rows step with the CFL condition only)."
+  echo
+  cat "$tmp/fountain.md"
+  echo
+  echo "## Machine share and instruction count"
+  echo
+  echo "- parallel share: \`/usr/bin/time -f %P $BENCH steps --steps 20 --threads 2\` reported $share CPU."
+  if [ -n "\${instructions:-}" ]; then
+    echo "- callgrind: \`valgrind --tool=callgrind --toggle-collect='fluid::stepSph*' $BENCH steps --steps 8 --threads 1\` counted $instructions instructions in stepSph ($(cat "$tmp/cg.txt"))."
+  fi
   echo
   echo "## Throughput"
   echo

@@ -80,10 +80,11 @@ std::vector<glm::vec3> randomCloud(std::size_t n, unsigned seed, float extent) {
   return p;
 }
 
-void expectMatchesBruteForce(const std::vector<glm::vec3>& p, float radius, glm::vec3 dmin, glm::vec3 dmax) {
+void expectMatchesBruteForce(const std::vector<glm::vec3>& p, float radius, glm::vec3 dmin, glm::vec3 dmax,
+                             float cell_fraction = 1.0f) {
   fluid::NeighborGrid grid;
   fluid::NeighborLists lists;
-  fluid::buildNeighborGrid(grid, p, radius, dmin, dmax);
+  fluid::buildNeighborGrid(grid, p, radius * cell_fraction, dmin, dmax);
   // The grid's order must be a permutation sorted by cell key.
   std::vector<std::uint32_t> sorted = grid.order;
   std::sort(sorted.begin(), sorted.end());
@@ -110,6 +111,13 @@ void expectMatchesBruteForce(const std::vector<glm::vec3>& p, float radius, glm:
 
 TEST(SphNeighborGrid, MatchesBruteForce) {
   expectMatchesBruteForce(randomCloud(3000, 1, 1.0f), 0.08f, glm::vec3(-1e30f), glm::vec3(1e30f));
+}
+
+TEST(SphNeighborGrid, MatchesBruteForceWithSmallerCells) {
+  // The SPH step uses cells of half the support; the query must stay exact for any ratio.
+  expectMatchesBruteForce(randomCloud(3000, 6, 1.0f), 0.08f, glm::vec3(-1e30f), glm::vec3(1e30f), 0.5f);
+  expectMatchesBruteForce(randomCloud(2000, 7, 1.0f), 0.1f, glm::vec3(0.3f), glm::vec3(0.6f), 0.5f);
+  expectMatchesBruteForce(randomCloud(2000, 8, 1.0f), 0.08f, glm::vec3(-1e30f), glm::vec3(1e30f), 0.3f);
 }
 
 TEST(SphNeighborGrid, MatchesBruteForceWithClampedDomain) {

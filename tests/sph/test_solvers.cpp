@@ -228,3 +228,34 @@ TEST(SphScenes, UnknownKeysAndBadValuesAreErrors) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(SphSolvers, WcsphVerletListsEqualAFreshSearch) {
+  // WCSPH reuses a Verlet list over several steps; every step's exact lists must still hold
+  // exactly the pairs within the support at the step-start positions (kept in old_position).
+  SphScene s = scene("dambreak", SphSolverKind::wcsph, {{"width", "0.1"}, {"spacing", "0.01"}});
+  const float H = sphSupport(s.world.params);
+  std::size_t checked = 0;
+  for (int step = 0; step < 40; ++step) {
+    ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+    if (step % 7 != 6) continue;
+    const auto& x = s.world.scratch.old_position;
+    const auto& nb = s.world.scratch.neighbors;
+    ASSERT_EQ(nb.offsets.size(), x.size() + 1);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      std::vector<std::uint32_t> expected;
+      for (std::size_t j = 0; j < x.size(); ++j) {
+        const glm::vec3 d = x[i] - x[j];
+        if (j != i && glm::dot(d, d) < H * H) expected.push_back(static_cast<std::uint32_t>(j));
+      }
+      std::vector<std::uint32_t> got(nb.indices.begin() + nb.offsets[i], nb.indices.begin() + nb.offsets[i + 1]);
+      std::sort(got.begin(), got.end());
+      ASSERT_EQ(got, expected) << "step " << step << " particle " << i;
+      checked += expected.size();
+    }
+  }
+  EXPECT_GT(checked, 1000u);
+}
+
+}  // namespace
