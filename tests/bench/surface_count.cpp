@@ -5,13 +5,25 @@
 //       build/dev/tests/bench/bench_surface_count tests/data/fountain.xyz 1.0
 //
 // One warm-up extract (allocations), then `reps` measured ones (default 1); prints the triangle
-// count so a run can be checked against docs/surface.md.
+// count so a run can be checked against docs/surface.md, and an FNV-1a hash of the mesh
+// (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <vector>
+
+namespace {
+template <class T>
+void fnv(std::uint64_t& h, const std::vector<T>& v) {
+  const auto* b = reinterpret_cast<const unsigned char*>(v.data());
+  for (std::size_t i = 0; i < v.size() * sizeof(T); ++i) h = (h ^ b[i]) * 1099511628211ull;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {
@@ -38,8 +50,13 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu\n", mesh.indices.size() / 3,
+  std::uint64_t h = 1469598103934665603ull;
+  fnv(h, mesh.positions);
+  fnv(h, mesh.normals);
+  fnv(h, mesh.indices);
+  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx\n", mesh.indices.size() / 3,
               mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
-              (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp);
+              (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
+              (unsigned long long)h);
   return 0;
 }
