@@ -54,9 +54,10 @@ int main(int argc, char** argv) {
   fnv(h, mesh.positions);
   fnv(h, mesh.normals);
   fnv(h, mesh.indices);
-  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx\n", mesh.indices.size() / 3,
+  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx cacheMB %.3f cornerMB %.3f\n", mesh.indices.size() / 3,
               mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
               (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
-              (unsigned long long)h);
+              (unsigned long long)h, mesh.stats.particleCacheBytesPeakBlock / 1e6,
+              mesh.stats.cornerCacheBytesPeakBlock / 1e6);
   return 0;
 }

@@ -68,27 +68,32 @@ struct Vec4Policy {
 // Data structures of Figure 3 and §6.
 
 // One element of a column list of the projection slice (§6): the particle influences corners
-// min_z..max_z of this column; mid_z is the slab holding its centre. Lists are stored as
-// contiguous z-sorted arrays (CSR) instead of doubly linked lists: the same walk, better locality.
-// Each element carries everything the field sum needs (x/y offsets to its column, their squared
-// length, the particle's z rest offset, 1/(2 Rc_i^2) and strength), so the walk reads one
-// contiguous array; `particle` (into the block's particle array) is only for user data.
+// min_z..max_z of this column. Lists are stored as contiguous z-sorted arrays (CSR) instead of
+// doubly linked lists: the same walk, better locality. 12 bytes, so a block's cache is smaller
+// than the paper's 16-byte elements (§6: "If each of these is 16 bytes"); everything else the
+// field sum needs (the paper's "pointer to the particle", mid_z included) lives once per particle
+// in CacheParticle, read in z order along the walk.
 //
 // Lookup bounds: reachMax is the largest max_z of this and every earlier element of the column,
 // reachMin the smallest min_z of this and every later one (empty ranges left out). Both are
 // non-decreasing along the list, so the walk for corner z can start at the first element with
 // reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
-// would return, in the same order, without stepping over the window's misses at either end.
+// (mid_z within z -/+ ceil(Rc/S)) would return, in the same order, without stepping over the
+// window's misses at either end.
 struct ColumnEntry {
-  std::int16_t minZ, maxZ, midZ;
-  std::uint16_t span;  // max_z - min_z (0 for the empty range)
+  std::int16_t minZ, maxZ;  // empty range: minZ = 32000 > maxZ = -32000 (no corner falls in it)
   std::int16_t reachMax, reachMin;
-  float dxy2;  // dx * dx + dy * dy, exactly as the field sum would form it
-  float restZ, k, s;
-  float dx, dy;
-  std::uint32_t particle;
+  std::uint32_t particle;  // into Worker::local
 };
-struct BlockParticle {
+static_assert(sizeof(ColumnEntry) == 12);
+
+// A block's particle as the field sum reads it: the offset from the particle to local corner c
+// along an axis is off[c - a] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
+// (bit for bit), from a small table instead of a multiply and two conversions per use.
+struct CacheParticle {
+  float rest[3];        // Particle::rest
+  float k, s;           // 1 / (2 Rc_i^2), strength
+  std::int16_t a[3];    // anchor minus the block's local corner 0 (the paper's mid_z for z)
   std::uint32_t index;  // input index (user data)
 };
 
@@ -167,8 +172,8 @@ struct Worker {
   int nx = -1, ny = -1, nz = -1;  // expanded cubes per axis; corners 0..n
   std::vector<std::uint32_t> colStart, cursor;
   std::vector<ColumnEntry> entries;
-  std::vector<BlockParticle> local;
-  std::vector<float> zOffset;  // float((d) * S) for d in [-window, window], the z part of the offset
+  std::vector<CacheParticle> local;
+  std::vector<float> offsets;  // float(d S) for d in [-offsetRange, offsetRange] (CacheParticle)
   std::vector<double> cx, cy, cz;  // corner coordinates of local indices
   std::vector<std::int16_t> chainLo, chainHi;  // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
@@ -286,7 +291,7 @@ class BlockMesher {
     out_.stats.vertices = out_.positions.size();
     out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
-                         std::uint64_t(w_.local.size()) * sizeof(BlockParticle);
+                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle);
     out_.cornerBytes = peakCornerBytes_;
     w_.peakBytes = std::max(w_.peakBytes, out_.particleBytes + out_.cornerBytes);
   }
@@ -298,7 +303,10 @@ class BlockMesher {
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float) { found.push_back(w_.local[e.particle].index); });
+    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float, float, float) {
+      found.push_back(p.index);
+      return false;
+    });
   }
 
  private:
@@ -308,7 +316,7 @@ class BlockMesher {
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
   std::int64_t g0_[3] = {0, 0, 0};
-  int window_ = 0;  // max |mid_z - min_z|, |max_z - mid_z| over entries: the lookup window (§6)
+  int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
   int lowestTodo_ = std::numeric_limits<int>::max();
@@ -349,6 +357,11 @@ class BlockMesher {
     const std::size_t cols = w_.columns();
     const std::size_t stride = std::size_t(stride_);
     const double inv = 1.0 / su_.s;
+    // Offsets float(d S): |corner - anchor| <= m + 1 for every influence (m = ceil(Rc_max / S)).
+    offsetRange_ = su_.m + 2;
+    w_.offsets.resize(std::size_t(2 * offsetRange_ + 1));
+    for (int d = -offsetRange_; d <= offsetRange_; ++d)
+      w_.offsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
     // Count pass as a difference array along x (two updates per disc row), then prefix sums.
     std::uint32_t* start = w_.colStart.data();
     std::fill(start, start + cols + 1, 0u);
@@ -372,30 +385,32 @@ class BlockMesher {
     const double* cx = w_.cx.data();
     const double* cz = w_.cz.data();
     const int zmax = nz_ - 1;
-    int window = 0;
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
-      w_.local[li] = BlockParticle{p.index};
+      CacheParticle& cp = w_.local[li];
+      for (int a = 0; a < 3; ++a) {
+        cp.rest[a] = p.rest[a];
+        // Block particles lie within Rc of the interior, so their anchors are inside the
+        // expanded block (margin m >= Rc / S): 0 <= a <= n.
+        assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);
+        cp.a[a] = std::int16_t(p.anchor[a] - g0_[a]);
+      }
+      cp.k = p.k;
+      cp.s = p.strength;
+      cp.index = p.index;
       const double fz = p.z * inv - double(g0_[2]);
       const double px = p.x, pz = p.z, rc2 = p.rc2;
-      const int mid = int(p.anchor[2] - g0_[2]);
-      const std::int16_t mid16 = std::int16_t(std::clamp(mid, -32000, 32000));
       // Candidate z range from the closed form, then corrected with the exact predicate
       // (influences()) so the cache returns precisely the particles within Rc_i.
       auto inside = [&](double dxy, int z) {
         const double dz = cz[z] - pz;
         return dxy + dz * dz < rc2;
       };
-      // Lowest min_z and highest max_z over this particle's non-empty elements (for the window).
-      int lowest = mid, highest = mid;
-      const std::int64_t xBase = g0_[0] - p.anchor[0];
-      const float restX = p.rest[0];
       int y0, y1;
       discRows(p, inv, y0, y1);
       for (int y = y0; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
         const double dy2 = r.dy * r.dy;
-        const float ey = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
         std::uint32_t* rowCursor = cursor + std::size_t(y) * stride;
         for (int x = r.x0; x <= r.x1; ++x) {
           const double dx = cx[x] - px;
@@ -431,28 +446,15 @@ class BlockMesher {
             if (l <= u) {
               lo = l;
               hi = u;
-              lowest = std::min(lowest, l);
-              highest = std::max(highest, u);
             }
           }
           ColumnEntry& e = entries[rowCursor[x]++];
-          const float ex = float(double(xBase + x) * su_.s) - restX;  // latticeOffset(g0 + x, ...)
           e.minZ = std::int16_t(lo);
           e.maxZ = std::int16_t(hi);
-          e.midZ = mid16;
-          e.span = std::uint16_t(hi - lo);
-          e.dxy2 = ex * ex + ey * ey;
-          e.restZ = p.rest[2];
-          e.k = p.k;
-          e.s = p.strength;
-          e.dx = ex;
-          e.dy = ey;
           e.particle = li;
         }
       }
-      window = std::max({window, mid - lowest, highest - mid});
     }
-    window_ = window;
     // Per-column reach bounds (see ColumnEntry).
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
@@ -469,14 +471,14 @@ class BlockMesher {
       }
     }
     std::copy(start, start + cols, cursor);
-    w_.zOffset.resize(std::size_t(2 * window_ + 1));
-    for (int d = -window_; d <= window_; ++d) w_.zOffset[std::size_t(d + window_)] = float(double(d) * su_.s);
   }
 
   // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
   // (reachMax >= z; the paper's mid_z >= z - window, tightened), walk up while entries can still
   // reach it (reachMin <= z; the paper's mid_z <= z + window), keep min_z <= z <= max_z, and leave
-  // the start pointer at the first entry found. f(entry, dz) is called in (z, index) order.
+  // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
+  // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
+  // bit); the walk stops early when f returns true.
   template <class F>
   void forEachInfluencing(int x, int y, int z, F&& f) {
     const std::size_t k = col(x, y);
@@ -487,13 +489,18 @@ class BlockMesher {
     while (cur > begin && e[cur - 1].reachMax >= z) --cur;
     while (cur < end && e[cur].reachMax < z) ++cur;
     w_.cursor[k] = cur;
-    const float* zoff = w_.zOffset.data() + window_ + z;  // zoff[-mid] = float((z - mid) S)
+    const float* off = w_.offsets.data() + offsetRange_;
+    const float* offX = off + x;
+    const float* offY = off + y;
+    const float* offZ = off + z;
+    const CacheParticle* parts = w_.local.data();
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
       if (en.reachMin > z) break;
-      // min_z <= z <= max_z as one unsigned compare (an empty range never passes).
-      if (unsigned(z - en.minZ) > en.span) continue;
-      f(en, zoff[-en.midZ] - en.restZ);
+      // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
+      if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
+      const CacheParticle& p = parts[en.particle];
+      if (f(p, offX[-p.a[0]] - p.rest[0], offY[-p.a[1]] - p.rest[1], offZ[-p.a[2]] - p.rest[2])) break;
     }
   }
 
@@ -502,16 +509,19 @@ class BlockMesher {
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) {
-      ++looked;
-      if constexpr (kGradient || Policy::kHasUser) {
+    if constexpr (!kGradient && !Policy::kHasUser) {
+      // Margin corner: only the sign of f - T is ever read (§3), so stop as soon as the sum
+      // passes T (see insideAt).
+      v = sumUntilAbove(x, y, z, looked);
+    } else {
+      forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+        ++looked;
         const float before = v;
-        accumulate(e.dx, e.dy, e.dxy2, dz, e.k, e.s, v, gx, gy, gz);
-        if constexpr (Policy::kHasUser) pol_.add(c.user, w_.local[e.particle].index, v - before);
-      } else {
-        v += contribution(e.dxy2, dz, e.k, e.s);
-      }
-    });
+        accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.s, v, gx, gy, gz);
+        if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
+        return false;
+      });
+    }
     out_.stats.particlesLookedUp += looked;
     c.value = v;
     c.g[0] = gx;
@@ -519,11 +529,25 @@ class BlockMesher {
     c.g[2] = gz;
   }
 
-  float fieldAt(int x, int y, int z) {
+  // The field summed in (z, index) order, stopped as soon as the partial sum exceeds T. Every
+  // term is >= 0 and rounded float addition is monotone, so a partial sum above T proves the full
+  // sum above T, and a sum that never passes T is the full sum: (result > T) == (f > T) exactly.
+  float sumUntilAbove(int x, int y, int z, std::uint64_t& looked) {
+    const float t = su_.threshold;
     float v = 0;
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) { v += contribution(e.dxy2, dz, e.k, e.s); });
-    ++out_.stats.seedEvaluations;
+    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+      ++looked;
+      v += contribution(dx * dx + dy * dy, dz, p.k, p.s);
+      return v > t;
+    });
     return v;
+  }
+
+  // Seeding only asks whether a corner is inside (§4).
+  bool insideAt(int x, int y, int z) {
+    std::uint64_t looked = 0;
+    ++out_.stats.seedEvaluations;
+    return sumUntilAbove(x, y, z, looked) > su_.threshold;
   }
 
   bool interiorCorner(int x, int y, int z) const {
@@ -559,7 +583,7 @@ class BlockMesher {
       const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
       const bool ownInside = influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) &&
                              contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
-      if (!ownInside && !(fieldAt(x, y, z0) > t)) continue;  // nearest corner outside: no seed here
+      if (!ownInside && !insideAt(x, y, z0)) continue;  // nearest corner outside: no seed here
       const int steps = iceil(std::sqrt(p.rc2) * inv) + 1;
       int z = z0;
       bool joined = false;
@@ -573,7 +597,7 @@ class BlockMesher {
         const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
         const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
                               contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
-        if (!ownBelow && !(fieldAt(x, y, below) > t)) {
+        if (!ownBelow && !insideAt(x, y, below)) {
           pushTodo(below, x, y);
           joined = true;
           break;
