@@ -252,13 +252,13 @@ inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis,
     // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
     nl[axis] = va > su.threshold ? 1.0f : -1.0f;
   }
-  VertexOut v;
+  float pos[3], nrm[3];
   for (int a = 0; a < 3; ++a) {
     const int wa = su.frame.axis[a];
-    v.position[wa] = float(su.frame.sign[a] * local[a] - su.origin[wa]);
-    v.normal[wa] = float(su.frame.sign[a]) * nl[a];
+    pos[wa] = float(su.frame.sign[a] * local[a] - su.origin[wa]);
+    nrm[wa] = float(su.frame.sign[a]) * nl[a];
   }
-  return v;
+  return {glm::vec3(pos[0], pos[1], pos[2]), glm::vec3(nrm[0], nrm[1], nrm[2])};
 }
 
 inline void buildRuns(BlockOut& out) {
@@ -285,8 +285,10 @@ class BlockMesher {
     buildParticleCache(particles);
     seed(particles);
     march();
-    if (su_.exact) sortBySlab();
-    buildRuns(out_);
+    if (su_.exact) {  // otherwise polygonize() built the runs as it went
+      sortBySlab();
+      buildRuns(out_);
+    }
     out_.stats.triangles = out_.indices.size() / 3;
     out_.stats.vertices = out_.positions.size();
     out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
@@ -647,16 +649,17 @@ class BlockMesher {
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
 
-  // cells == slice.cells.data() and c == col(x, y) (the caller keeps them at hand).
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, const SliceCell* cells, std::size_t c, int x, int y, int z) {
-    const std::uint32_t id = cells[c].corner;
+  // Alg. 1 lookupOrEval: the corner's index in the slice's corner cache, evaluated on first use.
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+    const std::uint32_t id = cell.corner;
     if (id) [[likely]]
       return id - 1;
-    return evaluateInto(slice, x, y, z);
+    return evaluateInto(slice, cell, x, y, z) - 1;
   }
 
-  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, int x, int y, int z) {
-    SliceCell& cell = slice.cells[col(x, y)];
+  // Evaluates corner (x, y, z) into the slice's corner cache; returns its index + 1. Not inlined:
+  // one out-of-line copy keeps the march loop small (most corners are already cached).
+  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
     Corner<Policy> c;
     if (interiorCorner(x, y, z))
       evaluate<true>(x, y, z, c);
@@ -668,7 +671,7 @@ class BlockMesher {
     slice.corners.push_back(c);
     ++out_.stats.cornersEvaluated;
     cell.corner = std::uint32_t(slice.corners.size());
-    return cell.corner - 1;
+    return cell.corner;
   }
 
   // Alg. 1 main loop.
@@ -701,14 +704,14 @@ class BlockMesher {
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEval(*below, cellsB, c0, x, y, z);
-        ci[1] = lookupOrEval(*below, cellsB, c0 + 1, x + 1, y, z);
-        ci[2] = lookupOrEval(*below, cellsB, c0 + sy, x, y + 1, z);
-        ci[3] = lookupOrEval(*below, cellsB, c0 + sy + 1, x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, cellsA, c0, x, y, z + 1);
-        ci[5] = lookupOrEval(*above, cellsA, c0 + 1, x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, cellsA, c0 + sy, x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, cellsA, c0 + sy + 1, x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEval(*below, cellsB[c0], x, y, z);
+        ci[1] = lookupOrEval(*below, cellsB[c0 + 1], x + 1, y, z);
+        ci[2] = lookupOrEval(*below, cellsB[c0 + sy], x, y + 1, z);
+        ci[3] = lookupOrEval(*below, cellsB[c0 + sy + 1], x + 1, y + 1, z);
+        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1);
+        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1);
+        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1);
+        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1);
         Corner<Policy>* const cornersB = below->corners.data();
         Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
@@ -769,12 +772,24 @@ class BlockMesher {
 
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
     const std::int32_t slab = std::int32_t(g0_[2] + z);
-    for (int tri = 0; tri < cs.triangleCount; ++tri) {
+    const int nt = cs.triangleCount;
+    const std::size_t first = out_.indices.size();
+    out_.indices.resize(first + 3 * std::size_t(nt));  // vertexOn never touches indices
+    std::uint32_t* dst = out_.indices.data() + first;
+    for (int tri = 0; tri < nt; ++tri, dst += 3) {
       std::uint32_t v[3];
       for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
       if (su_.flip) std::swap(v[1], v[2]);
-      out_.indices.insert(out_.indices.end(), {v[0], v[1], v[2]});
-      out_.triSlab.push_back(slab);
+      dst[0] = v[0];
+      dst[1] = v[1];
+      dst[2] = v[2];
+    }
+    if (su_.exact) {
+      out_.triSlab.insert(out_.triSlab.end(), std::size_t(nt), slab);
+    } else {  // one run per stretch of consecutive triangles of one slab (what buildRuns makes)
+      if (out_.runs.empty() || out_.runs.back().slab != slab)
+        out_.runs.push_back(SurfaceSlabRun{slab, IndexRange{std::uint32_t(first), 0}});
+      out_.runs.back().indices.count += std::uint32_t(3 * nt);
     }
   }
 
