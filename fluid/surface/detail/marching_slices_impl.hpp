@@ -12,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -173,6 +174,7 @@ struct Worker {
   std::vector<std::uint32_t> colStart, cursor;
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
+  std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;  // float(d S) for d in [-offsetRange, offsetRange] (CacheParticle)
   std::vector<double> cx, cy, cz;  // corner coordinates of local indices
   std::vector<std::int16_t> chainLo, chainHi;  // seeding memo per column
@@ -293,7 +295,8 @@ class BlockMesher {
     out_.stats.vertices = out_.positions.size();
     out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
-                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle);
+                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
+                         std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
     w_.peakBytes = std::max(w_.peakBytes, out_.particleBytes + out_.cornerBytes);
   }
@@ -365,13 +368,16 @@ class BlockMesher {
     for (int d = -offsetRange_; d <= offsetRange_; ++d)
       w_.offsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
     // Count pass as a difference array along x (two updates per disc row), then prefix sums.
+    // The rows' column ranges are kept for the fill pass (rowSpans, in the same order).
     std::uint32_t* start = w_.colStart.data();
     std::fill(start, start + cols + 1, 0u);
+    w_.rowSpans.clear();
     for (const Particle& p : particles) {
       int y0, y1;
       discRows(p, inv, y0, y1);
       for (int y = y0; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
+        w_.rowSpans.push_back({std::int16_t(r.x0), std::int16_t(r.x1)});
         if (r.x0 > r.x1) continue;
         ++start[std::size_t(y) * stride + std::size_t(r.x0) + 1];
         --start[std::size_t(y) * stride + std::size_t(r.x1) + 2];  // x1 + 1 <= nx: same row
@@ -384,9 +390,8 @@ class BlockMesher {
     w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
-    const double* cx = w_.cx.data();
-    const double* cz = w_.cz.data();
     const int zmax = nz_ - 1;
+    const std::array<std::int16_t, 2>* span = w_.rowSpans.data();
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
       CacheParticle& cp = w_.local[li];
@@ -401,20 +406,55 @@ class BlockMesher {
       cp.s = p.strength;
       cp.index = p.index;
       const double fz = p.z * inv - double(g0_[2]);
-      const double px = p.x, pz = p.z, rc2 = p.rc2;
-      // Candidate z range from the closed form, then corrected with the exact predicate
-      // (influences()) so the cache returns precisely the particles within Rc_i.
-      auto inside = [&](double dxy, int z) {
-        const double dz = cz[z] - pz;
-        return dxy + dz * dz < rc2;
-      };
-      int y0, y1;
-      discRows(p, inv, y0, y1);
-      for (int y = y0; y <= y1; ++y) {
-        const DiscRow r = discRow(p, y, inv);
-        const double dy2 = r.dy * r.dy;
-        std::uint32_t* rowCursor = cursor + std::size_t(y) * stride;
-        for (int x = r.x0; x <= r.x1; ++x) {
+      // Away from the block's top and bottom (the usual case) the clamps below cannot act.
+      const double reach = std::sqrt(p.rc2) * inv + 2.0;
+      if (fz - reach >= 1.0 && fz + reach <= double(zmax))
+        fillDisc<false>(p, li, fz, span, entries, cursor);
+      else
+        fillDisc<true>(p, li, fz, span, entries, cursor);
+    }
+    assert(span == w_.rowSpans.data() + w_.rowSpans.size());
+    // Per-column reach bounds (see ColumnEntry).
+    for (std::size_t c = 0; c < cols; ++c) {
+      const std::uint32_t b = start[c], en = start[c + 1];
+      if (b == en) continue;
+      std::int16_t run = -32000;
+      for (std::uint32_t i = b; i < en; ++i) {
+        run = std::max(run, entries[i].maxZ);
+        entries[i].reachMax = run;
+      }
+      run = 32000;
+      for (std::uint32_t i = en; i-- > b;) {
+        if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
+        entries[i].reachMin = run;
+      }
+    }
+    std::copy(start, start + cols, cursor);
+  }
+
+  // One particle's elements, row by row of its disc (rows and spans as in the count pass).
+  template <bool kClamp>
+  void fillDisc(const Particle& p, std::uint32_t li, double fz, const std::array<std::int16_t, 2>*& span,
+                ColumnEntry* entries, std::uint32_t* cursor) {
+    const double inv = 1.0 / su_.s;
+    const double* cx = w_.cx.data();
+    const double* cz = w_.cz.data();
+    const int zmax = nz_ - 1;
+    const double px = p.x, pz = p.z, rc2 = p.rc2;
+    // Candidate z range from the closed form, then corrected with the exact predicate
+    // (influences()) so the cache returns precisely the particles within Rc_i.
+    auto inside = [&](double dxy, int z) {
+      const double dz = cz[z] - pz;
+      return dxy + dz * dz < rc2;
+    };
+    int y0, y1;
+    discRows(p, inv, y0, y1);
+    for (int y = y0; y <= y1; ++y, ++span) {
+        const double dyr = w_.cy[y] - p.y;  // as discRow()
+        const double dy2 = dyr * dyr;
+        std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
+        const int x0 = (*span)[0], x1 = (*span)[1];
+        for (int x = x0; x <= x1; ++x) {
           const double dx = cx[x] - px;
           const double dxy = dx * dx + dy2;
           int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
@@ -424,7 +464,11 @@ class BlockMesher {
             // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
             const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
             const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-            int l = std::clamp(c, 1, zmax), u = std::clamp(f, 1, zmax);
+            int l = c, u = f;
+            if constexpr (kClamp) {
+              l = std::clamp(c, 1, zmax);
+              u = std::clamp(f, 1, zmax);
+            }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
             // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
             // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
             // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
@@ -450,29 +494,9 @@ class BlockMesher {
               hi = u;
             }
           }
-          ColumnEntry& e = entries[rowCursor[x]++];
-          e.minZ = std::int16_t(lo);
-          e.maxZ = std::int16_t(hi);
-          e.particle = li;
+          entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
         }
-      }
     }
-    // Per-column reach bounds (see ColumnEntry).
-    for (std::size_t c = 0; c < cols; ++c) {
-      const std::uint32_t b = start[c], en = start[c + 1];
-      if (b == en) continue;
-      std::int16_t run = -32000;
-      for (std::uint32_t i = b; i < en; ++i) {
-        run = std::max(run, entries[i].maxZ);
-        entries[i].reachMax = run;
-      }
-      run = 32000;
-      for (std::uint32_t i = en; i-- > b;) {
-        if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
-        entries[i].reachMin = run;
-      }
-    }
-    std::copy(start, start + cols, cursor);
   }
 
   // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
