@@ -89,12 +89,13 @@ struct ColumnEntry {
 static_assert(sizeof(ColumnEntry) == 12);
 
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
-// along an axis is off[c - a] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
-// (bit for bit), from a small table instead of a multiply and two conversions per use.
+// along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
+// (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
+// is stored negated and 32-bit so the index is one add.
 struct CacheParticle {
   float rest[3];        // Particle::rest
   float k, s;           // 1 / (2 Rc_i^2), strength
-  std::int16_t a[3];    // anchor minus the block's local corner 0 (the paper's mid_z for z)
+  std::int32_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
   std::uint32_t index;  // input index (user data)
 };
 
@@ -400,7 +401,7 @@ class BlockMesher {
         // Block particles lie within Rc of the interior, so their anchors are inside the
         // expanded block (margin m >= Rc / S): 0 <= a <= n.
         assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);
-        cp.a[a] = std::int16_t(p.anchor[a] - g0_[a]);
+        cp.na[a] = std::int32_t(g0_[a] - p.anchor[a]);
       }
       cp.k = p.k;
       cp.s = p.strength;
@@ -526,7 +527,7 @@ class BlockMesher {
       // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
       if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
       const CacheParticle& p = parts[en.particle];
-      if (f(p, offX[-p.a[0]] - p.rest[0], offY[-p.a[1]] - p.rest[1], offZ[-p.a[2]] - p.rest[2])) break;
+      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], offZ[p.na[2]] - p.rest[2])) break;
     }
   }
 
