@@ -7,6 +7,7 @@
 // One warm-up extract (allocations), then `reps` measured ones (default 1); prints the triangle
 // count so a run can be checked against docs/surface.md, and an FNV-1a hash of the mesh
 // (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
+// A fourth argument `blocks` also prints each block's triangles and vertices (thread balance).
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
@@ -15,6 +16,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 namespace {
@@ -27,7 +29,7 @@ void fnv(std::uint64_t& h, const std::vector<T>& v) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: bench_surface_count FILE CUBE [REPS]\n");
+    std::fprintf(stderr, "usage: bench_surface_count FILE CUBE [REPS [blocks]]\n");
     return 2;
   }
   fluid::ParticlePositions ps;
@@ -59,5 +61,8 @@ int main(int argc, char** argv) {
               (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
               (unsigned long long)h, mesh.stats.particleCacheBytesPeakBlock / 1e6,
               mesh.stats.cornerCacheBytesPeakBlock / 1e6);
+  if (argc > 4 && std::string(argv[4]) == "blocks")  // per-block share of the work, for balance checks
+    for (const fluid::SurfaceBlockRange& b : mesh.blocks)
+      std::printf("block (%d %d %d) triangles %u vertices %u\n", b.bx, b.by, b.bz, b.indices.count / 3, b.vertexCount);
   return 0;
 }
