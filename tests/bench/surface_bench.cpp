@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
      << "cmake --build build/dev --target bench_surface && build/dev/tests/bench/bench_surface --reps " << reps
      << " --out docs/surface.md --force`). Every figure below comes from that run on this machine ("
      << hw << " hardware threads); timings are medians of " << reps
-     << " repetitions with the approaches interleaved. Rc = 3, T = 0.2, blockCubes = 0 (auto: blocks of up to max(64, 12 ceil(Rc/S)) cubes; a set fitting one block is halved along its longest axis when the halves stay at least 5 margins wide) unless stated. The machine is shared, so absolute times are noisy; ratios within a table are the "
+     << " repetitions with the approaches interleaved. Rc = 3, T = 0.2, blockCubes = 0 (auto: blocks of up to max(128, 12 ceil(Rc/S)) cubes for approach 1 and max(64, 12 ceil(Rc/S)) for approach 2, whose full 3D corner array grows with the cube of the block edge; a set fitting one block is halved along its longest axis when the halves stay at least 5 margins wide) unless stated. The machine is shared, so absolute times are noisy; ratios within a table are the "
         "meaningful part.\n\n";
 
   // ---------------------------------------------------------------------------------------------
