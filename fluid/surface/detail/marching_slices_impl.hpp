@@ -513,8 +513,20 @@ class BlockMesher {
     if (begin == end) return;
     std::uint32_t cur = w_.cursor[k];
     const ColumnEntry* e = w_.entries.data();
-    while (cur > begin && e[cur - 1].reachMax >= z) --cur;
-    while (cur < end && e[cur].reachMax < z) ++cur;
+    // reachMax is non-decreasing, so the pointer may skip 8 elements at once when the one 8 away
+    // is still on the same side (long moves happen when the sweep jumps between surfaces).
+    while (cur > begin && e[cur - 1].reachMax >= z) {
+      if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
+        cur -= 9;
+      else
+        --cur;
+    }
+    while (cur < end && e[cur].reachMax < z) {
+      if (cur + 8 < end && e[cur + 8].reachMax < z)
+        cur += 9;
+      else
+        ++cur;
+    }
     w_.cursor[k] = cur;
     const float* off = w_.offsets.data() + offsetRange_;
     const float* offX = off + x;
