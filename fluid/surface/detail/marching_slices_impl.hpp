@@ -111,6 +111,11 @@ struct Corner {
 struct SliceCell {
   std::uint32_t corner = 0;  // corner index + 1 (0 = not evaluated)
   std::uint8_t doneAbove = 0, doneBelow = 0;
+  // Cube (x, y) of the slab above (below) this slice is already in a todo list. Not in Alg. 1:
+  // it only keeps a cube from being pushed again before it is popped (the done flags still
+  // decide at the pop). Every queued cube is popped before its slice can be returned, and
+  // popping evaluates this cell's corner, so returning the slice clears the flag too.
+  std::uint8_t queuedAbove = 0, queuedBelow = 0;
 };
 
 template <class Policy>
@@ -761,16 +766,24 @@ class BlockMesher {
         if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
-        if ((f & 1) && !cellsB[c0 - 1].doneAbove) list.push_back(item - 1);
-        if ((f & 2) && !cellsB[c0 + 1].doneAbove) list.push_back(item + 1);
-        if ((f & 4) && !cellsB[c0 - sy].doneAbove) list.push_back(item - (1u << 16));
-        if ((f & 8) && !cellsB[c0 + sy].doneAbove) list.push_back(item + (1u << 16));
-        if ((f & 16) && !cb.doneBelow) {
+        auto pushIn = [&](SliceCell& n, std::uint32_t next) {
+          if (!(n.doneAbove | n.queuedAbove)) {
+            n.queuedAbove = 1;
+            list.push_back(next);
+          }
+        };
+        if (f & 1) pushIn(cellsB[c0 - 1], item - 1);
+        if (f & 2) pushIn(cellsB[c0 + 1], item + 1);
+        if (f & 4) pushIn(cellsB[c0 - sy], item - (1u << 16));
+        if (f & 8) pushIn(cellsB[c0 + sy], item + (1u << 16));
+        if ((f & 16) && !(cb.doneBelow | cb.queuedBelow)) {
           assert(z > 0);
+          cb.queuedBelow = 1;
           w_.todo[z - 1].push_back(item);
         }
-        if ((f & 32) && !ca.doneAbove) {
+        if ((f & 32) && !(ca.doneAbove | ca.queuedAbove)) {
           assert(z + 1 < nz_);
+          ca.queuedAbove = 1;
           w_.todo[z + 1].push_back(item);
         }
       }
