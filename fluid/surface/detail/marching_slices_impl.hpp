@@ -25,6 +25,10 @@
 #include <unordered_map>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace fluid::detail {
 
 // ---------------------------------------------------------------------------------------------
@@ -759,8 +763,17 @@ class BlockMesher {
         Corner<Policy>* cp[8];
         for (int i = 0; i < 4; ++i) cp[i] = cornersB + ci[i];
         for (int i = 4; i < 8; ++i) cp[i] = cornersA + ci[i];
+#if defined(__SSE2__)
+        // The case index: bit i set when corner i is inside, as two 4-wide compares.
+        const __m128 lo = _mm_setr_ps(cp[0]->value, cp[1]->value, cp[2]->value, cp[3]->value);
+        const __m128 hi = _mm_setr_ps(cp[4]->value, cp[5]->value, cp[6]->value, cp[7]->value);
+        const __m128 tv = _mm_set1_ps(t);
+        const unsigned cube = unsigned(_mm_movemask_ps(_mm_cmpgt_ps(lo, tv))) |
+                              (unsigned(_mm_movemask_ps(_mm_cmpgt_ps(hi, tv))) << 4);
+#else
         unsigned cube = 0;
         for (int i = 0; i < 8; ++i) cube |= unsigned(cp[i]->value > t) << i;
+#endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
         if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
@@ -824,15 +837,13 @@ class BlockMesher {
     const std::int32_t slab = std::int32_t(g0_[2] + z);
     const int nt = cs.triangleCount;
     const std::size_t first = out_.indices.size();
-    out_.indices.resize(first + 3 * std::size_t(nt));  // vertexOn never touches indices
-    std::uint32_t* dst = out_.indices.data() + first;
-    for (int tri = 0; tri < nt; ++tri, dst += 3) {
+    for (int tri = 0; tri < nt; ++tri) {
       std::uint32_t v[3];
       for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
       if (su_.flip) std::swap(v[1], v[2]);
-      dst[0] = v[0];
-      dst[1] = v[1];
-      dst[2] = v[2];
+      out_.indices.push_back(v[0]);
+      out_.indices.push_back(v[1]);
+      out_.indices.push_back(v[2]);
     }
     if (su_.exact) {
       out_.triSlab.insert(out_.triSlab.end(), std::size_t(nt), slab);
