@@ -172,6 +172,7 @@ struct Setup {
   bool exact = false;
   bool flip = false;
   SweepFrame frame;
+  bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -247,10 +248,10 @@ inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0
 struct VertexOut {
   glm::vec3 position, normal;
 };
-inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3],
-                            float vb, const float gb[3]) {
+// `local` = corner A's coordinates, double(gi) * S per axis (any caller computes them that way).
+inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float va, const float ga[3], float vb,
+                              const float gb[3]) {
   const double tt = (double(su.threshold) - double(va)) / (double(vb) - double(va));
-  double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
   local[axis] += tt * su.s;
   const float tf = float(tt);
   float g[3];
@@ -264,6 +265,9 @@ inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis,
     // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
     nl[axis] = va > su.threshold ? 1.0f : -1.0f;
   }
+  if (su.plainFrame)  // the general form below with axis[a] = a, sign[a] = +1 (same bits)
+    return {glm::vec3(float(local[0] - su.origin[0]), float(local[1] - su.origin[1]), float(local[2] - su.origin[2])),
+            glm::vec3(nl[0], nl[1], nl[2])};
   float pos[3], nrm[3];
   for (int a = 0; a < 3; ++a) {
     const int wa = su.frame.axis[a];
@@ -271,6 +275,11 @@ inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis,
     nrm[wa] = float(su.frame.sign[a]) * nl[a];
   }
   return {glm::vec3(pos[0], pos[1], pos[2]), glm::vec3(nrm[0], nrm[1], nrm[2])};
+}
+inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3],
+                            float vb, const float gb[3]) {
+  double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
+  return makeVertexAt(su, local, axis, va, ga, vb, gb);
 }
 
 inline void buildRuns(BlockOut& out) {
@@ -820,8 +829,10 @@ class BlockMesher {
     Corner<Policy>& ca = *cp[base];
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
-    const std::int64_t gi[3] = {g0_[0] + x + (base & 1), g0_[1] + y + ((base >> 1) & 1), g0_[2] + z + (base >> 2)};
-    const VertexOut v = makeVertex(su_, gi, axis, ca.value, ca.g, cb.value, cb.g);
+    const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
+    const std::int64_t gi[3] = {g0_[0] + lx, g0_[1] + ly, g0_[2] + lz};
+    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(gi) * S, see begin()
+    const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
     if constexpr (Policy::kHasUser) {
@@ -1038,6 +1049,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   su.s = params.cube;
   su.threshold = params.threshold;
   su.frame = chooseFrame(params);
+  su.plainFrame = su.frame.axis[0] == 0 && su.frame.axis[1] == 1 && su.frame.axis[2] == 2 && su.frame.sign[0] == 1 &&
+                  su.frame.sign[1] == 1 && su.frame.sign[2] == 1;
   su.flip = su.frame.flipsWinding();
   su.exact = params.order != SurfaceOrder::none && params.exactSlabOrder;
   su.origin[0] = params.originX;
