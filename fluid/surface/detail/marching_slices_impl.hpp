@@ -492,15 +492,16 @@ class BlockMesher {
             // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
             // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
             // so where exactly the 1e-6 cut falls does not matter.
-            if (std::abs(double(c) - zlo - 0.5) > 0.5 - 1e-6) [[unlikely]] {
+            // One test for both bounds; settling a bound the closed form already got right
+            // leaves it unchanged, so both are settled when either is close.
+            if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6)
+                [[unlikely]] {
               if (l > 1 && inside(dxy, l - 1)) {
                 do --l;
                 while (l > 1 && inside(dxy, l - 1));
               } else {
                 while (l <= u && !inside(dxy, l)) ++l;
               }
-            }
-            if (std::abs(zhi - double(f) - 0.5) > 0.5 - 1e-6) [[unlikely]] {
               if (u < zmax && inside(dxy, u + 1)) {
                 do ++u;
                 while (u < zmax && inside(dxy, u + 1));
