@@ -12,8 +12,8 @@
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -56,11 +56,13 @@ int main(int argc, char** argv) {
   fnv(h, mesh.positions);
   fnv(h, mesh.normals);
   fnv(h, mesh.indices);
-  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx cacheMB %.3f cornerMB %.3f seedEvals %llu\n", mesh.indices.size() / 3,
-              mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
-              (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
-              (unsigned long long)h, mesh.stats.particleCacheBytesPeakBlock / 1e6,
-              mesh.stats.cornerCacheBytesPeakBlock / 1e6, (unsigned long long)mesh.stats.seedEvaluations);
+  std::printf(
+      "triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx cacheMB %.3f cornerMB %.3f "
+      "seedEvals %llu\n",
+      mesh.indices.size() / 3, mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
+      (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
+      (unsigned long long)h, mesh.stats.particleCacheBytesPeakBlock / 1e6, mesh.stats.cornerCacheBytesPeakBlock / 1e6,
+      (unsigned long long)mesh.stats.seedEvaluations);
   if (argc > 4 && std::string(argv[4]) == "blocks")  // per-block share of the work, for balance checks
     for (const fluid::SurfaceBlockRange& b : mesh.blocks)
       std::printf("block (%d %d %d) triangles %u vertices %u\n", b.bx, b.by, b.bz, b.indices.count / 3, b.vertexCount);

@@ -186,7 +186,7 @@ struct Worker {
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
-  std::vector<float> offsets;  // float(d S) for d in [-offsetRange, offsetRange] (CacheParticle)
+  std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;  // corner coordinates of local indices
   std::vector<std::int16_t> chainLo, chainHi;  // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
@@ -276,8 +276,8 @@ inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float 
   }
   return {glm::vec3(pos[0], pos[1], pos[2]), glm::vec3(nrm[0], nrm[1], nrm[2])};
 }
-inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3],
-                            float vb, const float gb[3]) {
+inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3], float vb,
+                            const float gb[3]) {
   double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
   return makeVertexAt(su, local, axis, va, ga, vb, gb);
 }
@@ -469,53 +469,52 @@ class BlockMesher {
     int y0, y1;
     discRows(p, inv, y0, y1);
     for (int y = y0; y <= y1; ++y, ++span) {
-        const double dyr = w_.cy[y] - p.y;  // as discRow()
-        const double dy2 = dyr * dyr;
-        std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
-        const int x0 = (*span)[0], x1 = (*span)[1];
-        for (int x = x0; x <= x1; ++x) {
-          const double dx = cx[x] - px;
-          const double dxy = dx * dx + dy2;
-          int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
-          if (dxy < rc2) {
-            const double h = std::sqrt(rc2 - dxy) * inv;
-            const double zlo = fz - h, zhi = fz + h;
-            // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
-            const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
-            const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-            int l = c, u = f;
-            if constexpr (kClamp) {
-              l = std::clamp(c, 1, zmax);
-              u = std::clamp(f, 1, zmax);
-            }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
-            // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-            // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
-            // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
-            // so where exactly the 1e-6 cut falls does not matter.
-            // One test for both bounds; settling a bound the closed form already got right
-            // leaves it unchanged, so both are settled when either is close.
-            if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6)
-                [[unlikely]] {
-              if (l > 1 && inside(dxy, l - 1)) {
-                do --l;
-                while (l > 1 && inside(dxy, l - 1));
-              } else {
-                while (l <= u && !inside(dxy, l)) ++l;
-              }
-              if (u < zmax && inside(dxy, u + 1)) {
-                do ++u;
-                while (u < zmax && inside(dxy, u + 1));
-              } else {
-                while (u >= l && !inside(dxy, u)) --u;
-              }
+      const double dyr = w_.cy[y] - p.y;  // as discRow()
+      const double dy2 = dyr * dyr;
+      std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
+      const int x0 = (*span)[0], x1 = (*span)[1];
+      for (int x = x0; x <= x1; ++x) {
+        const double dx = cx[x] - px;
+        const double dxy = dx * dx + dy2;
+        int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+        if (dxy < rc2) {
+          const double h = std::sqrt(rc2 - dxy) * inv;
+          const double zlo = fz - h, zhi = fz + h;
+          // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+          const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+          const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+          int l = c, u = f;
+          if constexpr (kClamp) {
+            l = std::clamp(c, 1, zmax);
+            u = std::clamp(f, 1, zmax);
+          }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
+          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+          // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+          // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+          // so where exactly the 1e-6 cut falls does not matter.
+          // One test for both bounds; settling a bound the closed form already got right
+          // leaves it unchanged, so both are settled when either is close.
+          if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
+            if (l > 1 && inside(dxy, l - 1)) {
+              do --l;
+              while (l > 1 && inside(dxy, l - 1));
+            } else {
+              while (l <= u && !inside(dxy, l)) ++l;
             }
-            if (l <= u) {
-              lo = l;
-              hi = u;
+            if (u < zmax && inside(dxy, u + 1)) {
+              do ++u;
+              while (u < zmax && inside(dxy, u + 1));
+            } else {
+              while (u >= l && !inside(dxy, u)) --u;
             }
           }
-          entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
+          if (l <= u) {
+            lo = l;
+            hi = u;
+          }
         }
+        entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
+      }
     }
   }
 
@@ -778,8 +777,8 @@ class BlockMesher {
         const __m128 lo = _mm_setr_ps(cp[0]->value, cp[1]->value, cp[2]->value, cp[3]->value);
         const __m128 hi = _mm_setr_ps(cp[4]->value, cp[5]->value, cp[6]->value, cp[7]->value);
         const __m128 tv = _mm_set1_ps(t);
-        const unsigned cube = unsigned(_mm_movemask_ps(_mm_cmpgt_ps(lo, tv))) |
-                              (unsigned(_mm_movemask_ps(_mm_cmpgt_ps(hi, tv))) << 4);
+        const unsigned cube =
+            unsigned(_mm_movemask_ps(_mm_cmpgt_ps(lo, tv))) | (unsigned(_mm_movemask_ps(_mm_cmpgt_ps(hi, tv))) << 4);
 #else
         unsigned cube = 0;
         for (int i = 0; i < 8; ++i) cube |= unsigned(cp[i]->value > t) << i;
@@ -1033,7 +1032,6 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     su.n[a] = su.b[a] + 2 * su.m;
   }
 }
-
 
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
 void runFollow(ExtractorState& st, const Setup& su);
