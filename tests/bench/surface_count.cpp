@@ -8,7 +8,8 @@
 // count so a run can be checked against docs/surface.md, and an FNV-1a hash of the mesh
 // (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
 // A fourth argument `blocks` also prints each block's triangles and vertices (thread balance);
-// SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1.
+// SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1, and
+// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
   params.cube = float(std::atof(argv[2]));
   params.threads = 1;
   if (const char* t = std::getenv("SURFACE_COUNT_THREADS")) params.threads = std::max(1, std::atoi(t));  // timing checks
+  if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;

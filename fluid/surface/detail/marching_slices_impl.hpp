@@ -930,6 +930,7 @@ struct ExtractorState {
   int arenaThreads = 0;
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
+  std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
 };
 
 
@@ -968,12 +969,16 @@ void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
     });
   for (std::thread& th : pool) th.join();
 #else
+  // One task per slot, each taking the next item from a shared counter as it becomes free: with
+  // few, uneven items (2-4 blocks) this balances better than splitting the index range in halves.
+  const int slots = arena.max_concurrency();
+  std::atomic<std::size_t> next{0};
   arena.execute([&] {
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, n, 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
+        tbb::blocked_range<int>(0, slots, 1),
+        [&](const tbb::blocked_range<int>&) {
           const int slot = tbb::this_task_arena::current_thread_index();
-          for (std::size_t i = r.begin(); i != r.end(); ++i) fn(slot, i);
+          for (std::size_t i = next++; i < n; i = next++) fn(slot, i);
         },
         tbb::simple_partitioner());
   });
@@ -983,6 +988,20 @@ void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
 template <class W, class Run>
 void runParallel(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
   parallelItems(*st.arena, st.blocks.size(), [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], i); });
+}
+
+// Approach 1: blocks are started largest first (block particles as the cost estimate), so the
+// last block to finish is a small one (longest-processing-time-first). Which thread runs a block
+// never changes its output, and outputs are concatenated in emission order.
+template <class W, class Run>
+void runParallelLargestFirst(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
+  st.runOrder.resize(st.blocks.size());
+  for (std::uint32_t i = 0; i < st.runOrder.size(); ++i) st.runOrder[i] = i;
+  std::sort(st.runOrder.begin(), st.runOrder.end(), [&](std::uint32_t a, std::uint32_t b) {  // no scratch buffer
+    return st.blocks[a].count > st.blocks[b].count || (st.blocks[a].count == st.blocks[b].count && a < b);
+  });
+  parallelItems(*st.arena, st.blocks.size(),
+                [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], std::size_t(st.runOrder[i])); });
 }
 
 template <class Policy>
@@ -995,7 +1014,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     w->resize(su.n);
     w->peakBytes = 0;
   }
-  runParallel(st, workers, [&](Worker<Policy>& w, std::size_t i) {
+  runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
     const BlockDesc& b = st.blocks[i];
     BlockMesher<Policy> mesher(w, su, policy, st.outs[i]);
     mesher.run(b, std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
