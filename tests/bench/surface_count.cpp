@@ -5,17 +5,33 @@
 //       build/dev/tests/bench/bench_surface_count tests/data/fountain.xyz 1.0
 //
 // One warm-up extract (allocations), then `reps` measured ones (default 1); prints the triangle
-// count so a run can be checked against docs/surface.md.
+// count so a run can be checked against docs/surface.md, and an FNV-1a hash of the mesh
+// (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
+// A fourth argument `blocks` also prints each block's triangles and vertices (thread balance);
+// SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1, and
+// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+template <class T>
+void fnv(std::uint64_t& h, const std::vector<T>& v) {
+  const auto* b = reinterpret_cast<const unsigned char*>(v.data());
+  for (std::size_t i = 0; i < v.size() * sizeof(T); ++i) h = (h ^ b[i]) * 1099511628211ull;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: bench_surface_count FILE CUBE [REPS]\n");
+    std::fprintf(stderr, "usage: bench_surface_count FILE CUBE [REPS [blocks]]\n");
     return 2;
   }
   fluid::ParticlePositions ps;
@@ -27,6 +43,8 @@ int main(int argc, char** argv) {
   fluid::SurfaceParams params;
   params.cube = float(std::atof(argv[2]));
   params.threads = 1;
+  if (const char* t = std::getenv("SURFACE_COUNT_THREADS")) params.threads = std::max(1, std::atoi(t));  // timing checks
+  if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
@@ -38,8 +56,19 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("triangles %zu vertices %zu cubes %llu corners %llu lookups %llu\n", mesh.indices.size() / 3,
-              mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
-              (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp);
+  std::uint64_t h = 1469598103934665603ull;
+  fnv(h, mesh.positions);
+  fnv(h, mesh.normals);
+  fnv(h, mesh.indices);
+  std::printf(
+      "triangles %zu vertices %zu cubes %llu corners %llu lookups %llu hash %016llx cacheMB %.3f cornerMB %.3f "
+      "seedEvals %llu\n",
+      mesh.indices.size() / 3, mesh.positions.size(), (unsigned long long)mesh.stats.cubesVisited,
+      (unsigned long long)mesh.stats.cornersEvaluated, (unsigned long long)mesh.stats.particlesLookedUp,
+      (unsigned long long)h, mesh.stats.particleCacheBytesPeakBlock / 1e6, mesh.stats.cornerCacheBytesPeakBlock / 1e6,
+      (unsigned long long)mesh.stats.seedEvaluations);
+  if (argc > 4 && std::string(argv[4]) == "blocks")  // per-block share of the work, for balance checks
+    for (const fluid::SurfaceBlockRange& b : mesh.blocks)
+      std::printf("block (%d %d %d) triangles %u vertices %u\n", b.bx, b.by, b.bz, b.indices.count / 3, b.vertexCount);
   return 0;
 }

@@ -12,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -23,6 +24,10 @@
 #include <typeindex>
 #include <unordered_map>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace fluid::detail {
 
@@ -68,27 +73,33 @@ struct Vec4Policy {
 // Data structures of Figure 3 and §6.
 
 // One element of a column list of the projection slice (§6): the particle influences corners
-// min_z..max_z of this column; mid_z is the slab holding its centre. Lists are stored as
-// contiguous z-sorted arrays (CSR) instead of doubly linked lists: the same walk, better locality.
-// Each element carries everything the field sum needs (x/y offsets to its column, their squared
-// length, the particle's z rest offset, 1/(2 Rc_i^2) and strength), so the walk reads one
-// contiguous array; `particle` (into the block's particle array) is only for user data.
+// min_z..max_z of this column. Lists are stored as contiguous z-sorted arrays (CSR) instead of
+// doubly linked lists: the same walk, better locality. 12 bytes, so a block's cache is smaller
+// than the paper's 16-byte elements (§6: "If each of these is 16 bytes"); everything else the
+// field sum needs (the paper's "pointer to the particle", mid_z included) lives once per particle
+// in CacheParticle, read in z order along the walk.
 //
 // Lookup bounds: reachMax is the largest max_z of this and every earlier element of the column,
 // reachMin the smallest min_z of this and every later one (empty ranges left out). Both are
 // non-decreasing along the list, so the walk for corner z can start at the first element with
 // reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
-// would return, in the same order, without stepping over the window's misses at either end.
+// (mid_z within z -/+ ceil(Rc/S)) would return, in the same order, without stepping over the
+// window's misses at either end.
 struct ColumnEntry {
-  std::int16_t minZ, maxZ, midZ;
-  std::uint16_t span;  // max_z - min_z (0 for the empty range)
+  std::int16_t minZ, maxZ;  // empty range: minZ = 32000 > maxZ = -32000 (no corner falls in it)
   std::int16_t reachMax, reachMin;
-  float dxy2;  // dx * dx + dy * dy, exactly as the field sum would form it
-  float restZ, k, s;
-  float dx, dy;
-  std::uint32_t particle;
+  std::uint32_t particle;  // into Worker::local
 };
-struct BlockParticle {
+static_assert(sizeof(ColumnEntry) == 12);
+
+// A block's particle as the field sum reads it: the offset from the particle to local corner c
+// along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
+// (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
+// is stored negated and 32-bit so the index is one add.
+struct CacheParticle {
+  float rest[3];        // Particle::rest
+  float k, s;           // 1 / (2 Rc_i^2), strength
+  std::int32_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
   std::uint32_t index;  // input index (user data)
 };
 
@@ -104,6 +115,11 @@ struct Corner {
 struct SliceCell {
   std::uint32_t corner = 0;  // corner index + 1 (0 = not evaluated)
   std::uint8_t doneAbove = 0, doneBelow = 0;
+  // Cube (x, y) of the slab above (below) this slice is already in a todo list. Not in Alg. 1:
+  // it only keeps a cube from being pushed again before it is popped (the done flags still
+  // decide at the pop). Every queued cube is popped before its slice can be returned, and
+  // popping evaluates this cell's corner, so returning the slice clears the flag too.
+  std::uint8_t queuedAbove = 0, queuedBelow = 0;
 };
 
 template <class Policy>
@@ -156,6 +172,7 @@ struct Setup {
   bool exact = false;
   bool flip = false;
   SweepFrame frame;
+  bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -167,8 +184,9 @@ struct Worker {
   int nx = -1, ny = -1, nz = -1;  // expanded cubes per axis; corners 0..n
   std::vector<std::uint32_t> colStart, cursor;
   std::vector<ColumnEntry> entries;
-  std::vector<BlockParticle> local;
-  std::vector<float> zOffset;  // float((d) * S) for d in [-window, window], the z part of the offset
+  std::vector<CacheParticle> local;
+  std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
+  std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;  // corner coordinates of local indices
   std::vector<std::int16_t> chainLo, chainHi;  // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
@@ -230,10 +248,10 @@ inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0
 struct VertexOut {
   glm::vec3 position, normal;
 };
-inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3],
-                            float vb, const float gb[3]) {
+// `local` = corner A's coordinates, double(gi) * S per axis (any caller computes them that way).
+inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float va, const float ga[3], float vb,
+                              const float gb[3]) {
   const double tt = (double(su.threshold) - double(va)) / (double(vb) - double(va));
-  double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
   local[axis] += tt * su.s;
   const float tf = float(tt);
   float g[3];
@@ -247,13 +265,21 @@ inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis,
     // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
     nl[axis] = va > su.threshold ? 1.0f : -1.0f;
   }
-  VertexOut v;
+  if (su.plainFrame)  // the general form below with axis[a] = a, sign[a] = +1 (same bits)
+    return {glm::vec3(float(local[0] - su.origin[0]), float(local[1] - su.origin[1]), float(local[2] - su.origin[2])),
+            glm::vec3(nl[0], nl[1], nl[2])};
+  float pos[3], nrm[3];
   for (int a = 0; a < 3; ++a) {
     const int wa = su.frame.axis[a];
-    v.position[wa] = float(su.frame.sign[a] * local[a] - su.origin[wa]);
-    v.normal[wa] = float(su.frame.sign[a]) * nl[a];
+    pos[wa] = float(su.frame.sign[a] * local[a] - su.origin[wa]);
+    nrm[wa] = float(su.frame.sign[a]) * nl[a];
   }
-  return v;
+  return {glm::vec3(pos[0], pos[1], pos[2]), glm::vec3(nrm[0], nrm[1], nrm[2])};
+}
+inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3], float vb,
+                            const float gb[3]) {
+  double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
+  return makeVertexAt(su, local, axis, va, ga, vb, gb);
 }
 
 inline void buildRuns(BlockOut& out) {
@@ -280,13 +306,16 @@ class BlockMesher {
     buildParticleCache(particles);
     seed(particles);
     march();
-    if (su_.exact) sortBySlab();
-    buildRuns(out_);
+    if (su_.exact) {  // otherwise polygonize() built the runs as it went
+      sortBySlab();
+      buildRuns(out_);
+    }
     out_.stats.triangles = out_.indices.size() / 3;
     out_.stats.vertices = out_.positions.size();
     out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
-                         std::uint64_t(w_.local.size()) * sizeof(BlockParticle);
+                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
+                         std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
     w_.peakBytes = std::max(w_.peakBytes, out_.particleBytes + out_.cornerBytes);
   }
@@ -298,7 +327,10 @@ class BlockMesher {
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float) { found.push_back(w_.local[e.particle].index); });
+    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float, float, float) {
+      found.push_back(p.index);
+      return false;
+    });
   }
 
  private:
@@ -308,7 +340,7 @@ class BlockMesher {
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
   std::int64_t g0_[3] = {0, 0, 0};
-  int window_ = 0;  // max |mid_z - min_z|, |max_z - mid_z| over entries: the lookup window (§6)
+  int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
   int lowestTodo_ = std::numeric_limits<int>::max();
@@ -349,14 +381,22 @@ class BlockMesher {
     const std::size_t cols = w_.columns();
     const std::size_t stride = std::size_t(stride_);
     const double inv = 1.0 / su_.s;
+    // Offsets float(d S): |corner - anchor| <= m + 1 for every influence (m = ceil(Rc_max / S)).
+    offsetRange_ = su_.m + 2;
+    w_.offsets.resize(std::size_t(2 * offsetRange_ + 1));
+    for (int d = -offsetRange_; d <= offsetRange_; ++d)
+      w_.offsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
     // Count pass as a difference array along x (two updates per disc row), then prefix sums.
+    // The rows' column ranges are kept for the fill pass (rowSpans, in the same order).
     std::uint32_t* start = w_.colStart.data();
     std::fill(start, start + cols + 1, 0u);
+    w_.rowSpans.clear();
     for (const Particle& p : particles) {
       int y0, y1;
       discRows(p, inv, y0, y1);
       for (int y = y0; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
+        w_.rowSpans.push_back({std::int16_t(r.x0), std::int16_t(r.x1)});
         if (r.x0 > r.x1) continue;
         ++start[std::size_t(y) * stride + std::size_t(r.x0) + 1];
         --start[std::size_t(y) * stride + std::size_t(r.x1) + 2];  // x1 + 1 <= nx: same row
@@ -369,90 +409,30 @@ class BlockMesher {
     w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
-    const double* cx = w_.cx.data();
-    const double* cz = w_.cz.data();
     const int zmax = nz_ - 1;
-    int window = 0;
+    const std::array<std::int16_t, 2>* span = w_.rowSpans.data();
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
-      w_.local[li] = BlockParticle{p.index};
-      const double fz = p.z * inv - double(g0_[2]);
-      const double px = p.x, pz = p.z, rc2 = p.rc2;
-      const int mid = int(p.anchor[2] - g0_[2]);
-      const std::int16_t mid16 = std::int16_t(std::clamp(mid, -32000, 32000));
-      // Candidate z range from the closed form, then corrected with the exact predicate
-      // (influences()) so the cache returns precisely the particles within Rc_i.
-      auto inside = [&](double dxy, int z) {
-        const double dz = cz[z] - pz;
-        return dxy + dz * dz < rc2;
-      };
-      // Lowest min_z and highest max_z over this particle's non-empty elements (for the window).
-      int lowest = mid, highest = mid;
-      const std::int64_t xBase = g0_[0] - p.anchor[0];
-      const float restX = p.rest[0];
-      int y0, y1;
-      discRows(p, inv, y0, y1);
-      for (int y = y0; y <= y1; ++y) {
-        const DiscRow r = discRow(p, y, inv);
-        const double dy2 = r.dy * r.dy;
-        const float ey = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
-        std::uint32_t* rowCursor = cursor + std::size_t(y) * stride;
-        for (int x = r.x0; x <= r.x1; ++x) {
-          const double dx = cx[x] - px;
-          const double dxy = dx * dx + dy2;
-          int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
-          if (dxy < rc2) {
-            const double h = std::sqrt(rc2 - dxy) * inv;
-            const double zlo = fz - h, zhi = fz + h;
-            // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
-            const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
-            const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-            int l = std::clamp(c, 1, zmax), u = std::clamp(f, 1, zmax);
-            // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-            // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
-            // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
-            // so where exactly the 1e-6 cut falls does not matter.
-            if (std::abs(double(c) - zlo - 0.5) > 0.5 - 1e-6) [[unlikely]] {
-              if (l > 1 && inside(dxy, l - 1)) {
-                do --l;
-                while (l > 1 && inside(dxy, l - 1));
-              } else {
-                while (l <= u && !inside(dxy, l)) ++l;
-              }
-            }
-            if (std::abs(zhi - double(f) - 0.5) > 0.5 - 1e-6) [[unlikely]] {
-              if (u < zmax && inside(dxy, u + 1)) {
-                do ++u;
-                while (u < zmax && inside(dxy, u + 1));
-              } else {
-                while (u >= l && !inside(dxy, u)) --u;
-              }
-            }
-            if (l <= u) {
-              lo = l;
-              hi = u;
-              lowest = std::min(lowest, l);
-              highest = std::max(highest, u);
-            }
-          }
-          ColumnEntry& e = entries[rowCursor[x]++];
-          const float ex = float(double(xBase + x) * su_.s) - restX;  // latticeOffset(g0 + x, ...)
-          e.minZ = std::int16_t(lo);
-          e.maxZ = std::int16_t(hi);
-          e.midZ = mid16;
-          e.span = std::uint16_t(hi - lo);
-          e.dxy2 = ex * ex + ey * ey;
-          e.restZ = p.rest[2];
-          e.k = p.k;
-          e.s = p.strength;
-          e.dx = ex;
-          e.dy = ey;
-          e.particle = li;
-        }
+      CacheParticle& cp = w_.local[li];
+      for (int a = 0; a < 3; ++a) {
+        cp.rest[a] = p.rest[a];
+        // Block particles lie within Rc of the interior, so their anchors are inside the
+        // expanded block (margin m >= Rc / S): 0 <= a <= n.
+        assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);
+        cp.na[a] = std::int32_t(g0_[a] - p.anchor[a]);
       }
-      window = std::max({window, mid - lowest, highest - mid});
+      cp.k = p.k;
+      cp.s = p.strength;
+      cp.index = p.index;
+      const double fz = p.z * inv - double(g0_[2]);
+      // Away from the block's top and bottom (the usual case) the clamps below cannot act.
+      const double reach = std::sqrt(p.rc2) * inv + 2.0;
+      if (fz - reach >= 1.0 && fz + reach <= double(zmax))
+        fillDisc<false>(p, li, fz, span, entries, cursor);
+      else
+        fillDisc<true>(p, li, fz, span, entries, cursor);
     }
-    window_ = window;
+    assert(span == w_.rowSpans.data() + w_.rowSpans.size());
     // Per-column reach bounds (see ColumnEntry).
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
@@ -469,14 +449,81 @@ class BlockMesher {
       }
     }
     std::copy(start, start + cols, cursor);
-    w_.zOffset.resize(std::size_t(2 * window_ + 1));
-    for (int d = -window_; d <= window_; ++d) w_.zOffset[std::size_t(d + window_)] = float(double(d) * su_.s);
+  }
+
+  // One particle's elements, row by row of its disc (rows and spans as in the count pass).
+  template <bool kClamp>
+  void fillDisc(const Particle& p, std::uint32_t li, double fz, const std::array<std::int16_t, 2>*& span,
+                ColumnEntry* entries, std::uint32_t* cursor) {
+    const double inv = 1.0 / su_.s;
+    const double* cx = w_.cx.data();
+    const double* cz = w_.cz.data();
+    const int zmax = nz_ - 1;
+    const double px = p.x, pz = p.z, rc2 = p.rc2;
+    // Candidate z range from the closed form, then corrected with the exact predicate
+    // (influences()) so the cache returns precisely the particles within Rc_i.
+    auto inside = [&](double dxy, int z) {
+      const double dz = cz[z] - pz;
+      return dxy + dz * dz < rc2;
+    };
+    int y0, y1;
+    discRows(p, inv, y0, y1);
+    for (int y = y0; y <= y1; ++y, ++span) {
+      const double dyr = w_.cy[y] - p.y;  // as discRow()
+      const double dy2 = dyr * dyr;
+      std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
+      const int x0 = (*span)[0], x1 = (*span)[1];
+      for (int x = x0; x <= x1; ++x) {
+        const double dx = cx[x] - px;
+        const double dxy = dx * dx + dy2;
+        int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+        if (dxy < rc2) {
+          const double h = std::sqrt(rc2 - dxy) * inv;
+          const double zlo = fz - h, zhi = fz + h;
+          // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+          const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+          const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+          int l = c, u = f;
+          if constexpr (kClamp) {
+            l = std::clamp(c, 1, zmax);
+            u = std::clamp(f, 1, zmax);
+          }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
+          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+          // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+          // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+          // so where exactly the 1e-6 cut falls does not matter.
+          // One test for both bounds; settling a bound the closed form already got right
+          // leaves it unchanged, so both are settled when either is close.
+          if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
+            if (l > 1 && inside(dxy, l - 1)) {
+              do --l;
+              while (l > 1 && inside(dxy, l - 1));
+            } else {
+              while (l <= u && !inside(dxy, l)) ++l;
+            }
+            if (u < zmax && inside(dxy, u + 1)) {
+              do ++u;
+              while (u < zmax && inside(dxy, u + 1));
+            } else {
+              while (u >= l && !inside(dxy, u)) --u;
+            }
+          }
+          if (l <= u) {
+            lo = l;
+            hi = u;
+          }
+        }
+        entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
+      }
+    }
   }
 
   // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
   // (reachMax >= z; the paper's mid_z >= z - window, tightened), walk up while entries can still
   // reach it (reachMin <= z; the paper's mid_z <= z + window), keep min_z <= z <= max_z, and leave
-  // the start pointer at the first entry found. f(entry, dz) is called in (z, index) order.
+  // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
+  // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
+  // bit); the walk stops early when f returns true.
   template <class F>
   void forEachInfluencing(int x, int y, int z, F&& f) {
     const std::size_t k = col(x, y);
@@ -484,16 +531,33 @@ class BlockMesher {
     if (begin == end) return;
     std::uint32_t cur = w_.cursor[k];
     const ColumnEntry* e = w_.entries.data();
-    while (cur > begin && e[cur - 1].reachMax >= z) --cur;
-    while (cur < end && e[cur].reachMax < z) ++cur;
+    // reachMax is non-decreasing, so the pointer may skip 8 elements at once when the one 8 away
+    // is still on the same side (long moves happen when the sweep jumps between surfaces).
+    while (cur > begin && e[cur - 1].reachMax >= z) {
+      if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
+        cur -= 9;
+      else
+        --cur;
+    }
+    while (cur < end && e[cur].reachMax < z) {
+      if (cur + 8 < end && e[cur + 8].reachMax < z)
+        cur += 9;
+      else
+        ++cur;
+    }
     w_.cursor[k] = cur;
-    const float* zoff = w_.zOffset.data() + window_ + z;  // zoff[-mid] = float((z - mid) S)
+    const float* off = w_.offsets.data() + offsetRange_;
+    const float* offX = off + x;
+    const float* offY = off + y;
+    const float* offZ = off + z;
+    const CacheParticle* parts = w_.local.data();
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
       if (en.reachMin > z) break;
-      // min_z <= z <= max_z as one unsigned compare (an empty range never passes).
-      if (unsigned(z - en.minZ) > en.span) continue;
-      f(en, zoff[-en.midZ] - en.restZ);
+      // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
+      if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
+      const CacheParticle& p = parts[en.particle];
+      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], offZ[p.na[2]] - p.rest[2])) break;
     }
   }
 
@@ -502,16 +566,19 @@ class BlockMesher {
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) {
-      ++looked;
-      if constexpr (kGradient || Policy::kHasUser) {
+    if constexpr (!kGradient && !Policy::kHasUser) {
+      // Margin corner: only the sign of f - T is ever read (§3), so stop as soon as the sum
+      // passes T (see insideAt).
+      v = sumUntilAbove(x, y, z, looked);
+    } else {
+      forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+        ++looked;
         const float before = v;
-        accumulate(e.dx, e.dy, e.dxy2, dz, e.k, e.s, v, gx, gy, gz);
-        if constexpr (Policy::kHasUser) pol_.add(c.user, w_.local[e.particle].index, v - before);
-      } else {
-        v += contribution(e.dxy2, dz, e.k, e.s);
-      }
-    });
+        accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.s, v, gx, gy, gz);
+        if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
+        return false;
+      });
+    }
     out_.stats.particlesLookedUp += looked;
     c.value = v;
     c.g[0] = gx;
@@ -519,11 +586,25 @@ class BlockMesher {
     c.g[2] = gz;
   }
 
-  float fieldAt(int x, int y, int z) {
+  // The field summed in (z, index) order, stopped as soon as the partial sum exceeds T. Every
+  // term is >= 0 and rounded float addition is monotone, so a partial sum above T proves the full
+  // sum above T, and a sum that never passes T is the full sum: (result > T) == (f > T) exactly.
+  float sumUntilAbove(int x, int y, int z, std::uint64_t& looked) {
+    const float t = su_.threshold;
     float v = 0;
-    forEachInfluencing(x, y, z, [&](const ColumnEntry& e, float dz) { v += contribution(e.dxy2, dz, e.k, e.s); });
-    ++out_.stats.seedEvaluations;
+    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+      ++looked;
+      v += contribution(dx * dx + dy * dy, dz, p.k, p.s);
+      return v > t;
+    });
     return v;
+  }
+
+  // Seeding only asks whether a corner is inside (§4).
+  bool insideAt(int x, int y, int z) {
+    std::uint64_t looked = 0;
+    ++out_.stats.seedEvaluations;
+    return sumUntilAbove(x, y, z, looked) > su_.threshold;
   }
 
   bool interiorCorner(int x, int y, int z) const {
@@ -559,7 +640,7 @@ class BlockMesher {
       const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
       const bool ownInside = influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) &&
                              contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
-      if (!ownInside && !(fieldAt(x, y, z0) > t)) continue;  // nearest corner outside: no seed here
+      if (!ownInside && !insideAt(x, y, z0)) continue;  // nearest corner outside: no seed here
       const int steps = iceil(std::sqrt(p.rc2) * inv) + 1;
       int z = z0;
       bool joined = false;
@@ -573,7 +654,7 @@ class BlockMesher {
         const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
         const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
                               contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
-        if (!ownBelow && !(fieldAt(x, y, below) > t)) {
+        if (!ownBelow && !insideAt(x, y, below)) {
           pushTodo(below, x, y);
           joined = true;
           break;
@@ -623,16 +704,17 @@ class BlockMesher {
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
 
-  // cells == slice.cells.data() and c == col(x, y) (the caller keeps them at hand).
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, const SliceCell* cells, std::size_t c, int x, int y, int z) {
-    const std::uint32_t id = cells[c].corner;
+  // Alg. 1 lookupOrEval: the corner's index in the slice's corner cache, evaluated on first use.
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+    const std::uint32_t id = cell.corner;
     if (id) [[likely]]
       return id - 1;
-    return evaluateInto(slice, x, y, z);
+    return evaluateInto(slice, cell, x, y, z) - 1;
   }
 
-  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, int x, int y, int z) {
-    SliceCell& cell = slice.cells[col(x, y)];
+  // Evaluates corner (x, y, z) into the slice's corner cache; returns its index + 1. Not inlined:
+  // one out-of-line copy keeps the march loop small (most corners are already cached).
+  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
     Corner<Policy> c;
     if (interiorCorner(x, y, z))
       evaluate<true>(x, y, z, c);
@@ -644,7 +726,7 @@ class BlockMesher {
     slice.corners.push_back(c);
     ++out_.stats.cornersEvaluated;
     cell.corner = std::uint32_t(slice.corners.size());
-    return cell.corner - 1;
+    return cell.corner;
   }
 
   // Alg. 1 main loop.
@@ -677,36 +759,53 @@ class BlockMesher {
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEval(*below, cellsB, c0, x, y, z);
-        ci[1] = lookupOrEval(*below, cellsB, c0 + 1, x + 1, y, z);
-        ci[2] = lookupOrEval(*below, cellsB, c0 + sy, x, y + 1, z);
-        ci[3] = lookupOrEval(*below, cellsB, c0 + sy + 1, x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, cellsA, c0, x, y, z + 1);
-        ci[5] = lookupOrEval(*above, cellsA, c0 + 1, x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, cellsA, c0 + sy, x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, cellsA, c0 + sy + 1, x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEval(*below, cellsB[c0], x, y, z);
+        ci[1] = lookupOrEval(*below, cellsB[c0 + 1], x + 1, y, z);
+        ci[2] = lookupOrEval(*below, cellsB[c0 + sy], x, y + 1, z);
+        ci[3] = lookupOrEval(*below, cellsB[c0 + sy + 1], x + 1, y + 1, z);
+        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1);
+        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1);
+        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1);
+        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1);
         Corner<Policy>* const cornersB = below->corners.data();
         Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
         for (int i = 0; i < 4; ++i) cp[i] = cornersB + ci[i];
         for (int i = 4; i < 8; ++i) cp[i] = cornersA + ci[i];
+#if defined(__SSE2__)
+        // The case index: bit i set when corner i is inside, as two 4-wide compares.
+        const __m128 lo = _mm_setr_ps(cp[0]->value, cp[1]->value, cp[2]->value, cp[3]->value);
+        const __m128 hi = _mm_setr_ps(cp[4]->value, cp[5]->value, cp[6]->value, cp[7]->value);
+        const __m128 tv = _mm_set1_ps(t);
+        const unsigned cube =
+            unsigned(_mm_movemask_ps(_mm_cmpgt_ps(lo, tv))) | (unsigned(_mm_movemask_ps(_mm_cmpgt_ps(hi, tv))) << 4);
+#else
         unsigned cube = 0;
         for (int i = 0; i < 8; ++i) cube |= unsigned(cp[i]->value > t) << i;
+#endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
         if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
-        if ((f & 1) && !cellsB[c0 - 1].doneAbove) list.push_back(item - 1);
-        if ((f & 2) && !cellsB[c0 + 1].doneAbove) list.push_back(item + 1);
-        if ((f & 4) && !cellsB[c0 - sy].doneAbove) list.push_back(item - (1u << 16));
-        if ((f & 8) && !cellsB[c0 + sy].doneAbove) list.push_back(item + (1u << 16));
-        if ((f & 16) && !cb.doneBelow) {
+        auto pushIn = [&](SliceCell& n, std::uint32_t next) {
+          if (!(n.doneAbove | n.queuedAbove)) {
+            n.queuedAbove = 1;
+            list.push_back(next);
+          }
+        };
+        if (f & 1) pushIn(cellsB[c0 - 1], item - 1);
+        if (f & 2) pushIn(cellsB[c0 + 1], item + 1);
+        if (f & 4) pushIn(cellsB[c0 - sy], item - (1u << 16));
+        if (f & 8) pushIn(cellsB[c0 + sy], item + (1u << 16));
+        if ((f & 16) && !(cb.doneBelow | cb.queuedBelow)) {
           assert(z > 0);
+          cb.queuedBelow = 1;
           w_.todo[z - 1].push_back(item);
         }
-        if ((f & 32) && !ca.doneAbove) {
+        if ((f & 32) && !(ca.doneAbove | ca.queuedAbove)) {
           assert(z + 1 < nz_);
+          ca.queuedAbove = 1;
           w_.todo[z + 1].push_back(item);
         }
       }
@@ -730,8 +829,10 @@ class BlockMesher {
     Corner<Policy>& ca = *cp[base];
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
-    const std::int64_t gi[3] = {g0_[0] + x + (base & 1), g0_[1] + y + ((base >> 1) & 1), g0_[2] + z + (base >> 2)};
-    const VertexOut v = makeVertex(su_, gi, axis, ca.value, ca.g, cb.value, cb.g);
+    const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
+    const std::int64_t gi[3] = {g0_[0] + lx, g0_[1] + ly, g0_[2] + lz};
+    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(gi) * S, see begin()
+    const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
     if constexpr (Policy::kHasUser) {
@@ -745,12 +846,22 @@ class BlockMesher {
 
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
     const std::int32_t slab = std::int32_t(g0_[2] + z);
-    for (int tri = 0; tri < cs.triangleCount; ++tri) {
+    const int nt = cs.triangleCount;
+    const std::size_t first = out_.indices.size();
+    for (int tri = 0; tri < nt; ++tri) {
       std::uint32_t v[3];
       for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
       if (su_.flip) std::swap(v[1], v[2]);
-      out_.indices.insert(out_.indices.end(), {v[0], v[1], v[2]});
-      out_.triSlab.push_back(slab);
+      out_.indices.push_back(v[0]);
+      out_.indices.push_back(v[1]);
+      out_.indices.push_back(v[2]);
+    }
+    if (su_.exact) {
+      out_.triSlab.insert(out_.triSlab.end(), std::size_t(nt), slab);
+    } else {  // one run per stretch of consecutive triangles of one slab (what buildRuns makes)
+      if (out_.runs.empty() || out_.runs.back().slab != slab)
+        out_.runs.push_back(SurfaceSlabRun{slab, IndexRange{std::uint32_t(first), 0}});
+      out_.runs.back().indices.count += std::uint32_t(3 * nt);
     }
   }
 
@@ -819,6 +930,7 @@ struct ExtractorState {
   int arenaThreads = 0;
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
+  std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
 };
 
 
@@ -857,12 +969,16 @@ void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
     });
   for (std::thread& th : pool) th.join();
 #else
+  // One task per slot, each taking the next item from a shared counter as it becomes free: with
+  // few, uneven items (2-4 blocks) this balances better than splitting the index range in halves.
+  const int slots = arena.max_concurrency();
+  std::atomic<std::size_t> next{0};
   arena.execute([&] {
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, n, 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
+        tbb::blocked_range<int>(0, slots, 1),
+        [&](const tbb::blocked_range<int>&) {
           const int slot = tbb::this_task_arena::current_thread_index();
-          for (std::size_t i = r.begin(); i != r.end(); ++i) fn(slot, i);
+          for (std::size_t i = next++; i < n; i = next++) fn(slot, i);
         },
         tbb::simple_partitioner());
   });
@@ -872,6 +988,20 @@ void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
 template <class W, class Run>
 void runParallel(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
   parallelItems(*st.arena, st.blocks.size(), [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], i); });
+}
+
+// Approach 1: blocks are started largest first (block particles as the cost estimate), so the
+// last block to finish is a small one (longest-processing-time-first). Which thread runs a block
+// never changes its output, and outputs are concatenated in emission order.
+template <class W, class Run>
+void runParallelLargestFirst(ExtractorState& st, std::vector<std::unique_ptr<W>>& workers, Run&& run) {
+  st.runOrder.resize(st.blocks.size());
+  for (std::uint32_t i = 0; i < st.runOrder.size(); ++i) st.runOrder[i] = i;
+  std::sort(st.runOrder.begin(), st.runOrder.end(), [&](std::uint32_t a, std::uint32_t b) {  // no scratch buffer
+    return st.blocks[a].count > st.blocks[b].count || (st.blocks[a].count == st.blocks[b].count && a < b);
+  });
+  parallelItems(*st.arena, st.blocks.size(),
+                [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], std::size_t(st.runOrder[i])); });
 }
 
 template <class Policy>
@@ -884,26 +1014,26 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     w->resize(su.n);
     w->peakBytes = 0;
   }
-  runParallel(st, workers, [&](Worker<Policy>& w, std::size_t i) {
+  runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
     const BlockDesc& b = st.blocks[i];
     BlockMesher<Policy> mesher(w, su, policy, st.outs[i]);
     mesher.run(b, std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
   });
 }
 
-inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& params, Setup& su) {
+inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& params, int autoCubes, Setup& su) {
   double lo[3] = {ps[0].x, ps[0].y, ps[0].z}, hi[3] = {ps[0].x, ps[0].y, ps[0].z};
   for (const Particle& p : ps) {
     lo[0] = std::min(lo[0], p.x), hi[0] = std::max(hi[0], p.x);
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
-  // Auto: blocks of up to max(64, 12 m) cubes keep the margins (m = ceil(Rc/S) cubes each side,
-  // traversed but not emitted, §3) a modest share of the work; a set that fits one such block is
-  // cut in two along its longest axis when both halves stay at least 5 m wide, so mid-size sets
-  // still have two blocks to run in parallel. Depends on the data, S and Rc only.
+  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = ceil(Rc/S) cubes each
+  // side, traversed but not emitted, §3) a modest share of the work; a set that fits one such
+  // block is cut in two along its longest axis when both halves stay at least 5 m wide, so
+  // mid-size sets still have two blocks to run in parallel. Depends on the data, S and Rc only.
   const bool autoSize = params.blockCubes <= 0;
-  const int maxBlock = autoSize ? std::max(64, 12 * su.m) : params.blockCubes;
+  const int maxBlock = autoSize ? std::max(autoCubes, 12 * su.m) : params.blockCubes;
   std::int64_t extent[3];
   for (int a = 0; a < 3; ++a) {
     const std::int64_t c0 = floorDiv(lo[a] - su.rcMax, su.s) - 1;
@@ -922,7 +1052,6 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
   }
 }
 
-
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
 void runFollow(ExtractorState& st, const Setup& su);
 std::uint64_t followPeakBytes(const ExtractorState& st);
@@ -938,6 +1067,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   su.s = params.cube;
   su.threshold = params.threshold;
   su.frame = chooseFrame(params);
+  su.plainFrame = su.frame.axis[0] == 0 && su.frame.axis[1] == 1 && su.frame.axis[2] == 2 && su.frame.sign[0] == 1 &&
+                  su.frame.sign[1] == 1 && su.frame.sign[2] == 1;
   su.flip = su.frame.flipsWinding();
   su.exact = params.order != SurfaceOrder::none && params.exactSlabOrder;
   su.origin[0] = params.originX;
@@ -954,7 +1085,11 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   prepareParticles(input, params, su.frame, st.particles, su.rcMax);
   if (st.particles.empty()) return {};
   su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)
-  planBlocks(st.particles, params, su);
+  // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
+  // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
+  // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
+  // cube of the block edge; 128 would make it a strawman).
+  planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube) is too large"};
   {
