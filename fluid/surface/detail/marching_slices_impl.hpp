@@ -219,14 +219,16 @@ struct Worker {
   }
 
   Slice<Policy>* acquireSlice() {
-    if (freeSlices.empty()) {
-      slicePool.push_back(std::make_unique<Slice<Policy>>());
-      slicePool.back()->cells.assign(columns(), SliceCell{});
-      freeSlices.push_back(slicePool.back().get());
-    }
+    if (freeSlices.empty()) return acquireSliceFromNewStorage();
     Slice<Policy>* s = freeSlices.back();
     freeSlices.pop_back();
     return s;
+  }
+  // A fresh slice, added to the pool (its cells cleared).
+  Slice<Policy>* acquireSliceFromNewStorage() {
+    slicePool.push_back(std::make_unique<Slice<Policy>>());
+    slicePool.back()->cells.assign(columns(), SliceCell{});
+    return slicePool.back().get();
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
   void releaseSlice(Slice<Policy>* s) {
@@ -1004,6 +1006,45 @@ void runParallelLargestFirst(ExtractorState& st, std::vector<std::unique_ptr<W>>
                 [&](int slot, std::size_t i) { run(*workers[std::size_t(slot)], std::size_t(st.runOrder[i])); });
 }
 
+// Which worker meets which block depends on timing, so a worker can meet a larger block than
+// it has seen before in any frame. After a frame every worker's scratch is grown to the largest
+// capacity any worker needed: once every block has been met by some worker, no worker allocates
+// again, whatever the schedule (issue 3: no allocation per frame after warm-up, for N threads).
+// Only capacities are touched; contents are rebuilt per block anyway.
+template <class Policy>
+void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
+  auto grow = [&](auto member) {
+    std::size_t need = 0;
+    for (const auto& w : workers) need = std::max(need, ((*w).*member).capacity());
+    for (auto& w : workers) ((*w).*member).reserve(need);
+  };
+  grow(&Worker<Policy>::entries);
+  grow(&Worker<Policy>::local);
+  grow(&Worker<Policy>::rowSpans);
+  grow(&Worker<Policy>::offsets);
+  grow(&Worker<Policy>::chainTouched);
+  grow(&Worker<Policy>::slicePool);
+  // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
+  std::size_t slices = 0, corners = 0, slabs = 0;
+  for (const auto& w : workers) {
+    slices = std::max(slices, w->slicePool.size());
+    for (const auto& slice : w->slicePool) corners = std::max(corners, slice->corners.capacity());
+    slabs = std::max(slabs, w->todo.size());
+  }
+  for (auto& w : workers) {
+    while (w->slicePool.size() < slices) w->releaseSlice(w->acquireSliceFromNewStorage());
+    for (auto& slice : w->slicePool) slice->corners.reserve(corners);
+    w->freeSlices.reserve(slices);
+  }
+  for (std::size_t z = 0; z < slabs; ++z) {
+    std::size_t need = 0;
+    for (const auto& w : workers)
+      if (z < w->todo.size()) need = std::max(need, w->todo[z].capacity());
+    for (auto& w : workers)
+      if (z < w->todo.size()) w->todo[z].reserve(need);
+  }
+}
+
 template <class Policy>
 void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
                std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
@@ -1019,6 +1060,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     BlockMesher<Policy> mesher(w, su, policy, st.outs[i]);
     mesher.run(b, std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
   });
+  if (workers.size() > 1) shareCapacities(workers);
 }
 
 inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& params, int autoCubes, Setup& su) {
