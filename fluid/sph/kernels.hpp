@@ -19,7 +19,7 @@ namespace fluid {
 struct CubicSplineKernel {
   float support = 0.1f;  // H (m), > 0
   float inv_support = 10.0f;
-  float sigma = 0.0f;     // 8 / (pi H^3)
+  float sigma = 0.0f;  // 8 / (pi H^3)
 
   static CubicSplineKernel make(float support_radius) {
     CubicSplineKernel k;

@@ -34,13 +34,14 @@ glm::ivec3 NeighborGrid::cellOf(glm::vec3 p) const {
 }
 
 std::uint32_t NeighborGrid::keyOf(glm::ivec3 cell) const {
-  return (static_cast<std::uint32_t>(cell.z) * static_cast<std::uint32_t>(dims.y) + static_cast<std::uint32_t>(cell.y)) *
+  return (static_cast<std::uint32_t>(cell.z) * static_cast<std::uint32_t>(dims.y) +
+          static_cast<std::uint32_t>(cell.y)) *
              static_cast<std::uint32_t>(dims.x) +
          static_cast<std::uint32_t>(cell.x);
 }
 
-void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions, float cell_size,
-                       glm::vec3 domain_min, glm::vec3 domain_max) {
+void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions, float cell_size, glm::vec3 domain_min,
+                       glm::vec3 domain_max) {
   assert(cell_size > 0.0f);
   const std::size_t n = positions.size();
   grid.cell_size = cell_size;
@@ -203,8 +204,7 @@ void findImpl(const NeighborGrid& grid, std::span<const glm::vec3> positions, fl
 
 }  // namespace
 
-void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius,
-                   NeighborLists& lists) {
+void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists) {
   const std::size_t n = positions.size();
   lists.counts.resize(n);
   lists.offsets.resize(n + 1);

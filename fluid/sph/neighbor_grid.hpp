@@ -30,9 +30,9 @@ struct NeighborGrid {
 
   float cell_size = 0.0f;
   glm::vec3 origin{0.0f};
-  glm::ivec3 dims{0};    // cells per axis
-  std::vector<std::uint32_t> cell_start;  // size key_count + 1: entries of key k are [cell_start[k], cell_start[k+1])
-  std::vector<std::uint32_t> order;       // order[e] = particle index of sorted entry e
+  glm::ivec3 dims{0};                       // cells per axis
+  std::vector<std::uint32_t> cell_start;    // size key_count + 1: entries of key k are [cell_start[k], cell_start[k+1])
+  std::vector<std::uint32_t> order;         // order[e] = particle index of sorted entry e
   std::vector<std::uint32_t> particle_key;  // key of each particle (input order)
   std::vector<std::uint32_t> cursor;        // scratch for the scatter
   bool identity_order = false;              // set by markGridReordered: order[e] == e
@@ -65,7 +65,6 @@ struct NeighborLists {
   std::vector<std::uint32_t> slots;   // scratch: kSlots per particle
 };
 
-void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius,
-                   NeighborLists& lists);
+void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists);
 
 }  // namespace fluid

@@ -33,8 +33,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <type_traits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace fluid {
@@ -47,44 +47,44 @@ const char* sphSolverName(SphSolverKind kind);
 
 struct SphParams {
   SphSolverKind solver = SphSolverKind::dfsph;
-  float particle_radius = 0.025f;   // r (m) > 0. Spacing d = 2r, kernel support H = 4r.
-  float rest_density = 1000.0f;     // rho_0 (kg/m^3) > 0
+  float particle_radius = 0.025f;         // r (m) > 0. Spacing d = 2r, kernel support H = 4r.
+  float rest_density = 1000.0f;           // rho_0 (kg/m^3) > 0
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};  // m/s^2
-  float viscosity = 0.01f;          // nu of the Laplacian viscosity (Monaghan 2005 form, as in SPlisHSPlasH "standard"), >= 0
-  float xsph = 0.0f;                // XSPH velocity smoothing epsilon in [0, 1] (Monaghan 1989), 0 = off
-  float cfl = 0.4f;                 // in [0.01, 1]: dt <= cfl * d / v_max; DFSPH also |g| dt^2 <= force_bound cfl d
+  float viscosity = 0.01f;  // nu of the Laplacian viscosity (Monaghan 2005 form, as in SPlisHSPlasH "standard"), >= 0
+  float xsph = 0.0f;        // XSPH velocity smoothing epsilon in [0, 1] (Monaghan 1989), 0 = off
+  float cfl = 0.4f;         // in [0.01, 1]: dt <= cfl * d / v_max; DFSPH also |g| dt^2 <= force_bound cfl d
   // DFSPH force condition |g| dt^2 <= force_bound * cfl * d, in [0, 1]; 0 = off (CFL, viscosity and
   // max_time_step only). The CFL bound does not limit a resting fluid (v = 0), whose step then
   // grows to max_time_step; with the default our column-at-rest test (tests/sph) keeps its top
   // layer still, without it surface particles start to slide (0.3 m/s after 2 s).
   float force_bound = 0.0025f;
-  float max_time_step = 0.005f;     // s, upper bound of the adaptive step (requested steps above are clamped)
-  float min_time_step = 1e-6f;      // s, lower bound (a step never gets shorter, even if CFL asks)
-  float max_speed = 0.0f;           // m/s, velocities are clamped to this after each step; 0 = no clamp
+  float max_time_step = 0.005f;          // s, upper bound of the adaptive step (requested steps above are clamped)
+  float min_time_step = 1e-6f;           // s, lower bound (a step never gets shorter, even if CFL asks)
+  float max_speed = 0.0f;                // m/s, velocities are clamped to this after each step; 0 = no clamp
   std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count
 
   // WCSPH (Becker & Teschner 2007)
-  float sound_speed = 20.0f;        // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
-  float tait_exponent = 7.0f;       // gamma of eq. 7
+  float sound_speed = 20.0f;          // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
+  float tait_exponent = 7.0f;         // gamma of eq. 7
   float artificial_viscosity = 0.0f;  // alpha of eq. 10, >= 0 (added to `viscosity`)
 
   // DFSPH (Bender & Koschier 2015)
   float max_density_error = 0.0005f;    // eta: stop when the mean predicted compression is below this (0.0005 = 0.05 %)
   float max_divergence_error = 0.001f;  // eta_v: mean (Drho/Dt) dt / rho_0 below this
-  int min_iterations = 2;           // constant-density solver; the divergence solver does at least 1
-  int max_iterations = 100;         // per solve, >= 1
+  int min_iterations = 2;               // constant-density solver; the divergence solver does at least 1
+  int max_iterations = 100;             // per solve, >= 1
   bool divergence_solver = true;
   // Warm start (2017 §4.3) of the constant-density solve: it starts from 0.4 x the previous
   // step's summed stiffness (kappa/rho), applied only to particles that compress now. Over 150
   // steps of dambreak_box it cuts the iterations per step by 21 % (with the force condition) to
-  // 33 % (CFL only) (bench_sph steps --steps 150 --set warm_start=0|1 [--set force_bound=0]). The divergence solve is not warm-started (it added energy to a jet hitting a
-  // collider in the randomised stability test).
+  // 33 % (CFL only) (bench_sph steps --steps 150 --set warm_start=0|1 [--set force_bound=0]). The divergence solve is
+  // not warm-started (it added energy to a jet hitting a collider in the randomised stability test).
   bool warm_start = true;
 
   // Neighbour grid extent (the grid clamps stray particles into its border cells).
   glm::vec3 domain_min{-1e30f};
   glm::vec3 domain_max{1e30f};
-  float collision_skin = 0.0f;      // m pushed beyond a collider surface; 0 = 0.01 r
+  float collision_skin = 0.0f;  // m pushed beyond a collider surface; 0 = 0.01 r
 };
 
 // SoA particle store. Index order may change at every step (particles are re-sorted by grid cell
@@ -93,8 +93,9 @@ struct ParticleStore {
   std::vector<glm::vec3> position;  // m
   std::vector<glm::vec3> velocity;  // m/s
   std::vector<float> density;       // kg/m^3, computed at the start of each step
-  std::vector<float> pressure;      // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
-                                    // over the step's solver iterations (a per-step impulse: average it over steps)
+  std::vector<float>
+      pressure;  // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
+                 // over the step's solver iterations (a per-step impulse: average it over steps)
   std::vector<std::uint32_t> id;
 
   std::size_t size() const { return position.size(); }
@@ -102,7 +103,7 @@ struct ParticleStore {
 
 struct SphCollider {
   std::shared_ptr<const SignedDistanceShape> shape;  // shared, read-only, must be non-null
-  ColliderPose pose;                                  // world placement at the start of the next step
+  ColliderPose pose;                                 // world placement at the start of the next step
   CollisionMaterial material;
   bool boundary_pressure = true;  // also act as SPH boundary (density/pressure), not only as collision
   bool integrate_pose = true;     // advance pose by its velocities during each step
@@ -117,12 +118,13 @@ struct SphCollider {
 struct SphEmitter {
   glm::vec3 position{0.0f};
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y
-  float speed = 2.0f;          // m/s > 0
-  float radius = 0.05f;        // m >= 0 (0 = one particle per layer)
-  float rate = 1000.0f;        // particles per second >= 0; clamped to speed * (particles per layer) / d so layers never overlap
+  float speed = 2.0f;                     // m/s > 0
+  float radius = 0.05f;                   // m >= 0 (0 = one particle per layer)
+  float rate =
+      1000.0f;  // particles per second >= 0; clamped to speed * (particles per layer) / d so layers never overlap
   float start_time = 0.0f;
   float end_time = 1e30f;
-  double accumulator = 0.0;    // internal: seconds since the last layer
+  double accumulator = 0.0;  // internal: seconds since the last layer
 };
 
 // Drain: particles inside the axis-aligned box [min, max] are removed at the start of a step.
@@ -132,8 +134,8 @@ struct SphSink {
 };
 
 struct SphStepStats {
-  float dt = 0.0f;                 // s
-  int density_iterations = 0;      // DFSPH constant-density iterations (0 for WCSPH)
+  float dt = 0.0f;             // s
+  int density_iterations = 0;  // DFSPH constant-density iterations (0 for WCSPH)
   int divergence_iterations = 0;
   float avg_density_error = 0.0f;  // mean over particles of max(0, rho/rho_0 - 1), state at step start
   float max_density_error = 0.0f;  // max over particles of the same
@@ -144,7 +146,7 @@ struct SphStepStats {
   std::size_t particles = 0;       // after the step
   std::size_t emitted = 0;
   std::size_t removed = 0;
-  std::size_t collisions = 0;      // particle-collider reactions (Kolb 2004 §3.3.2) in this step
+  std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step
   bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
 };
 
@@ -158,11 +160,11 @@ struct SphStatus {
 // world does not allocate in stepSph.
 struct SphScratch {
   CubicSplineKernel kernel;
-  float particle_mass = 0.0f;  // m = rho_0 / (lattice sum of W at spacing d): a resting lattice has rho = rho_0
-  std::vector<float> wall_volume;    // tabulated boundary volume V(s), s in [-H, H]
-  std::vector<float> wall_area;      // tabulated A(s) = -dV/ds
-  float wall_shift = 0.0f;           // calibration offset of s (see ensureInit)
-  float wall_neighbours = 0.0f;      // lattice neighbours per unit boundary volume
+  float particle_mass = 0.0f;      // m = rho_0 / (lattice sum of W at spacing d): a resting lattice has rho = rho_0
+  std::vector<float> wall_volume;  // tabulated boundary volume V(s), s in [-H, H]
+  std::vector<float> wall_area;    // tabulated A(s) = -dV/ds
+  float wall_shift = 0.0f;         // calibration offset of s (see ensureInit)
+  float wall_neighbours = 0.0f;    // lattice neighbours per unit boundary volume
   NeighborGrid grid;
   NeighborLists neighbors;
   // WCSPH Verlet list (radius H + skin) and the positions it was built at (see stepSph).
@@ -173,8 +175,8 @@ struct SphScratch {
   std::vector<glm::vec3> gradients;  // per neighbour pair: m_j grad W_ij (DFSPH)
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
-  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume,
-      boundary_flux, boundary_product, float_tmp;
+  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume, boundary_flux, boundary_product,
+      float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;
   std::vector<glm::vec3> local_points;
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
@@ -189,7 +191,7 @@ struct SphWorld {
   std::vector<SphCollider> colliders;
   std::vector<SphEmitter> emitters;
   std::vector<SphSink> sinks;
-  double time = 0.0;          // s
+  double time = 0.0;  // s
   std::uint64_t step_count = 0;
   std::uint32_t next_id = 0;
   float last_dt = 0.0f;

@@ -41,7 +41,8 @@ const KeySpec kFountain[] = {
     {"drain_size", 0.2f, 0.0f, 100.0f, "edge of the square drain in a floor corner (m)"},
 };
 const KeySpec kDambreakBox[] = {
-    {"particle_radius", 1.0f / 60.0f, 1e-4f, 1.0f, "particle radius r (m); block is (1 m - 2r) / 2r particles per side"},
+    {"particle_radius", 1.0f / 60.0f, 1e-4f, 1.0f,
+     "particle radius r (m); block is (1 m - 2r) / 2r particles per side"},
 };
 // Solver knobs, shared by all scenes (defaults: SphParams).
 const KeySpec kSolver[] = {
@@ -197,7 +198,8 @@ SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
     e.rate = get("rate");
     w.emitters.push_back(e);
     const float ds = get("drain_size");
-    if (ds > 0.0f) w.sinks.push_back({out.box_min - glm::vec3(1.0f), glm::vec3(out.box_min.x + ds, 1.5f * d, out.box_min.z + ds)});
+    if (ds > 0.0f)
+      w.sinks.push_back({out.box_min - glm::vec3(1.0f), glm::vec3(out.box_min.x + ds, 1.5f * d, out.box_min.z + ds)});
     expected_speed = e.speed;
   } else {  // dambreak_box
     const float r = get("particle_radius");

@@ -33,7 +33,7 @@ struct SphScene {
   std::vector<SphSceneKey> keys;  // effective values after overrides
   glm::vec3 box_min{0.0f};        // the closed container
   glm::vec3 box_max{0.0f};
-  float column_width = 0.0f;      // dam breaks: a (surge front is reported as max x / a)
+  float column_width = 0.0f;  // dam breaks: a (surge front is reported as max x / a)
   std::vector<std::shared_ptr<const SignedDistanceShape>> shapes;  // keeps the colliders alive
 };
 

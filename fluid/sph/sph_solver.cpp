@@ -34,9 +34,7 @@ constexpr float kWarmShare = 0.4f;
 constexpr float kWcsphSkin = 0.2f;
 
 using Clock = std::chrono::steady_clock;
-float msSince(Clock::time_point t0) {
-  return std::chrono::duration<float, std::milli>(Clock::now() - t0).count();
-}
+float msSince(Clock::time_point t0) { return std::chrono::duration<float, std::milli>(Clock::now() - t0).count(); }
 
 template <typename F>
 void forEach(std::size_t n, F&& f) {
@@ -167,7 +165,10 @@ void ensureInit(SphWorld& world) {
     for (int it = 0; it < 60; ++it) {
       const float mid = 0.5f * (lo + hi);
       const float ratio = lookup(w.wall_volume, r + mid, H) / std::max(lookup(w.wall_area, r + mid, H), 1e-30f);
-      if (ratio > f / g) lo = mid; else hi = mid;
+      if (ratio > f / g)
+        lo = mid;
+      else
+        hi = mid;
     }
     w.wall_shift = 0.5f * (lo + hi);
     w.wall_neighbours = 9.0f / f;  // a flat wall stands in for 9 lattice neighbours (2 layers at H = 2d)
@@ -190,14 +191,14 @@ ColliderPose advancedPose(const ColliderPose& pose, float dt) {
 // in chunks: transform to collider space, batch query (thread-safe on disjoint output ranges per
 // the contract), normals back to world space. An unrotated pose (the common static case: box
 // walls, the fountain) skips both rotations.
-void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& pose, const std::vector<glm::vec3>& points,
-                   std::vector<ColliderSample>& out) {
+void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& pose,
+                   const std::vector<glm::vec3>& points, std::vector<ColliderSample>& out) {
   const std::size_t n = points.size();
   w.local_points.resize(n);
   out.resize(n);
   const glm::quat inv = glm::inverse(pose.rotation);
-  const bool rotated = !(pose.rotation.w == 1.0f && pose.rotation.x == 0.0f && pose.rotation.y == 0.0f &&
-                         pose.rotation.z == 0.0f);
+  const bool rotated =
+      !(pose.rotation.w == 1.0f && pose.rotation.x == 0.0f && pose.rotation.y == 0.0f && pose.rotation.z == 0.0f);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     if (rotated)
       for (std::size_t i = r.begin(); i != r.end(); ++i) w.local_points[i] = inv * (points[i] - pose.translation);
@@ -228,8 +229,8 @@ inline glm::vec3 store3(__m128 a) {
 #endif
 
 // sum_k (v_i - v_j(k)) . G[k]
-inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b,
-                            std::uint32_t e, glm::vec3 vi) {
+inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G, const std::uint32_t* nbr,
+                            std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
 #if defined(__SSE2__)
   __m128 acc = _mm_setzero_ps();
   const __m128 v = load3(vi);
@@ -244,8 +245,8 @@ inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G,
 }
 
 // start + sum_k (k_i + k_j(k)) G[k]
-inline glm::vec3 pairKappaSum(const float* kr, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e,
-                              float ki, glm::vec3 start) {
+inline glm::vec3 pairKappaSum(const float* kr, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b,
+                              std::uint32_t e, float ki, glm::vec3 start) {
 #if defined(__SSE2__)
   __m128 acc = load3(start);
   for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), load3(G[k])));
@@ -367,8 +368,8 @@ std::size_t applyEmitters(SphWorld& world) {
 void advanceEmitterClocks(SphWorld& world, float dt) {
   for (SphEmitter& e : world.emitters) {
     const double t0 = world.time, t1 = world.time + dt;
-    const double active = std::max(0.0, std::min(t1, static_cast<double>(e.end_time)) -
-                                            std::max(t0, static_cast<double>(e.start_time)));
+    const double active =
+        std::max(0.0, std::min(t1, static_cast<double>(e.end_time)) - std::max(t0, static_cast<double>(e.start_time)));
     e.accumulator += active;
   }
 }
@@ -433,7 +434,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                  w.verlet_position.size() != n || w.verlet_radius != H + verlet_skin;
   if (!rebuild) {
     const float moved = reduce(
-        n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(S.position[i] - w.verlet_position[i])); },
+        n, 0.0f,
+        [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(S.position[i] - w.verlet_position[i])); },
         [](float a, float b) { return std::max(a, b); });
     rebuild = !(2.0f * moved < verlet_skin);
   }
@@ -518,16 +520,16 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
                         glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
     if (moving)
-      collider_speed = std::max(
-        collider_speed, reduce(
-                            n, 0.0f,
-                            [&](std::size_t i, float& acc) {
-                              const ColliderSample& s = smp[i];
-                              if (!s.valid) return;
-                              const float sp = glm::length(colliderVelocityAt(col.pose, X[i]));
-                              if (s.distance < H + sp * P.max_time_step) acc = std::max(acc, sp);
-                            },
-                            [](float a, float b) { return std::max(a, b); }));
+      collider_speed = std::max(collider_speed, reduce(
+                                                    n, 0.0f,
+                                                    [&](std::size_t i, float& acc) {
+                                                      const ColliderSample& s = smp[i];
+                                                      if (!s.valid) return;
+                                                      const float sp = glm::length(colliderVelocityAt(col.pose, X[i]));
+                                                      if (s.distance < H + sp * P.max_time_step)
+                                                        acc = std::max(acc, sp);
+                                                    },
+                                                    [](float a, float b) { return std::max(a, b); }));
   }
   for (std::size_t c = 0; c < nc; ++c) {
     const SphCollider& col = world.colliders[c];
@@ -553,8 +555,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const float w0 = w.kernel.value(0.0f);
   const float steepest = w.kernel.derivative(H / 3.0f);
   w.gradients.resize(nbr.size());
-  w.vec_b.resize(n);     // S_i
-  w.factor.resize(n);    // Q_i here, alpha_i after the solver-specific part below
+  w.vec_b.resize(n);   // S_i
+  w.factor.resize(n);  // Q_i here, alpha_i after the solver-specific part below
   forEach(n, [&](std::size_t i) {
     float sum = w0, sq = 0.0f;
     glm::vec3 grad_sum(0.0f);
@@ -562,8 +564,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       const glm::vec3 x = X[i] - X[nbr[k]];
       const float r = glm::length(x);
       sum += w.kernel.value(r);
-      const glm::vec3 g = r > 1e-6f * H ? m * w.kernel.gradient(x, r)
-                                        : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
+      const glm::vec3 g =
+          r > 1e-6f * H ? m * w.kernel.gradient(x, r) : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
       w.gradients[k] = g;
       grad_sum += g;
       sq += glm::dot(g, g);
@@ -701,13 +703,13 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     };
     auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
     kr.resize(n);
-    w.kappa_v.assign(n, 0.0f);  // sum over the divergence iterations of kappa^v_i / rho_i
+    w.kappa_v.assign(n, 0.0f);    // sum over the divergence iterations of kappa^v_i / rho_i
     w.float_tmp.assign(n, 0.0f);  // same for the density iterations
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forEach(n, [&](std::size_t i) {
-        const glm::vec3 dv =
-            pairKappaSum(kr.data(), G.data(), nbr.data(), off[i], off[i + 1], kr[i], kMirror * rho0 * kr[i] * w.boundary_gradient[i]);
+        const glm::vec3 dv = pairKappaSum(kr.data(), G.data(), nbr.data(), off[i], off[i + 1], kr[i],
+                                          kMirror * rho0 * kr[i] * w.boundary_gradient[i]);
         w.vec_b[i] = V[i] - h * dv;
         total[i] += kr[i];
       });
@@ -741,19 +743,22 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       const double eta_v = P.max_divergence_error;
       for (;;) {
         const double err = reduce(
-            n, 0.0,
-            [&](std::size_t i, double& acc) {
-              // Only compression is corrected, and only for particles with a full enough
-              // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9
-              // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
-              // free surface is pushed outward every step and the fluid creeps apart.
-              const float neighbours = static_cast<float>(off[i + 1] - off[i]) + w.boundary_volume[i] * w.wall_neighbours;
-              const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
-              kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
-              acc += rate * dt_prev / rho0;
-            },
-            [](double a, double b) { return a + b; }) / static_cast<double>(n);
-        if ((div_iterations >= 1 && err <= eta_v) || div_iterations >= P.max_iterations) break;  // 2017 paper: at least one
+                               n, 0.0,
+                               [&](std::size_t i, double& acc) {
+                                 // Only compression is corrected, and only for particles with a full enough
+                                 // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9
+                                 // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
+                                 // free surface is pushed outward every step and the fluid creeps apart.
+                                 const float neighbours =
+                                     static_cast<float>(off[i + 1] - off[i]) + w.boundary_volume[i] * w.wall_neighbours;
+                                 const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
+                                 kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
+                                 acc += rate * dt_prev / rho0;
+                               },
+                               [](double a, double b) { return a + b; }) /
+                           static_cast<double>(n);
+        if ((div_iterations >= 1 && err <= eta_v) || div_iterations >= P.max_iterations)
+          break;  // 2017 paper: at least one
         applyKappa(dt_prev, w.kappa_v);
         ++div_iterations;
       }
@@ -762,8 +767,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
     // 4b. Time step, then predicted velocities v* = v + dt a_nonpressure (Algorithm 1).
     const float vmax = reduce(
-        n, 0.0f,
-        [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(V[i] + max_dt * w.accel[i])); },
+        n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(V[i] + max_dt * w.accel[i])); },
         [](float a, float b) { return std::max(a, b); });
     dt = chooseDt(vmax, maxAccel(), false);
     forEach(n, [&](std::size_t i) { V[i] += dt * w.accel[i]; });
@@ -788,13 +792,14 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       const double eta = P.max_density_error;
       for (;;) {
         const double err = reduce(
-            n, 0.0,
-            [&](std::size_t i, double& acc) {
-              const float excess = std::max(0.0f, S.density[i] + dt * densityRate(i) - rho0);
-              kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
-              acc += excess / rho0;
-            },
-            [](double a, double b) { return a + b; }) / static_cast<double>(n);
+                               n, 0.0,
+                               [&](std::size_t i, double& acc) {
+                                 const float excess = std::max(0.0f, S.density[i] + dt * densityRate(i) - rho0);
+                                 kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
+                                 acc += excess / rho0;
+                               },
+                               [](double a, double b) { return a + b; }) /
+                           static_cast<double>(n);
         if ((iterations >= P.min_iterations && err <= eta) || iterations >= P.max_iterations) break;
         applyKappa(dt, w.float_tmp);
         ++iterations;
@@ -932,11 +937,11 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   stats.divergence_iterations = div_iterations;
   stats.particles = n;
   stats.dt_limited_by_request = requested < P.max_time_step && dt >= requested;
-  stats.kinetic_energy = static_cast<float>(0.5 * m *
-                                            reduce(
-                                                n, 0.0,
-                                                [&](std::size_t i, double& acc) { acc += glm::dot(V[i], V[i]); },
-                                                [](double a, double b) { return a + b; }));
+  stats.kinetic_energy =
+      static_cast<float>(0.5 * m *
+                         reduce(
+                             n, 0.0, [&](std::size_t i, double& acc) { acc += glm::dot(V[i], V[i]); },
+                             [](double a, double b) { return a + b; }));
   stats.step_ms = msSince(t_start);
   if (stats_out) *stats_out = stats;
   return {};

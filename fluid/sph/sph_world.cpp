@@ -35,7 +35,8 @@ float sphParticleMass(const SphParams& params) {
   double sum = 0.0;
   for (int z = -reach; z <= reach; ++z)
     for (int y = -reach; y <= reach; ++y)
-      for (int x = -reach; x <= reach; ++x) sum += kernel.value(d * std::sqrt(static_cast<float>(x * x + y * y + z * z)));
+      for (int x = -reach; x <= reach; ++x)
+        sum += kernel.value(d * std::sqrt(static_cast<float>(x * x + y * y + z * z)));
   return static_cast<float>(params.rest_density / sum);
 }
 
@@ -43,7 +44,8 @@ namespace {
 
 std::string fieldError(const char* field, float value, const char* range) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "sph parameter %s = %g is out of range (%s)", field, static_cast<double>(value), range);
+  std::snprintf(buf, sizeof buf, "sph parameter %s = %g is out of range (%s)", field, static_cast<double>(value),
+                range);
   return buf;
 }
 
@@ -82,7 +84,8 @@ SphStatus validateSphParams(const SphParams& p) {
       return {fieldError("domain_min/domain_max", p.domain_min[a], "finite, min <= max")};
   }
   if (p.min_iterations < 0 || p.max_iterations < 1 || p.min_iterations > p.max_iterations)
-    return {fieldError("min_iterations/max_iterations", static_cast<float>(p.max_iterations), "0 <= min <= max, max >= 1")};
+    return {
+        fieldError("min_iterations/max_iterations", static_cast<float>(p.max_iterations), "0 <= min <= max, max >= 1")};
   return {};
 }
 
@@ -121,8 +124,8 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel, &w.local_points})
     v->reserve(capacity);
-  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume,
-                  &w.boundary_flux, &w.float_tmp})
+  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume, &w.boundary_flux,
+                  &w.float_tmp})
     v->reserve(capacity);
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);

@@ -12,8 +12,8 @@ namespace detail {
 
 // Implemented in marching_slices.cpp: approach 2 shares the block subdivision and output path.
 SurfaceStatus extractBlockedSurfaceFollowing(SurfaceExtractor& extractor, const SurfaceInput& input,
-                                             const SurfaceParams& params, SurfaceMesh& out,
-                                             std::uint64_t& cornerBytes, std::uint64_t& particleBytes);
+                                             const SurfaceParams& params, SurfaceMesh& out, std::uint64_t& cornerBytes,
+                                             std::uint64_t& particleBytes);
 
 namespace {
 
@@ -41,8 +41,7 @@ void emitVertex(const CornerValue& a, const CornerValue& b, std::int64_t i, std:
   } else {
     n[axis] = a.value > params.threshold ? 1.0f : -1.0f;
   }
-  out.positions.push_back(
-      {float(p[0] - params.originX), float(p[1] - params.originY), float(p[2] - params.originZ)});
+  out.positions.push_back({float(p[0] - params.originX), float(p[1] - params.originY), float(p[2] - params.originZ)});
   out.normals.push_back(n);
   out.edgeKeys.push_back(edgeKey(i, j, k, axis));
 }
@@ -250,8 +249,8 @@ void hashed(BaselineState& st, const SurfaceParams& params, double rcMax, Surfac
     }
     ++st.cellRanges.back();
   }
-  st.particleBytes = st.cellIndex.bytes() + st.cellRanges.size() * 4 + st.cellParticles.size() * 4 +
-                     ps.size() * sizeof(Particle);
+  st.particleBytes =
+      st.cellIndex.bytes() + st.cellRanges.size() * 4 + st.cellParticles.size() * 4 + ps.size() * sizeof(Particle);
   st.corners.clear();
   st.cornerIndex.reset(std::max<std::size_t>(1024, st.corners.capacity()));
   auto corner = [&](std::int64_t i, std::int64_t j, std::int64_t k) -> std::uint32_t {
@@ -342,8 +341,8 @@ BaselineExtractor& BaselineExtractor::operator=(BaselineExtractor&&) noexcept = 
 std::uint64_t BaselineExtractor::cornerBytes() const { return state->cornerBytes; }
 std::uint64_t BaselineExtractor::particleBytes() const { return state->particleBytes; }
 
-SurfaceStatus BaselineExtractor::extract(BaselineMethod method, const SurfaceInput& input,
-                                         const SurfaceParams& params, SurfaceMesh& out) {
+SurfaceStatus BaselineExtractor::extract(BaselineMethod method, const SurfaceInput& input, const SurfaceParams& params,
+                                         SurfaceMesh& out) {
   out.clear();
   SurfaceStatus status = validateSurface(input, params);
   if (!status.ok()) return status;

@@ -60,8 +60,7 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
     return bad("surface input: radiusScale has " + std::to_string(in.radiusScale.size()) + " entries, expected " +
                std::to_string(n));
   if (!in.user.empty() && in.user.size() != n)
-    return bad("surface input: user has " + std::to_string(in.user.size()) + " entries, expected " +
-               std::to_string(n));
+    return bad("surface input: user has " + std::to_string(in.user.size()) + " entries, expected " + std::to_string(n));
   if (n >= (std::size_t(1) << 31)) return bad("surface input: too many particles");
   for (std::size_t i = 0; i < n; ++i) {
     if (!finite(in.x[i])) return bad(fieldError("x", i, in.x[i]));
@@ -133,8 +132,7 @@ class BlockFollower {
       const Particle& p = w_.particles[i];
       int c[3];
       const double pc[3] = {p.x, p.y, p.z};
-      for (int a = 0; a < 3; ++a)
-        c[a] = std::clamp(ifloor((pc[a] - double(g0_[a]) * su_.s) / su_.rcMax), 0, g[a] - 1);
+      for (int a = 0; a < 3; ++a) c[a] = std::clamp(ifloor((pc[a] - double(g0_[a]) * su_.s) / su_.rcMax), 0, g[a] - 1);
       w_.cellOf[i] = std::uint32_t((c[2] * g[1] + c[1]) * g[0] + c[0]);
       ++w_.cellStart[w_.cellOf[i] + 1];
     }
@@ -217,8 +215,7 @@ class BlockFollower {
     return std::uint64_t(x) | (std::uint64_t(y) << 16) | (std::uint64_t(z) << 32);
   }
   std::size_t index(int x, int y, int z) const {
-    return (std::size_t(z) * std::size_t(su_.n[1] + 1) + std::size_t(y)) * std::size_t(su_.n[0] + 1) +
-           std::size_t(x);
+    return (std::size_t(z) * std::size_t(su_.n[1] + 1) + std::size_t(y)) * std::size_t(su_.n[0] + 1) + std::size_t(x);
   }
   FollowCorner& corner(int x, int y, int z) {
     const std::size_t id = index(x, y, z);
@@ -323,8 +320,8 @@ float surfaceFieldAtCorner(const SurfaceInput& input, const SurfaceParams& param
 
 namespace detail {
 SurfaceStatus extractBlockedSurfaceFollowing(SurfaceExtractor& extractor, const SurfaceInput& input,
-                                             const SurfaceParams& params, SurfaceMesh& out,
-                                             std::uint64_t& cornerBytes, std::uint64_t& particleBytes) {
+                                             const SurfaceParams& params, SurfaceMesh& out, std::uint64_t& cornerBytes,
+                                             std::uint64_t& particleBytes) {
   extractor.state->method = 2;
   SurfaceStatus st = extractor.extract(input, params, out);
   extractor.state->method = 1;

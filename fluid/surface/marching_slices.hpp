@@ -41,24 +41,24 @@ struct SurfaceInput {
 };
 
 enum class SurfaceOrder : std::uint8_t {
-  none,          // sweep +z, blocks in lattice order
-  backToFront,   // sweep along the axis nearest the view, farthest first (paper §5)
-  frontToBack,   // the reverse, for early-z with opaque surfaces
+  none,         // sweep +z, blocks in lattice order
+  backToFront,  // sweep along the axis nearest the view, farthest first (paper §5)
+  frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
 struct SurfaceParams {
-  float rc = 3.0f;          // cutoff radius Rc, world units, > 0
-  float threshold = 0.2f;   // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
-  float cube = 1.0f;        // cube edge S, world units, > 0
+  float rc = 3.0f;         // cutoff radius Rc, world units, > 0
+  float threshold = 0.2f;  // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
+  float cube = 1.0f;       // cube edge S, world units, > 0
   // Largest interior cubes per block edge, else [4, 1024]; 0 = auto: max(128, 12 ceil(Rc/S)),
   // so the margins of ceil(Rc/S) cubes stay a modest share of each block, and a set fitting one
   // block is halved along its longest axis when the halves stay >= 5 margins wide. The
   // particles' lattice extent is cut into equal blocks no larger than this. Never depends on
   // `threads`, so the output does not either.
   int blockCubes = 0;
-  int threads = 0;          // 0 = all hardware threads, else 1..256
+  int threads = 0;  // 0 = all hardware threads, else 1..256
   SurfaceOrder order = SurfaceOrder::none;
-  glm::vec3 eye{0.0f};               // for ordering: eye position (blocks sorted by distance)
+  glm::vec3 eye{0.0f};                   // for ordering: eye position (blocks sorted by distance)
   glm::vec3 viewDir{0.0f, 0.0f, -1.0f};  // for ordering: view direction (need not be unit)
   // With an order: one index range per slab per block, slabs in sweep order, and triangles
   // within a slab sorted by centroid depth along viewDir (farthest first for backToFront).
@@ -75,9 +75,9 @@ struct IndexRange {
 };
 
 struct SurfaceBlockRange {
-  int bx = 0, by = 0, bz = 0;    // block index in the block grid (sweep frame)
+  int bx = 0, by = 0, bz = 0;                  // block index in the block grid (sweep frame)
   glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // interior box, world units minus origin (for culling)
-  IndexRange indices;            // its triangles
+  IndexRange indices;                          // its triangles
   std::uint32_t firstVertex = 0, vertexCount = 0;
   std::uint32_t firstSlabRun = 0, slabRunCount = 0;  // into SurfaceMesh::slabRuns
 };
@@ -90,9 +90,9 @@ struct SurfaceSlabRun {
 };
 
 struct SurfaceStats {
-  std::uint64_t cubesVisited = 0;     // cubes popped and marked done (margin included)
-  std::uint64_t cornersEvaluated = 0; // field evaluations stored in corner caches
-  std::uint64_t seedEvaluations = 0;  // field evaluations while seeding (not cached)
+  std::uint64_t cubesVisited = 0;       // cubes popped and marked done (margin included)
+  std::uint64_t cornersEvaluated = 0;   // field evaluations stored in corner caches
+  std::uint64_t seedEvaluations = 0;    // field evaluations while seeding (not cached)
   std::uint64_t particlesLookedUp = 0;  // particle contributions summed (exact lookups)
   std::uint64_t triangles = 0;
   std::uint64_t vertices = 0;
@@ -107,13 +107,13 @@ struct SurfaceStats {
 };
 
 struct SurfaceMesh {
-  std::vector<glm::vec3> positions;  // float(p - origin)
-  std::vector<glm::vec3> normals;    // unit, outward (down the field gradient)
-  std::vector<glm::vec4> attributes; // one per vertex when SurfaceInput::user was given, else empty
+  std::vector<glm::vec3> positions;   // float(p - origin)
+  std::vector<glm::vec3> normals;     // unit, outward (down the field gradient)
+  std::vector<glm::vec4> attributes;  // one per vertex when SurfaceInput::user was given, else empty
   // Global lattice edge of each vertex: equal keys are the same point (blocks duplicate the
   // vertices on their seams). Packs corner (i, j, k) mod 2^20 and axis; for welding.
   std::vector<std::uint64_t> edgeKeys;
-  std::vector<std::uint32_t> indices;  // triangles, counter-clockwise seen from outside
+  std::vector<std::uint32_t> indices;     // triangles, counter-clockwise seen from outside
   std::vector<SurfaceBlockRange> blocks;  // in emission order
   std::vector<SurfaceSlabRun> slabRuns;
   SurfaceStats stats;

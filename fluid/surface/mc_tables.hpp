@@ -25,9 +25,9 @@ inline constexpr std::array<std::uint8_t, 12> kEdgeBase = {0, 2, 4, 6, 0, 1, 4, 
 inline constexpr std::array<std::uint8_t, 12> kEdgeAxis = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2};
 
 struct CaseTable {
-  std::uint8_t triangleCount = 0;       // 0..12
-  std::uint16_t edgeMask = 0;           // bit e set when edge e is crossed
-  std::uint8_t faceMask = 0;            // bit 2*axis+side set when that face is crossed
+  std::uint8_t triangleCount = 0;        // 0..12
+  std::uint16_t edgeMask = 0;            // bit e set when edge e is crossed
+  std::uint8_t faceMask = 0;             // bit 2*axis+side set when that face is crossed
   std::array<std::uint8_t, 36> edges{};  // 3 edge ids per triangle, outward winding
 };
 

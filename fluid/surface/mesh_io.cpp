@@ -21,9 +21,8 @@ Welded weld(const SurfaceMesh& m, const MeshWriteOptions& o) {
   std::vector<std::uint32_t> order(m.positions.size()), remap(m.positions.size());
   std::iota(order.begin(), order.end(), 0u);
   if (o.weldSeams && m.edgeKeys.size() == m.positions.size()) {
-    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return m.edgeKeys[a] < m.edgeKeys[b];
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return m.edgeKeys[a] < m.edgeKeys[b]; });
   }
   std::vector<std::uint32_t> firstOf;  // welded index -> source vertex
   for (std::size_t i = 0; i < order.size(); ++i) {
@@ -58,8 +57,7 @@ std::string lower(std::string s) {
 
 IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
   const std::string ext = lower(path.extension().string());
-  if (ext != ".obj" && ext != ".ply")
-    return {path.string() + ": unknown mesh format '" + ext + "' (use .obj or .ply)"};
+  if (ext != ".obj" && ext != ".ply") return {path.string() + ": unknown mesh format '" + ext + "' (use .obj or .ply)"};
   std::error_code ec;
   if (options.overwrite == OverwritePolicy::refuse && std::filesystem::exists(path, ec))
     return {path.string() + ": exists; not overwriting (use --force to replace it)"};

@@ -21,6 +21,7 @@ struct MeshWriteOptions {
 };
 
 // Format from the extension (.obj or .ply, case-insensitive); anything else is an error.
-IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const MeshWriteOptions& options = {});
+IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& mesh,
+                          const MeshWriteOptions& options = {});
 
 }  // namespace fluid

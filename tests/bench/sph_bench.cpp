@@ -98,11 +98,13 @@ int fixedSteps(SphSolverKind solver, int steps, int threads, const Overrides& ex
     ms += st.step_ms;
     nb += st.neighbor_ms;
     iters += st.density_iterations + st.divergence_iterations;
-    if (std::getenv("SPH_BENCH_VERBOSE")) std::printf("step %d: dt %.3f ms, density it %d, divergence it %d, avg err %.4f %%, %.2f ms\n", i, 1e3 * st.dt, st.density_iterations, st.divergence_iterations, 100.0 * st.avg_density_error, st.step_ms);
+    if (std::getenv("SPH_BENCH_VERBOSE"))
+      std::printf("step %d: dt %.3f ms, density it %d, divergence it %d, avg err %.4f %%, %.2f ms\n", i, 1e3 * st.dt,
+                  st.density_iterations, st.divergence_iterations, 100.0 * st.avg_density_error, st.step_ms);
   }
-  std::printf("%s: %zu particles, %d steps to t = %.4f s, %.2f ms/step (neighbour search %.2f ms), %.2f iterations/step\n",
-              sphSolverName(solver), s.world.particles.size(), steps, s.world.time, ms / steps, nb / steps,
-              iters / steps);
+  std::printf(
+      "%s: %zu particles, %d steps to t = %.4f s, %.2f ms/step (neighbour search %.2f ms), %.2f iterations/step\n",
+      sphSolverName(solver), s.world.particles.size(), steps, s.world.time, ms / steps, nb / steps, iters / steps);
   return 0;
 }
 
@@ -110,7 +112,9 @@ int fixedSteps(SphSolverKind solver, int steps, int threads, const Overrides& ex
 // using at most half of a 16.7 ms frame. Fills the fountain scene (default budget 10,000) for up
 // to 8 simulated seconds, then times 60 frames of 1/60 s each.
 int fountain(const std::vector<int>& thread_counts, const Overrides& extra) {
-  std::printf("| configuration (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | steps per frame | mean density error | max density error |\n");
+  std::printf(
+      "| configuration (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | steps per frame | "
+      "mean density error | max density error |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   SphScene filled = makeScene("fountain", SphSolverKind::dfsph, extra);
   reserveSph(filled.world, filled.world.params.max_particles);
@@ -144,8 +148,9 @@ int fountain(const std::vector<int>& thread_counts, const Overrides& extra) {
         if (!st.ok()) return 1;
         ms.push_back(frame_ms);
       }
-      std::printf("| dfsph %s (%d) | %zu | %.2f | %.2f | %.1f | %.3f %% | %.2f %% |\n", row.label, threads, s.world.particles.size(),
-                  median(ms), *std::max_element(ms.begin(), ms.end()), steps / 60.0, 100.0 * err / steps, 100.0 * max_err);
+      std::printf("| dfsph %s (%d) | %zu | %.2f | %.2f | %.1f | %.3f %% | %.2f %% |\n", row.label, threads,
+                  s.world.particles.size(), median(ms), *std::max_element(ms.begin(), ms.end()), steps / 60.0,
+                  100.0 * err / steps, 100.0 * max_err);
       std::fflush(stdout);
     }
   }
@@ -202,8 +207,11 @@ RunResult runScene(SphScene& s, double seconds, double fps) {
   return r;
 }
 
-int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Overrides& extra, const SphSolverKind* only) {
-  std::printf("| solver (threads) | ms per step (wall) | mean time step | mean density error | s compute per simulated s (wall) | CPU s per simulated s |\n");
+int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Overrides& extra,
+                const SphSolverKind* only) {
+  std::printf(
+      "| solver (threads) | ms per step (wall) | mean time step | mean density error | s compute per simulated s "
+      "(wall) | CPU s per simulated s |\n");
   std::printf("|---|---|---|---|---|---|\n");
   struct Config {
     SphSolverKind solver;
@@ -254,7 +262,9 @@ int accuracy(const std::string& png) {
       {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}},
       {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}},
   };
-  std::printf("| solver | knobs | particles | steps | mean dt (ms) | iterations/step | mean density error (frames) | max density error | volume change after 2 s | ms per simulated s (wall) | CPU s per simulated s |\n");
+  std::printf(
+      "| solver | knobs | particles | steps | mean dt (ms) | iterations/step | mean density error (frames) | max "
+      "density error | volume change after 2 s | ms per simulated s (wall) | CPU s per simulated s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Point {
     double x, y;
@@ -273,9 +283,10 @@ int accuracy(const std::string& png) {
     for (const auto& kv : o) knobs += (knobs.empty() ? "" : ", ") + kv.first + "=" + kv.second;
     SphScene s = makeScene("dambreak", c.solver, o);
     const RunResult r = runScene(s, 2.0, 30.0);
-    std::printf("| %s | %s | %zu | %zu | %.3f | %.1f | %.4f %% | %.2f %% | %+.3f %% | %.0f | %.2f |\n", sphSolverName(c.solver),
-                knobs.c_str(), r.particles, r.steps, 1e3 * r.mean_dt, r.mean_iterations, 100.0 * r.frame_error,
-                100.0 * r.max_error, 100.0 * r.volume_change, r.wall_ms / r.sim_seconds, r.cpu_s / r.sim_seconds);
+    std::printf("| %s | %s | %zu | %zu | %.3f | %.1f | %.4f %% | %.2f %% | %+.3f %% | %.0f | %.2f |\n",
+                sphSolverName(c.solver), knobs.c_str(), r.particles, r.steps, 1e3 * r.mean_dt, r.mean_iterations,
+                100.0 * r.frame_error, 100.0 * r.max_error, 100.0 * r.volume_change, r.wall_ms / r.sim_seconds,
+                r.cpu_s / r.sim_seconds);
     std::fflush(stdout);
     points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, c.solver});
   }
@@ -290,11 +301,18 @@ int accuracy(const std::string& png) {
     ymin = std::min(ymin, std::log10(std::max(p.y, 1e-6)));
     ymax = std::max(ymax, std::log10(std::max(p.y, 1e-6)));
   }
-  xmin = std::floor(xmin); xmax = std::ceil(xmax + 1e-9); ymin = std::floor(ymin); ymax = std::ceil(ymax + 1e-9);
+  xmin = std::floor(xmin);
+  xmax = std::ceil(xmax + 1e-9);
+  ymin = std::floor(ymin);
+  ymax = std::ceil(ymax + 1e-9);
   if (xmax <= xmin) xmax = xmin + 1;
   if (ymax <= ymin) ymax = ymin + 1;
-  auto px = [&](double x) { return L + static_cast<int>((std::log10(std::max(x, 1e-6)) - xmin) / (xmax - xmin) * (R - L)); };
-  auto py = [&](double y) { return B - static_cast<int>((std::log10(std::max(y, 1e-6)) - ymin) / (ymax - ymin) * (B - T)); };
+  auto px = [&](double x) {
+    return L + static_cast<int>((std::log10(std::max(x, 1e-6)) - xmin) / (xmax - xmin) * (R - L));
+  };
+  auto py = [&](double y) {
+    return B - static_cast<int>((std::log10(std::max(y, 1e-6)) - ymin) / (ymax - ymin) * (B - T));
+  };
   cv.rect(L, T, R, B, 0x000000);
   for (double e = xmin; e <= xmax + 1e-9; e += 1) {
     const int x = L + static_cast<int>((e - xmin) / (xmax - xmin) * (R - L));
@@ -340,7 +358,10 @@ int accuracy(const std::string& png) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] [--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | steps [--solver S] [--steps N] [--threads T] [--set key=value ...]\n");
+    std::fprintf(stderr,
+                 "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] "
+                 "[--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | steps [--solver S] [--steps N] "
+                 "[--threads T] [--set key=value ...]\n");
     return 2;
   }
   const std::string cmd = argv[1];
@@ -349,13 +370,16 @@ int main(int argc, char** argv) {
   std::string png;
   SphSolverKind solver = SphSolverKind::dfsph;
   bool solver_given = false;  // dambreak_box: only that solver's rows
-  Overrides extra;  // --set key=value, applied after each configuration's own keys
+  Overrides extra;            // --set key=value, applied after each configuration's own keys
   std::vector<int> threads{1, 2};
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--steps") steps = std::atoi(v.c_str());
-    else if (k == "--seconds") seconds = std::atof(v.c_str());
-    else if (k == "--png") png = v;
+    if (k == "--steps")
+      steps = std::atoi(v.c_str());
+    else if (k == "--seconds")
+      seconds = std::atof(v.c_str());
+    else if (k == "--png")
+      png = v;
     else if (k == "--set") {
       const auto eq = v.find('=');
       if (eq == std::string::npos) {
@@ -363,15 +387,13 @@ int main(int argc, char** argv) {
         return 2;
       }
       extra.emplace_back(v.substr(0, eq), v.substr(eq + 1));
-    }
-    else if (k == "--solver") {
+    } else if (k == "--solver") {
       solver_given = true;
       if (!parseSphSolver(v, solver)) {
         std::fprintf(stderr, "bench_sph: unknown solver %s\n", v.c_str());
         return 2;
       }
-    }
-    else if (k == "--threads") {
+    } else if (k == "--threads") {
       threads.clear();
       for (char ch : v)
         if (ch >= '1' && ch <= '9') threads.push_back(ch - '0');

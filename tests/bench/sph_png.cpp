@@ -17,16 +17,26 @@ int glyph(char c, int row) {
                                            "25552", "65644", "25573", "65655", "34216", "72222", "55557",
                                            "55552", "55575", "55255", "55222", "71247"};
   const char* code = nullptr;
-  if (c >= '0' && c <= '9') code = kDigits[c - '0'];
-  else if (c >= 'A' && c <= 'Z') code = kLetters[c - 'A'];
-  else if (c == '.') code = "00002";
-  else if (c == '-') code = "00700";
-  else if (c == '%') code = "51245";
-  else if (c == '/') code = "11244";
-  else if (c == '(') code = "24442";
-  else if (c == ')') code = "42224";
-  else if (c == '=') code = "07070";
-  else return 0;
+  if (c >= '0' && c <= '9')
+    code = kDigits[c - '0'];
+  else if (c >= 'A' && c <= 'Z')
+    code = kLetters[c - 'A'];
+  else if (c == '.')
+    code = "00002";
+  else if (c == '-')
+    code = "00700";
+  else if (c == '%')
+    code = "51245";
+  else if (c == '/')
+    code = "11244";
+  else if (c == '(')
+    code = "24442";
+  else if (c == ')')
+    code = "42224";
+  else if (c == '=')
+    code = "07070";
+  else
+    return 0;
   return code[row] - '0';
 }
 
@@ -75,8 +85,14 @@ void Canvas::line(int x0, int y0, int x1, int y1, std::uint32_t color) {
     set(x0, y0, color);
     if (x0 == x1 && y0 == y1) break;
     const int e2 = 2 * err;
-    if (e2 >= dy) { err += dy; x0 += sx; }
-    if (e2 <= dx) { err += dx; y0 += sy; }
+    if (e2 >= dy) {
+      err += dy;
+      x0 += sx;
+    }
+    if (e2 <= dx) {
+      err += dx;
+      y0 += sy;
+    }
   }
 }
 
@@ -104,8 +120,10 @@ void Canvas::text(int x, int y, const std::string& s, std::uint32_t color, int s
         for (int a = 0; a < scale; ++a)
           for (int b = 0; b < scale; ++b) {
             const int gx = (pen + col) * scale + a, gy = row * scale + b;
-            if (vertical) set(x + gy, y - gx, color);
-            else set(x + gx, y + gy, color);
+            if (vertical)
+              set(x + gy, y - gx, color);
+            else
+              set(x + gx, y + gy, color);
           }
       }
     }
@@ -132,7 +150,8 @@ std::string writePng(const std::string& path, const Canvas& c) {
     z.push_back(static_cast<std::uint8_t>(len >> 8));
     z.push_back(static_cast<std::uint8_t>(~len));
     z.push_back(static_cast<std::uint8_t>(~len >> 8));
-    z.insert(z.end(), raw.begin() + static_cast<std::ptrdiff_t>(pos), raw.begin() + static_cast<std::ptrdiff_t>(pos + len));
+    z.insert(z.end(), raw.begin() + static_cast<std::ptrdiff_t>(pos),
+             raw.begin() + static_cast<std::ptrdiff_t>(pos + len));
     pos += len;
   } while (pos < raw.size());
   std::uint32_t a = 1, b = 0;

@@ -236,8 +236,8 @@ int main(int argc, char** argv) {
          << (cfg.readmeTriangles ? std::to_string(cfg.readmeTriangles) : std::string("—")) << " | "
          << fmt("%.2f", res.ms1) << " | " << (threaded ? fmt("%.2f", res.msN) : std::string("—")) << " | "
          << (res.stats.cubesVisited ? big(double(res.stats.cubesVisited) / s) : std::string("—")) << " | "
-         << big(double(res.stats.triangles) / s) << " | " << mb(res.renderBytes) << " | " << mb(res.cacheBytes)
-         << " | " << fmt("%.1f", 1.0 / s) << " |\n";
+         << big(double(res.stats.triangles) / s) << " | " << mb(res.renderBytes) << " | " << mb(res.cacheBytes) << " | "
+         << fmt("%.1f", 1.0 / s) << " |\n";
     };
     row("1", sr.a1, true);
     row("2", sr.a2, true);
@@ -251,8 +251,9 @@ int main(int argc, char** argv) {
                   (m1.stats.triangles == cfg.readmeTriangles ? "same" : "**differs**") + " | " +
                   fmt("%.2f", sr.a1.ms1 / sr.a1.msN) + "x | " + fmt("%.2f", sr.a2.ms1 / sr.a1.ms1) + "x" +
                   (sr.a2.ms1 / sr.a1.ms1 >= 1.5 ? " (met)" : " (**not met**)") + " | " +
-                  fmt("%.2f", sr.a3.ms1 / sr.a1.ms1) + "x" + (sr.a3.ms1 / sr.a1.ms1 >= 3.5 ? " (met)" : " (**not met**)") +
-                  " | " + mb(sr.a1.workingAll) + " | " + fmt("%.2f", sr.dense.ms1 / sr.a1.ms1) + "x |\n";
+                  fmt("%.2f", sr.a3.ms1 / sr.a1.ms1) + "x" +
+                  (sr.a3.ms1 / sr.a1.ms1 >= 3.5 ? " (met)" : " (**not met**)") + " | " + mb(sr.a1.workingAll) + " | " +
+                  fmt("%.2f", sr.dense.ms1 / sr.a1.ms1) + "x |\n";
     }
   }
 
@@ -299,7 +300,8 @@ int main(int argc, char** argv) {
 
   // ---------------------------------------------------------------------------------------------
   md << "\n## Thread scaling, approach 1\n\n"
-     << "Same parameters (blockCubes auto) for every thread count, so the meshes are bit-identical; median ms and speed-up over 1 thread.\n\n"
+     << "Same parameters (blockCubes auto) for every thread count, so the meshes are bit-identical; median ms and "
+        "speed-up over 1 thread.\n\n"
      << "| set | S | blocks |";
   for (int t = 1; t <= hw; ++t) md << " " << t << " thr ms |";
   md << " speed-up |\n|---|---|---|";
@@ -387,9 +389,9 @@ int main(int argc, char** argv) {
           maxErr = std::max(maxErr, std::abs(len - rt));
           sumErr += std::abs(len - rt);
         }
-        md << "| " << sh.name << " | " << cube << " | " << m.stats.triangles << " | " << fmt("%.3f", median(t))
-           << " | " << fmt("%+.3f", 100.0 * (topo.signedVolume - trueVol) / trueVol) << " | " << fmt("%.5f", maxErr)
-           << " | " << fmt("%.5f", sumErr / double(std::max<std::size_t>(1, m.positions.size()))) << " |\n";
+        md << "| " << sh.name << " | " << cube << " | " << m.stats.triangles << " | " << fmt("%.3f", median(t)) << " | "
+           << fmt("%+.3f", 100.0 * (topo.signedVolume - trueVol) / trueVol) << " | " << fmt("%.5f", maxErr) << " | "
+           << fmt("%.5f", sumErr / double(std::max<std::size_t>(1, m.positions.size()))) << " |\n";
       }
     }
   }

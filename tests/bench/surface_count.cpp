@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
   fluid::SurfaceParams params;
   params.cube = float(std::atof(argv[2]));
   params.threads = 1;
-  if (const char* t = std::getenv("SURFACE_COUNT_THREADS")) params.threads = std::max(1, std::atoi(t));  // timing checks
+  if (const char* t = std::getenv("SURFACE_COUNT_THREADS"))
+    params.threads = std::max(1, std::atoi(t));                                              // timing checks
   if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;

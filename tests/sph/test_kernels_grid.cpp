@@ -101,7 +101,8 @@ void expectMatchesBruteForce(const std::vector<glm::vec3>& p, float radius, glm:
       const glm::vec3 d = p[i] - p[j];
       if (j != i && glm::dot(d, d) < r2) expected.push_back(static_cast<std::uint32_t>(j));
     }
-    std::vector<std::uint32_t> got(lists.indices.begin() + lists.offsets[i], lists.indices.begin() + lists.offsets[i + 1]);
+    std::vector<std::uint32_t> got(lists.indices.begin() + lists.offsets[i],
+                                   lists.indices.begin() + lists.offsets[i + 1]);
     std::sort(got.begin(), got.end());
     ASSERT_EQ(got, expected) << "particle " << i;
     total += expected.size();

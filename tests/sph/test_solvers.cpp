@@ -9,9 +9,9 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstring>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <new>
 #include <numeric>
 
@@ -86,7 +86,12 @@ void columnStaysAtRest(SphSolverKind solver, float max_error) {
   for (int l = 2; l < 11; ++l) {
     if (count[l] == 0) continue;
     const double x = depth_sum[l] / count[l], y = p_sum[l] / count[l];
-    sx += x; sy += y; sxx += x * x; sxy += x * y; syy += y * y; k += 1;
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    syy += y * y;
+    k += 1;
   }
   const double slope = (k * sxy - sx * sy) / (k * sxx - sx * sx);
   const double r = (k * sxy - sx * sy) / std::sqrt((k * sxx - sx * sx) * (k * syy - sy * sy));
@@ -135,7 +140,8 @@ TEST(SphSolvers, FloorCarriesTheWeight) {
   EXPECT_NEAR(-floor.force.y, weight, 0.15 * weight);
   EXPECT_LT(std::abs(floor.force.x) + std::abs(floor.force.z), 0.05 * weight);
   // Side walls feel equal and opposite pushes.
-  EXPECT_NEAR(s.world.colliders[0].force.x, -s.world.colliders[1].force.x, 0.05 * weight + 0.2 * std::abs(s.world.colliders[0].force.x));
+  EXPECT_NEAR(s.world.colliders[0].force.x, -s.world.colliders[1].force.x,
+              0.05 * weight + 0.2 * std::abs(s.world.colliders[0].force.x));
   EXPECT_LT(s.world.colliders[0].force.x, 0.0f);  // the x = 0 wall is pushed towards -x
 }
 
@@ -169,8 +175,10 @@ TEST(SphSolvers, BitIdenticalForOneAndManyThreads) {
 }
 
 TEST(SphSolvers, EmittersAndSinksAreThreadCountInvariant) {
-  const Overrides o{{"spacing", "0.04"}, {"budget", "400"}, {"rate", "3000"}, {"basin_size", "0.4"}, {"drain_size", "0.2"}};
-  const Snapshot a = run(SphSolverKind::dfsph, 1, 250, "fountain", o), b = run(SphSolverKind::dfsph, 4, 250, "fountain", o);
+  const Overrides o{
+      {"spacing", "0.04"}, {"budget", "400"}, {"rate", "3000"}, {"basin_size", "0.4"}, {"drain_size", "0.2"}};
+  const Snapshot a = run(SphSolverKind::dfsph, 1, 250, "fountain", o),
+                 b = run(SphSolverKind::dfsph, 4, 250, "fountain", o);
   ASSERT_GT(a.id.size(), 50u);
   ASSERT_EQ(a.id, b.id);
   EXPECT_EQ(0, std::memcmp(a.x.data(), b.x.data(), a.x.size() * sizeof(glm::vec3)));
@@ -192,8 +200,9 @@ TEST(SphSolvers, NoAllocationPerStepAfterWarmUp) {
 }
 
 TEST(SphSolvers, FountainEmitsDrainsAndRespectsBudget) {
-  SphScene s = scene("fountain", SphSolverKind::dfsph,
-                     {{"spacing", "0.04"}, {"budget", "600"}, {"rate", "2000"}, {"basin_size", "0.6"}, {"drain_size", "0.3"}});
+  SphScene s =
+      scene("fountain", SphSolverKind::dfsph,
+            {{"spacing", "0.04"}, {"budget", "600"}, {"rate", "2000"}, {"basin_size", "0.6"}, {"drain_size", "0.3"}});
   std::size_t emitted = 0, removed = 0, peak = 0;
   ASSERT_TRUE(advanceSph(s.world, 1.5, [&](const SphStepStats& st) {
                 emitted += st.emitted;

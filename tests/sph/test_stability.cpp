@@ -71,8 +71,8 @@ TEST(SphStability, TwoHundredParticlesOnOnePointSeparate) {
     ASSERT_TRUE(st.ok()) << st.error;
     EXPECT_TRUE(finiteState(s.world)) << sphSolverName(solver);
     EXPECT_TRUE(inside(s)) << sphSolverName(solver);
-    EXPECT_LT(peak, 60.0f) << sphSolverName(solver);                // no explosion
-    EXPECT_GT(extent(s.world).x, 0.04f) << sphSolverName(solver);   // they spread out
+    EXPECT_LT(peak, 60.0f) << sphSolverName(solver);               // no explosion
+    EXPECT_GT(extent(s.world).x, 0.04f) << sphSolverName(solver);  // they spread out
   }
 }
 
@@ -89,7 +89,8 @@ TEST(SphStability, GridAtHalfSpacingRelaxes) {
     EXPECT_TRUE(inside(s));
     // Bounded: DFSPH limits the per-step pressure push; WCSPH's release speed from 50 % (clamped)
     // compression is of the order of its sound speed.
-    EXPECT_LT(peak, solver == SphSolverKind::dfsph ? 30.0f : 2.0f * s.world.params.sound_speed) << sphSolverName(solver);
+    EXPECT_LT(peak, solver == SphSolverKind::dfsph ? 30.0f : 2.0f * s.world.params.sound_speed)
+        << sphSolverName(solver);
     EXPECT_GT(extent(s.world).x, 8 * half * 1.3f) << sphSolverName(solver);  // expanded
   }
 }
@@ -185,7 +186,8 @@ TEST(SphStability, ThinFastWallDoesNotLetParticlesThrough) {
       ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
       const float wall_x = s.world.colliders.back().pose.translation.x;
       for (const glm::vec3& p : s.world.particles.position)
-        ASSERT_GE(p.x, wall_x + 0.002f - 1e-4f) << sphSolverName(solver) << " t = " << s.world.time << " dt = " << s.world.last_dt;
+        ASSERT_GE(p.x, wall_x + 0.002f - 1e-4f)
+            << sphSolverName(solver) << " t = " << s.world.time << " dt = " << s.world.last_dt;
     }
     EXPECT_TRUE(finiteState(s.world));
   }

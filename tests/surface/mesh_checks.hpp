@@ -2,9 +2,9 @@
 // Helpers for the surface tests: welding by lattice edge, watertightness, orientation, and a
 // canonical triangle list for comparing meshes from different extractors.
 
-#include "fluid/io/particle_io.hpp"
 #include <glm/glm.hpp>
 #include <stdexcept>
+#include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
@@ -35,10 +35,10 @@ inline std::vector<Tri> canonicalTriangles(const fluid::SurfaceMesh& m) {
 
 struct Topology {
   std::size_t triangles = 0;
-  std::size_t degenerate = 0;      // triangles with a repeated welded vertex
-  std::size_t badEdges = 0;        // directed edges not matched by exactly one opposite edge
+  std::size_t degenerate = 0;           // triangles with a repeated welded vertex
+  std::size_t badEdges = 0;             // directed edges not matched by exactly one opposite edge
   std::size_t keyPositionMismatch = 0;  // same edge key, different position
-  double signedVolume = 0;         // > 0 for outward winding
+  double signedVolume = 0;              // > 0 for outward winding
   double area = 0;
   std::size_t normalsAgainstFaces = 0;  // vertex normal opposite to its triangle's normal
 };
@@ -56,7 +56,8 @@ inline Topology checkTopology(const fluid::SurfaceMesh& m) {
     const std::uint64_t k[3] = {m.edgeKeys[m.indices[i]], m.edgeKeys[m.indices[i + 1]], m.edgeKeys[m.indices[i + 2]]};
     if (k[0] == k[1] || k[1] == k[2] || k[0] == k[2]) ++t.degenerate;
     for (int e = 0; e < 3; ++e) ++directed[{k[e], k[(e + 1) % 3]}];
-    const glm::dvec3 a = m.positions[m.indices[i]], b = m.positions[m.indices[i + 1]], c = m.positions[m.indices[i + 2]];
+    const glm::dvec3 a = m.positions[m.indices[i]], b = m.positions[m.indices[i + 1]],
+                     c = m.positions[m.indices[i + 2]];
     t.signedVolume += glm::dot(a, glm::cross(b, c)) / 6.0;
     const glm::dvec3 fn = glm::cross(b - a, c - a);
     t.area += 0.5 * glm::length(fn);

@@ -180,8 +180,8 @@ TEST(MarchingSlices, FieldExactlyEqualToThresholdAtCorners) {
   p.cube = 1.0f;
   p.threshold = 0.140625f;
   const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
-  ASSERT_EQ(fluid::surfaceFieldAtCorner({std::span(x).first(1), std::span(y).first(1), std::span(z).first(1), {}, {}, {}},
-                                        p, 1, 0, 0),
+  ASSERT_EQ(fluid::surfaceFieldAtCorner(
+                {std::span(x).first(1), std::span(y).first(1), std::span(z).first(1), {}, {}, {}}, p, 1, 0, 0),
             p.threshold);
   const fluid::SurfaceMesh m = slices(in, p);
   const Topology t = checkTopology(m);

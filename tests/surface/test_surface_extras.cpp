@@ -19,7 +19,8 @@ fluid::SurfaceMesh run(const fluid::SurfaceInput& in, const fluid::SurfaceParams
   EXPECT_TRUE(st.ok()) << st.error;
   return m;
 }
-fluid::SurfaceMesh baseline(fluid::BaselineMethod method, const fluid::SurfaceInput& in, const fluid::SurfaceParams& p) {
+fluid::SurfaceMesh baseline(fluid::BaselineMethod method, const fluid::SurfaceInput& in,
+                            const fluid::SurfaceParams& p) {
   fluid::BaselineExtractor ex;
   fluid::SurfaceMesh m;
   const fluid::SurfaceStatus st = ex.extract(method, in, p, m);
@@ -96,9 +97,10 @@ TEST(SurfaceOrder, BackToFrontForRandomViewsAndExactSlabOrder) {
     EXPECT_LE(exact, ordered + 0.005);
     sumExact += exact;
   }
-  std::printf("out-of-order fraction over %d random views: back-to-front mean %.4f (worst %.4f), "
-              "exact slab order mean %.4f, front-to-back mean %.4f\n",
-              views, sumOrdered / views, worstOrdered, sumExact / views, sumReverse / views);
+  std::printf(
+      "out-of-order fraction over %d random views: back-to-front mean %.4f (worst %.4f), "
+      "exact slab order mean %.4f, front-to-back mean %.4f\n",
+      views, sumOrdered / views, worstOrdered, sumExact / views, sumReverse / views);
   EXPECT_LT(sumExact, sumOrdered);
   EXPECT_LT(worstOrdered, 0.15);
   EXPECT_GT(sumReverse / views, 0.8);

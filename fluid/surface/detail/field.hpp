@@ -15,12 +15,12 @@ namespace fluid::detail {
 // One particle, prepared. Positions are doubles of the float input.
 struct Particle {
   double x, y, z;
-  double rc2;                // Rc_i^2: influence iff (dx*dx + dy*dy) + dz*dz < rc2 (in double)
-  std::int64_t anchor[3];    // lattice index floor(p / S) per axis
-  float rest[3];             // float(p - anchor * S) per axis, in [0, S)
-  float k;                   // 1 / (2 Rc_i^2), so u = r^2 k = (r / (sqrt2 Rc_i))^2
-  float strength;            // s_i
-  std::uint32_t index;       // input index (user data)
+  double rc2;              // Rc_i^2: influence iff (dx*dx + dy*dy) + dz*dz < rc2 (in double)
+  std::int64_t anchor[3];  // lattice index floor(p / S) per axis
+  float rest[3];           // float(p - anchor * S) per axis, in [0, S)
+  float k;                 // 1 / (2 Rc_i^2), so u = r^2 k = (r / (sqrt2 Rc_i))^2
+  float strength;          // s_i
+  std::uint32_t index;     // input index (user data)
 };
 
 // The exact-influence predicate. Every lookup structure must return exactly the particles for
@@ -43,8 +43,8 @@ inline float contribution(float dxy2, float dz, float k, float s) {
   return s * (w * w);
 }
 
-inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx,
-                       float& gy, float& gz) {
+inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx, float& gy,
+                       float& gz) {
   const float w = (dxy2 + dz * dz) * k - 0.5f;
   value += s * (w * w);
   const float g = 4.0f * s * w * k;

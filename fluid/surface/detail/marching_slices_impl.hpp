@@ -163,10 +163,10 @@ struct Setup {
   double s = 1;
   float threshold = 0.2f;
   double rcMax = 3;
-  int m = 3;                         // margin cubes, ceil(Rc/S) (§3)
-  int b[3] = {32, 32, 32};           // interior cubes per block, per axis
-  int n[3] = {38, 38, 38};           // expanded cubes per block, b + 2m
-  int nb[3] = {1, 1, 1};             // blocks per axis
+  int m = 3;                             // margin cubes, ceil(Rc/S) (§3)
+  int b[3] = {32, 32, 32};               // interior cubes per block, per axis
+  int n[3] = {38, 38, 38};               // expanded cubes per block, b + 2m
+  int nb[3] = {1, 1, 1};                 // blocks per axis
   std::int64_t lattice0[3] = {0, 0, 0};  // lattice index where block 0's interior starts
   int octant = 0;
   bool exact = false;
@@ -187,8 +187,8 @@ struct Worker {
   std::vector<CacheParticle> local;
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
-  std::vector<double> cx, cy, cz;  // corner coordinates of local indices
-  std::vector<std::int16_t> chainLo, chainHi;  // seeding memo per column
+  std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
+  std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
   std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
   std::vector<Slice<Policy>*> freeSlices;
@@ -299,7 +299,13 @@ template <class Policy>
 class BlockMesher {
  public:
   BlockMesher(Worker<Policy>& w, const Setup& setup, const Policy& policy, BlockOut& out)
-      : w_(w), su_(setup), pol_(policy), out_(out), nx_(setup.n[0]), ny_(setup.n[1]), nz_(setup.n[2]),
+      : w_(w),
+        su_(setup),
+        pol_(policy),
+        out_(out),
+        nx_(setup.n[0]),
+        ny_(setup.n[1]),
+        nz_(setup.n[2]),
         stride_(setup.n[0] + 1) {}
 
   void run(const BlockDesc& block, std::span<const Particle> particles) {
@@ -640,8 +646,8 @@ class BlockMesher {
       const float ox = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
       const float oy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
       const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
-      const bool ownInside = influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) &&
-                             contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
+      const bool ownInside =
+          influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) && contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
       if (!ownInside && !insideAt(x, y, z0)) continue;  // nearest corner outside: no seed here
       const int steps = iceil(std::sqrt(p.rc2) * inv) + 1;
       int z = z0;
@@ -899,7 +905,8 @@ class BlockMesher {
     }
     auto& tmp = out_.sortScratch;
     tmp.resize(nt * 3);
-    for (std::size_t i = 0; i < nt; ++i) std::memcpy(&tmp[3 * i], &out_.indices[3 * keyed[i].second], 3 * sizeof(std::uint32_t));
+    for (std::size_t i = 0; i < nt; ++i)
+      std::memcpy(&tmp[3 * i], &out_.indices[3 * keyed[i].second], 3 * sizeof(std::uint32_t));
     out_.indices.swap(tmp);
     std::sort(out_.triSlab.begin(), out_.triSlab.end());
   }
@@ -934,7 +941,6 @@ struct ExtractorState {
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
 };
-
 
 inline SweepFrame chooseFrame(const SurfaceParams& p) {
   SweepFrame f;
@@ -1160,9 +1166,10 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     for (int bz = b0[2]; bz <= b1[2]; ++bz)
       for (int by = b0[1]; by <= b1[1]; ++by)
         for (int bx = b0[0]; bx <= b1[0]; ++bx)
-          st.pairs.push_back({(std::uint64_t(bz) * std::uint64_t(su.nb[1]) + std::uint64_t(by)) * std::uint64_t(su.nb[0]) +
-                                  std::uint64_t(bx),
-                              r});
+          st.pairs.push_back(
+              {(std::uint64_t(bz) * std::uint64_t(su.nb[1]) + std::uint64_t(by)) * std::uint64_t(su.nb[0]) +
+                   std::uint64_t(bx),
+               r});
   }
   std::sort(st.pairs.begin(), st.pairs.end(), [](const ExtractorState::Pair& a, const ExtractorState::Pair& b) {
     return a.key < b.key || (a.key == b.key && a.rank < b.rank);
@@ -1247,36 +1254,36 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   out.slabRuns.resize(st.runBase[nb]);
   out.blocks.resize(nb);
   parallelItems(*st.arena, nb, [&](int, std::size_t i) {
-      const BlockOut& o = st.outs[i];
-      const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
-      std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
-      std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
-      std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
-      if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
-      for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
-      for (std::size_t k = 0; k < o.runs.size(); ++k) {
-        SurfaceSlabRun r = o.runs[k];
-        r.indices.first += ib;
-        out.slabRuns[rb + k] = r;
-      }
-      SurfaceBlockRange& br = out.blocks[i];
-      br.bx = st.blocks[i].bx;
-      br.by = st.blocks[i].by;
-      br.bz = st.blocks[i].bz;
-      const int bc[3] = {br.bx, br.by, br.bz};
-      for (int a = 0; a < 3; ++a) {
-        const double c0 = double(su.lattice0[a] + std::int64_t(bc[a]) * su.b[a]) * su.s;
-        const double c1 = c0 + double(su.b[a]) * su.s;
-        const int wa = su.frame.axis[a];
-        const double w0 = su.frame.sign[a] * c0, w1 = su.frame.sign[a] * c1;
-        br.boundsMin[wa] = float(std::min(w0, w1) - su.origin[wa]);
-        br.boundsMax[wa] = float(std::max(w0, w1) - su.origin[wa]);
-      }
-      br.indices = {ib, std::uint32_t(o.indices.size())};
-      br.firstVertex = vb;
-      br.vertexCount = std::uint32_t(o.positions.size());
-      br.firstSlabRun = rb;
-      br.slabRunCount = std::uint32_t(o.runs.size());
+    const BlockOut& o = st.outs[i];
+    const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
+    std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
+    std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
+    std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
+    if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
+    for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+    for (std::size_t k = 0; k < o.runs.size(); ++k) {
+      SurfaceSlabRun r = o.runs[k];
+      r.indices.first += ib;
+      out.slabRuns[rb + k] = r;
+    }
+    SurfaceBlockRange& br = out.blocks[i];
+    br.bx = st.blocks[i].bx;
+    br.by = st.blocks[i].by;
+    br.bz = st.blocks[i].bz;
+    const int bc[3] = {br.bx, br.by, br.bz};
+    for (int a = 0; a < 3; ++a) {
+      const double c0 = double(su.lattice0[a] + std::int64_t(bc[a]) * su.b[a]) * su.s;
+      const double c1 = c0 + double(su.b[a]) * su.s;
+      const int wa = su.frame.axis[a];
+      const double w0 = su.frame.sign[a] * c0, w1 = su.frame.sign[a] * c1;
+      br.boundsMin[wa] = float(std::min(w0, w1) - su.origin[wa]);
+      br.boundsMax[wa] = float(std::max(w0, w1) - su.origin[wa]);
+    }
+    br.indices = {ib, std::uint32_t(o.indices.size())};
+    br.firstVertex = vb;
+    br.vertexCount = std::uint32_t(o.positions.size());
+    br.firstSlabRun = rb;
+    br.slabRunCount = std::uint32_t(o.runs.size());
   });
   stats.triangles = out.indices.size() / 3;
   stats.vertices = out.positions.size();
@@ -1288,6 +1295,5 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   stats.workingBytesAllWorkers = workBytes;
   return {};
 }
-
 
 }  // namespace fluid::detail

@@ -22,8 +22,8 @@ class BlockCacheProbe {
   // in the order the field sums them.
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found);
 
-  int n = 0;       // cubes per expanded block edge
-  int margin = 0;  // margin cubes; local corner 0 is lattice index b * blockCubes - margin
+  int n = 0;                        // cubes per expanded block edge
+  int margin = 0;                   // margin cubes; local corner 0 is lattice index b * blockCubes - margin
   std::vector<Particle> particles;  // all particles, prepared (sorted by (z, index))
 
  private:
