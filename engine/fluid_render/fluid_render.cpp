@@ -1,6 +1,7 @@
 #include "engine/fluid_render/fluid_render.hpp"
 
 #include "engine/gl/gl.hpp"
+#include "fluid/core/finite.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -13,8 +14,6 @@ namespace engine {
 namespace {
 
 GLint loc(GLuint program, const char* name) { return glGetUniformLocation(program, name); }
-
-bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Capacity policy: grow to max(need, 1.5 × old) so a slowly growing mesh reallocates O(log n) times.
 bool ensureCapacity(GLenum target, GLuint buffer, std::size_t need, std::size_t& capacity) {
@@ -176,7 +175,7 @@ bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std
     }
   }
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    if (!finite3(positions[k]) || !finite3(normals[k])) {
+    if (!fluid::isFinite(positions[k]) || !fluid::isFinite(normals[k])) {
       error = "fluid mesh: vertex " + std::to_string(k) + " is not finite";
       return false;
     }

@@ -2,6 +2,7 @@
 #include "engine/gpu_particles/gpu_particles.hpp"
 
 #include "engine/gl/gl.hpp"
+#include "fluid/core/finite.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -298,8 +299,7 @@ std::size_t spawn(GpuParticles& s, const BirthBatch& batch) {
     const glm::vec3 p = batch.positions[k], v = batch.velocities[k];
     const float life = batch.lifetimes[k], spin = batch.spins[k];
     // Bad content is dropped, never uploaded: NaN/inf or a non-positive lifetime.
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v.x) && std::isfinite(v.y) &&
-          std::isfinite(v.z) && std::isfinite(life) && life > 0.0f && std::isfinite(spin))) {
+    if (!(fluid::isFinite(p) && fluid::isFinite(v) && std::isfinite(life) && life > 0.0f && std::isfinite(spin))) {
       continue;
     }
     std::uint32_t index = 0;
@@ -454,7 +454,7 @@ bool setFlowField(GpuParticles& s, const FlowFieldDesc& flow, std::string& error
     return false;
   }
   for (const glm::vec3& v : flow.velocities) {
-    if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))) {
+    if (!fluid::isFinite(v)) {
       error = "flow field: non-finite velocity";
       return false;
     }

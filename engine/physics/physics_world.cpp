@@ -1,5 +1,7 @@
 #include "engine/physics/physics_world.hpp"
 
+#include "fluid/core/finite.hpp"
+
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
@@ -130,8 +132,7 @@ void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps) {
 
 bool setExternalForce(PhysicsWorld& world, BodyId id, glm::vec3 force, glm::vec3 torque) {
   assert(id >= 0 && id < bodyCount(world));
-  const auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-  if (!finite(force) || !finite(torque)) return false;
+  if (!fluid::isFinite(force) || !fluid::isFinite(torque)) return false;
   const auto index = static_cast<std::size_t>(id);
   if (world.external_force.size() < world.bodies.size()) {
     world.external_force.resize(world.bodies.size(), glm::vec3(0.0f));

@@ -1,5 +1,6 @@
 // The SPH step: neighbour search, boundary terms, WCSPH / DFSPH, collisions, coupling forces.
 // See sph.hpp for the papers; equations are cited where they are implemented.
+#include "fluid/core/finite.hpp"
 #include "fluid/sph/sph.hpp"
 
 #include <tbb/blocked_range.h>
@@ -383,18 +384,17 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   SphStepStats stats;
   const SphParams& P = world.params;
   if (SphStatus s = validateSphParams(P); !s.ok()) return s;
-  auto finite3 = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
   for (std::size_t c = 0; c < world.colliders.size(); ++c) {
     const SphCollider& col = world.colliders[c];
     if (!col.shape) return {"sph collider " + std::to_string(c) + " has no shape"};
     const glm::quat q = col.pose.rotation;
-    if (!finite3(col.pose.translation) || !finite3(col.pose.linear_velocity) || !finite3(col.pose.angular_velocity) ||
-        !std::isfinite(q.w + q.x + q.y + q.z) || !(glm::dot(q, q) > 0.0f))
+    if (!isFinite(col.pose.translation) || !isFinite(col.pose.linear_velocity) ||
+        !isFinite(col.pose.angular_velocity) || !std::isfinite(q.w + q.x + q.y + q.z) || !(glm::dot(q, q) > 0.0f))
       return {"sph collider " + std::to_string(c) + " has a non-finite or degenerate pose; step refused"};
   }
   for (std::size_t e = 0; e < world.emitters.size(); ++e) {
     const SphEmitter& em = world.emitters[e];
-    if (!finite3(em.position) || !finite3(em.direction) || !std::isfinite(em.speed) || !std::isfinite(em.radius) ||
+    if (!isFinite(em.position) || !isFinite(em.direction) || !std::isfinite(em.speed) || !std::isfinite(em.radius) ||
         !std::isfinite(em.rate) || std::isnan(em.start_time) || std::isnan(em.end_time))
       return {"sph emitter " + std::to_string(e) + " has a non-finite field; step refused"};
   }

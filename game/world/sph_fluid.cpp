@@ -1,5 +1,7 @@
 #include "game/world/sph_fluid.hpp"
 
+#include "fluid/core/finite.hpp"
+
 #include <cmath>
 
 namespace game {
@@ -100,10 +102,9 @@ bool stepSphFluid(SphFluid& f, double dt) {
 std::string findNonFiniteSph(const SphFluid& f) {
   if (!f.error.empty()) return "sph_fluid: " + f.error;
   const fluid::ParticleStore& p = f.world.particles;
-  auto bad = [](glm::vec3 v) { return !std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z); };
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (bad(p.position[i])) return "sph_fluid particle id " + std::to_string(p.id[i]) + " position";
-    if (bad(p.velocity[i])) return "sph_fluid particle id " + std::to_string(p.id[i]) + " velocity";
+    if (!fluid::isFinite(p.position[i])) return "sph_fluid particle id " + std::to_string(p.id[i]) + " position";
+    if (!fluid::isFinite(p.velocity[i])) return "sph_fluid particle id " + std::to_string(p.id[i]) + " velocity";
     if (i < p.density.size() && !std::isfinite(p.density[i]))
       return "sph_fluid particle id " + std::to_string(p.id[i]) + " density";
   }
