@@ -147,25 +147,52 @@ std::string programInfoLog(GLuint program) {
   return log;
 }
 
-}  // namespace
-
-GlShader compileShader(GLenum stage, const std::string& source, const std::string& file_label, std::string& error) {
+// Compiles one stage from several source strings; `names[N]` names string N in the error.
+GlShader compileSources(GLenum stage, std::span<const std::string> sources, std::span<const std::string> names,
+                        std::string& error) {
   GlShader shader(glCreateShader(stage));
   if (!shader) {
-    error = file_label + ": glCreateShader failed";
+    error = names.back() + ": glCreateShader failed";
     return {};
   }
-  const char* text = source.c_str();
-  const GLint length = static_cast<GLint>(source.size());
-  glShaderSource(shader.id(), 1, &text, &length);
+  std::vector<const char*> texts;
+  std::vector<GLint> lengths;
+  for (const std::string& source : sources) {
+    texts.push_back(source.c_str());
+    lengths.push_back(static_cast<GLint>(source.size()));
+  }
+  glShaderSource(shader.id(), static_cast<GLsizei>(texts.size()), texts.data(), lengths.data());
   glCompileShader(shader.id());
   GLint ok = GL_FALSE;
   glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &ok);
   if (ok != GL_TRUE) {
-    error = formatShaderLog(shaderInfoLog(shader.id()), file_label);
+    error = formatShaderLog(shaderInfoLog(shader.id()), names);
     return {};
   }
   return shader;
+}
+
+// Links the compiled `shaders` into a program (detached again afterwards); a link error is
+// reported against `label`.
+GlProgram linkShaders(std::span<const GlShader> shaders, const std::string& label, std::string& error) {
+  GlProgram program(glCreateProgram());
+  for (const GlShader& shader : shaders) glAttachShader(program.id(), shader.id());
+  glLinkProgram(program.id());
+  for (const GlShader& shader : shaders) glDetachShader(program.id(), shader.id());
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    error = formatShaderLog(programInfoLog(program.id()), label + " (link)");
+    return {};
+  }
+  return program;
+}
+
+}  // namespace
+
+GlShader compileShader(GLenum stage, const std::string& source, const std::string& file_label, std::string& error) {
+  return compileSources(stage, std::span<const std::string>(&source, 1), std::span<const std::string>(&file_label, 1),
+                        error);
 }
 
 namespace {
@@ -194,30 +221,18 @@ GlProgram loadProgram(const std::filesystem::path& shader_dir, std::string_view 
   const std::filesystem::path fragment_path = shader_dir / fragment_name;
   std::string vertex_source, fragment_source;
   if (!readText(vertex_path, vertex_source, error) || !readText(fragment_path, fragment_source, error)) return {};
-  GlShader vertex = compileShader(GL_VERTEX_SHADER, vertex_source, vertex_path.string(), error);
-  if (!vertex) return {};
-  GlShader fragment = compileShader(GL_FRAGMENT_SHADER, fragment_source, fragment_path.string(), error);
-  if (!fragment) return {};
-  GlProgram program(glCreateProgram());
-  glAttachShader(program.id(), vertex.id());
-  glAttachShader(program.id(), fragment.id());
-  glLinkProgram(program.id());
-  glDetachShader(program.id(), vertex.id());
-  glDetachShader(program.id(), fragment.id());
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    error = formatShaderLog(programInfoLog(program.id()),
-                            vertex_path.string() + " + " + fragment_path.string() + " (link)");
-    return {};
-  }
-  return program;
+  GlShader shaders[2];
+  shaders[0] = compileShader(GL_VERTEX_SHADER, vertex_source, vertex_path.string(), error);
+  if (!shaders[0]) return {};
+  shaders[1] = compileShader(GL_FRAGMENT_SHADER, fragment_source, fragment_path.string(), error);
+  if (!shaders[1]) return {};
+  return linkShaders(shaders, vertex_path.string() + " + " + fragment_path.string(), error);
 }
 
 GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string& prelude, std::string& error) {
   error.clear();
-  GlProgram program(glCreateProgram());
   std::vector<GlShader> shaders;
+  std::string files;  // every file, for a link error
   for (const ShaderStageFiles& stage : stages) {
     // Source string 0 is the version line + prelude; the files follow. Each file starts with
     // "#line 1 N" (N = its source-string number) so drivers that report positions in the
@@ -234,32 +249,21 @@ GLuint buildProgram(std::span<const ShaderStageFiles> stages, const std::string&
       }
       texts.push_back("#line 1 " + std::to_string(texts.size()) + "\n" + text + "\n");
       names.push_back(file.string());
+      files += (files.empty() ? "" : " + ") + file.string();
     }
     if (!read_all) continue;
-    std::vector<const char*> pointers;
-    for (const std::string& t : texts) pointers.push_back(t.c_str());
-    GlShader shader(glCreateShader(stage.stage));
-    glShaderSource(shader.id(), static_cast<GLsizei>(pointers.size()), pointers.data(), nullptr);
-    glCompileShader(shader.id());
-    GLint status = GL_FALSE;
-    glGetShaderiv(shader.id(), GL_COMPILE_STATUS, &status);
-    if (status != GL_TRUE) {
-      error += formatShaderLog(shaderInfoLog(shader.id()), names) + "\n";
+    std::string compile_error;
+    GlShader shader = compileSources(stage.stage, texts, names, compile_error);
+    if (!shader) {
+      error += compile_error + "\n";
       continue;
     }
-    glAttachShader(program.id(), shader.id());
     shaders.push_back(std::move(shader));
   }
   if (!error.empty()) return 0;
-  glLinkProgram(program.id());
-  for (const GlShader& shader : shaders) glDetachShader(program.id(), shader.id());
-  GLint linked = GL_FALSE;
-  glGetProgramiv(program.id(), GL_LINK_STATUS, &linked);
-  if (linked != GL_TRUE) {
-    std::string files;
-    for (const ShaderStageFiles& stage : stages)
-      for (const std::filesystem::path& file : stage.files) files += (files.empty() ? "" : " + ") + file.string();
-    error = formatShaderLog(programInfoLog(program.id()), files + " (link)") + "\n";
+  GlProgram program = linkShaders(shaders, files, error);
+  if (!program) {
+    error += "\n";
     return 0;
   }
   return program.release();
