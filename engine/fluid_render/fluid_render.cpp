@@ -63,14 +63,15 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   }
   const std::filesystem::path dir = desc.shader_dir / "fluid";
   std::string error;
-  out.water_program =
-      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
-                                                 {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "water.frag"}}},
-                   "", error);
+  out.water_program = buildProgram(
+      std::vector<ShaderStageFiles>{
+          {GL_VERTEX_SHADER, {dir / "surface.vert"}},
+          {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "depth.glsl", dir / "water.frag"}}},
+      "", error);
   out.error += error;
   out.water_extent_program =
       buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
-                                                 {GL_FRAGMENT_SHADER, {dir / "water_extent.frag"}}},
+                                                 {GL_FRAGMENT_SHADER, {dir / "depth.glsl", dir / "water_extent.frag"}}},
                    "", error);
   out.error += error;
   out.goo_program =
@@ -234,11 +235,8 @@ void drawFluid(FluidRenderer& r, GLuint target_fbo, const FluidCamera& camera, c
     // entry (as its negative) and the farthest surface in front of the scene depth.
     glBindFramebuffer(GL_FRAMEBUFFER, r.water_extent_fbo);
     glViewport(0, 0, r.desc.width, r.desc.height);
-    GLfloat caller_clear[4];
-    glGetFloatv(GL_COLOR_CLEAR_VALUE, caller_clear);
-    glClearColor(-1e30f, 0.0f, 0.0f, 0.0f);
-    glClear(GL_COLOR_BUFFER_BIT);
-    glClearColor(caller_clear[0], caller_clear[1], caller_clear[2], caller_clear[3]);
+    const GLfloat no_water[4] = {-1e30f, 0.0f, 0.0f, 0.0f};  // no entry, no far surface
+    glClearBufferfv(GL_COLOR, 0, no_water);                  // leaves the caller's clear colour alone
     glDisable(GL_DEPTH_TEST);
     glEnable(GL_BLEND);
     glBlendEquation(GL_MAX);

@@ -15,7 +15,6 @@ uniform sampler2D u_scene_depth;
 uniform sampler2D u_water_extent;
 uniform mat4 u_view;
 uniform mat4 u_projection;
-uniform vec2 u_near_far;
 uniform vec2 u_viewport;
 uniform vec3 u_absorption;
 uniform float u_refraction;
@@ -24,11 +23,6 @@ uniform float u_opacity;
 in vec3 v_world;
 in vec3 v_normal;
 layout(location = 0) out vec4 out_colour;
-
-float linearDepth(float d) {
-  float n = u_near_far.x, f = u_near_far.y;
-  return 2.0 * n * f / (f + n - (2.0 * d - 1.0) * (f - n));
-}
 
 void main() {
   vec2 uv = gl_FragCoord.xy / u_viewport;

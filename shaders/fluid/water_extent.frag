@@ -5,13 +5,7 @@
 // a distant wall absorbs through itself only, and a camera inside the water sees it tinted.
 uniform sampler2D u_scene_depth;
 uniform vec2 u_viewport;
-uniform vec2 u_near_far;
 layout(location = 0) out vec4 out_extent;
-
-float linearDepth(float d) {
-  float n = u_near_far.x, f = u_near_far.y;
-  return 2.0 * n * f / (f + n - (2.0 * d - 1.0) * (f - n));
-}
 
 void main() {
   // Same projection and resolution as the opaque pass: raw window depths compare directly.
