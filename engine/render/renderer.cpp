@@ -37,22 +37,10 @@ bool createTargets(Renderer& r, int width, int height, std::string& error) {
   r.scene_depth.reset();
   r.width = std::max(width, 1);
   r.height = std::max(height, 1);
-  r.scene_colour = GlTexture(genTexture());
-  glBindTexture(GL_TEXTURE_2D, r.scene_colour.id());
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, r.width, r.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  r.scene_depth = GlTexture(genTexture());
-  glBindTexture(GL_TEXTURE_2D, r.scene_depth.id());
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, r.width, r.height, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT,
-               nullptr);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glBindTexture(GL_TEXTURE_2D, 0);
+  r.scene_colour =
+      GlTexture(createTexture2D(GL_RGBA8, r.width, r.height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr, GL_LINEAR));
+  r.scene_depth =
+      GlTexture(createTexture2D(GL_DEPTH_COMPONENT24, r.width, r.height, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr));
   GLuint fbo = 0;
   glGenFramebuffers(1, &fbo);
   r.scene_fbo = GlFramebuffer(fbo);
@@ -122,14 +110,10 @@ namespace {
 
 bool createShadowMap(Renderer& r, int size, std::string& error) {
   r.shadow_size = std::clamp(size, 256, 8192);
-  r.shadow_depth = GlTexture(genTexture());
+  r.shadow_depth = GlTexture(createTexture2D(GL_DEPTH_COMPONENT24, r.shadow_size, r.shadow_size, GL_DEPTH_COMPONENT,
+                                             GL_UNSIGNED_INT, nullptr, GL_LINEAR));
+  // Hardware depth comparison: sampler2DShadow lookups return the filtered lit fraction.
   glBindTexture(GL_TEXTURE_2D, r.shadow_depth.id());
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, r.shadow_size, r.shadow_size, 0, GL_DEPTH_COMPONENT,
-               GL_UNSIGNED_INT, nullptr);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   glBindTexture(GL_TEXTURE_2D, 0);
