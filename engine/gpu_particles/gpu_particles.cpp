@@ -46,6 +46,15 @@ void bindTexture(int unit, GLenum target, GLuint tex) {
   glBindTexture(target, tex);
 }
 
+// Every simulation pass writes texels of a state texture: no blending, no depth test, the
+// viewport covering `rows` rows of the state textures.
+void beginStatePass(const GpuParticles& s, GLuint fbo, GLsizei rows) {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, static_cast<GLsizei>(s.desc.width), rows);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+}
+
 bool isPowerOfTwo(std::uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 
 // Rows covering the active range (§3.3.1: the heap keeps it packed at the start).
@@ -321,10 +330,7 @@ std::size_t spawn(GpuParticles& s, const BirthBatch& batch) {
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(s.birth_scratch.size() * sizeof(float)), s.birth_scratch.data(),
                GL_STREAM_DRAW);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
-  glBindFramebuffer(GL_FRAMEBUFFER, s.birth_fbo[s.current]);
-  glViewport(0, 0, static_cast<GLsizei>(s.desc.width), static_cast<GLsizei>(s.desc.height));
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
+  beginStatePass(s, s.birth_fbo[s.current], static_cast<GLsizei>(s.desc.height));
   glEnable(GL_PROGRAM_POINT_SIZE);
   glUseProgram(s.birth.id);
   glUniform2i(loc(s.birth.id, "u_size"), static_cast<GLint>(s.desc.width), static_cast<GLint>(s.desc.height));
@@ -499,10 +505,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
     }
   }
   const GLuint prog = s.update_variants[variant];
-  glBindFramebuffer(GL_FRAMEBUFFER, s.fbo[dst]);
-  glViewport(0, 0, static_cast<GLsizei>(s.desc.width), rows);
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
+  beginStatePass(s, s.fbo[dst], rows);
   glUseProgram(prog);
   bindTexture(0, GL_TEXTURE_2D, s.state0[src]);
   bindTexture(1, GL_TEXTURE_2D, s.state1[src]);
@@ -579,13 +582,10 @@ float stokesDragRate(const GpuStepParams& params) {
 
 void refreshSortKeys(GpuParticles& s, glm::vec3 eye) {
   if (!s.ready) return;
-  const auto w = static_cast<GLsizei>(s.desc.width), h = static_cast<GLsizei>(s.desc.height);
-  glViewport(0, 0, w, h);
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
+  const auto w = static_cast<GLsizei>(s.desc.width);
+  beginStatePass(s, s.sort_fbo[1 - s.sort_current], static_cast<GLsizei>(s.desc.height));
   glBindVertexArray(s.empty_vao);
   const GLuint prog = s.sort_key.id;
-  glBindFramebuffer(GL_FRAMEBUFFER, s.sort_fbo[1 - s.sort_current]);
   glUseProgram(prog);
   bindTexture(0, GL_TEXTURE_2D, s.sort_tex[s.sort_current]);
   bindTexture(1, GL_TEXTURE_2D, s.state0[s.current]);
@@ -604,10 +604,8 @@ void refreshSortKeys(GpuParticles& s, glm::vec3 eye) {
 
 void sortPasses(GpuParticles& s, std::uint32_t passes) {
   if (!s.ready) return;
-  const auto w = static_cast<GLsizei>(s.desc.width), h = static_cast<GLsizei>(s.desc.height);
-  glViewport(0, 0, w, h);
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
+  const auto w = static_cast<GLsizei>(s.desc.width);
+  beginStatePass(s, s.sort_fbo[1 - s.sort_current], static_cast<GLsizei>(s.desc.height));
   glBindVertexArray(s.empty_vao);
   const GLuint prog = s.sort_pass.id;
   glUseProgram(prog);
