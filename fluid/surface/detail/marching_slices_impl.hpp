@@ -95,13 +95,15 @@ static_assert(sizeof(ColumnEntry) == 12);
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
 // along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
 // (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
-// is stored negated and 32-bit so the index is one add.
+// is stored negated so the index is one add; 16 bits suffice (0 <= anchor - corner 0 <= n < 32000),
+// which makes the record 32 bytes, so one never straddles two cache lines.
 struct CacheParticle {
   float rest[3];        // Particle::rest
   float k, s;           // 1 / (2 Rc_i^2), strength
-  std::int32_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
+  std::int16_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
   std::uint32_t index;  // input index (user data)
 };
+static_assert(sizeof(CacheParticle) == 32);
 
 template <class Policy>
 struct Corner {
@@ -183,6 +185,7 @@ template <class Policy>
 struct Worker {
   int nx = -1, ny = -1, nz = -1;  // expanded cubes per axis; corners 0..n
   std::vector<std::uint32_t> colStart, cursor;
+  std::vector<std::int16_t> runMax;  // cache build: running max_z per column
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
@@ -204,6 +207,7 @@ struct Worker {
     const std::size_t cols = columns();
     colStart.assign(cols + 1, 0);
     cursor.assign(cols, 0);
+    runMax.assign(cols, 0);
     cx.assign(nx + 1, 0);
     cy.assign(ny + 1, 0);
     cz.assign(nz + 1, 0);
@@ -320,7 +324,7 @@ class BlockMesher {
     }
     out_.stats.triangles = out_.indices.size() / 3;
     out_.stats.vertices = out_.positions.size();
-    out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
+    out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
                          std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
                          std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
@@ -414,6 +418,8 @@ class BlockMesher {
     for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // CSR starts
     std::uint32_t* cursor = w_.cursor.data();
     std::copy(start, start + cols, cursor);
+    // Running max_z per column while filling: reachMax of each element as it is written.
+    std::fill(w_.runMax.begin(), w_.runMax.end(), std::int16_t(-32000));
     w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
@@ -427,7 +433,7 @@ class BlockMesher {
         // Block particles lie within Rc of the interior, so their anchors are inside the
         // expanded block (margin m >= Rc / S): 0 <= a <= n.
         assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);
-        cp.na[a] = std::int32_t(g0_[a] - p.anchor[a]);
+        cp.na[a] = std::int16_t(g0_[a] - p.anchor[a]);
       }
       cp.k = p.k;
       cp.s = p.strength;
@@ -441,16 +447,11 @@ class BlockMesher {
         fillDisc<true>(p, li, fz, span, entries, cursor);
     }
     assert(span == w_.rowSpans.data() + w_.rowSpans.size());
-    // Per-column reach bounds (see ColumnEntry).
+    // reachMin: suffix minimum of min_z per column (see ColumnEntry; reachMax was set by the fill).
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
       if (b == en) continue;
-      std::int16_t run = -32000;
-      for (std::uint32_t i = b; i < en; ++i) {
-        run = std::max(run, entries[i].maxZ);
-        entries[i].reachMax = run;
-      }
-      run = 32000;
+      std::int16_t run = 32000;
       for (std::uint32_t i = en; i-- > b;) {
         if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
         entries[i].reachMin = run;
@@ -460,6 +461,10 @@ class BlockMesher {
   }
 
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
+  // Without clamping (the particle is away from the block's top and bottom: fz -/+ (Rc / S + 2)
+  // lies in [1, zmax]) two columns go through the closed form at once (SSE2, the same double
+  // operations lane by lane); a pair with a rim column (outside the disc) or a bound that needs
+  // the exact predicate takes the scalar path, column by column.
   template <bool kClamp>
   void fillDisc(const Particle& p, std::uint32_t li, double fz, const std::array<std::int16_t, 2>*& span,
                 ColumnEntry* entries, std::uint32_t* cursor) {
@@ -474,55 +479,111 @@ class BlockMesher {
       const double dz = cz[z] - pz;
       return dxy + dz * dz < rc2;
     };
+    std::int16_t* runMax = w_.runMax.data();
+    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000), reachMax from the
+    // column's running max, reachMin set after the fill.
+    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, int lo, int hi) {
+      const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
+      rowRun[x] = rm;
+      entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), rm, 0, li};
+    };
+    // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
+    auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
+      const double dx = cx[x] - px;
+      const double dxy = dx * dx + dy2;
+      int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+      if (dxy < rc2) {
+        const double h = std::sqrt(rc2 - dxy) * inv;
+        const double zlo = fz - h, zhi = fz + h;
+        // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+        const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+        const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+        int l = c, u = f;
+        if constexpr (kClamp) {
+          l = std::clamp(c, 1, zmax);
+          u = std::clamp(f, 1, zmax);
+        }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
+        // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+        // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+        // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+        // so where exactly the 1e-6 cut falls does not matter.
+        // One test for both bounds; settling a bound the closed form already got right
+        // leaves it unchanged, so both are settled when either is close.
+        if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
+          if (l > 1 && inside(dxy, l - 1)) {
+            do --l;
+            while (l > 1 && inside(dxy, l - 1));
+          } else {
+            while (l <= u && !inside(dxy, l)) ++l;
+          }
+          if (u < zmax && inside(dxy, u + 1)) {
+            do ++u;
+            while (u < zmax && inside(dxy, u + 1));
+          } else {
+            while (u >= l && !inside(dxy, u)) --u;
+          }
+        }
+        if (l <= u) {
+          lo = l;
+          hi = u;
+        }
+      }
+      store(rowCursor, rowRun, x, lo, hi);
+    };
     int y0, y1;
     discRows(p, inv, y0, y1);
     for (int y = y0; y <= y1; ++y, ++span) {
       const double dyr = w_.cy[y] - p.y;  // as discRow()
       const double dy2 = dyr * dyr;
-      std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
+      const std::size_t rowBase = std::size_t(y) * std::size_t(stride_);
+      std::uint32_t* rowCursor = cursor + rowBase;
+      std::int16_t* rowRun = runMax + rowBase;
       const int x0 = (*span)[0], x1 = (*span)[1];
-      for (int x = x0; x <= x1; ++x) {
-        const double dx = cx[x] - px;
-        const double dxy = dx * dx + dy2;
-        int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
-        if (dxy < rc2) {
-          const double h = std::sqrt(rc2 - dxy) * inv;
-          const double zlo = fz - h, zhi = fz + h;
-          // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
-          const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
-          const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-          int l = c, u = f;
-          if constexpr (kClamp) {
-            l = std::clamp(c, 1, zmax);
-            u = std::clamp(f, 1, zmax);
-          }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
-          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-          // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
-          // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
-          // so where exactly the 1e-6 cut falls does not matter.
-          // One test for both bounds; settling a bound the closed form already got right
-          // leaves it unchanged, so both are settled when either is close.
-          if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
-            if (l > 1 && inside(dxy, l - 1)) {
-              do --l;
-              while (l > 1 && inside(dxy, l - 1));
-            } else {
-              while (l <= u && !inside(dxy, l)) ++l;
-            }
-            if (u < zmax && inside(dxy, u + 1)) {
-              do ++u;
-              while (u < zmax && inside(dxy, u + 1));
-            } else {
-              while (u >= l && !inside(dxy, u)) --u;
-            }
+      int x = x0;
+#if defined(__SSE2__)
+      if constexpr (!kClamp) {
+        // zlo >= 1 here, so truncation is floor: c = trunc(zlo) + 1 is ceil(zlo) except when zlo
+        // is a whole number, where c - zlo = 1 sends the column to the scalar path (settled).
+        const __m128d vpx = _mm_set1_pd(px), vdy2 = _mm_set1_pd(dy2), vrc2 = _mm_set1_pd(rc2);
+        const __m128d vinv = _mm_set1_pd(inv), vfz = _mm_set1_pd(fz), half = _mm_set1_pd(0.5);
+        const __m128d cut = _mm_set1_pd(0.5 - 1e-6), absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffll));
+        const __m128i one = _mm_set1_epi32(1);
+        for (; x <= x1; x += 2) {
+          // The row's last column, when alone, rides in both lanes; only lane 0 is stored.
+          const bool pair = x < x1;
+          const __m128d dx = _mm_sub_pd(pair ? _mm_loadu_pd(cx + x) : _mm_set1_pd(cx[x]), vpx);
+          const __m128d dxy = _mm_add_pd(_mm_mul_pd(dx, dx), vdy2);
+          const __m128d in = _mm_cmplt_pd(dxy, vrc2);
+          const __m128d h = _mm_mul_pd(_mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, dxy), _mm_setzero_pd())), vinv);
+          const __m128d zlo = _mm_sub_pd(vfz, h), zhi = _mm_add_pd(vfz, h);
+          const __m128i c = _mm_add_epi32(_mm_cvttpd_epi32(zlo), one), f = _mm_cvttpd_epi32(zhi);
+          const __m128d a = _mm_and_pd(_mm_sub_pd(_mm_sub_pd(_mm_cvtepi32_pd(c), zlo), half), absMask);
+          const __m128d b = _mm_and_pd(_mm_sub_pd(_mm_sub_pd(zhi, _mm_cvtepi32_pd(f)), half), absMask);
+          const __m128d settle = _mm_cmpgt_pd(_mm_max_pd(a, b), cut);
+          if (_mm_movemask_pd(_mm_andnot_pd(settle, in)) != 3) [[unlikely]] {
+            column(rowCursor, rowRun, x, dy2);
+            if (pair) column(rowCursor, rowRun, x + 1, dy2);
+            continue;
           }
-          if (l <= u) {
-            lo = l;
-            hi = u;
-          }
+          // Both columns are inside the disc with clear bounds; c <= f holds unless the range
+          // holds no slice, where the element is stored empty like the scalar path does.
+          const __m128i cf = _mm_unpacklo_epi32(c, f);  // c0 f0 c1 f1
+          const int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
+          const int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          if (c0 <= f0)
+            store(rowCursor, rowRun, x, c0, f0);
+          else
+            store(rowCursor, rowRun, x, -32000, -32000);
+          if (!pair) break;
+          if (c1 <= f1)
+            store(rowCursor, rowRun, x + 1, c1, f1);
+          else
+            store(rowCursor, rowRun, x + 1, -32000, -32000);
         }
-        entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
+        continue;
       }
+#endif
+      for (; x <= x1; ++x) column(rowCursor, rowRun, x, dy2);
     }
   }
 
