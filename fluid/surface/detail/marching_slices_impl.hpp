@@ -500,8 +500,10 @@ class BlockMesher {
         const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
         int l = c, u = f;
         if constexpr (kClamp) {
-          l = std::clamp(c, 1, zmax);
-          u = std::clamp(f, 1, zmax);
+          // Intersect with [1, zmax] (not clamp each bound: a range wholly below 1 or above zmax,
+          // possible for a particle in the outermost margin cube, must stay empty).
+          l = std::max(c, 1);
+          u = std::min(f, zmax);
         }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
         // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
         // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
