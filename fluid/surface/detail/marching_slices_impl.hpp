@@ -984,7 +984,8 @@ struct ExtractorState {
     std::uint64_t key;
     std::uint32_t rank;
   };
-  std::vector<Pair> pairs;
+  std::vector<Pair> pairs, pairsByBlock;
+  std::vector<std::uint32_t> blockCount;  // counting sort of pairs by block
   std::vector<Particle> blockParticles;
   std::vector<BlockDesc> blocks;
   std::vector<BlockOut> outs;
@@ -1214,7 +1215,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
 
   // Block lists (§3): each particle goes to every block whose interior, grown by Rc_i, holds it.
-  // Sorting (block, rank) pairs keeps each block's particles in (z, index) order.
+  // Sorting (block, rank) pairs keeps each block's particles in (z, index) order. The pairs are
+  // made in rank order, so a stable counting sort by block gives that order in one pass when the
+  // block grid is not much larger than the pair list (otherwise a comparison sort).
   st.pairs.clear();
   const double inv = 1.0 / su.s;
   for (std::uint32_t r = 0; r < st.particles.size(); ++r) {
@@ -1234,9 +1237,19 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
                    std::uint64_t(bx),
                r});
   }
-  std::sort(st.pairs.begin(), st.pairs.end(), [](const ExtractorState::Pair& a, const ExtractorState::Pair& b) {
-    return a.key < b.key || (a.key == b.key && a.rank < b.rank);
-  });
+  const std::uint64_t gridBlocks = std::uint64_t(su.nb[0]) * std::uint64_t(su.nb[1]) * std::uint64_t(su.nb[2]);
+  if (gridBlocks <= 4 * std::uint64_t(st.pairs.size()) + 64) {
+    st.blockCount.assign(std::size_t(gridBlocks) + 1, 0u);
+    for (const ExtractorState::Pair& pr : st.pairs) ++st.blockCount[std::size_t(pr.key) + 1];
+    for (std::size_t b = 1; b <= std::size_t(gridBlocks); ++b) st.blockCount[b] += st.blockCount[b - 1];
+    st.pairsByBlock.resize(st.pairs.size());
+    for (const ExtractorState::Pair& pr : st.pairs) st.pairsByBlock[st.blockCount[std::size_t(pr.key)]++] = pr;
+    st.pairs.swap(st.pairsByBlock);
+  } else {
+    std::sort(st.pairs.begin(), st.pairs.end(), [](const ExtractorState::Pair& a, const ExtractorState::Pair& b) {
+      return a.key < b.key || (a.key == b.key && a.rank < b.rank);
+    });
+  }
   st.blocks.clear();
   st.blockParticles.resize(st.pairs.size());
   for (std::size_t i = 0; i < st.pairs.size(); ++i) {
