@@ -1297,7 +1297,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   else
     runBlocks(st, su, policy, st.workersFor<Policy>());
 
-  // Concatenate block outputs in emission order (prefix sums, then a parallel copy).
+  // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
+  // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
+  // zero-fill of resize()).
   const std::size_t nb = st.blocks.size();
   st.vertexBase.resize(nb + 1);
   st.indexBase.resize(nb + 1);
@@ -1322,21 +1324,45 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }
   const bool user = Policy::kHasUser && st.method == 1;
-  out.positions.resize(st.vertexBase[nb]);
-  out.normals.resize(st.vertexBase[nb]);
-  out.edgeKeys.resize(st.vertexBase[nb]);
-  if (user) out.attributes.resize(st.vertexBase[nb]);
-  out.indices.resize(st.indexBase[nb]);
+  // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block.
+  const int gather = nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
+  if (gather == 1) {
+    BlockOut& o = st.outs[0];
+    out.positions.swap(o.positions);
+    out.normals.swap(o.normals);
+    out.edgeKeys.swap(o.keys);
+    if (user) out.attributes.swap(o.attributes);
+    out.indices.swap(o.indices);  // vertex base 0: no rebasing
+  } else if (gather == 2) {
+    for (std::size_t i = 0; i < nb; ++i) {
+      const BlockOut& o = st.outs[i];
+      out.positions.insert(out.positions.end(), o.positions.begin(), o.positions.end());
+      out.normals.insert(out.normals.end(), o.normals.begin(), o.normals.end());
+      out.edgeKeys.insert(out.edgeKeys.end(), o.keys.begin(), o.keys.end());
+      if (user) out.attributes.insert(out.attributes.end(), o.attributes.begin(), o.attributes.end());
+      out.indices.insert(out.indices.end(), o.indices.begin(), o.indices.end());
+      const std::uint32_t vb = st.vertexBase[i];
+      for (std::size_t k = st.indexBase[i]; k < st.indexBase[i + 1]; ++k) out.indices[k] += vb;
+    }
+  } else {
+    out.positions.resize(st.vertexBase[nb]);
+    out.normals.resize(st.vertexBase[nb]);
+    out.edgeKeys.resize(st.vertexBase[nb]);
+    if (user) out.attributes.resize(st.vertexBase[nb]);
+    out.indices.resize(st.indexBase[nb]);
+  }
   out.slabRuns.resize(st.runBase[nb]);
   out.blocks.resize(nb);
   parallelItems(*st.arena, nb, [&](int, std::size_t i) {
     const BlockOut& o = st.outs[i];
     const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
-    std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
-    std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
-    std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
-    if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
-    for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+    if (gather == 0) {
+      std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
+      std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
+      std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
+      if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
+      for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+    }
     for (std::size_t k = 0; k < o.runs.size(); ++k) {
       SurfaceSlabRun r = o.runs[k];
       r.indices.first += ib;
@@ -1355,9 +1381,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       br.boundsMin[wa] = float(std::min(w0, w1) - su.origin[wa]);
       br.boundsMax[wa] = float(std::max(w0, w1) - su.origin[wa]);
     }
-    br.indices = {ib, std::uint32_t(o.indices.size())};
+    br.indices = {ib, st.indexBase[i + 1] - ib};  // from the prefix sums: a swapped block's arrays are gone
     br.firstVertex = vb;
-    br.vertexCount = std::uint32_t(o.positions.size());
+    br.vertexCount = st.vertexBase[i + 1] - vb;
     br.firstSlabRun = rb;
     br.slabRunCount = std::uint32_t(o.runs.size());
   });
