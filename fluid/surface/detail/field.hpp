@@ -69,10 +69,17 @@ struct SweepFrame {
   bool flipsWinding() const;
 };
 
+// Sort key of prepareParticles (caller-owned scratch, reused across calls).
+struct ParticleSortKey {
+  double z;
+  std::uint32_t index;
+};
+
 // Prepares particles in sweep-frame coordinates, sorted by (z, index). Fills rcMax with the
-// largest Rc_i. Input must be valid (validateSurface).
+// largest Rc_i. Input must be valid (validateSurface). `keys`: sort scratch (a local one when
+// null).
 void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
-                      std::vector<Particle>& out, double& rcMax);
+                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys = nullptr);
 
 // Lattice coordinate helpers: corner k sits at k * S.
 inline std::int64_t floorDiv(double v, double s) { return static_cast<std::int64_t>(std::floor(v / s)); }

@@ -980,6 +980,7 @@ struct FollowWorker;  // approach 2 (baselines.hpp), defined in marching_slices.
 // ---------------------------------------------------------------------------------------------
 struct ExtractorState {
   std::vector<Particle> particles;
+  std::vector<ParticleSortKey> sortKeys;
   struct Pair {
     std::uint64_t key;
     std::uint32_t rank;
@@ -1194,7 +1195,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       su.view[a] = params.order == SurfaceOrder::frontToBack ? -double(d[a]) : double(d[a]);
     }
   }
-  prepareParticles(input, params, su.frame, st.particles, su.rcMax);
+  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
   su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)
   // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
