@@ -124,10 +124,17 @@ struct SliceCell {
   std::uint8_t queuedAbove = 0, queuedBelow = 0;
 };
 
+// Offset along z from a block particle to this slice's corners, and its square: the same for every
+// column, so the field sums read them from the slice instead of working them out per lookup.
+struct SliceDz {
+  float dz, dz2;  // latticeOffset() along z, and dz * dz (the float product accumulate() forms)
+};
+
 template <class Policy>
 struct Slice {
   std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
   std::vector<Corner<Policy>> corners;
+  std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
 };
 
 struct BlockDesc {
@@ -339,7 +346,7 @@ class BlockMesher {
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
-    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float, float, float) {
+    forEachInfluencing<false>(x, y, z, nullptr, [&](const CacheParticle& p, float, float, float, float) {
       found.push_back(p.index);
       return false;
     });
@@ -595,8 +602,10 @@ class BlockMesher {
   // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
   // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
   // bit); the walk stops early when f returns true.
-  template <class F>
-  void forEachInfluencing(int x, int y, int z, F&& f) {
+  // With kTable the offsets along z come from the slice's table (dzt, see fillSliceDz), else from
+  // the offsets table; f(particle, dx, dy, dz, dz * dz).
+  template <bool kTable, class F>
+  void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
     const std::size_t k = col(x, y);
     const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
     if (begin == end) return;
@@ -628,24 +637,32 @@ class BlockMesher {
       // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
       if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
       const CacheParticle& p = parts[en.particle];
-      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], offZ[p.na[2]] - p.rest[2])) break;
+      float dz, dz2;
+      if constexpr (kTable) {
+        dz = dzt[en.particle].dz;
+        dz2 = dzt[en.particle].dz2;
+      } else {
+        dz = offZ[p.na[2]] - p.rest[2];
+        dz2 = dz * dz;
+      }
+      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], dz, dz2)) break;
     }
   }
 
   template <bool kGradient>
-  void evaluate(int x, int y, int z, Corner<Policy>& c) {
+  void evaluate(int x, int y, int z, const SliceDz* dzt, Corner<Policy>& c) {
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
     if constexpr (!kGradient && !Policy::kHasUser) {
       // Margin corner: only the sign of f - T is ever read (§3), so stop as soon as the sum
       // passes T (see insideAt).
-      v = sumUntilAbove(x, y, z, looked);
+      v = sumUntilAbove<true>(x, y, z, dzt, looked);
     } else {
-      forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+      forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
         ++looked;
         const float before = v;
-        accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.s, v, gx, gy, gz);
+        accumulateDz2(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, v, gx, gy, gz);
         if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
         return false;
       });
@@ -660,12 +677,13 @@ class BlockMesher {
   // The field summed in (z, index) order, stopped as soon as the partial sum exceeds T. Every
   // term is >= 0 and rounded float addition is monotone, so a partial sum above T proves the full
   // sum above T, and a sum that never passes T is the full sum: (result > T) == (f > T) exactly.
-  float sumUntilAbove(int x, int y, int z, std::uint64_t& looked) {
+  template <bool kTable>
+  float sumUntilAbove(int x, int y, int z, const SliceDz* dzt, std::uint64_t& looked) {
     const float t = su_.threshold;
     float v = 0;
-    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+    forEachInfluencing<kTable>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float, float dz2) {
       ++looked;
-      v += contribution(dx * dx + dy * dy, dz, p.k, p.s);
+      v += contributionDz2(dx * dx + dy * dy, dz2, p.k, p.s);
       return v > t;
     });
     return v;
@@ -675,7 +693,7 @@ class BlockMesher {
   bool insideAt(int x, int y, int z) {
     std::uint64_t looked = 0;
     ++out_.stats.seedEvaluations;
-    return sumUntilAbove(x, y, z, looked) > su_.threshold;
+    return sumUntilAbove<false>(x, y, z, nullptr, looked) > su_.threshold;
   }
 
   bool interiorCorner(int x, int y, int z) const {
@@ -751,9 +769,30 @@ class BlockMesher {
     lowestTodo_ = std::min(lowestTodo_, slab);
   }
 
+  // A lookup at slice z walks only particles whose anchor lies within m + 1 slices of z (every
+  // element it passes has mid_z within ceil(Rc/S) = m of z, see forEachInfluencing, and the
+  // anchor is floor(mid_z) up to rounding), a contiguous run of the z-sorted block particles; the
+  // run for m + 2 (the offsets table's reach) is tabulated, one slice of slack.
+  void fillSliceDz(Slice<Policy>& slice, int z) {
+    const std::size_t n = w_.local.size();
+    slice.dz.resize(n);
+    const CacheParticle* parts = w_.local.data();
+    // -na[2] = anchor - corner 0 along z, non-decreasing in the local index.
+    const int lo = z - offsetRange_, hi = z + offsetRange_;  // offsetRange_ = m + 2
+    const CacheParticle* first =
+        std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < lo; });
+    const float* offZ = w_.offsets.data() + offsetRange_ + z;
+    SliceDz* out = slice.dz.data();
+    for (const CacheParticle* p = first; p != parts + n && -int(p->na[2]) <= hi; ++p) {
+      const float dz = offZ[p->na[2]] - p->rest[2];
+      out[p - parts] = {dz, dz * dz};
+    }
+  }
+
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {
       w_.active[z] = w_.acquireSlice();
+      fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
       out_.stats.maxActiveSlices = std::max<std::uint32_t>(out_.stats.maxActiveSlices, activeSlices_);
     }
@@ -770,7 +809,8 @@ class BlockMesher {
     std::uint64_t bytes = 0;
     for (int i = 0; i <= nz_; ++i)
       if (w_.active[i])
-        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) + w_.active[i]->corners.size() * sizeof(Corner<Policy>);
+        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) + w_.active[i]->corners.size() * sizeof(Corner<Policy>) +
+                 w_.active[i]->dz.size() * sizeof(SliceDz);
     (void)z;
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
@@ -788,9 +828,9 @@ class BlockMesher {
   [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
     Corner<Policy> c;
     if (interiorCorner(x, y, z))
-      evaluate<true>(x, y, z, c);
+      evaluate<true>(x, y, z, slice.dz.data(), c);
     else
-      evaluate<false>(x, y, z, c);  // margin: only the sign is needed (§3)
+      evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
     c.x = std::int16_t(x);
     c.y = std::int16_t(y);
@@ -1096,15 +1136,21 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
-  std::size_t slices = 0, corners = 0, slabs = 0;
+  std::size_t slices = 0, corners = 0, dzs = 0, slabs = 0;
   for (const auto& w : workers) {
     slices = std::max(slices, w->slicePool.size());
-    for (const auto& slice : w->slicePool) corners = std::max(corners, slice->corners.capacity());
+    for (const auto& slice : w->slicePool) {
+      corners = std::max(corners, slice->corners.capacity());
+      dzs = std::max(dzs, slice->dz.capacity());
+    }
     slabs = std::max(slabs, w->todo.size());
   }
   for (auto& w : workers) {
     while (w->slicePool.size() < slices) w->releaseSlice(w->acquireSliceFromNewStorage());
-    for (auto& slice : w->slicePool) slice->corners.reserve(corners);
+    for (auto& slice : w->slicePool) {
+      slice->corners.reserve(corners);
+      slice->dz.reserve(dzs);
+    }
     w->freeSlices.reserve(slices);
   }
   for (std::size_t z = 0; z < slabs; ++z) {
