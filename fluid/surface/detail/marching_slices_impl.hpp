@@ -858,6 +858,7 @@ class BlockMesher {
       SliceCell* const cellsB = below->cells.data();
       SliceCell* const cellsA = above->cells.data();
       const std::size_t sy = std::size_t(stride_);
+      const std::size_t slabFirst = out_.indices.size();
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
@@ -920,6 +921,7 @@ class BlockMesher {
           w_.todo[z + 1].push_back(item);
         }
       }
+      closeSlabVisit(z, slabFirst);
       notePeak(z);
       // Return slices no neighbouring slab still needs (Alg. 1, end of the slab).
       const bool belowEmpty = z == 0 || w_.todo[z - 1].empty();
@@ -956,9 +958,7 @@ class BlockMesher {
   }
 
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
-    const std::int32_t slab = std::int32_t(g0_[2] + z);
     const int nt = cs.triangleCount;
-    const std::size_t first = out_.indices.size();
     for (int tri = 0; tri < nt; ++tri) {
       std::uint32_t v[3];
       for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
@@ -967,12 +967,21 @@ class BlockMesher {
       out_.indices.push_back(v[1]);
       out_.indices.push_back(v[2]);
     }
+  }
+
+  // After one visit of slab z (the triangles from index `first` on are all of that slab): their
+  // slab tags for the exact order, or one run per stretch of consecutive triangles of one slab
+  // (what buildRuns makes), extended when the previous visit ended with the same slab.
+  void closeSlabVisit(int z, std::size_t first) {
+    const std::size_t count = out_.indices.size() - first;
+    if (count == 0) return;
+    const std::int32_t slab = std::int32_t(g0_[2] + z);
     if (su_.exact) {
-      out_.triSlab.insert(out_.triSlab.end(), std::size_t(nt), slab);
-    } else {  // one run per stretch of consecutive triangles of one slab (what buildRuns makes)
+      out_.triSlab.insert(out_.triSlab.end(), count / 3, slab);
+    } else {
       if (out_.runs.empty() || out_.runs.back().slab != slab)
         out_.runs.push_back(SurfaceSlabRun{slab, IndexRange{std::uint32_t(first), 0}});
-      out_.runs.back().indices.count += std::uint32_t(3 * nt);
+      out_.runs.back().indices.count += std::uint32_t(count);
     }
   }
 
