@@ -410,15 +410,41 @@ class BlockMesher {
     std::uint32_t* start = w_.colStart.data();
     std::fill(start, start + cols + 1, 0u);
     w_.rowSpans.clear();
+    auto addRow = [&](int y, int x0, int x1) {
+      w_.rowSpans.push_back({std::int16_t(x0), std::int16_t(x1)});
+      if (x0 > x1) return;
+      ++start[std::size_t(y) * stride + std::size_t(x0) + 1];
+      --start[std::size_t(y) * stride + std::size_t(x1) + 2];  // x1 + 1 <= nx: same row
+    };
+    const double* cyRow = w_.cy.data();
     for (const Particle& p : particles) {
       int y0, y1;
       discRows(p, inv, y0, y1);
-      for (int y = y0; y <= y1; ++y) {
+      int y = y0;
+#if defined(__SSE2__)
+      // Two rows at once: discRow()'s double expressions lane by lane, and its iceil / ifloor as
+      // truncation plus the same one-step correction, so the spans come out identical.
+      const __m128d vpx = _mm_set1_pd(p.x), vpy = _mm_set1_pd(p.y), vrc2 = _mm_set1_pd(p.rc2);
+      const __m128d vinv = _mm_set1_pd(inv), vg0 = _mm_set1_pd(double(g0_[0])), eps = _mm_set1_pd(1e-6);
+      for (; y + 1 <= y1; y += 2) {
+        const __m128d dy = _mm_sub_pd(_mm_loadu_pd(cyRow + y), vpy);
+        const __m128d hx = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, _mm_mul_pd(dy, dy)), _mm_setzero_pd()));
+        const __m128d a = _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(_mm_sub_pd(vpx, hx), vinv), vg0), eps);
+        const __m128d b = _mm_add_pd(_mm_sub_pd(_mm_mul_pd(_mm_add_pd(vpx, hx), vinv), vg0), eps);
+        const __m128i ta = _mm_cvttpd_epi32(a), tb = _mm_cvttpd_epi32(b);
+        // Lane masks (all ones = -1) of a > trunc(a) and b < trunc(b), low 32 bits of each lane.
+        const __m128i up = _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128i down =
+            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(b, _mm_cvtepi32_pd(tb))), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128i c = _mm_sub_epi32(ta, up), f = _mm_add_epi32(tb, down);  // iceil(a), ifloor(b)
+        addRow(y, std::max(1, _mm_cvtsi128_si32(c)), std::min(nx_ - 1, _mm_cvtsi128_si32(f)));
+        addRow(y + 1, std::max(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 1))),
+               std::min(nx_ - 1, _mm_cvtsi128_si32(_mm_shuffle_epi32(f, 1))));
+      }
+#endif
+      for (; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
-        w_.rowSpans.push_back({std::int16_t(r.x0), std::int16_t(r.x1)});
-        if (r.x0 > r.x1) continue;
-        ++start[std::size_t(y) * stride + std::size_t(r.x0) + 1];
-        --start[std::size_t(y) * stride + std::size_t(r.x1) + 2];  // x1 + 1 <= nx: same row
+        addRow(y, r.x0, r.x1);
       }
     }
     for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // per-column counts
