@@ -576,9 +576,11 @@ class BlockMesher {
       const int x0 = (*span)[0], x1 = (*span)[1];
       int x = x0;
 #if defined(__SSE2__)
-      if constexpr (!kClamp) {
-        // zlo >= 1 here, so truncation is floor: c = trunc(zlo) + 1 is ceil(zlo) except when zlo
-        // is a whole number, where c - zlo = 1 sends the column to the scalar path (settled).
+      {
+        // Without clamping zlo >= 1, so truncation is floor: c = trunc(zlo) + 1 is ceil(zlo)
+        // except when zlo is a whole number, where c - zlo = 1 sends the column to the scalar path
+        // (settled). With clamping zlo may be below 1: then ceil(zlo) <= 1 and c <= 1 (trunc
+        // rounds towards zero), both 1 after the clamp; zhi = fz + h >= 0 always.
         const __m128d vpx = _mm_set1_pd(px), vdy2 = _mm_set1_pd(dy2), vrc2 = _mm_set1_pd(rc2);
         const __m128d vinv = _mm_set1_pd(inv), vfz = _mm_set1_pd(fz), half = _mm_set1_pd(0.5);
         const __m128d cut = _mm_set1_pd(0.5 - 1e-6), absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffll));
@@ -603,8 +605,12 @@ class BlockMesher {
           // Both columns are inside the disc with clear bounds; c <= f holds unless the range
           // holds no slice, where the element is stored empty like the scalar path does.
           const __m128i cf = _mm_unpacklo_epi32(c, f);  // c0 f0 c1 f1
-          const int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
-          const int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
+          int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          if constexpr (kClamp) {  // intersect with [1, zmax], as the scalar path
+            c0 = std::max(c0, 1), f0 = std::min(f0, zmax);
+            c1 = std::max(c1, 1), f1 = std::min(f1, zmax);
+          }
           if (c0 <= f0)
             store(rowCursor, rowRun, x, c0, f0);
           else
