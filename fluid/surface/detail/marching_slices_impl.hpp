@@ -433,7 +433,8 @@ class BlockMesher {
         const __m128d b = _mm_add_pd(_mm_sub_pd(_mm_mul_pd(_mm_add_pd(vpx, hx), vinv), vg0), eps);
         const __m128i ta = _mm_cvttpd_epi32(a), tb = _mm_cvttpd_epi32(b);
         // Lane masks (all ones = -1) of a > trunc(a) and b < trunc(b), low 32 bits of each lane.
-        const __m128i up = _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128i up =
+            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
         const __m128i down =
             _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(b, _mm_cvtepi32_pd(tb))), _MM_SHUFFLE(2, 0, 2, 0));
         const __m128i c = _mm_sub_epi32(ta, up), f = _mm_add_epi32(tb, down);  // iceil(a), ifloor(b)
@@ -841,8 +842,8 @@ class BlockMesher {
     std::uint64_t bytes = 0;
     for (int i = 0; i <= nz_; ++i)
       if (w_.active[i])
-        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) + w_.active[i]->corners.size() * sizeof(Corner<Policy>) +
-                 w_.active[i]->dz.size() * sizeof(SliceDz);
+        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
+                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
     (void)z;
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
