@@ -120,6 +120,7 @@ struct HashIndex {
 
 struct BaselineState {
   std::vector<Particle> particles;
+  std::vector<ParticleSortKey> sortKeys;  // prepareParticles scratch
   // dense
   std::vector<CornerValue> lower, upper;
   std::vector<std::uint32_t> lowIx, lowIy, lowIz, upIx, upIy;
@@ -351,7 +352,7 @@ SurfaceStatus BaselineExtractor::extract(BaselineMethod method, const SurfaceInp
     return detail::extractBlockedSurfaceFollowing(state->blockedExtractor, input, params, out, state->cornerBytes,
                                                   state->particleBytes);
   double rcMax = 0;
-  detail::prepareParticles(input, params, detail::SweepFrame{}, state->particles, rcMax);
+  detail::prepareParticles(input, params, detail::SweepFrame{}, state->particles, rcMax, &state->sortKeys);
   if (method == BaselineMethod::dense)
     detail::dense(*state, params, rcMax, out);
   else

@@ -101,7 +101,7 @@ struct SurfaceStats {
   std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
   // Working memory, bytes actually touched: largest single block, and summed over all blocks
   // processed concurrently (one per worker).
-  std::uint64_t cornerCacheBytesPeakBlock = 0;    // slice caches (index arrays + corner caches)
+  std::uint64_t cornerCacheBytesPeakBlock = 0;    // slice caches (index arrays, corner caches, z offsets)
   std::uint64_t particleCacheBytesPeakBlock = 0;  // projection slice + column lists + block particles
   std::uint64_t workingBytesAllWorkers = 0;       // sum over workers of their peak (both caches)
 };

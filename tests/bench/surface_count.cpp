@@ -9,8 +9,12 @@
 // (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
 // A fourth argument `blocks` also prints each block's triangles and vertices (thread balance);
 // SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1, and
-// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto.
+// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto. SURFACE_COUNT_RATIO=N times N
+// interleaved rounds of approach 1 and approach 3 (hashed baseline) on the calling thread's CPU
+// clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
+// bench_surface runs (1 thread).
 #include "fluid/io/particle_io.hpp"
+#include "fluid/surface/baselines.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
@@ -20,6 +24,8 @@
 #include <cstring>
 #include <string>
 #include <vector>
+
+#include <time.h>
 
 namespace {
 template <class T>
@@ -71,5 +77,29 @@ int main(int argc, char** argv) {
   if (argc > 4 && std::string(argv[4]) == "blocks")  // per-block share of the work, for balance checks
     for (const fluid::SurfaceBlockRange& b : mesh.blocks)
       std::printf("block (%d %d %d) triangles %u vertices %u\n", b.bx, b.by, b.bz, b.indices.count / 3, b.vertexCount);
+  if (const char* rr = std::getenv("SURFACE_COUNT_RATIO")) {
+    const int rounds = std::max(1, std::atoi(rr));
+    auto cpuMs = [] {
+      timespec ts{};
+      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+      return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+    };
+    fluid::BaselineExtractor base;
+    fluid::SurfaceMesh other;
+    std::vector<double> t1, t3;
+    for (int r = 0; r < rounds; ++r) {
+      double c0 = cpuMs();
+      (void)extractor.extract(in, params, mesh);
+      t1.push_back(cpuMs() - c0);
+      c0 = cpuMs();
+      (void)base.extract(fluid::BaselineMethod::hashed, in, params, other);
+      t3.push_back(cpuMs() - c0);
+    }
+    std::sort(t1.begin(), t1.end());
+    std::sort(t3.begin(), t3.end());
+    const double m1 = t1[t1.size() / 2], m3 = t3[t3.size() / 2];
+    std::printf("cpu ms median of %d: a1 %.3f a3 %.3f a3/a1 %.2f (a3 triangles %zu)\n", rounds, m1, m3, m3 / m1,
+                other.indices.size() / 3);
+  }
   return 0;
 }

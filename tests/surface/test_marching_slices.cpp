@@ -268,6 +268,47 @@ TEST(MarchingSlices, RejectsNonFiniteInputWithClearError) {
   EXPECT_TRUE(m.indices.empty());
 }
 
+// Particles in the outermost margin cube along z (Rc / S not a whole number, so the block holds
+// particles less than one cube inside its expanded top and bottom): columns near the rim of their
+// discs have z ranges entirely beyond corner 1 (resp. n - 1), which the cache must leave empty
+// rather than clamp onto that corner.
+TEST(ParticleCache, ExactInTheOutermostMarginCubes) {
+  std::mt19937 rng(77);
+  fluid::SurfaceParams p;
+  p.cube = 1.2f;  // Rc / S = 2.5, margin 3 cubes: block particles reach to half a cube from the top
+  p.rc = 3.0f;
+  p.blockCubes = 8;
+  const double s = p.cube, bs = double(p.blockCubes) * s;
+  std::uniform_real_distribution<float> u(0.0f, float(bs)), edge(0.0f, 0.5f * float(s));
+  std::vector<float> x, y, z;
+  for (int i = 0; i < 400; ++i) {
+    x.push_back(u(rng)), y.push_back(u(rng));
+    // Within Rc of the interior [0, bs] but in the last margin cube: below 0 - (m - 1) S or above
+    // bs + (m - 1) S, at most Rc away.
+    const float d = edge(rng);
+    z.push_back(i % 2 ? float(bs + p.rc) - d : -p.rc + d);
+  }
+  const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+  fluid::detail::BlockCacheProbe probe(in, p, 0, 0, 0);
+  ASSERT_EQ(probe.margin, 3);
+  std::vector<std::uint32_t> found, expect;
+  std::size_t nonEmpty = 0;
+  for (int cz = 0; cz <= probe.n; ++cz)
+    for (int cy = 0; cy <= probe.n; ++cy)
+      for (int cx = 0; cx <= probe.n; ++cx) {
+        probe.lookup(cx, cy, cz, found);
+        expect.clear();
+        const bool boundary = cx == 0 || cy == 0 || cz == 0 || cx == probe.n || cy == probe.n || cz == probe.n;
+        const double px = double(cx - probe.margin) * s, py = double(cy - probe.margin) * s,
+                     pz = double(cz - probe.margin) * s;
+        for (const auto& q : probe.particles)
+          if (!boundary && fluid::detail::influences(q, px, py, pz)) expect.push_back(q.index);
+        nonEmpty += !expect.empty();
+        ASSERT_EQ(found, expect) << "corner " << cx << "," << cy << "," << cz;
+      }
+  EXPECT_GT(nonEmpty, 50u);
+}
+
 TEST(ParticleCache, EveryLookupIsExactlyTheBruteForceSet) {
   std::mt19937 rng(1234);
   for (int trial = 0; trial < 6; ++trial) {

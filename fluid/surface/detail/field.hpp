@@ -38,19 +38,25 @@ inline float latticeOffset(std::int64_t corner, std::int64_t anchor, float rest,
   return float(double(corner - anchor) * s) - rest;
 }
 
-inline float contribution(float dxy2, float dz, float k, float s) {
-  const float w = (dxy2 + dz * dz) * k - 0.5f;
+// dz2 is the float product dz * dz (callers may have it already; same bits either way).
+inline float contributionDz2(float dxy2, float dz2, float k, float s) {
+  const float w = (dxy2 + dz2) * k - 0.5f;
   return s * (w * w);
 }
+inline float contribution(float dxy2, float dz, float k, float s) { return contributionDz2(dxy2, dz * dz, k, s); }
 
-inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx, float& gy,
-                       float& gz) {
-  const float w = (dxy2 + dz * dz) * k - 0.5f;
+inline void accumulateDz2(float dx, float dy, float dxy2, float dz, float dz2, float k, float s, float& value,
+                          float& gx, float& gy, float& gz) {
+  const float w = (dxy2 + dz2) * k - 0.5f;
   value += s * (w * w);
   const float g = 4.0f * s * w * k;
   gx += g * dx;
   gy += g * dy;
   gz += g * dz;
+}
+inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx, float& gy,
+                       float& gz) {
+  accumulateDz2(dx, dy, dxy2, dz, dz * dz, k, s, value, gx, gy, gz);
 }
 
 // Lattice-corner form (oracle, baselines). Caller guarantees influences() is true there.
@@ -69,10 +75,17 @@ struct SweepFrame {
   bool flipsWinding() const;
 };
 
+// Sort key of prepareParticles (caller-owned scratch, reused across calls).
+struct ParticleSortKey {
+  double z;
+  std::uint32_t index;
+};
+
 // Prepares particles in sweep-frame coordinates, sorted by (z, index). Fills rcMax with the
-// largest Rc_i. Input must be valid (validateSurface).
+// largest Rc_i. Input must be valid (validateSurface). `keys`: sort scratch (a local one when
+// null).
 void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
-                      std::vector<Particle>& out, double& rcMax);
+                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys = nullptr);
 
 // Lattice coordinate helpers: corner k sits at k * S.
 inline std::int64_t floorDiv(double v, double s) { return static_cast<std::int64_t>(std::floor(v / s)); }

@@ -95,13 +95,15 @@ static_assert(sizeof(ColumnEntry) == 12);
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
 // along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
 // (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
-// is stored negated and 32-bit so the index is one add.
+// is stored negated so the index is one add; 16 bits suffice (0 <= anchor - corner 0 <= n < 32000),
+// which makes the record 32 bytes, so one never straddles two cache lines.
 struct CacheParticle {
   float rest[3];        // Particle::rest
   float k, s;           // 1 / (2 Rc_i^2), strength
-  std::int32_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
+  std::int16_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
   std::uint32_t index;  // input index (user data)
 };
+static_assert(sizeof(CacheParticle) == 32);
 
 template <class Policy>
 struct Corner {
@@ -122,10 +124,17 @@ struct SliceCell {
   std::uint8_t queuedAbove = 0, queuedBelow = 0;
 };
 
+// Offset along z from a block particle to this slice's corners, and its square: the same for every
+// column, so the field sums read them from the slice instead of working them out per lookup.
+struct SliceDz {
+  float dz, dz2;  // latticeOffset() along z, and dz * dz (the float product accumulate() forms)
+};
+
 template <class Policy>
 struct Slice {
   std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
   std::vector<Corner<Policy>> corners;
+  std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
 };
 
 struct BlockDesc {
@@ -183,6 +192,7 @@ template <class Policy>
 struct Worker {
   int nx = -1, ny = -1, nz = -1;  // expanded cubes per axis; corners 0..n
   std::vector<std::uint32_t> colStart, cursor;
+  std::vector<std::int16_t> runMax;  // cache build: running max_z per column
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
@@ -204,6 +214,7 @@ struct Worker {
     const std::size_t cols = columns();
     colStart.assign(cols + 1, 0);
     cursor.assign(cols, 0);
+    runMax.assign(cols, 0);
     cx.assign(nx + 1, 0);
     cy.assign(ny + 1, 0);
     cz.assign(nz + 1, 0);
@@ -320,7 +331,7 @@ class BlockMesher {
     }
     out_.stats.triangles = out_.indices.size() / 3;
     out_.stats.vertices = out_.positions.size();
-    out_.particleBytes = std::uint64_t(w_.columns()) * 2 * sizeof(std::uint32_t) +
+    out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
                          std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
                          std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
@@ -335,7 +346,7 @@ class BlockMesher {
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
-    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float, float, float) {
+    forEachInfluencing<false>(x, y, z, nullptr, [&](const CacheParticle& p, float, float, float, float) {
       found.push_back(p.index);
       return false;
     });
@@ -399,21 +410,50 @@ class BlockMesher {
     std::uint32_t* start = w_.colStart.data();
     std::fill(start, start + cols + 1, 0u);
     w_.rowSpans.clear();
+    auto addRow = [&](int y, int x0, int x1) {
+      w_.rowSpans.push_back({std::int16_t(x0), std::int16_t(x1)});
+      if (x0 > x1) return;
+      ++start[std::size_t(y) * stride + std::size_t(x0) + 1];
+      --start[std::size_t(y) * stride + std::size_t(x1) + 2];  // x1 + 1 <= nx: same row
+    };
+    const double* cyRow = w_.cy.data();
     for (const Particle& p : particles) {
       int y0, y1;
       discRows(p, inv, y0, y1);
-      for (int y = y0; y <= y1; ++y) {
+      int y = y0;
+#if defined(__SSE2__)
+      // Two rows at once: discRow()'s double expressions lane by lane, and its iceil / ifloor as
+      // truncation plus the same one-step correction, so the spans come out identical.
+      const __m128d vpx = _mm_set1_pd(p.x), vpy = _mm_set1_pd(p.y), vrc2 = _mm_set1_pd(p.rc2);
+      const __m128d vinv = _mm_set1_pd(inv), vg0 = _mm_set1_pd(double(g0_[0])), eps = _mm_set1_pd(1e-6);
+      for (; y + 1 <= y1; y += 2) {
+        const __m128d dy = _mm_sub_pd(_mm_loadu_pd(cyRow + y), vpy);
+        const __m128d hx = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, _mm_mul_pd(dy, dy)), _mm_setzero_pd()));
+        const __m128d a = _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(_mm_sub_pd(vpx, hx), vinv), vg0), eps);
+        const __m128d b = _mm_add_pd(_mm_sub_pd(_mm_mul_pd(_mm_add_pd(vpx, hx), vinv), vg0), eps);
+        const __m128i ta = _mm_cvttpd_epi32(a), tb = _mm_cvttpd_epi32(b);
+        // Lane masks (all ones = -1) of a > trunc(a) and b < trunc(b), low 32 bits of each lane.
+        const __m128i up =
+            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128i down =
+            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(b, _mm_cvtepi32_pd(tb))), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128i c = _mm_sub_epi32(ta, up), f = _mm_add_epi32(tb, down);  // iceil(a), ifloor(b)
+        addRow(y, std::max(1, _mm_cvtsi128_si32(c)), std::min(nx_ - 1, _mm_cvtsi128_si32(f)));
+        addRow(y + 1, std::max(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 1))),
+               std::min(nx_ - 1, _mm_cvtsi128_si32(_mm_shuffle_epi32(f, 1))));
+      }
+#endif
+      for (; y <= y1; ++y) {
         const DiscRow r = discRow(p, y, inv);
-        w_.rowSpans.push_back({std::int16_t(r.x0), std::int16_t(r.x1)});
-        if (r.x0 > r.x1) continue;
-        ++start[std::size_t(y) * stride + std::size_t(r.x0) + 1];
-        --start[std::size_t(y) * stride + std::size_t(r.x1) + 2];  // x1 + 1 <= nx: same row
+        addRow(y, r.x0, r.x1);
       }
     }
     for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // per-column counts
     for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // CSR starts
     std::uint32_t* cursor = w_.cursor.data();
     std::copy(start, start + cols, cursor);
+    // Running max_z per column while filling: reachMax of each element as it is written.
+    std::fill(w_.runMax.begin(), w_.runMax.end(), std::int16_t(-32000));
     w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
@@ -427,7 +467,7 @@ class BlockMesher {
         // Block particles lie within Rc of the interior, so their anchors are inside the
         // expanded block (margin m >= Rc / S): 0 <= a <= n.
         assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);
-        cp.na[a] = std::int32_t(g0_[a] - p.anchor[a]);
+        cp.na[a] = std::int16_t(g0_[a] - p.anchor[a]);
       }
       cp.k = p.k;
       cp.s = p.strength;
@@ -441,16 +481,11 @@ class BlockMesher {
         fillDisc<true>(p, li, fz, span, entries, cursor);
     }
     assert(span == w_.rowSpans.data() + w_.rowSpans.size());
-    // Per-column reach bounds (see ColumnEntry).
+    // reachMin: suffix minimum of min_z per column (see ColumnEntry; reachMax was set by the fill).
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
       if (b == en) continue;
-      std::int16_t run = -32000;
-      for (std::uint32_t i = b; i < en; ++i) {
-        run = std::max(run, entries[i].maxZ);
-        entries[i].reachMax = run;
-      }
-      run = 32000;
+      std::int16_t run = 32000;
       for (std::uint32_t i = en; i-- > b;) {
         if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
         entries[i].reachMin = run;
@@ -460,6 +495,10 @@ class BlockMesher {
   }
 
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
+  // Without clamping (the particle is away from the block's top and bottom: fz -/+ (Rc / S + 2)
+  // lies in [1, zmax]) two columns go through the closed form at once (SSE2, the same double
+  // operations lane by lane); a pair with a rim column (outside the disc) or a bound that needs
+  // the exact predicate takes the scalar path, column by column.
   template <bool kClamp>
   void fillDisc(const Particle& p, std::uint32_t li, double fz, const std::array<std::int16_t, 2>*& span,
                 ColumnEntry* entries, std::uint32_t* cursor) {
@@ -474,55 +513,119 @@ class BlockMesher {
       const double dz = cz[z] - pz;
       return dxy + dz * dz < rc2;
     };
+    std::int16_t* runMax = w_.runMax.data();
+    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000), reachMax from the
+    // column's running max, reachMin set after the fill.
+    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, int lo, int hi) {
+      const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
+      rowRun[x] = rm;
+      entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), rm, 0, li};
+    };
+    // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
+    auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
+      const double dx = cx[x] - px;
+      const double dxy = dx * dx + dy2;
+      int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+      if (dxy < rc2) {
+        const double h = std::sqrt(rc2 - dxy) * inv;
+        const double zlo = fz - h, zhi = fz + h;
+        // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+        const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+        const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+        int l = c, u = f;
+        if constexpr (kClamp) {
+          // Intersect with [1, zmax] (not clamp each bound: a range wholly below 1 or above zmax,
+          // possible for a particle in the outermost margin cube, must stay empty).
+          l = std::max(c, 1);
+          u = std::min(f, zmax);
+        }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
+        // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+        // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+        // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+        // so where exactly the 1e-6 cut falls does not matter.
+        // One test for both bounds; settling a bound the closed form already got right
+        // leaves it unchanged, so both are settled when either is close.
+        if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
+          if (l > 1 && inside(dxy, l - 1)) {
+            do --l;
+            while (l > 1 && inside(dxy, l - 1));
+          } else {
+            while (l <= u && !inside(dxy, l)) ++l;
+          }
+          if (u < zmax && inside(dxy, u + 1)) {
+            do ++u;
+            while (u < zmax && inside(dxy, u + 1));
+          } else {
+            while (u >= l && !inside(dxy, u)) --u;
+          }
+        }
+        if (l <= u) {
+          lo = l;
+          hi = u;
+        }
+      }
+      store(rowCursor, rowRun, x, lo, hi);
+    };
     int y0, y1;
     discRows(p, inv, y0, y1);
     for (int y = y0; y <= y1; ++y, ++span) {
       const double dyr = w_.cy[y] - p.y;  // as discRow()
       const double dy2 = dyr * dyr;
-      std::uint32_t* rowCursor = cursor + std::size_t(y) * std::size_t(stride_);
+      const std::size_t rowBase = std::size_t(y) * std::size_t(stride_);
+      std::uint32_t* rowCursor = cursor + rowBase;
+      std::int16_t* rowRun = runMax + rowBase;
       const int x0 = (*span)[0], x1 = (*span)[1];
-      for (int x = x0; x <= x1; ++x) {
-        const double dx = cx[x] - px;
-        const double dxy = dx * dx + dy2;
-        int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
-        if (dxy < rc2) {
-          const double h = std::sqrt(rc2 - dxy) * inv;
-          const double zlo = fz - h, zhi = fz + h;
-          // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
-          const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
-          const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-          int l = c, u = f;
-          if constexpr (kClamp) {
-            l = std::clamp(c, 1, zmax);
-            u = std::clamp(f, 1, zmax);
-          }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
-          // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-          // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
-          // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
-          // so where exactly the 1e-6 cut falls does not matter.
-          // One test for both bounds; settling a bound the closed form already got right
-          // leaves it unchanged, so both are settled when either is close.
-          if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
-            if (l > 1 && inside(dxy, l - 1)) {
-              do --l;
-              while (l > 1 && inside(dxy, l - 1));
-            } else {
-              while (l <= u && !inside(dxy, l)) ++l;
-            }
-            if (u < zmax && inside(dxy, u + 1)) {
-              do ++u;
-              while (u < zmax && inside(dxy, u + 1));
-            } else {
-              while (u >= l && !inside(dxy, u)) --u;
-            }
+      int x = x0;
+#if defined(__SSE2__)
+      {
+        // Without clamping zlo >= 1, so truncation is floor: c = trunc(zlo) + 1 is ceil(zlo)
+        // except when zlo is a whole number, where c - zlo = 1 sends the column to the scalar path
+        // (settled). With clamping zlo may be below 1: then ceil(zlo) <= 1 and c <= 1 (trunc
+        // rounds towards zero), both 1 after the clamp; zhi = fz + h >= 0 always.
+        const __m128d vpx = _mm_set1_pd(px), vdy2 = _mm_set1_pd(dy2), vrc2 = _mm_set1_pd(rc2);
+        const __m128d vinv = _mm_set1_pd(inv), vfz = _mm_set1_pd(fz), half = _mm_set1_pd(0.5);
+        const __m128d cut = _mm_set1_pd(0.5 - 1e-6), absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffll));
+        const __m128i one = _mm_set1_epi32(1);
+        for (; x <= x1; x += 2) {
+          // The row's last column, when alone, rides in both lanes; only lane 0 is stored.
+          const bool pair = x < x1;
+          const __m128d dx = _mm_sub_pd(pair ? _mm_loadu_pd(cx + x) : _mm_set1_pd(cx[x]), vpx);
+          const __m128d dxy = _mm_add_pd(_mm_mul_pd(dx, dx), vdy2);
+          const __m128d in = _mm_cmplt_pd(dxy, vrc2);
+          const __m128d h = _mm_mul_pd(_mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, dxy), _mm_setzero_pd())), vinv);
+          const __m128d zlo = _mm_sub_pd(vfz, h), zhi = _mm_add_pd(vfz, h);
+          const __m128i c = _mm_add_epi32(_mm_cvttpd_epi32(zlo), one), f = _mm_cvttpd_epi32(zhi);
+          const __m128d a = _mm_and_pd(_mm_sub_pd(_mm_sub_pd(_mm_cvtepi32_pd(c), zlo), half), absMask);
+          const __m128d b = _mm_and_pd(_mm_sub_pd(_mm_sub_pd(zhi, _mm_cvtepi32_pd(f)), half), absMask);
+          const __m128d settle = _mm_cmpgt_pd(_mm_max_pd(a, b), cut);
+          if (_mm_movemask_pd(_mm_andnot_pd(settle, in)) != 3) [[unlikely]] {
+            column(rowCursor, rowRun, x, dy2);
+            if (pair) column(rowCursor, rowRun, x + 1, dy2);
+            continue;
           }
-          if (l <= u) {
-            lo = l;
-            hi = u;
+          // Both columns are inside the disc with clear bounds; c <= f holds unless the range
+          // holds no slice, where the element is stored empty like the scalar path does.
+          const __m128i cf = _mm_unpacklo_epi32(c, f);  // c0 f0 c1 f1
+          int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
+          int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          if constexpr (kClamp) {  // intersect with [1, zmax], as the scalar path
+            c0 = std::max(c0, 1), f0 = std::min(f0, zmax);
+            c1 = std::max(c1, 1), f1 = std::min(f1, zmax);
           }
+          if (c0 <= f0)
+            store(rowCursor, rowRun, x, c0, f0);
+          else
+            store(rowCursor, rowRun, x, -32000, -32000);
+          if (!pair) break;
+          if (c1 <= f1)
+            store(rowCursor, rowRun, x + 1, c1, f1);
+          else
+            store(rowCursor, rowRun, x + 1, -32000, -32000);
         }
-        entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), 0, 0, li};
+        continue;
       }
+#endif
+      for (; x <= x1; ++x) column(rowCursor, rowRun, x, dy2);
     }
   }
 
@@ -532,8 +635,10 @@ class BlockMesher {
   // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
   // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
   // bit); the walk stops early when f returns true.
-  template <class F>
-  void forEachInfluencing(int x, int y, int z, F&& f) {
+  // With kTable the offsets along z come from the slice's table (dzt, see fillSliceDz), else from
+  // the offsets table; f(particle, dx, dy, dz, dz * dz).
+  template <bool kTable, class F>
+  void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
     const std::size_t k = col(x, y);
     const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
     if (begin == end) return;
@@ -565,24 +670,32 @@ class BlockMesher {
       // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
       if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
       const CacheParticle& p = parts[en.particle];
-      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], offZ[p.na[2]] - p.rest[2])) break;
+      float dz, dz2;
+      if constexpr (kTable) {
+        dz = dzt[en.particle].dz;
+        dz2 = dzt[en.particle].dz2;
+      } else {
+        dz = offZ[p.na[2]] - p.rest[2];
+        dz2 = dz * dz;
+      }
+      if (f(p, offX[p.na[0]] - p.rest[0], offY[p.na[1]] - p.rest[1], dz, dz2)) break;
     }
   }
 
   template <bool kGradient>
-  void evaluate(int x, int y, int z, Corner<Policy>& c) {
+  void evaluate(int x, int y, int z, const SliceDz* dzt, Corner<Policy>& c) {
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
     if constexpr (!kGradient && !Policy::kHasUser) {
       // Margin corner: only the sign of f - T is ever read (§3), so stop as soon as the sum
       // passes T (see insideAt).
-      v = sumUntilAbove(x, y, z, looked);
+      v = sumUntilAbove<true>(x, y, z, dzt, looked);
     } else {
-      forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+      forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
         ++looked;
         const float before = v;
-        accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.s, v, gx, gy, gz);
+        accumulateDz2(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, v, gx, gy, gz);
         if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
         return false;
       });
@@ -597,12 +710,13 @@ class BlockMesher {
   // The field summed in (z, index) order, stopped as soon as the partial sum exceeds T. Every
   // term is >= 0 and rounded float addition is monotone, so a partial sum above T proves the full
   // sum above T, and a sum that never passes T is the full sum: (result > T) == (f > T) exactly.
-  float sumUntilAbove(int x, int y, int z, std::uint64_t& looked) {
+  template <bool kTable>
+  float sumUntilAbove(int x, int y, int z, const SliceDz* dzt, std::uint64_t& looked) {
     const float t = su_.threshold;
     float v = 0;
-    forEachInfluencing(x, y, z, [&](const CacheParticle& p, float dx, float dy, float dz) {
+    forEachInfluencing<kTable>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float, float dz2) {
       ++looked;
-      v += contribution(dx * dx + dy * dy, dz, p.k, p.s);
+      v += contributionDz2(dx * dx + dy * dy, dz2, p.k, p.s);
       return v > t;
     });
     return v;
@@ -612,7 +726,7 @@ class BlockMesher {
   bool insideAt(int x, int y, int z) {
     std::uint64_t looked = 0;
     ++out_.stats.seedEvaluations;
-    return sumUntilAbove(x, y, z, looked) > su_.threshold;
+    return sumUntilAbove<false>(x, y, z, nullptr, looked) > su_.threshold;
   }
 
   bool interiorCorner(int x, int y, int z) const {
@@ -688,9 +802,30 @@ class BlockMesher {
     lowestTodo_ = std::min(lowestTodo_, slab);
   }
 
+  // A lookup at slice z walks only particles whose anchor lies within m + 1 slices of z (every
+  // element it passes has mid_z within ceil(Rc/S) = m of z, see forEachInfluencing, and the
+  // anchor is floor(mid_z) up to rounding), a contiguous run of the z-sorted block particles; the
+  // run for m + 2 (the offsets table's reach) is tabulated, one slice of slack.
+  void fillSliceDz(Slice<Policy>& slice, int z) {
+    const std::size_t n = w_.local.size();
+    slice.dz.resize(n);
+    const CacheParticle* parts = w_.local.data();
+    // -na[2] = anchor - corner 0 along z, non-decreasing in the local index.
+    const int lo = z - offsetRange_, hi = z + offsetRange_;  // offsetRange_ = m + 2
+    const CacheParticle* first =
+        std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < lo; });
+    const float* offZ = w_.offsets.data() + offsetRange_ + z;
+    SliceDz* out = slice.dz.data();
+    for (const CacheParticle* p = first; p != parts + n && -int(p->na[2]) <= hi; ++p) {
+      const float dz = offZ[p->na[2]] - p->rest[2];
+      out[p - parts] = {dz, dz * dz};
+    }
+  }
+
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {
       w_.active[z] = w_.acquireSlice();
+      fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
       out_.stats.maxActiveSlices = std::max<std::uint32_t>(out_.stats.maxActiveSlices, activeSlices_);
     }
@@ -707,7 +842,8 @@ class BlockMesher {
     std::uint64_t bytes = 0;
     for (int i = 0; i <= nz_; ++i)
       if (w_.active[i])
-        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) + w_.active[i]->corners.size() * sizeof(Corner<Policy>);
+        bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
+                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
     (void)z;
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
@@ -725,9 +861,9 @@ class BlockMesher {
   [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
     Corner<Policy> c;
     if (interiorCorner(x, y, z))
-      evaluate<true>(x, y, z, c);
+      evaluate<true>(x, y, z, slice.dz.data(), c);
     else
-      evaluate<false>(x, y, z, c);  // margin: only the sign is needed (§3)
+      evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
     c.x = std::int16_t(x);
     c.y = std::int16_t(y);
@@ -755,6 +891,7 @@ class BlockMesher {
       SliceCell* const cellsB = below->cells.data();
       SliceCell* const cellsA = above->cells.data();
       const std::size_t sy = std::size_t(stride_);
+      const std::size_t slabFirst = out_.indices.size();
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
@@ -817,6 +954,7 @@ class BlockMesher {
           w_.todo[z + 1].push_back(item);
         }
       }
+      closeSlabVisit(z, slabFirst);
       notePeak(z);
       // Return slices no neighbouring slab still needs (Alg. 1, end of the slab).
       const bool belowEmpty = z == 0 || w_.todo[z - 1].empty();
@@ -853,9 +991,7 @@ class BlockMesher {
   }
 
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
-    const std::int32_t slab = std::int32_t(g0_[2] + z);
     const int nt = cs.triangleCount;
-    const std::size_t first = out_.indices.size();
     for (int tri = 0; tri < nt; ++tri) {
       std::uint32_t v[3];
       for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
@@ -864,12 +1000,21 @@ class BlockMesher {
       out_.indices.push_back(v[1]);
       out_.indices.push_back(v[2]);
     }
+  }
+
+  // After one visit of slab z (the triangles from index `first` on are all of that slab): their
+  // slab tags for the exact order, or one run per stretch of consecutive triangles of one slab
+  // (what buildRuns makes), extended when the previous visit ended with the same slab.
+  void closeSlabVisit(int z, std::size_t first) {
+    const std::size_t count = out_.indices.size() - first;
+    if (count == 0) return;
+    const std::int32_t slab = std::int32_t(g0_[2] + z);
     if (su_.exact) {
-      out_.triSlab.insert(out_.triSlab.end(), std::size_t(nt), slab);
-    } else {  // one run per stretch of consecutive triangles of one slab (what buildRuns makes)
+      out_.triSlab.insert(out_.triSlab.end(), count / 3, slab);
+    } else {
       if (out_.runs.empty() || out_.runs.back().slab != slab)
         out_.runs.push_back(SurfaceSlabRun{slab, IndexRange{std::uint32_t(first), 0}});
-      out_.runs.back().indices.count += std::uint32_t(3 * nt);
+      out_.runs.back().indices.count += std::uint32_t(count);
     }
   }
 
@@ -917,11 +1062,13 @@ struct FollowWorker;  // approach 2 (baselines.hpp), defined in marching_slices.
 // ---------------------------------------------------------------------------------------------
 struct ExtractorState {
   std::vector<Particle> particles;
+  std::vector<ParticleSortKey> sortKeys;
   struct Pair {
     std::uint64_t key;
     std::uint32_t rank;
   };
-  std::vector<Pair> pairs;
+  std::vector<Pair> pairs, pairsByBlock;
+  std::vector<std::uint32_t> blockCount;  // counting sort of pairs by block
   std::vector<Particle> blockParticles;
   std::vector<BlockDesc> blocks;
   std::vector<BlockOut> outs;
@@ -1031,15 +1178,21 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
-  std::size_t slices = 0, corners = 0, slabs = 0;
+  std::size_t slices = 0, corners = 0, dzs = 0, slabs = 0;
   for (const auto& w : workers) {
     slices = std::max(slices, w->slicePool.size());
-    for (const auto& slice : w->slicePool) corners = std::max(corners, slice->corners.capacity());
+    for (const auto& slice : w->slicePool) {
+      corners = std::max(corners, slice->corners.capacity());
+      dzs = std::max(dzs, slice->dz.capacity());
+    }
     slabs = std::max(slabs, w->todo.size());
   }
   for (auto& w : workers) {
     while (w->slicePool.size() < slices) w->releaseSlice(w->acquireSliceFromNewStorage());
-    for (auto& slice : w->slicePool) slice->corners.reserve(corners);
+    for (auto& slice : w->slicePool) {
+      slice->corners.reserve(corners);
+      slice->dz.reserve(dzs);
+    }
     w->freeSlices.reserve(slices);
   }
   for (std::size_t z = 0; z < slabs; ++z) {
@@ -1130,7 +1283,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       su.view[a] = params.order == SurfaceOrder::frontToBack ? -double(d[a]) : double(d[a]);
     }
   }
-  prepareParticles(input, params, su.frame, st.particles, su.rcMax);
+  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
   su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)
   // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
@@ -1151,7 +1304,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
 
   // Block lists (§3): each particle goes to every block whose interior, grown by Rc_i, holds it.
-  // Sorting (block, rank) pairs keeps each block's particles in (z, index) order.
+  // Sorting (block, rank) pairs keeps each block's particles in (z, index) order. The pairs are
+  // made in rank order, so a stable counting sort by block gives that order in one pass when the
+  // block grid is not much larger than the pair list (otherwise a comparison sort).
   st.pairs.clear();
   const double inv = 1.0 / su.s;
   for (std::uint32_t r = 0; r < st.particles.size(); ++r) {
@@ -1171,9 +1326,19 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
                    std::uint64_t(bx),
                r});
   }
-  std::sort(st.pairs.begin(), st.pairs.end(), [](const ExtractorState::Pair& a, const ExtractorState::Pair& b) {
-    return a.key < b.key || (a.key == b.key && a.rank < b.rank);
-  });
+  const std::uint64_t gridBlocks = std::uint64_t(su.nb[0]) * std::uint64_t(su.nb[1]) * std::uint64_t(su.nb[2]);
+  if (gridBlocks <= 4 * std::uint64_t(st.pairs.size()) + 64) {
+    st.blockCount.assign(std::size_t(gridBlocks) + 1, 0u);
+    for (const ExtractorState::Pair& pr : st.pairs) ++st.blockCount[std::size_t(pr.key) + 1];
+    for (std::size_t b = 1; b <= std::size_t(gridBlocks); ++b) st.blockCount[b] += st.blockCount[b - 1];
+    st.pairsByBlock.resize(st.pairs.size());
+    for (const ExtractorState::Pair& pr : st.pairs) st.pairsByBlock[st.blockCount[std::size_t(pr.key)]++] = pr;
+    st.pairs.swap(st.pairsByBlock);
+  } else {
+    std::sort(st.pairs.begin(), st.pairs.end(), [](const ExtractorState::Pair& a, const ExtractorState::Pair& b) {
+      return a.key < b.key || (a.key == b.key && a.rank < b.rank);
+    });
+  }
   st.blocks.clear();
   st.blockParticles.resize(st.pairs.size());
   for (std::size_t i = 0; i < st.pairs.size(); ++i) {
@@ -1221,7 +1386,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   else
     runBlocks(st, su, policy, st.workersFor<Policy>());
 
-  // Concatenate block outputs in emission order (prefix sums, then a parallel copy).
+  // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
+  // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
+  // zero-fill of resize()).
   const std::size_t nb = st.blocks.size();
   st.vertexBase.resize(nb + 1);
   st.indexBase.resize(nb + 1);
@@ -1246,21 +1413,45 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }
   const bool user = Policy::kHasUser && st.method == 1;
-  out.positions.resize(st.vertexBase[nb]);
-  out.normals.resize(st.vertexBase[nb]);
-  out.edgeKeys.resize(st.vertexBase[nb]);
-  if (user) out.attributes.resize(st.vertexBase[nb]);
-  out.indices.resize(st.indexBase[nb]);
+  // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block.
+  const int gather = nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
+  if (gather == 1) {
+    BlockOut& o = st.outs[0];
+    out.positions.swap(o.positions);
+    out.normals.swap(o.normals);
+    out.edgeKeys.swap(o.keys);
+    if (user) out.attributes.swap(o.attributes);
+    out.indices.swap(o.indices);  // vertex base 0: no rebasing
+  } else if (gather == 2) {
+    for (std::size_t i = 0; i < nb; ++i) {
+      const BlockOut& o = st.outs[i];
+      out.positions.insert(out.positions.end(), o.positions.begin(), o.positions.end());
+      out.normals.insert(out.normals.end(), o.normals.begin(), o.normals.end());
+      out.edgeKeys.insert(out.edgeKeys.end(), o.keys.begin(), o.keys.end());
+      if (user) out.attributes.insert(out.attributes.end(), o.attributes.begin(), o.attributes.end());
+      out.indices.insert(out.indices.end(), o.indices.begin(), o.indices.end());
+      const std::uint32_t vb = st.vertexBase[i];
+      for (std::size_t k = st.indexBase[i]; k < st.indexBase[i + 1]; ++k) out.indices[k] += vb;
+    }
+  } else {
+    out.positions.resize(st.vertexBase[nb]);
+    out.normals.resize(st.vertexBase[nb]);
+    out.edgeKeys.resize(st.vertexBase[nb]);
+    if (user) out.attributes.resize(st.vertexBase[nb]);
+    out.indices.resize(st.indexBase[nb]);
+  }
   out.slabRuns.resize(st.runBase[nb]);
   out.blocks.resize(nb);
   parallelItems(*st.arena, nb, [&](int, std::size_t i) {
     const BlockOut& o = st.outs[i];
     const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
-    std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
-    std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
-    std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
-    if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
-    for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+    if (gather == 0) {
+      std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
+      std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
+      std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
+      if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
+      for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+    }
     for (std::size_t k = 0; k < o.runs.size(); ++k) {
       SurfaceSlabRun r = o.runs[k];
       r.indices.first += ib;
@@ -1279,9 +1470,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       br.boundsMin[wa] = float(std::min(w0, w1) - su.origin[wa]);
       br.boundsMax[wa] = float(std::max(w0, w1) - su.origin[wa]);
     }
-    br.indices = {ib, std::uint32_t(o.indices.size())};
+    br.indices = {ib, st.indexBase[i + 1] - ib};  // from the prefix sums: a swapped block's arrays are gone
     br.firstVertex = vb;
-    br.vertexCount = std::uint32_t(o.positions.size());
+    br.vertexCount = st.vertexBase[i + 1] - vb;
     br.firstSlabRun = rb;
     br.slabRunCount = std::uint32_t(o.runs.size());
   });
