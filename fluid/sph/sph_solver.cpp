@@ -440,7 +440,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     rebuild = !(2.0f * moved < verlet_skin);
   }
   if (rebuild) {
-    buildNeighborGrid(w.grid, S.position, 0.5f * (H + verlet_skin), P.domain_min, P.domain_max);
+    // Cells 0.2 % wider than the search radius: the query then reaches one cell on each side
+    // (neighborReach), with room for float slack at coordinates up to ~400 H from the origin.
+    buildNeighborGrid(w.grid, S.position, 1.002f * (H + verlet_skin), P.domain_min, P.domain_max);
     gather(S.position, w.vec_a, w.grid.order);
     gather(S.velocity, w.vec_a, w.grid.order);
     gather(S.id, w.u32_tmp, w.grid.order);
