@@ -166,6 +166,9 @@ struct SphScratch {
   float wall_shift = 0.0f;         // calibration offset of s (see ensureInit)
   float wall_neighbours = 0.0f;    // lattice neighbours per unit boundary volume
   NeighborGrid grid;
+  // The step's exact lists: the neighbours of i are neighbors.indices[offsets[i] .. offsets[i] +
+  // counts[i]) (DFSPH: a fresh search, so that is up to offsets[i + 1]; WCSPH: the front of i's
+  // Verlet range, filtered by the density pass).
   NeighborLists neighbors;
   // WCSPH Verlet list (radius H + skin) and the positions it was built at (see stepSph).
   NeighborLists verlet;
