@@ -546,13 +546,20 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   w.factor.resize(n);  // Q_i here, alpha_i after the solver-specific part below
   const float h2 = H * H;
   auto densityPass = [&](auto filter, auto dfsph_sums) {
+    const glm::vec3* __restrict Xp = X.data();
+    glm::vec3* __restrict Gp = w.gradients.data();
+    std::uint32_t* __restrict counts = w.neighbors.counts.data();
+    const CubicSplineKernel kernel = w.kernel;
+    const float r_min = 1e-6f * H;
     forEach(n, [&](std::size_t i) {
       float sum = w0, sq = 0.0f;
       glm::vec3 grad_sum(0.0f);
-      std::uint32_t out = off[i];
-      for (std::uint32_t k = off[i]; k < cand_end[i]; ++k) {
+      const glm::vec3 xi = Xp[i];
+      const std::uint32_t first = off[i], last = cand_end[i];
+      std::uint32_t out = first;
+      for (std::uint32_t k = first; k < last; ++k) {
         const std::uint32_t j = cand[k];
-        const glm::vec3 x = X[i] - X[j];
+        const glm::vec3 x = xi - Xp[j];
         if constexpr (decltype(filter)::value) {
           // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
           // exactly a fresh search's.
@@ -560,15 +567,17 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           nbr_out[out] = j;
         }
         const float r = glm::length(x);
-        sum += w.kernel.value(r);
-        const glm::vec3 g = r > 1e-6f * H ? m * w.kernel.gradient(x, r) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
-        w.gradients[out++] = g;
+        float wr, dr;
+        kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
+        sum += wr;
+        const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
+        Gp[out++] = g;
         if constexpr (decltype(dfsph_sums)::value) {
           grad_sum += g;
           sq += glm::dot(g, g);
         }
       }
-      if constexpr (decltype(filter)::value) w.neighbors.counts[i] = out - off[i];
+      if constexpr (decltype(filter)::value) counts[i] = out - first;
       S.density[i] = m * sum + rho0 * w.boundary_volume[i];
       w.vec_b[i] = grad_sum;
       w.factor[i] = sq;
@@ -627,37 +636,53 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
   }
   forEach(n, [&](std::size_t i) { visc_coef[i] = 10.0f * nu / S.density[i]; });
-  auto nonPressure = [&](auto with_pressure) {
+  auto nonPressure = [&](auto with_pressure, auto with_viscosity) {
+    constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
+    const glm::vec3* __restrict Xp = X.data();
+    const glm::vec3* __restrict Vp = V.data();
+    const glm::vec3* __restrict Gp = G.data();
+    const float* __restrict vc = visc_coef.data();
+    const float* __restrict prp = pr.data();
+    const float eps = 0.01f * H * H;
     forEach(n, [&](std::size_t i) {
       glm::vec3 a = P.gravity;
-      if (nu > 0.0f || alpha_av > 0.0f || decltype(with_pressure)::value) {
-        const float pi = decltype(with_pressure)::value ? pr[i] : 0.0f;
-        for (std::uint32_t k = off[i]; k < off[i] + cnt[i]; ++k) {
+      if (kViscosity || kPressure || alpha_av > 0.0f) {
+        const float pi = kPressure ? prp[i] : 0.0f;
+        const glm::vec3 xi = Xp[i], vi = Vp[i];
+        const std::uint32_t first = off[i], last = off[i] + cnt[i];
+        for (std::uint32_t k = first; k < last; ++k) {
           const std::uint32_t j = nbr[k];
-          const glm::vec3 xij = X[i] - X[j];
-          const float vx = glm::dot(V[i] - V[j], xij);
-          const float denom = glm::dot(xij, xij) + 0.01f * H * H;
+          const glm::vec3 xij = xi - Xp[j];
+          const float vx = glm::dot(vi - Vp[j], xij);
+          const float denom = glm::dot(xij, xij) + eps;
           float coef = 0.0f;
-          if (nu > 0.0f) coef = visc_coef[j] * (vx / denom);
+          if constexpr (kViscosity) coef = vc[j] * (vx / denom);
           if (alpha_av > 0.0f && vx < 0.0f) {
             const float nu_ij = 2.0f * alpha_av * h_bt * cs / (S.density[i] + S.density[j]);
             coef += nu_ij * vx / denom;  // - Pi_ij, Pi_ij = -nu_ij vx / denom
           }
           // Symmetric pressure force (B&T eq. 6).
-          if constexpr (decltype(with_pressure)::value) coef -= pi + pr[j];
-          a += coef * G[k];
+          if constexpr (kPressure) coef -= pi + prp[j];
+          a += coef * Gp[k];
         }
         // Boundary: the same symmetric pressure term against the wall volume with the mirrored
         // pressure p_b = p_i, rho_b = rho_i.
-        if constexpr (decltype(with_pressure)::value) a -= 2.0f * rho0 * pi * w.boundary_gradient[i];
+        if constexpr (kPressure) a -= 2.0f * rho0 * pi * w.boundary_gradient[i];
       }
       w.accel[i] = a;
     });
   };
-  if (wcsph)
-    nonPressure(std::true_type{});
-  else
-    nonPressure(std::false_type{});
+  if (wcsph) {
+    if (nu > 0.0f)
+      nonPressure(std::true_type{}, std::true_type{});
+    else
+      nonPressure(std::true_type{}, std::false_type{});
+  } else {
+    if (nu > 0.0f)
+      nonPressure(std::false_type{}, std::true_type{});
+    else
+      nonPressure(std::false_type{}, std::false_type{});
+  }
 
   // Boundary pressure impulse per particle (for the coupling forces): the velocity change the
   // boundary term gave particle i during this step is -impulse_i * rho_0 * grad V_ic.
