@@ -175,7 +175,7 @@ struct SphScratch {
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;
   bool verlet_valid = false;
-  std::vector<glm::vec3> gradients;  // per neighbour pair: m_j grad W_ij (DFSPH)
+  std::vector<glm::vec4> gradients;  // per neighbour pair: m_j grad W_ij, 4th component 0 (one 16-byte load)
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume, boundary_flux, boundary_product,

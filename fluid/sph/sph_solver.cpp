@@ -215,7 +215,8 @@ void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& po
 }
 
 // The two pair loops of every solver iteration (Bender & Koschier 2015 eq. 9 / 13), on the
-// per-pair gradients G[k] = m_j grad W_ij. With SSE2 (every x86-64) a pair's three components
+// per-pair gradients G[k] = m_j grad W_ij (stored with a zero 4th component, so a pair's
+// gradient is one 16-byte load). With SSE2 (every x86-64) a pair's three components
 // are one vector operation; the sums run in the same pair order for every thread count.
 #if defined(__SSE2__)
 inline __m128 load3(const glm::vec3& v) {
@@ -230,30 +231,32 @@ inline glm::vec3 store3(__m128 a) {
 #endif
 
 // sum_k (v_i - v_j(k)) . G[k]
-inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G, const std::uint32_t* nbr,
+inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec4* G, const std::uint32_t* nbr,
                             std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
 #if defined(__SSE2__)
   __m128 acc = _mm_setzero_ps();
   const __m128 v = load3(vi);
-  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), load3(G[k])));
+  for (std::uint32_t k = b; k < e; ++k)
+    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), _mm_loadu_ps(&G[k].x)));
   const glm::vec3 c = store3(acc);
   return c.x + c.y + c.z;
 #else
   glm::vec3 acc(0.0f);
-  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * G[k];
+  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * glm::vec3(G[k]);
   return acc.x + acc.y + acc.z;
 #endif
 }
 
 // start + sum_k (k_i + k_j(k)) G[k]
-inline glm::vec3 pairKappaSum(const float* kr, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b,
+inline glm::vec3 pairKappaSum(const float* kr, const glm::vec4* G, const std::uint32_t* nbr, std::uint32_t b,
                               std::uint32_t e, float ki, glm::vec3 start) {
 #if defined(__SSE2__)
   __m128 acc = load3(start);
-  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), load3(G[k])));
+  for (std::uint32_t k = b; k < e; ++k)
+    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), _mm_loadu_ps(&G[k].x)));
   return store3(acc);
 #else
-  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * G[k];
+  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * glm::vec3(G[k]);
   return start;
 #endif
 }
@@ -547,7 +550,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const float h2 = H * H;
   auto densityPass = [&](auto filter, auto dfsph_sums) {
     const glm::vec3* __restrict Xp = X.data();
-    glm::vec3* __restrict Gp = w.gradients.data();
+    glm::vec4* __restrict Gp = w.gradients.data();
     std::uint32_t* __restrict counts = w.neighbors.counts.data();
     const CubicSplineKernel kernel = w.kernel;
     const float r_min = 1e-6f * H;
@@ -571,7 +574,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
         sum += wr;
         const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
-        Gp[out++] = g;
+        Gp[out++] = glm::vec4(g, 0.0f);
         if constexpr (decltype(dfsph_sums)::value) {
           grad_sum += g;
           sq += glm::dot(g, g);
@@ -640,7 +643,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
     const glm::vec3* __restrict Xp = X.data();
     const glm::vec3* __restrict Vp = V.data();
-    const glm::vec3* __restrict Gp = G.data();
+    const glm::vec4* __restrict Gp = G.data();
     const float* __restrict vc = visc_coef.data();
     const float* __restrict prp = pr.data();
     const float eps = 0.01f * H * H;
@@ -663,7 +666,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           }
           // Symmetric pressure force (B&T eq. 6).
           if constexpr (kPressure) coef -= pi + prp[j];
-          a += coef * Gp[k];
+          a += coef * glm::vec3(Gp[k]);
         }
         // Boundary: the same symmetric pressure term against the wall volume with the mirrored
         // pressure p_b = p_i, rho_b = rho_i.
