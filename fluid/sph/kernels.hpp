@@ -47,6 +47,22 @@ struct CubicSplineKernel {
     return -sigma * inv_support * 6.0f * t * t;
   }
 
+  // W(r) and W'(r) / r in one evaluation (one branch, the same expressions as value() and
+  // derivative()), for 0 < r <= H: the caller has already tested the support.
+  void evaluateInside(float r, float& w, float& derivative_over_r) const {
+    const float q = r * inv_support;
+    float dw;
+    if (q <= 0.5f) {
+      w = sigma * (6.0f * q * q * q - 6.0f * q * q + 1.0f);
+      dw = sigma * inv_support * (18.0f * q * q - 12.0f * q);
+    } else {
+      const float t = 1.0f - q;
+      w = sigma * 2.0f * t * t * t;
+      dw = -sigma * inv_support * 6.0f * t * t;
+    }
+    derivative_over_r = dw / r;
+  }
+
   // grad_x W(|x|) for x = x_i - x_j; zero at x = 0 (the kernel's gradient is continuous there).
   glm::vec3 gradient(glm::vec3 x, float r) const {
     if (r <= 1e-9f * support || r > support) return glm::vec3(0.0f);

@@ -9,6 +9,13 @@
 #include <cassert>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
+
 namespace fluid {
 namespace {
 
@@ -18,6 +25,7 @@ struct Bounds {
 };
 
 constexpr std::size_t kGrain = 1024;
+constexpr std::size_t kPad = 8;  // padding of the SoA position copies (one 8-wide load)
 
 }  // namespace
 
@@ -125,94 +133,216 @@ void markGridReordered(NeighborGrid& grid) {
 
 namespace {
 
-// Calls f(begin, end) for each run of sorted entries that holds the cells overlapping the box
-// [p - r, p + r] (one run per (y, z) row, since x is the fastest key), in a fixed order (z, then
-// y ascending). Rows whose (y, z) slab is at least r from p are skipped. Cell coordinates are
-// clamped like cellOf, which keeps strays exact (clamping is monotone).
-template <typename F>
-inline void forEachRun(const NeighborGrid& grid, glm::vec3 p, float r, F&& f) {
-  const glm::ivec3 lo = grid.cellOf(p - glm::vec3(r)), hi = grid.cellOf(p + glm::vec3(r));
-  const float cs = grid.cell_size, r2 = r * r;
-  for (int z = lo.z; z <= hi.z; ++z) {
-    // Distance from p to the slab of row z (conservative 0 for the open border rows).
-    const float zlo = grid.origin.z + cs * static_cast<float>(z);
-    float dz = std::max(std::max(zlo - p.z, p.z - (zlo + cs)), 0.0f);
-    if (z == 0 || z == grid.dims.z - 1) dz = 0.0f;
-    for (int y = lo.y; y <= hi.y; ++y) {
-      const float ylo = grid.origin.y + cs * static_cast<float>(y);
-      float dy = std::max(std::max(ylo - p.y, p.y - (ylo + cs)), 0.0f);
-      if (y == 0 || y == grid.dims.y - 1) dy = 0.0f;
-      if (dz * dz + dy * dy >= r2) continue;
-      const std::uint32_t k0 = grid.keyOf({lo.x, y, z}), k1 = grid.keyOf({hi.x, y, z});
-      const std::uint32_t b = grid.cell_start[k0], e = grid.cell_start[k1 + 1];
-      if (b != e) f(b, e);
+// Calls emit(t) for every sorted entry t in [b, e) with dot(p - x_t, p - x_t) < r2, ascending.
+template <typename Emit>
+inline void scanRun(const float* sx, const float* sy, const float* sz, std::uint32_t b, std::uint32_t e, glm::vec3 p,
+                    float r2, Emit&& emit) {
+#if defined(__SSE2__)
+  const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z), rr = _mm_set1_ps(r2);
+  for (std::uint32_t t = b; t < e; t += 4) {
+    const __m128 dx = _mm_sub_ps(px, _mm_loadu_ps(sx + t));
+    const __m128 dy = _mm_sub_ps(py, _mm_loadu_ps(sy + t));
+    const __m128 dz = _mm_sub_ps(pz, _mm_loadu_ps(sz + t));
+    // ((dx dx + dy dy) + dz dz): the evaluation order of glm::dot, so the test is bit-for-bit
+    // the brute-force one.
+    const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    unsigned bits = static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(d2, rr)));
+    if (e - t < 4) bits &= (1u << (e - t)) - 1u;  // lanes past the run (the arrays are padded)
+    while (bits) {
+      emit(t + static_cast<std::uint32_t>(__builtin_ctz(bits)));
+      bits &= bits - 1u;
     }
   }
+#else
+  for (std::uint32_t t = b; t < e; ++t) {
+    const glm::vec3 d = p - glm::vec3(sx[t], sy[t], sz[t]);
+    if (glm::dot(d, d) < r2) emit(t);
+  }
+#endif
 }
 
-// Appends (via emit) every neighbour j != i of particle i within sqrt(r2), in run order.
-template <bool kIdentity, typename Emit>
-inline void searchParticle(const NeighborGrid& grid, std::span<const glm::vec3> positions, std::uint32_t i, float r,
-                           Emit&& emit) {
-  const glm::vec3 p = positions[i];
-  const std::uint32_t* order = grid.order.data();
-  const float r2 = r * r;
-  forEachRun(grid, p, r, [&](std::uint32_t b, std::uint32_t e) {
-    for (std::uint32_t s = b; s < e; ++s) {
-      const std::uint32_t j = kIdentity ? s : order[s];
-      const glm::vec3 d = p - positions[j];
-      if (glm::dot(d, d) < r2 && j != i) emit(j);
-    }
-  });
+// One particle's scan over the row runs of its cell: writes the neighbours (particle indices,
+// without `self`) to out and returns the end. Every row gets room for all its candidates.
+struct RowScan {
+  const float* sx;
+  const float* sy;
+  const float* sz;
+  const std::uint32_t* runs;  // rows pairs (begin, end) of sorted entries
+  std::size_t rows;
+  const std::uint32_t* order;  // sorted entry -> particle index; null when the order is the identity
+  float r2;
+};
+
+std::uint32_t* scanRows(const RowScan& a, std::uint32_t self, glm::vec3 p, std::uint32_t* out) {
+  for (std::size_t k = 0; k < a.rows; ++k)
+    scanRun(a.sx, a.sy, a.sz, a.runs[2 * k], a.runs[2 * k + 1], p, a.r2, [&](std::uint32_t t) {
+      *out = a.order ? a.order[t] : t;
+      out += t != self ? 1 : 0;
+    });
+  return out;
 }
 
-template <bool kIdentity>
-void findImpl(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists) {
-  const std::size_t n = positions.size();
-  const std::uint32_t* order = grid.order.data();
-  // One pass into fixed per-particle slots (a resting fluid has about 30 neighbours at H = 2d);
-  // only particles with more than kSlots neighbours are searched a second time below. Particles
-  // are visited in sorted (cell) order, so consecutive particles share their runs in cache.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t s = r.begin(); s != r.end(); ++s) {
-      const std::uint32_t i = kIdentity ? static_cast<std::uint32_t>(s) : order[s];
-      std::uint32_t c = 0;
-      std::uint32_t* slot = lists.slots.data() + static_cast<std::size_t>(i) * NeighborLists::kSlots;
-      searchParticle<kIdentity>(grid, positions, i, radius, [&](std::uint32_t j) {
-        if (c < NeighborLists::kSlots) slot[c] = j;
-        ++c;
-      });
-      lists.counts[i] = c;
-    }
-  });
-  lists.offsets[0] = 0;
-  for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
-  lists.indices.resize(lists.offsets[n]);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      std::uint32_t out = lists.offsets[i];
-      if (lists.counts[i] <= NeighborLists::kSlots) {
-        const std::uint32_t* slot = lists.slots.data() + i * NeighborLists::kSlots;
-        std::copy(slot, slot + lists.counts[i], lists.indices.data() + out);
-        continue;
+#if defined(__x86_64__) && defined(__GNUC__)
+#define FLUID_SPH_AVX2_SCAN 1
+// The same scan eight candidates at a time where the CPU has AVX2 (picked at run time; the build
+// targets baseline x86-64). The arithmetic is the same IEEE sequence without FMA (the target
+// does not enable it, so nothing is contracted): the lists are identical to the SSE2 scan's.
+__attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2(const RowScan& a, std::uint32_t self, glm::vec3 p,
+                                                            std::uint32_t* out) {
+  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z),
+               rr = _mm256_set1_ps(a.r2);
+  for (std::size_t k = 0; k < a.rows; ++k) {
+    const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
+    for (std::uint32_t t = b; t < e; t += 8) {
+      const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
+      const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
+      const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
+      const __m256 d2 =
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+      unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, rr, _CMP_LT_OQ)));
+      if (e - t < 8) bits &= (1u << (e - t)) - 1u;
+      while (bits) {
+        const std::uint32_t u = t + static_cast<std::uint32_t>(__builtin_ctz(bits));
+        *out = a.order ? a.order[u] : u;
+        out += u != self ? 1 : 0;
+        bits &= bits - 1u;
       }
-      searchParticle<kIdentity>(grid, positions, static_cast<std::uint32_t>(i), radius,
-                                [&](std::uint32_t j) { lists.indices[out++] = j; });
     }
-  });
+  }
+  return out;
 }
+#endif
 
 }  // namespace
 
+void reserveNeighborLists(NeighborLists& lists, std::size_t capacity) {
+  lists.counts.reserve(capacity);
+  lists.offsets.reserve(capacity + 1);
+  for (auto* v : {&lists.sx, &lists.sy, &lists.sz}) v->reserve(capacity + kPad);
+  const std::size_t chunks = (capacity + NeighborLists::kChunk - 1) / NeighborLists::kChunk;
+  lists.chunk_used.reserve(chunks);
+  lists.runs.reserve(chunks * 2 * 27);
+  lists.chunk_pairs.reserve(chunks);
+  while (lists.chunk_pairs.size() < chunks)
+    lists.chunk_pairs.emplace_back(static_cast<std::size_t>(NeighborLists::kChunk) *
+                                   NeighborLists::kReservePerParticle);
+}
+
+int neighborReach(const NeighborGrid& grid, float radius) {
+  // Float slack: cell coordinates and the distance test are rounded relative to the coordinates'
+  // magnitude (one ulp is 1.2e-7 of it); 5e-6 of the largest coordinate (and 1e-5 of the radius)
+  // is far above that, so a pair the float test accepts never lies more than `reach` cells apart.
+  float extent = 0.0f;
+  for (int a = 0; a < 3; ++a)
+    extent = std::max({extent, std::abs(grid.origin[a]),
+                       std::abs(grid.origin[a] + grid.cell_size * static_cast<float>(grid.dims[a]))});
+  const float slack = 5e-6f * extent + 1e-5f * radius;
+  return std::max(1, static_cast<int>(std::ceil((radius + slack) / grid.cell_size)));
+}
+
 void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists) {
   const std::size_t n = positions.size();
+  constexpr std::uint32_t K = NeighborLists::kChunk;
+  const std::size_t chunks = (n + K - 1) / K;
   lists.counts.resize(n);
   lists.offsets.resize(n + 1);
-  lists.slots.resize(n * NeighborLists::kSlots);
-  if (grid.identity_order)
-    findImpl<true>(grid, positions, radius, lists);
-  else
-    findImpl<false>(grid, positions, radius, lists);
+  lists.chunk_used.resize(chunks);
+  // Chunk buffers: vectors only grow; a new buffer starts with the usual capacity so that a
+  // growing fluid does not reallocate its buffers many times.
+  while (lists.chunk_pairs.size() < chunks)
+    lists.chunk_pairs.emplace_back(static_cast<std::size_t>(K) * NeighborLists::kReservePerParticle);
+  const std::uint32_t* order = grid.order.data();
+  const bool identity = grid.identity_order;
+  // SoA copies of the positions in sorted order, padded so that a 4- or 8-wide load at the end
+  // of a run never reads past the arrays (the lanes past the run are masked off).
+  lists.sx.resize(n + kPad);
+  lists.sy.resize(n + kPad);
+  lists.sz.resize(n + kPad);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const glm::vec3 x = positions[identity ? t : order[t]];
+      lists.sx[t] = x.x;
+      lists.sy[t] = x.y;
+      lists.sz[t] = x.z;
+    }
+  });
+  for (std::size_t t = n; t < n + kPad; ++t) lists.sx[t] = lists.sy[t] = lists.sz[t] = 0.0f;
+  const float* sx = lists.sx.data();
+  const float* sy = lists.sy.data();
+  const float* sz = lists.sz.data();
+  const float r2 = radius * radius;
+  const int reach = neighborReach(grid, radius);
+  const std::size_t max_rows = static_cast<std::size_t>(2 * reach + 1) * static_cast<std::size_t>(2 * reach + 1);
+  lists.runs.resize(chunks * 2 * max_rows);
+  auto scan = &scanRows;
+#if defined(FLUID_SPH_AVX2_SCAN)
+  if (__builtin_cpu_supports("avx2")) scan = &scanRowsAvx2;
+#endif
+
+  // 1. Search: chunk c holds sorted entries [c K, (c + 1) K), grouped by cell. The particles of
+  // one cell share their candidates: the cells within `reach` of it, one run of sorted entries
+  // per (y, z) row (x is the fastest key), computed once per cell. The chunk's output depends
+  // only on the chunk, not on which thread ran it.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+    for (std::size_t c = cr.begin(); c != cr.end(); ++c) {
+      std::vector<std::uint32_t>& buf = lists.chunk_pairs[c];
+      std::uint32_t* runs = lists.runs.data() + c * 2 * max_rows;
+      std::size_t used = 0;
+      const std::size_t end = std::min(n, (c + 1) * K);
+      for (std::size_t s = c * K; s < end;) {
+        const std::uint32_t key = grid.particle_key[identity ? s : order[s]];
+        std::size_t group_end = s + 1;
+        while (group_end < end && grid.particle_key[identity ? group_end : order[group_end]] == key) ++group_end;
+        // The cell's coordinates from its key (row-major, x fastest).
+        const int cx = static_cast<int>(key % static_cast<std::uint32_t>(grid.dims.x));
+        const int cy = static_cast<int>((key / static_cast<std::uint32_t>(grid.dims.x)) % static_cast<std::uint32_t>(grid.dims.y));
+        const int cz = static_cast<int>(key / static_cast<std::uint32_t>(grid.dims.x * grid.dims.y));
+        const int x0 = std::max(cx - reach, 0), x1 = std::min(cx + reach, grid.dims.x - 1);
+        std::size_t rows = 0, candidates = 0;
+        for (int z = std::max(cz - reach, 0); z <= std::min(cz + reach, grid.dims.z - 1); ++z)
+          for (int y = std::max(cy - reach, 0); y <= std::min(cy + reach, grid.dims.y - 1); ++y) {
+            const std::uint32_t b = grid.cell_start[grid.keyOf({x0, y, z})], e = grid.cell_start[grid.keyOf({x1, y, z}) + 1];
+            if (b == e) continue;
+            runs[2 * rows] = b;
+            runs[2 * rows + 1] = e;
+            ++rows;
+            candidates += e - b;
+          }
+        for (; s < group_end; ++s) {
+          // Room for every candidate, so the scan writes through a plain pointer.
+          if (buf.size() < used + candidates) buf.resize(std::max(2 * buf.size(), used + candidates));
+          std::uint32_t* const first = buf.data() + used;
+          const RowScan args{sx, sy, sz, runs, rows, identity ? nullptr : order, r2};
+          const std::uint32_t* const last =
+              scan(args, static_cast<std::uint32_t>(s), glm::vec3(sx[s], sy[s], sz[s]), first);
+          const std::size_t count = static_cast<std::size_t>(last - first);
+          lists.counts[identity ? s : order[s]] = static_cast<std::uint32_t>(count);
+          used += count;
+        }
+      }
+      lists.chunk_used[c] = static_cast<std::uint32_t>(used);
+    }
+  });
+  // 2. Offsets (per particle index), then each chunk's lists copied to their places.
+  lists.offsets[0] = 0;
+  for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
+  lists.indices.resize(lists.offsets[n]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+    for (std::size_t c = cr.begin(); c != cr.end(); ++c) {
+      const std::uint32_t* src = lists.chunk_pairs[c].data();
+      if (identity) {
+        // Entries of a chunk are consecutive particles: one copy.
+        std::copy(src, src + lists.chunk_used[c], lists.indices.data() + lists.offsets[c * K]);
+        continue;
+      }
+      const std::size_t end = std::min(n, (c + 1) * K);
+      for (std::size_t s = c * K; s < end; ++s) {
+        const std::uint32_t i = order[s];
+        std::copy(src, src + lists.counts[i], lists.indices.data() + lists.offsets[i]);
+        src += lists.counts[i];
+      }
+    }
+  });
 }
 
 }  // namespace fluid

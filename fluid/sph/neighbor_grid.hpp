@@ -1,13 +1,14 @@
 #pragma once
 // Uniform neighbour grid for fluid/sph: particles counting-sorted by cell (Green 2008 "Particle
 // simulation using CUDA"; Ihmsen et al. 2011 "A parallel SPH implementation on multi-core CPUs",
-// §4: index sort by a cell key). The SPH step uses cells of half the kernel support.
+// §4: index sort by a cell key). The SPH step uses cells a little wider than the search radius.
 //
 // Cells are numbered row-major with x fastest, so the cells of one (y, z) row that a query box
 // spans are consecutive keys and their particles one contiguous run of the sorted order: a query
-// reads one run per row (Ihmsen et al. 2011 §4 use z-order; with half-support cells and the
-// particle data re-sorted by cell, the row runs cost fewer instructions per query than the
-// z-ordered 27 support-sized cells we had: callgrind, bench_sph steps).
+// reads one run per row (Ihmsen et al. 2011 §4 use z-order). With support-sized cells all
+// particles of a cell share 9 runs, found once per cell, and the distance tests run four at a
+// time: fewer instructions than per-particle runs over half-support cells, whose per-row
+// bookkeeping cost more than the extra candidates (callgrind, bench_sph steps; see docs/sph.md).
 //
 // The grid covers the particles' bounding box clipped to [domain_min, domain_max]; at most
 // kMaxCellsPerAxis cells per axis. Cell coordinates outside the grid are clamped to the border
@@ -53,17 +54,35 @@ void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions,
 void markGridReordered(NeighborGrid& grid);
 
 // Compressed neighbour lists: neighbours of i are indices[offsets[i] .. offsets[i+1]), each j != i
-// with |x_i - x_j| < radius (any radius > 0; the query visits the cells overlapping the box
-// [x_i - radius, x_i + radius], cheapest for cells of about radius / 2: fewer candidates than the
-// 27 cells of size radius), in a fixed order (row by row, then by sorted entry), identical for
-// every thread count.
+// with |x_i - x_j| < radius (any radius > 0), in a fixed order (row by row, then by sorted
+// entry), identical for every thread count. The query visits, for all particles of one cell at
+// once, the cells within neighborReach(grid, radius) of that cell (one run of sorted entries per
+// (y, z) row): cheapest for cells a little wider than the radius (3 x 3 rows of 3 cells; the
+// SPH step uses radius * 1.002). The distance test is the same float expression as a
+// brute-force dot(x_i - x_j, x_i - x_j) < radius^2, four candidates at a time (SSE2) over SoA
+// copies of the sorted positions, so the lists are exact.
 struct NeighborLists {
+  // Particles are searched in chunks of kChunk consecutive sorted entries; a chunk's lists are
+  // written to its own buffer and then copied into `indices` (one search per particle, any count).
+  static constexpr std::uint32_t kChunk = 256;
+  // Initial size per particle of a chunk buffer (it grows if a chunk needs more room: it must
+  // hold the chunk's lists plus one cell's candidates).
+  static constexpr std::uint32_t kReservePerParticle = 64;
   std::vector<std::uint32_t> offsets;
   std::vector<std::uint32_t> indices;
-  static constexpr std::uint32_t kSlots = 48;
-  std::vector<std::uint32_t> counts;  // scratch
-  std::vector<std::uint32_t> slots;   // scratch: kSlots per particle
+  std::vector<std::uint32_t> counts;                    // scratch: count per particle
+  std::vector<std::uint32_t> chunk_used;                // scratch: entries used in each chunk buffer
+  std::vector<std::uint32_t> runs;                      // scratch: row runs of the current cell, per chunk
+  std::vector<std::vector<std::uint32_t>> chunk_pairs;  // scratch: one buffer per chunk
+  std::vector<float> sx, sy, sz;                        // scratch: sorted positions (SoA, padded)
 };
+
+// Cells per axis on each side of a particle's cell that can hold neighbours within `radius`
+// (>= 1): ceil((radius + float slack) / cell_size).
+int neighborReach(const NeighborGrid& grid, float radius);
+
+// Reserves the scratch of `lists` for `capacity` particles.
+void reserveNeighborLists(NeighborLists& lists, std::size_t capacity);
 
 void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists);
 

@@ -54,6 +54,7 @@ const KeySpec kSolver[] = {
     {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},
     {"density_error", 0.0005f, 1e-7f, 1.0f, "DFSPH: mean density error tolerance (0.0005 = 0.05 %)"},
     {"divergence_error", 0.001f, 1e-7f, 1.0f, "DFSPH: divergence error tolerance"},
+    {"min_iterations", 1.0f, 0.0f, 10000.0f, "DFSPH: minimum constant-density iterations per step (paper: 2)"},
     {"max_iterations", 100.0f, 1.0f, 10000.0f, "DFSPH: iteration cap per solve"},
     {"sound_speed", 0.0f, 0.0f, 1e5f, "WCSPH: c_s (m/s); 0 = 10 x the scene's expected max speed"},
     {"artificial_viscosity", 0.0f, 0.0f, 10.0f, "WCSPH: B&T alpha"},
@@ -157,7 +158,7 @@ SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
   p.max_density_error = get("density_error");
   p.max_divergence_error = get("divergence_error");
   p.max_iterations = static_cast<int>(get("max_iterations"));
-  p.min_iterations = std::min(p.min_iterations, p.max_iterations);
+  p.min_iterations = std::min(static_cast<int>(get("min_iterations")), p.max_iterations);
   p.artificial_viscosity = get("artificial_viscosity");
   p.max_speed = get("max_speed");
   CollisionMaterial material;

@@ -215,7 +215,8 @@ void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& po
 }
 
 // The two pair loops of every solver iteration (Bender & Koschier 2015 eq. 9 / 13), on the
-// per-pair gradients G[k] = m_j grad W_ij. With SSE2 (every x86-64) a pair's three components
+// per-pair gradients G[k] = m_j grad W_ij (stored with a zero 4th component, so a pair's
+// gradient is one 16-byte load). With SSE2 (every x86-64) a pair's three components
 // are one vector operation; the sums run in the same pair order for every thread count.
 #if defined(__SSE2__)
 inline __m128 load3(const glm::vec3& v) {
@@ -230,30 +231,32 @@ inline glm::vec3 store3(__m128 a) {
 #endif
 
 // sum_k (v_i - v_j(k)) . G[k]
-inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec3* G, const std::uint32_t* nbr,
+inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec4* G, const std::uint32_t* nbr,
                             std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
 #if defined(__SSE2__)
   __m128 acc = _mm_setzero_ps();
   const __m128 v = load3(vi);
-  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), load3(G[k])));
+  for (std::uint32_t k = b; k < e; ++k)
+    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), _mm_loadu_ps(&G[k].x)));
   const glm::vec3 c = store3(acc);
   return c.x + c.y + c.z;
 #else
   glm::vec3 acc(0.0f);
-  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * G[k];
+  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * glm::vec3(G[k]);
   return acc.x + acc.y + acc.z;
 #endif
 }
 
 // start + sum_k (k_i + k_j(k)) G[k]
-inline glm::vec3 pairKappaSum(const float* kr, const glm::vec3* G, const std::uint32_t* nbr, std::uint32_t b,
+inline glm::vec3 pairKappaSum(const float* kr, const glm::vec4* G, const std::uint32_t* nbr, std::uint32_t b,
                               std::uint32_t e, float ki, glm::vec3 start) {
 #if defined(__SSE2__)
   __m128 acc = load3(start);
-  for (std::uint32_t k = b; k < e; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), load3(G[k])));
+  for (std::uint32_t k = b; k < e; ++k)
+    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), _mm_loadu_ps(&G[k].x)));
   return store3(acc);
 #else
-  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * G[k];
+  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * glm::vec3(G[k]);
   return start;
 #endif
 }
@@ -440,7 +443,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     rebuild = !(2.0f * moved < verlet_skin);
   }
   if (rebuild) {
-    buildNeighborGrid(w.grid, S.position, 0.5f * (H + verlet_skin), P.domain_min, P.domain_max);
+    // Cells 0.2 % wider than the search radius: the query then reaches one cell on each side
+    // (neighborReach), with room for float slack at coordinates up to ~400 H from the origin.
+    buildNeighborGrid(w.grid, S.position, 1.002f * (H + verlet_skin), P.domain_min, P.domain_max);
     gather(S.position, w.vec_a, w.grid.order);
     gather(S.velocity, w.vec_a, w.grid.order);
     gather(S.id, w.u32_tmp, w.grid.order);
@@ -457,38 +462,23 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.verlet_valid = false;
     }
   }
-  if (verlet_skin > 0.0f) {
-    // Exact lists from the Verlet list: count, prefix sum, fill (same order as the Verlet list).
-    const auto& vo = w.verlet.offsets;
-    const auto& vi = w.verlet.indices;
-    auto& nb = w.neighbors;
-    const float h2 = H * H;
-    nb.counts.resize(n);
-    nb.offsets.resize(n + 1);
-    forEach(n, [&](std::size_t i) {
-      std::uint32_t c = 0;
-      const glm::vec3 p = S.position[i];
-      for (std::uint32_t k = vo[i]; k < vo[i + 1]; ++k) {
-        const glm::vec3 dx = p - S.position[vi[k]];
-        c += glm::dot(dx, dx) < h2 ? 1u : 0u;
-      }
-      nb.counts[i] = c;
-    });
-    nb.offsets[0] = 0;
-    for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + nb.counts[i];
-    nb.indices.resize(nb.offsets[n]);
-    forEach(n, [&](std::size_t i) {
-      std::uint32_t out = nb.offsets[i];
-      const glm::vec3 p = S.position[i];
-      for (std::uint32_t k = vo[i]; k < vo[i + 1]; ++k) {
-        const glm::vec3 dx = p - S.position[vi[k]];
-        if (glm::dot(dx, dx) < h2) nb.indices[out++] = vi[k];
-      }
-    });
-  }
   stats.neighbor_ms = msSince(t_nb);
-  const auto& off = w.neighbors.offsets;
-  const auto& nbr = w.neighbors.indices;
+  // Exact lists: the neighbours of i are nbr[off[i] .. off[i] + cnt[i]). DFSPH: the fresh search
+  // (off[i] + cnt[i] = off[i + 1]). WCSPH: the density pass below filters each particle's Verlet
+  // candidates vi[vo[i] .. vo[i + 1]) to |x_ij| < H and writes them to the front of the same range
+  // of neighbors.indices (counts in neighbors.counts), so no separate filter pass runs.
+  const bool filter_verlet = verlet_skin > 0.0f;
+  if (filter_verlet) {
+    w.neighbors.offsets.assign(w.verlet.offsets.begin(), w.verlet.offsets.end());
+    w.neighbors.counts.resize(n);
+    w.neighbors.indices.resize(w.verlet.indices.size());
+  }
+  const std::uint32_t* off = w.neighbors.offsets.data();
+  const std::uint32_t* cnt = w.neighbors.counts.data();
+  std::uint32_t* const nbr_out = w.neighbors.indices.data();
+  const std::uint32_t* nbr = nbr_out;
+  const std::uint32_t* cand = filter_verlet ? w.verlet.indices.data() : nbr;
+  const std::uint32_t* cand_end = filter_verlet ? w.verlet.offsets.data() + 1 : off + 1;
   const auto& X = S.position;
   auto& V = S.velocity;
 
@@ -554,26 +544,52 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   // i <-> j, so momentum is still conserved), which pushes stacked particles apart deterministically.
   const float w0 = w.kernel.value(0.0f);
   const float steepest = w.kernel.derivative(H / 3.0f);
-  w.gradients.resize(nbr.size());
+  w.gradients.resize(w.neighbors.indices.size());
   w.vec_b.resize(n);   // S_i
   w.factor.resize(n);  // Q_i here, alpha_i after the solver-specific part below
-  forEach(n, [&](std::size_t i) {
-    float sum = w0, sq = 0.0f;
-    glm::vec3 grad_sum(0.0f);
-    for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
-      const glm::vec3 x = X[i] - X[nbr[k]];
-      const float r = glm::length(x);
-      sum += w.kernel.value(r);
-      const glm::vec3 g =
-          r > 1e-6f * H ? m * w.kernel.gradient(x, r) : (m * steepest) * coincidentDirection(S.id[i], S.id[nbr[k]]);
-      w.gradients[k] = g;
-      grad_sum += g;
-      sq += glm::dot(g, g);
-    }
-    S.density[i] = m * sum + rho0 * w.boundary_volume[i];
-    w.vec_b[i] = grad_sum;
-    w.factor[i] = sq;
-  });
+  const float h2 = H * H;
+  auto densityPass = [&](auto filter, auto dfsph_sums) {
+    const glm::vec3* __restrict Xp = X.data();
+    glm::vec4* __restrict Gp = w.gradients.data();
+    std::uint32_t* __restrict counts = w.neighbors.counts.data();
+    const CubicSplineKernel kernel = w.kernel;
+    const float r_min = 1e-6f * H;
+    forEach(n, [&](std::size_t i) {
+      float sum = w0, sq = 0.0f;
+      glm::vec3 grad_sum(0.0f);
+      const glm::vec3 xi = Xp[i];
+      const std::uint32_t first = off[i], last = cand_end[i];
+      std::uint32_t out = first;
+      for (std::uint32_t k = first; k < last; ++k) {
+        const std::uint32_t j = cand[k];
+        const glm::vec3 x = xi - Xp[j];
+        if constexpr (decltype(filter)::value) {
+          // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
+          // exactly a fresh search's.
+          if (!(glm::dot(x, x) < h2)) continue;
+          nbr_out[out] = j;
+        }
+        const float r = glm::length(x);
+        float wr, dr;
+        kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
+        sum += wr;
+        const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
+        Gp[out++] = glm::vec4(g, 0.0f);
+        if constexpr (decltype(dfsph_sums)::value) {
+          grad_sum += g;
+          sq += glm::dot(g, g);
+        }
+      }
+      if constexpr (decltype(filter)::value) counts[i] = out - first;
+      S.density[i] = m * sum + rho0 * w.boundary_volume[i];
+      w.vec_b[i] = grad_sum;
+      w.factor[i] = sq;
+    });
+  };
+  if (filter_verlet)
+    densityPass(std::true_type{}, std::false_type{});
+  else
+    densityPass(std::false_type{}, std::true_type{});
   {
     const SumMax e = reduce(
         n, SumMax{},
@@ -596,24 +612,80 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const float alpha_av = P.solver == SphSolverKind::wcsph ? P.artificial_viscosity : 0.0f;
   const float cs = P.sound_speed;
   const float h_bt = d;  // B&T's smoothing length h (support 2h = H)
-  forEach(n, [&](std::size_t i) {
-    glm::vec3 a = P.gravity;
-    if (nu > 0.0f || alpha_av > 0.0f) {
-      for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
-        const std::uint32_t j = nbr[k];
-        const glm::vec3 xij = X[i] - X[j];
-        const float vx = glm::dot(V[i] - V[j], xij);
-        const float denom = glm::dot(xij, xij) + 0.01f * H * H;
-        if (nu > 0.0f) a += (10.0f * nu / S.density[j]) * (vx / denom) * G[k];
-        if (alpha_av > 0.0f && vx < 0.0f) {
-          const float nu_ij = 2.0f * alpha_av * h_bt * cs / (S.density[i] + S.density[j]);
-          const float pi_ij = -nu_ij * vx / denom;
-          a -= pi_ij * G[k];
-        }
+  const bool wcsph = P.solver == SphSolverKind::wcsph;
+  auto& visc_coef = w.float_tmp;  // 10 nu / rho_j per particle: no division per pair
+  auto& pr = w.density_adv;       // WCSPH: p_j / rho_j^2 per particle
+  visc_coef.resize(n);
+  pr.resize(n);
+  if (wcsph) {
+    // Tait equation (B&T eq. 7) with B = rho_0 c_s^2 / gamma; negative pressures are clamped to
+    // zero so the free surface does not clump (tensile instability). Computed before the pair
+    // pass so the pressure force (eq. 6) joins the viscosity terms in one pass over the pairs.
+    const float B = rho0 * cs * cs / P.tait_exponent;
+    const bool gamma7 = P.tait_exponent == 7.0f;
+    forEach(n, [&](std::size_t i) {
+      // The ratio is clamped to 1.5: real flows stay within a few per cent, and degenerate input
+      // (particles stacked on one point) would otherwise produce pressures of 1e12 B.
+      const float ratio = std::min(S.density[i] / rho0, 1.5f);
+      float power;
+      if (gamma7) {  // the default gamma = 7 by products (a powf call cost more than the rest of the loop)
+        const float r2 = ratio * ratio, r4 = r2 * r2;
+        power = r4 * r2 * ratio;
+      } else {
+        power = std::pow(ratio, P.tait_exponent);
       }
-    }
-    w.accel[i] = a;
-  });
+      S.pressure[i] = std::max(0.0f, B * (power - 1.0f));
+      pr[i] = S.pressure[i] / (S.density[i] * S.density[i]);
+    });
+  }
+  forEach(n, [&](std::size_t i) { visc_coef[i] = 10.0f * nu / S.density[i]; });
+  auto nonPressure = [&](auto with_pressure, auto with_viscosity) {
+    constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
+    const glm::vec3* __restrict Xp = X.data();
+    const glm::vec3* __restrict Vp = V.data();
+    const glm::vec4* __restrict Gp = G.data();
+    const float* __restrict vc = visc_coef.data();
+    const float* __restrict prp = pr.data();
+    const float eps = 0.01f * H * H;
+    forEach(n, [&](std::size_t i) {
+      glm::vec3 a = P.gravity;
+      if (kViscosity || kPressure || alpha_av > 0.0f) {
+        const float pi = kPressure ? prp[i] : 0.0f;
+        const glm::vec3 xi = Xp[i], vi = Vp[i];
+        const std::uint32_t first = off[i], last = off[i] + cnt[i];
+        for (std::uint32_t k = first; k < last; ++k) {
+          const std::uint32_t j = nbr[k];
+          const glm::vec3 xij = xi - Xp[j];
+          const float vx = glm::dot(vi - Vp[j], xij);
+          const float denom = glm::dot(xij, xij) + eps;
+          float coef = 0.0f;
+          if constexpr (kViscosity) coef = vc[j] * (vx / denom);
+          if (alpha_av > 0.0f && vx < 0.0f) {
+            const float nu_ij = 2.0f * alpha_av * h_bt * cs / (S.density[i] + S.density[j]);
+            coef += nu_ij * vx / denom;  // - Pi_ij, Pi_ij = -nu_ij vx / denom
+          }
+          // Symmetric pressure force (B&T eq. 6).
+          if constexpr (kPressure) coef -= pi + prp[j];
+          a += coef * glm::vec3(Gp[k]);
+        }
+        // Boundary: the same symmetric pressure term against the wall volume with the mirrored
+        // pressure p_b = p_i, rho_b = rho_i.
+        if constexpr (kPressure) a -= 2.0f * rho0 * pi * w.boundary_gradient[i];
+      }
+      w.accel[i] = a;
+    });
+  };
+  if (wcsph) {
+    if (nu > 0.0f)
+      nonPressure(std::true_type{}, std::true_type{});
+    else
+      nonPressure(std::true_type{}, std::false_type{});
+  } else {
+    if (nu > 0.0f)
+      nonPressure(std::false_type{}, std::true_type{});
+    else
+      nonPressure(std::false_type{}, std::false_type{});
+  }
 
   // Boundary pressure impulse per particle (for the coupling forces): the velocity change the
   // boundary term gave particle i during this step is -impulse_i * rho_0 * grad V_ic.
@@ -631,7 +703,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(w.accel[i])); },
         [](float a, float b) { return std::max(a, b); });
   };
-  auto chooseDt = [&](float vmax, float amax, bool wcsph) {
+  auto chooseDt = [&](float vmax, float amax, bool wcsph_bounds) {
     stats.max_acceleration = amax;
     float t = max_dt;
     const float v = std::max(vmax, collider_speed);
@@ -645,7 +717,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     if (body > 0.0f && P.force_bound > 0.0f) t = std::min(t, std::sqrt(P.force_bound * P.cfl * d / body));
     // Explicit viscosity stability (diffusion number): dt <= 0.125 d^2 / nu (Morris et al. 1997).
     if (P.viscosity > 0.0f) t = std::min(t, 0.125f * d * d / P.viscosity);
-    if (wcsph) {
+    if (wcsph_bounds) {
       // Becker & Teschner 2007 §4: dt <= 0.4 h / (c_s (1 + 0.6 alpha)), dt <= 0.25 sqrt(h / |a|max)
       // with the total acceleration (pressure included).
       t = std::min(t, 0.4f * h_bt / (cs * (1.0f + 0.6f * alpha_av)));
@@ -659,32 +731,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   w.old_position.resize(n);
   forEach(n, [&](std::size_t i) { w.old_position[i] = X[i]; });
 
-  if (P.solver == SphSolverKind::wcsph) {
-    // Tait equation (B&T eq. 7) with B = rho_0 c_s^2 / gamma; negative pressures are clamped to
-    // zero so the free surface does not clump (tensile instability).
-    const float B = rho0 * cs * cs / P.tait_exponent;
-    forEach(n, [&](std::size_t i) {
-      // The ratio is clamped to 1.5: real flows stay within a few per cent, and degenerate input
-      // (particles stacked on one point) would otherwise produce pressures of 1e12 B.
-      const float ratio = std::min(S.density[i] / rho0, 1.5f);
-      S.pressure[i] = std::max(0.0f, B * (std::pow(ratio, P.tait_exponent) - 1.0f));
-    });
-    // Symmetric pressure force (B&T eq. 6) + boundary (the same symmetric term against the wall
-    // volume with the mirrored pressure p_b = p_i, rho_b = rho_i).
-    forEach(n, [&](std::size_t i) {
-      const float pi = S.pressure[i] / (S.density[i] * S.density[i]);
-      glm::vec3 a(0.0f);
-      for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
-        const std::uint32_t j = nbr[k];
-        a -= (pi + S.pressure[j] / (S.density[j] * S.density[j])) * G[k];
-      }
-      a -= 2.0f * rho0 * pi * w.boundary_gradient[i];  // mirrored pressure p_b = p_i
-      w.accel[i] += a;
-    });
+  if (wcsph) {
+    // The pressure force was added to w.accel in the pair pass above (section 4).
     dt = chooseDt(maxSpeed(), maxAccel(), true);
     forEach(n, [&](std::size_t i) {
       V[i] += dt * w.accel[i];
-      w.kappa[i] = dt * S.pressure[i] / (S.density[i] * S.density[i]);
+      w.kappa[i] = dt * pr[i];
     });
   } else {
     // DFSPH. alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_j |m_j grad W_ij|^2)
@@ -698,7 +750,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
     auto densityRate = [&](std::size_t i) {
-      const float r = pairDivergence(V, G.data(), nbr.data(), off[i], off[i + 1], V[i]);
+      const float r = pairDivergence(V, G.data(), nbr, off[i], off[i] + cnt[i], V[i]);
       return r + rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
     };
     auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
@@ -708,7 +760,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forEach(n, [&](std::size_t i) {
-        const glm::vec3 dv = pairKappaSum(kr.data(), G.data(), nbr.data(), off[i], off[i + 1], kr[i],
+        const glm::vec3 dv = pairKappaSum(kr.data(), G.data(), nbr, off[i], off[i] + cnt[i], kr[i],
                                           kMirror * rho0 * kr[i] * w.boundary_gradient[i]);
         w.vec_b[i] = V[i] - h * dv;
         total[i] += kr[i];
@@ -750,7 +802,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                                  // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
                                  // free surface is pushed outward every step and the fluid creeps apart.
                                  const float neighbours =
-                                     static_cast<float>(off[i + 1] - off[i]) + w.boundary_volume[i] * w.wall_neighbours;
+                                     static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
                                  const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
                                  kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
                                  acc += rate * dt_prev / rho0;
@@ -819,7 +871,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     w.vec_b.resize(n);
     forEach(n, [&](std::size_t i) {
       glm::vec3 corr(0.0f);
-      for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
+      for (std::uint32_t k = off[i]; k < off[i] + cnt[i]; ++k) {
         const std::uint32_t j = nbr[k];
         corr += (2.0f * m / (S.density[i] + S.density[j]) * w.kernel.value(glm::length(X[i] - X[j]))) * (V[j] - V[i]);
       }

@@ -130,12 +130,8 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);
   w.end_samples.reserve(capacity);
-  w.neighbors.counts.reserve(capacity);
-  w.neighbors.slots.reserve(capacity * NeighborLists::kSlots);
-  w.neighbors.offsets.reserve(capacity + 1);
-  w.verlet.counts.reserve(capacity);
-  w.verlet.slots.reserve(capacity * NeighborLists::kSlots);
-  w.verlet.offsets.reserve(capacity + 1);
+  reserveNeighborLists(w.neighbors, capacity);
+  reserveNeighborLists(w.verlet, capacity);
   w.verlet_position.reserve(capacity);
   w.grid.order.reserve(capacity);
   w.grid.particle_key.reserve(capacity);

@@ -115,7 +115,7 @@ TEST(SphNeighborGrid, MatchesBruteForce) {
 }
 
 TEST(SphNeighborGrid, MatchesBruteForceWithSmallerCells) {
-  // The SPH step uses cells of half the support; the query must stay exact for any ratio.
+  // The SPH step uses cells a little wider than the support; the query must stay exact for any ratio.
   expectMatchesBruteForce(randomCloud(3000, 6, 1.0f), 0.08f, glm::vec3(-1e30f), glm::vec3(1e30f), 0.5f);
   expectMatchesBruteForce(randomCloud(2000, 7, 1.0f), 0.1f, glm::vec3(0.3f), glm::vec3(0.6f), 0.5f);
   expectMatchesBruteForce(randomCloud(2000, 8, 1.0f), 0.08f, glm::vec3(-1e30f), glm::vec3(1e30f), 0.3f);

@@ -251,14 +251,19 @@ TEST(SphSolvers, WcsphVerletListsEqualAFreshSearch) {
     if (step % 7 != 6) continue;
     const auto& x = s.world.scratch.old_position;
     const auto& nb = s.world.scratch.neighbors;
+    // Layout of the step's exact lists (sph.hpp, SphScratch::neighbors): i's neighbours are
+    // indices[offsets[i] .. offsets[i] + counts[i]) inside its Verlet range.
     ASSERT_EQ(nb.offsets.size(), x.size() + 1);
+    ASSERT_EQ(nb.counts.size(), x.size());
     for (std::size_t i = 0; i < x.size(); ++i) {
       std::vector<std::uint32_t> expected;
       for (std::size_t j = 0; j < x.size(); ++j) {
         const glm::vec3 d = x[i] - x[j];
         if (j != i && glm::dot(d, d) < H * H) expected.push_back(static_cast<std::uint32_t>(j));
       }
-      std::vector<std::uint32_t> got(nb.indices.begin() + nb.offsets[i], nb.indices.begin() + nb.offsets[i + 1]);
+      ASSERT_LE(nb.offsets[i] + nb.counts[i], nb.offsets[i + 1]);
+      std::vector<std::uint32_t> got(nb.indices.begin() + nb.offsets[i],
+                                     nb.indices.begin() + nb.offsets[i] + nb.counts[i]);
       std::sort(got.begin(), got.end());
       ASSERT_EQ(got, expected) << "step " << step << " particle " << i;
       checked += expected.size();
