@@ -68,6 +68,12 @@ fi
   echo "Command: \`$BENCH throughput --steps 20\` (block of water falling in the 4 x 3 x 1.5 m tank, median of 20 steps after 5 warm-up steps; the neighbour search share is grid, re-sort and list building: for WCSPH the Verlet-list rebuilds, while the per-step filtering of the Verlet lists to the support runs inside the density pass)."
   echo
   cat "$tmp/throughput.md"
+  echo
+  echo "## Status against the performance bar of issue 4"
+  echo
+  echo "Command: \`python3 tests/bench/sph_bar_status.py BOX FOUNTAIN\` over the dambreak_box and game-aim tables above (SPlisHSPlasH's figures quoted from issue 4)."
+  echo
+  python3 tests/bench/sph_bar_status.py "$tmp/box.md" "$tmp/fountain.md"
   cat tests/bench/sph_docs_tail.md
 } > "$OUT"
 rm -rf "$tmp"
