@@ -85,12 +85,28 @@ struct Vec4Policy {
 // reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
 // (mid_z within z -/+ ceil(Rc/S)) would return, in the same order, without stepping over the
 // window's misses at either end.
+//
+// The range min_z..max_z is packed into one word (zKey, see columnKey) so that the walk's test
+// "min_z <= z <= max_z" is one add and one mask test (coversCorner) instead of two loads, two
+// subtractions and a compare per element passed.
 struct ColumnEntry {
-  std::int16_t minZ, maxZ;  // empty range: minZ = 32000 > maxZ = -32000 (no corner falls in it)
+  std::uint32_t zKey;  // columnKey(min_z, max_z); 0 for an empty range (no corner falls in it)
   std::int16_t reachMax, reachMin;
   std::uint32_t particle;  // into Worker::local
 };
 static_assert(sizeof(ColumnEntry) == 12);
+
+// zKey = (max_z << 16) | (0x8000 - min_z) for 1 <= min_z <= max_z <= 31999; cornerKey(z) =
+// ((0x8000 - z) << 16) + z for 0 <= z <= 31999. Their sum has (0x8000 + z - min_z) in the low
+// half and (0x8000 + max_z - z) in the high half, each in [1, 0xffff] (no carry between them), so
+// bit 15 is set iff z >= min_z and bit 31 iff z <= max_z. An empty key (0) leaves bit 15 clear
+// (z < 0x8000).
+inline std::uint32_t columnKey(int lo, int hi) { return (std::uint32_t(hi) << 16) | std::uint32_t(0x8000 - lo); }
+inline std::uint32_t cornerKey(int z) { return (std::uint32_t(0x8000 - z) << 16) + std::uint32_t(z); }
+inline bool coversCorner(std::uint32_t zKey, std::uint32_t cKey) {
+  return ((zKey + cKey) & 0x80008000u) == 0x80008000u;
+}
+inline int keyMinZ(std::uint32_t zKey) { return 0x8000 - int(zKey & 0xffffu); }
 
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
 // along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
@@ -485,10 +501,12 @@ class BlockMesher {
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
       if (b == en) continue;
-      std::int16_t run = 32000;
+      // The low half of a key is 0x8000 - min_z (0 when empty), so the smallest min_z is the largest
+      // low half; 768 = 0x8000 - 32000 stands for "none" (reachMin 32000) and is below every real one.
+      std::uint32_t run = 0x8000u - 32000u;
       for (std::uint32_t i = en; i-- > b;) {
-        if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
-        entries[i].reachMin = run;
+        run = std::max(run, entries[i].zKey & 0xffffu);
+        entries[i].reachMin = std::int16_t(0x8000 - int(run));
       }
     }
     std::copy(start, start + cols, cursor);
@@ -514,12 +532,16 @@ class BlockMesher {
       return dxy + dz * dz < rc2;
     };
     std::int16_t* runMax = w_.runMax.data();
-    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000), reachMax from the
-    // column's running max, reachMin set after the fill.
-    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, int lo, int hi) {
+    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000, stored as key 0),
+    // reachMax from the column's running max, reachMin set after the fill.
+    // `key` is columnKey(lo, hi), or 0 when empty.
+    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, std::uint32_t key, int hi) {
       const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
       rowRun[x] = rm;
-      entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), rm, 0, li};
+      ColumnEntry& en = entries[rowCursor[x]++];
+      en.zKey = key;
+      en.reachMax = rm;
+      en.particle = li;
     };
     // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
     auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
@@ -564,7 +586,7 @@ class BlockMesher {
           hi = u;
         }
       }
-      store(rowCursor, rowRun, x, lo, hi);
+      store(rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi);
     };
     int y0, y1;
     discRows(p, inv, y0, y1);
@@ -613,14 +635,14 @@ class BlockMesher {
             c1 = std::max(c1, 1), f1 = std::min(f1, zmax);
           }
           if (c0 <= f0)
-            store(rowCursor, rowRun, x, c0, f0);
+            store(rowCursor, rowRun, x, columnKey(c0, f0), f0);
           else
-            store(rowCursor, rowRun, x, -32000, -32000);
+            store(rowCursor, rowRun, x, 0u, -32000);
           if (!pair) break;
           if (c1 <= f1)
-            store(rowCursor, rowRun, x + 1, c1, f1);
+            store(rowCursor, rowRun, x + 1, columnKey(c1, f1), f1);
           else
-            store(rowCursor, rowRun, x + 1, -32000, -32000);
+            store(rowCursor, rowRun, x + 1, 0u, -32000);
         }
         continue;
       }
@@ -664,11 +686,11 @@ class BlockMesher {
     const float* offY = off + y;
     const float* offZ = off + z;
     const CacheParticle* parts = w_.local.data();
+    const std::uint32_t ck = cornerKey(z);
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
       if (en.reachMin > z) break;
-      // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
-      if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
+      if (!coversCorner(en.zKey, ck)) continue;  // min_z <= z <= max_z
       const CacheParticle& p = parts[en.particle];
       float dz, dz2;
       if constexpr (kTable) {
@@ -910,11 +932,11 @@ class BlockMesher {
       const SliceDz* dzLo = lo.dz.data();
       const SliceDz* dzHi = hi.dz.data();
       const int z1 = z + 1;
+      const std::uint32_t ck0 = cornerKey(z), ck1 = cornerKey(z1);
       for (std::uint32_t i = cur; i < end; ++i) {
         const ColumnEntry& en = e[i];
         if (en.reachMin > z1) break;
-        const unsigned span = unsigned(en.maxZ - en.minZ);
-        const bool in0 = unsigned(z - en.minZ) <= span, in1 = unsigned(z1 - en.minZ) <= span;
+        const bool in0 = coversCorner(en.zKey, ck0), in1 = coversCorner(en.zKey, ck1);
         if (!(in0 | in1)) continue;
         const std::uint32_t pi = en.particle;
         const CacheParticle& p = parts[pi];
