@@ -113,11 +113,13 @@ inline int keyMinZ(std::uint32_t zKey) { return 0x8000 - int(zKey & 0xffffu); }
 // (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
 // is stored negated so the index is one add; 16 bits suffice (0 <= anchor - corner 0 <= n < 32000),
 // which makes the record 32 bytes, so one never straddles two cache lines.
+// The input index (user data) is read from the block's Particle records instead (same local
+// index), which leaves room for 4 s, a factor of the gradient term formed once per particle.
 struct CacheParticle {
-  float rest[3];        // Particle::rest
-  float k, s;           // 1 / (2 Rc_i^2), strength
-  std::int16_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
-  std::uint32_t index;  // input index (user data)
+  float rest[3];       // Particle::rest
+  float k, s;          // 1 / (2 Rc_i^2), strength
+  float s4;            // 4.0f * s (exact; the first product of accumulate()'s gradient factor)
+  std::int16_t na[3];  // minus (anchor - the block's local corner 0); -mid_z for z (§6)
 };
 static_assert(sizeof(CacheParticle) == 32);
 
@@ -336,6 +338,7 @@ class BlockMesher {
         stride_(setup.n[0] + 1) {}
 
   void run(const BlockDesc& block, std::span<const Particle> particles) {
+    particles_ = particles;
     out_.reset();
     begin(block);
     buildParticleCache(particles);
@@ -357,13 +360,14 @@ class BlockMesher {
 
   // Test hook (detail/testing.hpp): build the particle cache only, then look up corners.
   void prepareCache(const BlockDesc& block, std::span<const Particle> particles) {
+    particles_ = particles;
     begin(block);
     buildParticleCache(particles);
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
     forEachInfluencing<false>(x, y, z, nullptr, [&](const CacheParticle& p, float, float, float, float) {
-      found.push_back(p.index);
+      found.push_back(indexOf(p));
       return false;
     });
   }
@@ -378,6 +382,8 @@ class BlockMesher {
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
+  std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
+  std::uint32_t indexOf(const CacheParticle& p) const { return particles_[std::size_t(&p - w_.local.data())].index; }
   int lowestTodo_ = std::numeric_limits<int>::max();
 
   std::size_t col(int x, int y) const { return std::size_t(y) * std::size_t(stride_) + std::size_t(x); }
@@ -487,7 +493,7 @@ class BlockMesher {
       }
       cp.k = p.k;
       cp.s = p.strength;
-      cp.index = p.index;
+      cp.s4 = 4.0f * p.strength;
       const double fz = p.z * inv - double(g0_[2]);
       // Away from the block's top and bottom (the usual case) the clamps below cannot act.
       const double reach = std::sqrt(p.rc2) * inv + 2.0;
@@ -717,8 +723,8 @@ class BlockMesher {
       forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
         ++looked;
         const float before = v;
-        accumulateDz2(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, v, gx, gy, gz);
-        if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
+        accumulateDz2S4(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, p.s4, v, gx, gy, gz);
+        if constexpr (Policy::kHasUser) pol_.add(c.user, indexOf(p), v - before);
         return false;
       });
     }
@@ -871,25 +877,26 @@ class BlockMesher {
   }
 
   // Alg. 1 lookupOrEval: the corner's index in the slice's corner cache, evaluated on first use.
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+  // `interior`: the caller knows the corner is interior (a corner of an emitted cube).
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z, bool interior) {
     const std::uint32_t id = cell.corner;
     if (id) [[likely]]
       return id - 1;
-    return evaluateInto(slice, cell, x, y, z) - 1;
+    return evaluateInto(slice, cell, x, y, z, interior) - 1;
   }
 
   // lookupOrEval for a corner of the lower slice (z) whose twin one slice up (z + 1, same column)
   // the cube needs as well: when neither is cached yet, both come from one walk of the column.
   std::uint32_t lookupOrEvalLow(Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi, SliceCell& cellHi, int x,
-                                int y, int z) {
+                                int y, int z, bool interior) {
     const std::uint32_t id = cellLo.corner;
     if (id) [[likely]]
       return id - 1;
     if constexpr (!Policy::kHasUser) {
-      if (!cellHi.corner && interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))
+      if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
         return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
     }
-    return evaluateInto(lo, cellLo, x, y, z) - 1;
+    return evaluateInto(lo, cellLo, x, y, z, interior) - 1;
   }
 
   // Two interior corners of one column, (x, y, z) and (x, y, z + 1), from one §6 walk: the walk
@@ -944,11 +951,11 @@ class BlockMesher {
         const float dxy2 = dx * dx + dy * dy;
         if (in0) {
           ++looked;
-          accumulateDz2(dx, dy, dxy2, dzLo[pi].dz, dzLo[pi].dz2, p.k, p.s, v0, gx0, gy0, gz0);
+          accumulateDz2S4(dx, dy, dxy2, dzLo[pi].dz, dzLo[pi].dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
         }
         if (in1) {
           ++looked;
-          accumulateDz2(dx, dy, dxy2, dzHi[pi].dz, dzHi[pi].dz2, p.k, p.s, v1, gx1, gy1, gz1);
+          accumulateDz2S4(dx, dy, dxy2, dzHi[pi].dz, dzHi[pi].dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
         }
       }
     }
@@ -976,9 +983,10 @@ class BlockMesher {
 
   // Evaluates corner (x, y, z) into the slice's corner cache; returns its index + 1. Not inlined:
   // one out-of-line copy keeps the march loop small (most corners are already cached).
-  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z,
+                                               bool interior) {
     Corner<Policy> c;
-    if (interiorCorner(x, y, z))
+    if (interior || interiorCorner(x, y, z))
       evaluate<true>(x, y, z, slice.dz.data(), c);
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
@@ -1021,15 +1029,17 @@ class BlockMesher {
         cb.doneAbove = 1;
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
+        // A cube of the block's interior (the ones polygonize() emits): all eight corners interior.
+        const bool emit = interiorSlab && x >= ia && x < ibx && y >= ia && y < iby;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEvalLow(*below, cellsB[c0], *above, cellsA[c0], x, y, z);
-        ci[1] = lookupOrEvalLow(*below, cellsB[c0 + 1], *above, cellsA[c0 + 1], x + 1, y, z);
-        ci[2] = lookupOrEvalLow(*below, cellsB[c0 + sy], *above, cellsA[c0 + sy], x, y + 1, z);
-        ci[3] = lookupOrEvalLow(*below, cellsB[c0 + sy + 1], *above, cellsA[c0 + sy + 1], x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1);
-        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEvalLow(*below, cellsB[c0], *above, cellsA[c0], x, y, z, emit);
+        ci[1] = lookupOrEvalLow(*below, cellsB[c0 + 1], *above, cellsA[c0 + 1], x + 1, y, z, emit);
+        ci[2] = lookupOrEvalLow(*below, cellsB[c0 + sy], *above, cellsA[c0 + sy], x, y + 1, z, emit);
+        ci[3] = lookupOrEvalLow(*below, cellsB[c0 + sy + 1], *above, cellsA[c0 + sy + 1], x + 1, y + 1, z, emit);
+        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1, emit);
+        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1, emit);
+        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1, emit);
+        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1, emit);
         Corner<Policy>* const cornersB = below->corners.data();
         Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
@@ -1048,7 +1058,7 @@ class BlockMesher {
 #endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
-        if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
+        if (emit) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
         auto pushIn = [&](SliceCell& n, std::uint32_t next) {
