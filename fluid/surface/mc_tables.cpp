@@ -153,6 +153,20 @@ Tables buildTables() {
       tables.cases[octant][cube] = sorted;
     }
   }
+  for (auto& octant : tables.cases)
+    for (CaseTable& t : octant) {
+      int local[12];
+      for (int& l : local) l = -1;
+      t.edgeCount = 0;
+      for (int i = 0; i < 3 * t.triangleCount; ++i) {
+        const int e = t.edges[i];
+        if (local[e] < 0) {
+          local[e] = t.edgeCount;
+          t.firstUse[t.edgeCount++] = std::uint8_t(e);
+        }
+        t.slot[i] = std::uint8_t(local[e]);
+      }
+    }
   return tables;
 }
 

@@ -1118,15 +1118,23 @@ class BlockMesher {
     return ca.vert[axis] - 1;
   }
 
+  // Each crossed edge's vertex is looked up (or made) once per cube, in first-use order along the
+  // case's triangles (the order walking the triangles would make them in), then the triangles
+  // are written from those.
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
+    std::uint32_t vid[12];
+    const int ne = cs.edgeCount;
+    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstUse[u], x, y, z);
     const int nt = cs.triangleCount;
-    for (int tri = 0; tri < nt; ++tri) {
-      std::uint32_t v[3];
-      for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
-      if (su_.flip) std::swap(v[1], v[2]);
-      out_.indices.push_back(v[0]);
-      out_.indices.push_back(v[1]);
-      out_.indices.push_back(v[2]);
+    const std::size_t first = out_.indices.size();
+    out_.indices.resize(first + 3 * std::size_t(nt));
+    std::uint32_t* dst = out_.indices.data() + first;
+    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
+    const std::uint8_t* slot = cs.slot.data();
+    for (int tri = 0; tri < nt; ++tri, slot += 3, dst += 3) {
+      dst[0] = vid[slot[0]];
+      dst[1] = vid[slot[b]];
+      dst[2] = vid[slot[c]];
     }
   }
 
