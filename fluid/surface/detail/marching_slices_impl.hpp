@@ -216,6 +216,7 @@ struct Worker {
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
+  std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
   std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
   std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
@@ -234,6 +235,9 @@ struct Worker {
     cursor.assign(cols, 0);
     runMax.assign(cols, 0);
     cx.assign(nx + 1, 0);
+    kx.assign(nx + 1, 0);
+    ky.assign(ny + 1, 0);
+    kz.assign(nz + 1, 0);
     cy.assign(ny + 1, 0);
     cz.assign(nz + 1, 0);
     chainLo.assign(cols, 0);
@@ -290,7 +294,12 @@ inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float 
   const float len2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
   float nl[3] = {0, 0, 0};
   if (len2 > 1e-30f && std::isfinite(len2)) {
+#if defined(__SSE2__)
+    // The IEEE square root without std::sqrt's errno branch (len2 > 0 here).
+    const float inv = -1.0f / _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(len2)));
+#else
     const float inv = -1.0f / std::sqrt(len2);
+#endif
     for (int i = 0; i < 3; ++i) nl[i] = g[i] * inv;
   } else {
     // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
@@ -340,6 +349,7 @@ class BlockMesher {
   void run(const BlockDesc& block, std::span<const Particle> particles) {
     particles_ = particles;
     out_.reset();
+    vertexCount_ = 0;
     begin(block);
     buildParticleCache(particles);
     seed(particles);
@@ -383,6 +393,7 @@ class BlockMesher {
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
+  std::uint32_t vertexCount_ = 0;        // vertices made in this block (out_.positions.size())
   std::uint32_t indexOf(const CacheParticle& p) const { return particles_[std::size_t(&p - w_.local.data())].index; }
   int lowestTodo_ = std::numeric_limits<int>::max();
 
@@ -393,6 +404,10 @@ class BlockMesher {
     for (int i = 0; i <= nx_; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
+    // edgeKey(i, j, k, axis) = kx[i] | ky[j] | kz[k] | axis for the block's lattice indices.
+    for (int i = 0; i <= nx_; ++i) w_.kx[i] = edgeKey(g0_[0] + i, 0, 0, 0);
+    for (int i = 0; i <= ny_; ++i) w_.ky[i] = edgeKey(0, g0_[1] + i, 0, 0);
+    for (int i = 0; i <= nz_; ++i) w_.kz[i] = edgeKey(0, 0, g0_[2] + i, 0);
   }
 
   // §6: particles arrive sorted by (z, index); insert one element per column of the projection
@@ -1104,8 +1119,7 @@ class BlockMesher {
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
     const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
-    const std::int64_t gi[3] = {g0_[0] + lx, g0_[1] + ly, g0_[2] + lz};
-    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(gi) * S, see begin()
+    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(g0 + l) * S, see begin()
     const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
@@ -1113,9 +1127,10 @@ class BlockMesher {
       const float tf = (su_.threshold - ca.value) / (cb.value - ca.value);
       out_.attributes.push_back(pol_.vertex(ca.user, cb.user, tf));
     }
-    out_.keys.push_back(edgeKey(gi[0], gi[1], gi[2], axis));
-    ca.vert[axis] = std::uint32_t(out_.positions.size());
-    return ca.vert[axis] - 1;
+    out_.keys.push_back(w_.kx[lx] | w_.ky[ly] | w_.kz[lz] | std::uint64_t(axis));  // edgeKey(g0 + l, axis)
+    const std::uint32_t id = vertexCount_++;  // == out_.positions.size() - 1
+    ca.vert[axis] = id + 1;
+    return id;
   }
 
   // Each crossed edge's vertex is looked up (or made) once per cube, in first-use order along the
