@@ -92,7 +92,8 @@ struct Vec4Policy {
 struct ColumnEntry {
   std::uint32_t zKey;  // columnKey(min_z, max_z); 0 for an empty range (no corner falls in it)
   std::int16_t reachMax, reachMin;
-  std::uint32_t particle;  // into Worker::local
+  std::uint32_t particle8;  // 8 x (index into Worker::local): the byte offset into a slice's dz
+                            // table, and a quarter of the one into Worker::local (atParticle8)
 };
 static_assert(sizeof(ColumnEntry) == 12);
 
@@ -147,6 +148,15 @@ struct SliceCell {
 struct SliceDz {
   float dz, dz2;  // latticeOffset() along z, and dz * dz (the float product accumulate() forms)
 };
+static_assert(sizeof(SliceDz) == 8);
+
+// Element i of a per-particle array of 8- or 32-byte records from p8 = 8 i: one scaled-index
+// address instead of a multiply and an add per array (ColumnEntry::particle8).
+template <class T>
+inline const T& atParticle8(const T* base, std::uint32_t p8) {
+  static_assert(sizeof(T) == 8 || sizeof(T) == 32);
+  return *reinterpret_cast<const T*>(reinterpret_cast<const char*>(base) + std::size_t(p8) * (sizeof(T) / 8));
+}
 
 template <class Policy>
 struct Slice {
@@ -562,7 +572,7 @@ class BlockMesher {
       ColumnEntry& en = entries[rowCursor[x]++];
       en.zKey = key;
       en.reachMax = rm;
-      en.particle = li;
+      en.particle8 = 8 * li;
     };
     // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
     auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
@@ -712,11 +722,12 @@ class BlockMesher {
       const ColumnEntry& en = e[i];
       if (en.reachMin > z) break;
       if (!coversCorner(en.zKey, ck)) continue;  // min_z <= z <= max_z
-      const CacheParticle& p = parts[en.particle];
+      const CacheParticle& p = atParticle8(parts, en.particle8);
       float dz, dz2;
       if constexpr (kTable) {
-        dz = dzt[en.particle].dz;
-        dz2 = dzt[en.particle].dz2;
+        const SliceDz& d = atParticle8(dzt, en.particle8);
+        dz = d.dz;
+        dz2 = d.dz2;
       } else {
         dz = offZ[p.na[2]] - p.rest[2];
         dz2 = dz * dz;
@@ -960,17 +971,19 @@ class BlockMesher {
         if (en.reachMin > z1) break;
         const bool in0 = coversCorner(en.zKey, ck0), in1 = coversCorner(en.zKey, ck1);
         if (!(in0 | in1)) continue;
-        const std::uint32_t pi = en.particle;
-        const CacheParticle& p = parts[pi];
+        const std::uint32_t pi = en.particle8;
+        const CacheParticle& p = atParticle8(parts, pi);
         const float dx = offX[p.na[0]] - p.rest[0], dy = offY[p.na[1]] - p.rest[1];
         const float dxy2 = dx * dx + dy * dy;
         if (in0) {
           ++looked;
-          accumulateDz2S4(dx, dy, dxy2, dzLo[pi].dz, dzLo[pi].dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
+          const SliceDz& d = atParticle8(dzLo, pi);
+          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
         }
         if (in1) {
           ++looked;
-          accumulateDz2S4(dx, dy, dxy2, dzHi[pi].dz, dzHi[pi].dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
+          const SliceDz& d = atParticle8(dzHi, pi);
+          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
         }
       }
     }
