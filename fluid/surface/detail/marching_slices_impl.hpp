@@ -91,7 +91,8 @@ struct Vec4Policy {
 // subtractions and a compare per element passed.
 struct ColumnEntry {
   std::uint32_t zKey;  // columnKey(min_z, max_z); 0 for an empty range (no corner falls in it)
-  std::int16_t reachMax, reachMin;
+  std::int16_t reachMax;
+  std::uint16_t reachMinB;  // 0x8000 - reachMin (the stop test reachMin > z is reachMinB < 0x8000 - z)
   std::uint32_t particle8;  // 8 x (index into Worker::local): the byte offset into a slice's dz
                             // table, and a quarter of the one into Worker::local (atParticle8)
 };
@@ -537,7 +538,7 @@ class BlockMesher {
       std::uint32_t run = 0x8000u - 32000u;
       for (std::uint32_t i = en; i-- > b;) {
         run = std::max(run, entries[i].zKey & 0xffffu);
-        entries[i].reachMin = std::int16_t(0x8000 - int(run));
+        entries[i].reachMinB = std::uint16_t(run);  // 0x8000 - reachMin
       }
     }
     std::copy(start, start + cols, cursor);
@@ -657,23 +658,25 @@ class BlockMesher {
             continue;
           }
           // Both columns are inside the disc with clear bounds; c <= f holds unless the range
-          // holds no slice, where the element is stored empty like the scalar path does.
-          const __m128i cf = _mm_unpacklo_epi32(c, f);  // c0 f0 c1 f1
-          int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
-          int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          // holds no slice, where the element is stored empty like the scalar path does. Keys
+          // (columnKey, 0 when empty) and max_z (-32000 when empty) for both lanes at once.
+          __m128i cc = c, ff = f;
           if constexpr (kClamp) {  // intersect with [1, zmax], as the scalar path
-            c0 = std::max(c0, 1), f0 = std::min(f0, zmax);
-            c1 = std::max(c1, 1), f1 = std::min(f1, zmax);
+            const __m128i vz = _mm_set1_epi32(zmax);
+            const __m128i below1 = _mm_cmplt_epi32(cc, one), above = _mm_cmpgt_epi32(ff, vz);
+            cc = _mm_or_si128(_mm_andnot_si128(below1, cc), _mm_and_si128(below1, one));
+            ff = _mm_or_si128(_mm_andnot_si128(above, ff), _mm_and_si128(above, vz));
           }
-          if (c0 <= f0)
-            store(rowCursor, rowRun, x, columnKey(c0, f0), f0);
-          else
-            store(rowCursor, rowRun, x, 0u, -32000);
+          const __m128i empty = _mm_cmpgt_epi32(cc, ff);
+          const __m128i key = _mm_andnot_si128(
+              empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
+          const __m128i hi = _mm_or_si128(_mm_andnot_si128(empty, ff), _mm_and_si128(empty, _mm_set1_epi32(-32000)));
+          const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
+          store(rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)));
           if (!pair) break;
-          if (c1 <= f1)
-            store(rowCursor, rowRun, x + 1, columnKey(c1, f1), f1);
-          else
-            store(rowCursor, rowRun, x + 1, 0u, -32000);
+          store(rowCursor, rowRun, x + 1, std::uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 2))),
+                _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 3)));
         }
         continue;
       }
@@ -718,9 +721,10 @@ class BlockMesher {
     const float* offZ = off + z;
     const CacheParticle* parts = w_.local.data();
     const std::uint32_t ck = cornerKey(z);
+    const unsigned zb = 0x8000u - unsigned(z);
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
-      if (en.reachMin > z) break;
+      if (en.reachMinB < zb) break;  // reachMin > z
       if (!coversCorner(en.zKey, ck)) continue;  // min_z <= z <= max_z
       const CacheParticle& p = atParticle8(parts, en.particle8);
       float dz, dz2;
@@ -966,9 +970,10 @@ class BlockMesher {
       const SliceDz* dzHi = hi.dz.data();
       const int z1 = z + 1;
       const std::uint32_t ck0 = cornerKey(z), ck1 = cornerKey(z1);
+      const unsigned zb1 = 0x8000u - unsigned(z1);
       for (std::uint32_t i = cur; i < end; ++i) {
         const ColumnEntry& en = e[i];
-        if (en.reachMin > z1) break;
+        if (en.reachMinB < zb1) break;  // reachMin > z + 1
         const bool in0 = coversCorner(en.zKey, ck0), in1 = coversCorner(en.zKey, ck1);
         if (!(in0 | in1)) continue;
         const std::uint32_t pi = en.particle8;
