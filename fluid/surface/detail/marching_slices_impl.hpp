@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -671,12 +672,30 @@ class BlockMesher {
           const __m128i key = _mm_andnot_si128(
               empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
           const __m128i hi = _mm_or_si128(_mm_andnot_si128(empty, ff), _mm_and_si128(empty, _mm_set1_epi32(-32000)));
-          const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
-          store(rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
-                _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)));
-          if (!pair) break;
-          store(rowCursor, rowRun, x + 1, std::uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 2))),
-                _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 3)));
+          if (!pair) [[unlikely]] {
+            const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
+            store(rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
+                  _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)));
+            break;
+          }
+          // Columns x and x + 1 are neighbours, so their running max_z (int16) and cursors
+          // (uint32) are adjacent: update both at once, then write each element's first 8 bytes
+          // (key, reachMax; reachMinB is set by the suffix pass) in one store.
+          std::int32_t run2;
+          std::memcpy(&run2, rowRun + x, 4);
+          const __m128i rm = _mm_max_epi16(_mm_cvtsi32_si128(run2), _mm_packs_epi32(hi, hi));  // reachMax x, x+1
+          run2 = _mm_cvtsi128_si32(rm);
+          std::memcpy(rowRun + x, &run2, 4);
+          const __m128i cur = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rowCursor + x));
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(rowCursor + x), _mm_sub_epi32(cur, _mm_set1_epi32(-1)));
+          const __m128i kr = _mm_unpacklo_epi32(key, _mm_unpacklo_epi16(rm, _mm_setzero_si128()));  // k0 r0 k1 r1
+          ColumnEntry* e0 = entries + std::uint32_t(_mm_cvtsi128_si32(cur));
+          ColumnEntry* e1 = entries + std::uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(cur, 1)));
+          static_assert(offsetof(ColumnEntry, reachMax) == 4 && offsetof(ColumnEntry, particle8) == 8);
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(e0), kr);
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(e1), _mm_unpackhi_epi64(kr, kr));
+          e0->particle8 = 8 * li;
+          e1->particle8 = 8 * li;
         }
         continue;
       }
