@@ -406,6 +406,12 @@ class BlockMesher {
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
   std::uint32_t vertexCount_ = 0;        // vertices made in this block (out_.positions.size())
+  // The particle cache's arrays, set once it is built (they do not move while the block runs).
+  const std::uint32_t* colStart_ = nullptr;
+  std::uint32_t* cursor_ = nullptr;
+  const ColumnEntry* entries_ = nullptr;
+  const float* off0_ = nullptr;  // offsets table at d = 0
+  const CacheParticle* parts_ = nullptr;
   std::uint32_t indexOf(const CacheParticle& p) const { return particles_[std::size_t(&p - w_.local.data())].index; }
   int lowestTodo_ = std::numeric_limits<int>::max();
 
@@ -543,6 +549,11 @@ class BlockMesher {
       }
     }
     std::copy(start, start + cols, cursor);
+    colStart_ = w_.colStart.data();
+    cursor_ = w_.cursor.data();
+    entries_ = w_.entries.data();
+    off0_ = w_.offsets.data() + offsetRange_;
+    parts_ = w_.local.data();
   }
 
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
@@ -715,10 +726,10 @@ class BlockMesher {
   template <bool kTable, class F>
   void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
     const std::size_t k = col(x, y);
-    const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
+    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
     if (begin == end) return;
-    std::uint32_t cur = w_.cursor[k];
-    const ColumnEntry* e = w_.entries.data();
+    std::uint32_t cur = cursor_[k];
+    const ColumnEntry* e = entries_;
     // reachMax is non-decreasing, so the pointer may skip 8 elements at once when the one 8 away
     // is still on the same side (long moves happen when the sweep jumps between surfaces).
     while (cur > begin && e[cur - 1].reachMax >= z) {
@@ -733,12 +744,12 @@ class BlockMesher {
       else
         ++cur;
     }
-    w_.cursor[k] = cur;
-    const float* off = w_.offsets.data() + offsetRange_;
+    cursor_[k] = cur;
+    const float* off = off0_;
     const float* offX = off + x;
     const float* offY = off + y;
     const float* offZ = off + z;
-    const CacheParticle* parts = w_.local.data();
+    const CacheParticle* parts = parts_;
     const std::uint32_t ck = cornerKey(z);
     const unsigned zb = 0x8000u - unsigned(z);
     for (std::uint32_t i = cur; i < end; ++i) {
@@ -910,6 +921,9 @@ class BlockMesher {
   }
   void freeSlice(int z) {
     if (!w_.active[z]) return;
+    // Every evaluated corner sits in exactly one slice's corner cache until the slice is
+    // returned (all are by the end of march()): count them here rather than per evaluation.
+    out_.stats.cornersEvaluated += w_.active[z]->corners.size();
     w_.releaseSlice(w_.active[z]);
     w_.active[z] = nullptr;
     --activeSlices_;
@@ -963,10 +977,10 @@ class BlockMesher {
     float v0 = 0, gx0 = 0, gy0 = 0, gz0 = 0, v1 = 0, gx1 = 0, gy1 = 0, gz1 = 0;
     std::uint64_t looked = 0;
     const std::size_t k = col(x, y);
-    const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
+    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
     if (begin != end) {
-      std::uint32_t cur = w_.cursor[k];
-      const ColumnEntry* e = w_.entries.data();
+      std::uint32_t cur = cursor_[k];
+      const ColumnEntry* e = entries_;
       // Start of z's walk, as forEachInfluencing.
       while (cur > begin && e[cur - 1].reachMax >= z) {
         if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
@@ -980,11 +994,11 @@ class BlockMesher {
         else
           ++cur;
       }
-      w_.cursor[k] = cur;
-      const float* off = w_.offsets.data() + offsetRange_;
+      cursor_[k] = cur;
+      const float* off = off0_;
       const float* offX = off + x;
       const float* offY = off + y;
-      const CacheParticle* parts = w_.local.data();
+      const CacheParticle* parts = parts_;
       const SliceDz* dzLo = lo.dz.data();
       const SliceDz* dzHi = hi.dz.data();
       const int z1 = z + 1;
@@ -1012,7 +1026,6 @@ class BlockMesher {
       }
     }
     out_.stats.particlesLookedUp += looked;
-    out_.stats.cornersEvaluated += 2;
     Corner<Policy> c;
     c.user = {};
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
@@ -1046,7 +1059,6 @@ class BlockMesher {
     c.x = std::int16_t(x);
     c.y = std::int16_t(y);
     slice.corners.push_back(c);
-    ++out_.stats.cornersEvaluated;
     cell.corner = std::uint32_t(slice.corners.size());
     return cell.corner;
   }
