@@ -362,6 +362,7 @@ class BlockMesher {
     particles_ = particles;
     out_.reset();
     vertexCount_ = 0;
+    nIndices_ = 0;
     begin(block);
     buildParticleCache(particles);
     seed(particles);
@@ -406,6 +407,7 @@ class BlockMesher {
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
   std::uint32_t vertexCount_ = 0;        // vertices made in this block (out_.positions.size())
+  std::size_t nIndices_ = 0;             // used length of out_.indices while marching (polygonize)
   // The particle cache's arrays, set once it is built (they do not move while the block runs).
   const std::uint32_t* colStart_ = nullptr;
   std::uint32_t* cursor_ = nullptr;
@@ -1081,7 +1083,7 @@ class BlockMesher {
       SliceCell* const cellsB = below->cells.data();
       SliceCell* const cellsA = above->cells.data();
       const std::size_t sy = std::size_t(stride_);
-      const std::size_t slabFirst = out_.indices.size();
+      const std::size_t slabFirst = nIndices_;
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
@@ -1159,6 +1161,7 @@ class BlockMesher {
       }
     }
     for (int i = 0; i <= nz_; ++i) freeSlice(i);
+    out_.indices.resize(nIndices_);  // drop the unused tail of the last step (polygonize)
     lowestTodo_ = std::numeric_limits<int>::max();
   }
 
@@ -1190,8 +1193,12 @@ class BlockMesher {
     const int ne = cs.edgeCount;
     for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstUse[u], x, y, z);
     const int nt = cs.triangleCount;
-    const std::size_t first = out_.indices.size();
-    out_.indices.resize(first + 3 * std::size_t(nt));
+    // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
+    // cube); nIndices_ is its used length, and march() trims it to that at the end.
+    const std::size_t first = nIndices_;
+    if (out_.indices.size() < first + 36) [[unlikely]]
+      out_.indices.resize(first + 256 + 36);  // 36 = 3 x the most triangles of one case (12)
+    nIndices_ = first + 3 * std::size_t(nt);
     std::uint32_t* dst = out_.indices.data() + first;
     const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
     const std::uint8_t* slot = cs.slot.data();
@@ -1206,7 +1213,7 @@ class BlockMesher {
   // slab tags for the exact order, or one run per stretch of consecutive triangles of one slab
   // (what buildRuns makes), extended when the previous visit ended with the same slab.
   void closeSlabVisit(int z, std::size_t first) {
-    const std::size_t count = out_.indices.size() - first;
+    const std::size_t count = nIndices_ - first;
     if (count == 0) return;
     const std::int32_t slab = std::int32_t(g0_[2] + z);
     if (su_.exact) {
