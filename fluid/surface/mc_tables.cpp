@@ -136,7 +136,10 @@ Tables buildTables() {
       const CaseTable& base = tables.cases[0][cube];
       int order[12];
       double depth[12];
-      for (int i = 0; i < base.triangleCount; ++i) {
+      // At most 12 triangles by construction; the explicit bound also tells the compiler (GCC's
+      // -Warray-bounds otherwise assumes up to 255 in the sort below).
+      const int nt = std::min<int>(base.triangleCount, 12);
+      for (int i = 0; i < nt; ++i) {
         order[i] = i;
         V3 c{0, 0, 0};
         for (int k = 0; k < 3; ++k) {
@@ -146,9 +149,9 @@ Tables buildTables() {
         depth[i] = dot(c, view);
       }
       // Farthest along the view direction first.
-      std::stable_sort(order, order + base.triangleCount, [&](int a, int b) { return depth[a] > depth[b]; });
+      std::stable_sort(order, order + nt, [&](int a, int b) { return depth[a] > depth[b]; });
       CaseTable sorted = base;
-      for (int i = 0; i < base.triangleCount; ++i)
+      for (int i = 0; i < nt; ++i)
         for (int k = 0; k < 3; ++k) sorted.edges[3 * i + k] = base.edges[3 * order[i] + k];
       tables.cases[octant][cube] = sorted;
     }
