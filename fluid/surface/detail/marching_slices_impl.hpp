@@ -99,17 +99,16 @@ struct ColumnEntry {
 };
 static_assert(sizeof(ColumnEntry) == 12);
 
-// zKey = (max_z << 16) | (0x8000 - min_z) for 1 <= min_z <= max_z <= 31999; cornerKey(z) =
-// ((0x8000 - z) << 16) + z for 0 <= z <= 31999. Their sum has (0x8000 + z - min_z) in the low
-// half and (0x8000 + max_z - z) in the high half, each in [1, 0xffff] (no carry between them), so
-// bit 15 is set iff z >= min_z and bit 31 iff z <= max_z. An empty key (0) leaves bit 15 clear
-// (z < 0x8000).
+// zKey = (max_z << 16) | (0x8000 - min_z) for 0 <= min_z <= max_z <= 31999 (the fill gives
+// min_z >= 1); cornerKey(z) = ((0x8000 - z) << 16) + z for 0 <= z <= 31999. Their sum has
+// (0x8000 + z - min_z) in the low half and (0x8000 + max_z - z) in the high half, each in
+// [1, 0xffff] (no carry between them), so bit 15 is set iff z >= min_z and bit 31 iff z <= max_z.
+// An empty key (0) leaves bit 15 clear (z < 0x8000).
 inline std::uint32_t columnKey(int lo, int hi) { return (std::uint32_t(hi) << 16) | std::uint32_t(0x8000 - lo); }
 inline std::uint32_t cornerKey(int z) { return (std::uint32_t(0x8000 - z) << 16) + std::uint32_t(z); }
 inline bool coversCorner(std::uint32_t zKey, std::uint32_t cKey) {
   return ((zKey + cKey) & 0x80008000u) == 0x80008000u;
 }
-inline int keyMinZ(std::uint32_t zKey) { return 0x8000 - int(zKey & 0xffffu); }
 
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
 // along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
