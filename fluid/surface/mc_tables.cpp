@@ -136,7 +136,8 @@ Tables buildTables() {
       const CaseTable& base = tables.cases[0][cube];
       int order[12];
       double depth[12];
-      for (int i = 0; i < base.triangleCount; ++i) {
+      const int nt = std::min<int>(base.triangleCount, 12);  // at most 12 by construction
+      for (int i = 0; i < nt; ++i) {
         order[i] = i;
         V3 c{0, 0, 0};
         for (int k = 0; k < 3; ++k) {
@@ -145,14 +146,35 @@ Tables buildTables() {
         }
         depth[i] = dot(c, view);
       }
-      // Farthest along the view direction first.
-      std::stable_sort(order, order + base.triangleCount, [&](int a, int b) { return depth[a] > depth[b]; });
+      // Farthest along the view direction first; ties keep their order (a stable insertion sort
+      // of at most 12 items; std::stable_sort here drew a false -Warray-bounds from GCC 12 in the
+      // ASan build).
+      for (int i = 1; i < nt; ++i) {
+        const int v = order[i];
+        int j = i;
+        for (; j > 0 && depth[v] > depth[order[j - 1]]; --j) order[j] = order[j - 1];
+        order[j] = v;
+      }
       CaseTable sorted = base;
-      for (int i = 0; i < base.triangleCount; ++i)
+      for (int i = 0; i < nt; ++i)
         for (int k = 0; k < 3; ++k) sorted.edges[3 * i + k] = base.edges[3 * order[i] + k];
       tables.cases[octant][cube] = sorted;
     }
   }
+  for (auto& octant : tables.cases)
+    for (CaseTable& t : octant) {
+      int local[12];
+      for (int& l : local) l = -1;
+      t.edgeCount = 0;
+      for (int i = 0; i < 3 * t.triangleCount; ++i) {
+        const int e = t.edges[i];
+        if (local[e] < 0) {
+          local[e] = t.edgeCount;
+          t.firstUse[t.edgeCount++] = std::uint8_t(e);
+        }
+        t.slot[i] = std::uint8_t(local[e]);
+      }
+    }
   return tables;
 }
 

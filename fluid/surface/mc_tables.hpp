@@ -29,6 +29,11 @@ struct CaseTable {
   std::uint16_t edgeMask = 0;            // bit e set when edge e is crossed
   std::uint8_t faceMask = 0;             // bit 2*axis+side set when that face is crossed
   std::array<std::uint8_t, 36> edges{};  // 3 edge ids per triangle, outward winding
+  // The crossed edges in order of first use along `edges` (so resolving them in this order makes
+  // vertices in the same order as walking `edges`), and each triangle corner as an index into it.
+  std::uint8_t edgeCount = 0;
+  std::array<std::uint8_t, 12> firstUse{};
+  std::array<std::uint8_t, 36> slot{};
 };
 
 struct Tables {

@@ -54,6 +54,16 @@ inline void accumulateDz2(float dx, float dy, float dxy2, float dz, float dz2, f
   gy += g * dy;
   gz += g * dz;
 }
+// The same with s4 = 4.0f * s formed by the caller (same bits: 4.0f * s * w * k is (4s * w) * k).
+inline void accumulateDz2S4(float dx, float dy, float dxy2, float dz, float dz2, float k, float s, float s4,
+                            float& value, float& gx, float& gy, float& gz) {
+  const float w = (dxy2 + dz2) * k - 0.5f;
+  value += s * (w * w);
+  const float g = s4 * w * k;
+  gx += g * dx;
+  gy += g * dy;
+  gz += g * dz;
+}
 inline void accumulate(float dx, float dy, float dxy2, float dz, float k, float s, float& value, float& gx, float& gy,
                        float& gz) {
   accumulateDz2(dx, dy, dxy2, dz, dz * dz, k, s, value, gx, gy, gz);

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -85,23 +86,42 @@ struct Vec4Policy {
 // reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
 // (mid_z within z -/+ ceil(Rc/S)) would return, in the same order, without stepping over the
 // window's misses at either end.
+//
+// The range min_z..max_z is packed into one word (zKey, see columnKey) so that the walk's test
+// "min_z <= z <= max_z" is one add and one mask test (coversCorner) instead of two loads, two
+// subtractions and a compare per element passed.
 struct ColumnEntry {
-  std::int16_t minZ, maxZ;  // empty range: minZ = 32000 > maxZ = -32000 (no corner falls in it)
-  std::int16_t reachMax, reachMin;
-  std::uint32_t particle;  // into Worker::local
+  std::uint32_t zKey;  // columnKey(min_z, max_z); 0 for an empty range (no corner falls in it)
+  std::int16_t reachMax;
+  std::uint16_t reachMinB;  // 0x8000 - reachMin (the stop test reachMin > z is reachMinB < 0x8000 - z)
+  std::uint32_t particle8;  // 8 x (index into Worker::local): the byte offset into a slice's dz
+                            // table, and a quarter of the one into Worker::local (atParticle8)
 };
 static_assert(sizeof(ColumnEntry) == 12);
+
+// zKey = (max_z << 16) | (0x8000 - min_z) for 0 <= min_z <= max_z <= 31999 (the fill gives
+// min_z >= 1); cornerKey(z) = ((0x8000 - z) << 16) + z for 0 <= z <= 31999. Their sum has
+// (0x8000 + z - min_z) in the low half and (0x8000 + max_z - z) in the high half, each in
+// [1, 0xffff] (no carry between them), so bit 15 is set iff z >= min_z and bit 31 iff z <= max_z.
+// An empty key (0) leaves bit 15 clear (z < 0x8000).
+inline std::uint32_t columnKey(int lo, int hi) { return (std::uint32_t(hi) << 16) | std::uint32_t(0x8000 - lo); }
+inline std::uint32_t cornerKey(int z) { return (std::uint32_t(0x8000 - z) << 16) + std::uint32_t(z); }
+inline bool coversCorner(std::uint32_t zKey, std::uint32_t cKey) {
+  return ((zKey + cKey) & 0x80008000u) == 0x80008000u;
+}
 
 // A block's particle as the field sum reads it: the offset from the particle to local corner c
 // along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
 // (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
 // is stored negated so the index is one add; 16 bits suffice (0 <= anchor - corner 0 <= n < 32000),
 // which makes the record 32 bytes, so one never straddles two cache lines.
+// The input index (user data) is read from the block's Particle records instead (same local
+// index), which leaves room for 4 s, a factor of the gradient term formed once per particle.
 struct CacheParticle {
-  float rest[3];        // Particle::rest
-  float k, s;           // 1 / (2 Rc_i^2), strength
-  std::int16_t na[3];   // minus (anchor - the block's local corner 0); -mid_z for z (§6)
-  std::uint32_t index;  // input index (user data)
+  float rest[3];       // Particle::rest
+  float k, s;          // 1 / (2 Rc_i^2), strength
+  float s4;            // 4.0f * s (exact; the first product of accumulate()'s gradient factor)
+  std::int16_t na[3];  // minus (anchor - the block's local corner 0); -mid_z for z (§6)
 };
 static_assert(sizeof(CacheParticle) == 32);
 
@@ -129,6 +149,15 @@ struct SliceCell {
 struct SliceDz {
   float dz, dz2;  // latticeOffset() along z, and dz * dz (the float product accumulate() forms)
 };
+static_assert(sizeof(SliceDz) == 8);
+
+// Element i of a per-particle array of 8- or 32-byte records from p8 = 8 i: one scaled-index
+// address instead of a multiply and an add per array (ColumnEntry::particle8).
+template <class T>
+inline const T& atParticle8(const T* base, std::uint32_t p8) {
+  static_assert(sizeof(T) == 8 || sizeof(T) == 32);
+  return *reinterpret_cast<const T*>(reinterpret_cast<const char*>(base) + std::size_t(p8) * (sizeof(T) / 8));
+}
 
 template <class Policy>
 struct Slice {
@@ -198,6 +227,7 @@ struct Worker {
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
+  std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
   std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
   std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
@@ -216,6 +246,9 @@ struct Worker {
     cursor.assign(cols, 0);
     runMax.assign(cols, 0);
     cx.assign(nx + 1, 0);
+    kx.assign(nx + 1, 0);
+    ky.assign(ny + 1, 0);
+    kz.assign(nz + 1, 0);
     cy.assign(ny + 1, 0);
     cz.assign(nz + 1, 0);
     chainLo.assign(cols, 0);
@@ -272,7 +305,12 @@ inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float 
   const float len2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
   float nl[3] = {0, 0, 0};
   if (len2 > 1e-30f && std::isfinite(len2)) {
+#if defined(__SSE2__)
+    // The IEEE square root without std::sqrt's errno branch (len2 > 0 here).
+    const float inv = -1.0f / _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(len2)));
+#else
     const float inv = -1.0f / std::sqrt(len2);
+#endif
     for (int i = 0; i < 3; ++i) nl[i] = g[i] * inv;
   } else {
     // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
@@ -320,7 +358,10 @@ class BlockMesher {
         stride_(setup.n[0] + 1) {}
 
   void run(const BlockDesc& block, std::span<const Particle> particles) {
+    particles_ = particles;
     out_.reset();
+    vertexCount_ = 0;
+    nIndices_ = 0;
     begin(block);
     buildParticleCache(particles);
     seed(particles);
@@ -341,13 +382,14 @@ class BlockMesher {
 
   // Test hook (detail/testing.hpp): build the particle cache only, then look up corners.
   void prepareCache(const BlockDesc& block, std::span<const Particle> particles) {
+    particles_ = particles;
     begin(block);
     buildParticleCache(particles);
   }
   void lookup(int x, int y, int z, std::vector<std::uint32_t>& found) {
     found.clear();
     forEachInfluencing<false>(x, y, z, nullptr, [&](const CacheParticle& p, float, float, float, float) {
-      found.push_back(p.index);
+      found.push_back(indexOf(p));
       return false;
     });
   }
@@ -362,6 +404,16 @@ class BlockMesher {
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
+  std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
+  std::uint32_t vertexCount_ = 0;        // vertices made in this block (out_.positions.size())
+  std::size_t nIndices_ = 0;             // used length of out_.indices while marching (polygonize)
+  // The particle cache's arrays, set once it is built (they do not move while the block runs).
+  const std::uint32_t* colStart_ = nullptr;
+  std::uint32_t* cursor_ = nullptr;
+  const ColumnEntry* entries_ = nullptr;
+  const float* off0_ = nullptr;  // offsets table at d = 0
+  const CacheParticle* parts_ = nullptr;
+  std::uint32_t indexOf(const CacheParticle& p) const { return particles_[std::size_t(&p - w_.local.data())].index; }
   int lowestTodo_ = std::numeric_limits<int>::max();
 
   std::size_t col(int x, int y) const { return std::size_t(y) * std::size_t(stride_) + std::size_t(x); }
@@ -371,6 +423,10 @@ class BlockMesher {
     for (int i = 0; i <= nx_; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
+    // edgeKey(i, j, k, axis) = kx[i] | ky[j] | kz[k] | axis for the block's lattice indices.
+    for (int i = 0; i <= nx_; ++i) w_.kx[i] = edgeKey(g0_[0] + i, 0, 0, 0);
+    for (int i = 0; i <= ny_; ++i) w_.ky[i] = edgeKey(0, g0_[1] + i, 0, 0);
+    for (int i = 0; i <= nz_; ++i) w_.kz[i] = edgeKey(0, 0, g0_[2] + i, 0);
   }
 
   // §6: particles arrive sorted by (z, index); insert one element per column of the projection
@@ -471,7 +527,7 @@ class BlockMesher {
       }
       cp.k = p.k;
       cp.s = p.strength;
-      cp.index = p.index;
+      cp.s4 = 4.0f * p.strength;
       const double fz = p.z * inv - double(g0_[2]);
       // Away from the block's top and bottom (the usual case) the clamps below cannot act.
       const double reach = std::sqrt(p.rc2) * inv + 2.0;
@@ -485,13 +541,20 @@ class BlockMesher {
     for (std::size_t c = 0; c < cols; ++c) {
       const std::uint32_t b = start[c], en = start[c + 1];
       if (b == en) continue;
-      std::int16_t run = 32000;
+      // The low half of a key is 0x8000 - min_z (0 when empty), so the smallest min_z is the largest
+      // low half; 768 = 0x8000 - 32000 stands for "none" (reachMin 32000) and is below every real one.
+      std::uint32_t run = 0x8000u - 32000u;
       for (std::uint32_t i = en; i-- > b;) {
-        if (entries[i].minZ >= 0) run = std::min(run, entries[i].minZ);
-        entries[i].reachMin = run;
+        run = std::max(run, entries[i].zKey & 0xffffu);
+        entries[i].reachMinB = std::uint16_t(run);  // 0x8000 - reachMin
       }
     }
     std::copy(start, start + cols, cursor);
+    colStart_ = w_.colStart.data();
+    cursor_ = w_.cursor.data();
+    entries_ = w_.entries.data();
+    off0_ = w_.offsets.data() + offsetRange_;
+    parts_ = w_.local.data();
   }
 
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
@@ -514,12 +577,16 @@ class BlockMesher {
       return dxy + dz * dz < rc2;
     };
     std::int16_t* runMax = w_.runMax.data();
-    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000), reachMax from the
-    // column's running max, reachMin set after the fill.
-    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, int lo, int hi) {
+    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000, stored as key 0),
+    // reachMax from the column's running max, reachMin set after the fill.
+    // `key` is columnKey(lo, hi), or 0 when empty.
+    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, std::uint32_t key, int hi) {
       const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
       rowRun[x] = rm;
-      entries[rowCursor[x]++] = ColumnEntry{std::int16_t(lo), std::int16_t(hi), rm, 0, li};
+      ColumnEntry& en = entries[rowCursor[x]++];
+      en.zKey = key;
+      en.reachMax = rm;
+      en.particle8 = 8 * li;
     };
     // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
     auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
@@ -564,7 +631,7 @@ class BlockMesher {
           hi = u;
         }
       }
-      store(rowCursor, rowRun, x, lo, hi);
+      store(rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi);
     };
     int y0, y1;
     discRows(p, inv, y0, y1);
@@ -604,23 +671,43 @@ class BlockMesher {
             continue;
           }
           // Both columns are inside the disc with clear bounds; c <= f holds unless the range
-          // holds no slice, where the element is stored empty like the scalar path does.
-          const __m128i cf = _mm_unpacklo_epi32(c, f);  // c0 f0 c1 f1
-          int c0 = _mm_cvtsi128_si32(cf), f0 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 1));
-          int c1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 2)), f1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(cf, 3));
+          // holds no slice, where the element is stored empty like the scalar path does. Keys
+          // (columnKey, 0 when empty) and max_z (-32000 when empty) for both lanes at once.
+          __m128i cc = c, ff = f;
           if constexpr (kClamp) {  // intersect with [1, zmax], as the scalar path
-            c0 = std::max(c0, 1), f0 = std::min(f0, zmax);
-            c1 = std::max(c1, 1), f1 = std::min(f1, zmax);
+            const __m128i vz = _mm_set1_epi32(zmax);
+            const __m128i below1 = _mm_cmplt_epi32(cc, one), above = _mm_cmpgt_epi32(ff, vz);
+            cc = _mm_or_si128(_mm_andnot_si128(below1, cc), _mm_and_si128(below1, one));
+            ff = _mm_or_si128(_mm_andnot_si128(above, ff), _mm_and_si128(above, vz));
           }
-          if (c0 <= f0)
-            store(rowCursor, rowRun, x, c0, f0);
-          else
-            store(rowCursor, rowRun, x, -32000, -32000);
-          if (!pair) break;
-          if (c1 <= f1)
-            store(rowCursor, rowRun, x + 1, c1, f1);
-          else
-            store(rowCursor, rowRun, x + 1, -32000, -32000);
+          const __m128i empty = _mm_cmpgt_epi32(cc, ff);
+          const __m128i key = _mm_andnot_si128(
+              empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
+          const __m128i hi = _mm_or_si128(_mm_andnot_si128(empty, ff), _mm_and_si128(empty, _mm_set1_epi32(-32000)));
+          if (!pair) [[unlikely]] {
+            const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
+            store(rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
+                  _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)));
+            break;
+          }
+          // Columns x and x + 1 are neighbours, so their running max_z (int16) and cursors
+          // (uint32) are adjacent: update both at once, then write each element's first 8 bytes
+          // (key, reachMax; reachMinB is set by the suffix pass) in one store.
+          std::int32_t run2;
+          std::memcpy(&run2, rowRun + x, 4);
+          const __m128i rm = _mm_max_epi16(_mm_cvtsi32_si128(run2), _mm_packs_epi32(hi, hi));  // reachMax x, x+1
+          run2 = _mm_cvtsi128_si32(rm);
+          std::memcpy(rowRun + x, &run2, 4);
+          const __m128i cur = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rowCursor + x));
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(rowCursor + x), _mm_sub_epi32(cur, _mm_set1_epi32(-1)));
+          const __m128i kr = _mm_unpacklo_epi32(key, _mm_unpacklo_epi16(rm, _mm_setzero_si128()));  // k0 r0 k1 r1
+          ColumnEntry* e0 = entries + std::uint32_t(_mm_cvtsi128_si32(cur));
+          ColumnEntry* e1 = entries + std::uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(cur, 1)));
+          static_assert(offsetof(ColumnEntry, reachMax) == 4 && offsetof(ColumnEntry, particle8) == 8);
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(e0), kr);
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(e1), _mm_unpackhi_epi64(kr, kr));
+          e0->particle8 = 8 * li;
+          e1->particle8 = 8 * li;
         }
         continue;
       }
@@ -640,10 +727,10 @@ class BlockMesher {
   template <bool kTable, class F>
   void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
     const std::size_t k = col(x, y);
-    const std::uint32_t begin = w_.colStart[k], end = w_.colStart[k + 1];
+    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
     if (begin == end) return;
-    std::uint32_t cur = w_.cursor[k];
-    const ColumnEntry* e = w_.entries.data();
+    std::uint32_t cur = cursor_[k];
+    const ColumnEntry* e = entries_;
     // reachMax is non-decreasing, so the pointer may skip 8 elements at once when the one 8 away
     // is still on the same side (long moves happen when the sweep jumps between surfaces).
     while (cur > begin && e[cur - 1].reachMax >= z) {
@@ -658,22 +745,24 @@ class BlockMesher {
       else
         ++cur;
     }
-    w_.cursor[k] = cur;
-    const float* off = w_.offsets.data() + offsetRange_;
+    cursor_[k] = cur;
+    const float* off = off0_;
     const float* offX = off + x;
     const float* offY = off + y;
     const float* offZ = off + z;
-    const CacheParticle* parts = w_.local.data();
+    const CacheParticle* parts = parts_;
+    const std::uint32_t ck = cornerKey(z);
+    const unsigned zb = 0x8000u - unsigned(z);
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
-      if (en.reachMin > z) break;
-      // min_z <= z <= max_z as one unsigned compare (the empty range -32000..-32000 never passes).
-      if (unsigned(z - en.minZ) > unsigned(en.maxZ - en.minZ)) continue;
-      const CacheParticle& p = parts[en.particle];
+      if (en.reachMinB < zb) break;  // reachMin > z
+      if (!coversCorner(en.zKey, ck)) continue;  // min_z <= z <= max_z
+      const CacheParticle& p = atParticle8(parts, en.particle8);
       float dz, dz2;
       if constexpr (kTable) {
-        dz = dzt[en.particle].dz;
-        dz2 = dzt[en.particle].dz2;
+        const SliceDz& d = atParticle8(dzt, en.particle8);
+        dz = d.dz;
+        dz2 = d.dz2;
       } else {
         dz = offZ[p.na[2]] - p.rest[2];
         dz2 = dz * dz;
@@ -695,8 +784,8 @@ class BlockMesher {
       forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
         ++looked;
         const float before = v;
-        accumulateDz2(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, v, gx, gy, gz);
-        if constexpr (Policy::kHasUser) pol_.add(c.user, p.index, v - before);
+        accumulateDz2S4(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, p.s4, v, gx, gy, gz);
+        if constexpr (Policy::kHasUser) pol_.add(c.user, indexOf(p), v - before);
         return false;
       });
     }
@@ -833,6 +922,9 @@ class BlockMesher {
   }
   void freeSlice(int z) {
     if (!w_.active[z]) return;
+    // Every evaluated corner sits in exactly one slice's corner cache until the slice is
+    // returned (all are by the end of march()): count them here rather than per evaluation.
+    out_.stats.cornersEvaluated += w_.active[z]->corners.size();
     w_.releaseSlice(w_.active[z]);
     w_.active[z] = nullptr;
     --activeSlices_;
@@ -849,18 +941,118 @@ class BlockMesher {
   }
 
   // Alg. 1 lookupOrEval: the corner's index in the slice's corner cache, evaluated on first use.
-  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+  // `interior`: the caller knows the corner is interior (a corner of an emitted cube).
+  std::uint32_t lookupOrEval(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z, bool interior) {
     const std::uint32_t id = cell.corner;
     if (id) [[likely]]
       return id - 1;
-    return evaluateInto(slice, cell, x, y, z) - 1;
+    return evaluateInto(slice, cell, x, y, z, interior) - 1;
+  }
+
+  // lookupOrEval for a corner of the lower slice (z) whose twin one slice up (z + 1, same column)
+  // the cube needs as well: when neither is cached yet, both come from one walk of the column.
+  std::uint32_t lookupOrEvalLow(Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi, SliceCell& cellHi, int x,
+                                int y, int z, bool interior) {
+    const std::uint32_t id = cellLo.corner;
+    if (id) [[likely]]
+      return id - 1;
+    if constexpr (!Policy::kHasUser) {
+      if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
+        return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
+    }
+    return evaluateInto(lo, cellLo, x, y, z, interior) - 1;
+  }
+
+  // Two interior corners of one column, (x, y, z) and (x, y, z + 1), from one §6 walk: the walk
+  // for z + 1 starts at or after the one for z (reachMax is non-decreasing) and stops at or after
+  // it (reachMin is too), so walking from z's start to z + 1's stop passes every element of both
+  // in the same (z, index) order. Each corner adds exactly the terms, in exactly the order and
+  // with exactly the float expressions, of evaluate<true>: the same bits as two separate calls,
+  // while the walk, the particle record and the x, y offsets are shared (about a third of the
+  // evaluated corners come in such pairs: horizontal stretches of surface). Returns the lower
+  // corner's index + 1 (the upper one is cached in its slice).
+  // Scalar sums: GCC's SLP vectoriser would pack each corner's four sums into one register and
+  // repack them on every term (about 10 more instructions per term for the second corner).
+  [[gnu::noinline, gnu::optimize("no-tree-slp-vectorize")]] std::uint32_t evaluatePairInto(Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi,
+                                                   SliceCell& cellHi, int x, int y, int z) {
+    float v0 = 0, gx0 = 0, gy0 = 0, gz0 = 0, v1 = 0, gx1 = 0, gy1 = 0, gz1 = 0;
+    std::uint64_t looked = 0;
+    const std::size_t k = col(x, y);
+    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
+    if (begin != end) {
+      std::uint32_t cur = cursor_[k];
+      const ColumnEntry* e = entries_;
+      // Start of z's walk, as forEachInfluencing.
+      while (cur > begin && e[cur - 1].reachMax >= z) {
+        if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
+          cur -= 9;
+        else
+          --cur;
+      }
+      while (cur < end && e[cur].reachMax < z) {
+        if (cur + 8 < end && e[cur + 8].reachMax < z)
+          cur += 9;
+        else
+          ++cur;
+      }
+      cursor_[k] = cur;
+      const float* off = off0_;
+      const float* offX = off + x;
+      const float* offY = off + y;
+      const CacheParticle* parts = parts_;
+      const SliceDz* dzLo = lo.dz.data();
+      const SliceDz* dzHi = hi.dz.data();
+      const int z1 = z + 1;
+      const std::uint32_t ck0 = cornerKey(z), ck1 = cornerKey(z1);
+      const unsigned zb1 = 0x8000u - unsigned(z1);
+      for (std::uint32_t i = cur; i < end; ++i) {
+        const ColumnEntry& en = e[i];
+        if (en.reachMinB < zb1) break;  // reachMin > z + 1
+        const bool in0 = coversCorner(en.zKey, ck0), in1 = coversCorner(en.zKey, ck1);
+        if (!(in0 | in1)) continue;
+        const std::uint32_t pi = en.particle8;
+        const CacheParticle& p = atParticle8(parts, pi);
+        const float dx = offX[p.na[0]] - p.rest[0], dy = offY[p.na[1]] - p.rest[1];
+        const float dxy2 = dx * dx + dy * dy;
+        if (in0) {
+          ++looked;
+          const SliceDz& d = atParticle8(dzLo, pi);
+          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
+        }
+        if (in1) {
+          ++looked;
+          const SliceDz& d = atParticle8(dzHi, pi);
+          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
+        }
+      }
+    }
+    out_.stats.particlesLookedUp += looked;
+    Corner<Policy> c;
+    c.user = {};
+    c.vert[0] = c.vert[1] = c.vert[2] = 0;
+    c.x = std::int16_t(x);
+    c.y = std::int16_t(y);
+    c.value = v1;
+    c.g[0] = gx1;
+    c.g[1] = gy1;
+    c.g[2] = gz1;
+    hi.corners.push_back(c);
+    cellHi.corner = std::uint32_t(hi.corners.size());
+    c.value = v0;
+    c.g[0] = gx0;
+    c.g[1] = gy0;
+    c.g[2] = gz0;
+    lo.corners.push_back(c);
+    cellLo.corner = std::uint32_t(lo.corners.size());
+    return cellLo.corner;
   }
 
   // Evaluates corner (x, y, z) into the slice's corner cache; returns its index + 1. Not inlined:
   // one out-of-line copy keeps the march loop small (most corners are already cached).
-  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z) {
+  [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z,
+                                               bool interior) {
     Corner<Policy> c;
-    if (interiorCorner(x, y, z))
+    if (interior || interiorCorner(x, y, z))
       evaluate<true>(x, y, z, slice.dz.data(), c);
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
@@ -868,7 +1060,6 @@ class BlockMesher {
     c.x = std::int16_t(x);
     c.y = std::int16_t(y);
     slice.corners.push_back(c);
-    ++out_.stats.cornersEvaluated;
     cell.corner = std::uint32_t(slice.corners.size());
     return cell.corner;
   }
@@ -891,7 +1082,7 @@ class BlockMesher {
       SliceCell* const cellsB = below->cells.data();
       SliceCell* const cellsA = above->cells.data();
       const std::size_t sy = std::size_t(stride_);
-      const std::size_t slabFirst = out_.indices.size();
+      const std::size_t slabFirst = nIndices_;
       while (!list.empty()) {
         const std::uint32_t item = list.back();
         list.pop_back();
@@ -903,15 +1094,17 @@ class BlockMesher {
         cb.doneAbove = 1;
         ca.doneBelow = 1;
         ++out_.stats.cubesVisited;
+        // A cube of the block's interior (the ones polygonize() emits): all eight corners interior.
+        const bool emit = interiorSlab && x >= ia && x < ibx && y >= ia && y < iby;
         std::uint32_t ci[8];
-        ci[0] = lookupOrEval(*below, cellsB[c0], x, y, z);
-        ci[1] = lookupOrEval(*below, cellsB[c0 + 1], x + 1, y, z);
-        ci[2] = lookupOrEval(*below, cellsB[c0 + sy], x, y + 1, z);
-        ci[3] = lookupOrEval(*below, cellsB[c0 + sy + 1], x + 1, y + 1, z);
-        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1);
-        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1);
-        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1);
-        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1);
+        ci[0] = lookupOrEvalLow(*below, cellsB[c0], *above, cellsA[c0], x, y, z, emit);
+        ci[1] = lookupOrEvalLow(*below, cellsB[c0 + 1], *above, cellsA[c0 + 1], x + 1, y, z, emit);
+        ci[2] = lookupOrEvalLow(*below, cellsB[c0 + sy], *above, cellsA[c0 + sy], x, y + 1, z, emit);
+        ci[3] = lookupOrEvalLow(*below, cellsB[c0 + sy + 1], *above, cellsA[c0 + sy + 1], x + 1, y + 1, z, emit);
+        ci[4] = lookupOrEval(*above, cellsA[c0], x, y, z + 1, emit);
+        ci[5] = lookupOrEval(*above, cellsA[c0 + 1], x + 1, y, z + 1, emit);
+        ci[6] = lookupOrEval(*above, cellsA[c0 + sy], x, y + 1, z + 1, emit);
+        ci[7] = lookupOrEval(*above, cellsA[c0 + sy + 1], x + 1, y + 1, z + 1, emit);
         Corner<Policy>* const cornersB = below->corners.data();
         Corner<Policy>* const cornersA = above->corners.data();
         Corner<Policy>* cp[8];
@@ -930,7 +1123,7 @@ class BlockMesher {
 #endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
-        if (interiorSlab && x >= ia && x < ibx && y >= ia && y < iby) polygonize(cs, cp, x, y, z);
+        if (emit) polygonize(cs, cp, x, y, z);
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
         auto pushIn = [&](SliceCell& n, std::uint32_t next) {
@@ -967,6 +1160,7 @@ class BlockMesher {
       }
     }
     for (int i = 0; i <= nz_; ++i) freeSlice(i);
+    out_.indices.resize(nIndices_);  // drop the unused tail of the last step (polygonize)
     lowestTodo_ = std::numeric_limits<int>::max();
   }
 
@@ -976,8 +1170,7 @@ class BlockMesher {
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
     const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
-    const std::int64_t gi[3] = {g0_[0] + lx, g0_[1] + ly, g0_[2] + lz};
-    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(gi) * S, see begin()
+    double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(g0 + l) * S, see begin()
     const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
@@ -985,20 +1178,33 @@ class BlockMesher {
       const float tf = (su_.threshold - ca.value) / (cb.value - ca.value);
       out_.attributes.push_back(pol_.vertex(ca.user, cb.user, tf));
     }
-    out_.keys.push_back(edgeKey(gi[0], gi[1], gi[2], axis));
-    ca.vert[axis] = std::uint32_t(out_.positions.size());
-    return ca.vert[axis] - 1;
+    out_.keys.push_back(w_.kx[lx] | w_.ky[ly] | w_.kz[lz] | std::uint64_t(axis));  // edgeKey(g0 + l, axis)
+    const std::uint32_t id = vertexCount_++;  // == out_.positions.size() - 1
+    ca.vert[axis] = id + 1;
+    return id;
   }
 
+  // Each crossed edge's vertex is looked up (or made) once per cube, in first-use order along the
+  // case's triangles (the order walking the triangles would make them in), then the triangles
+  // are written from those.
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
+    std::uint32_t vid[12];
+    const int ne = cs.edgeCount;
+    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstUse[u], x, y, z);
     const int nt = cs.triangleCount;
-    for (int tri = 0; tri < nt; ++tri) {
-      std::uint32_t v[3];
-      for (int k = 0; k < 3; ++k) v[k] = vertexOn(cp, cs.edges[3 * tri + k], x, y, z);
-      if (su_.flip) std::swap(v[1], v[2]);
-      out_.indices.push_back(v[0]);
-      out_.indices.push_back(v[1]);
-      out_.indices.push_back(v[2]);
+    // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
+    // cube); nIndices_ is its used length, and march() trims it to that at the end.
+    const std::size_t first = nIndices_;
+    if (out_.indices.size() < first + 36) [[unlikely]]
+      out_.indices.resize(first + 256 + 36);  // 36 = 3 x the most triangles of one case (12)
+    nIndices_ = first + 3 * std::size_t(nt);
+    std::uint32_t* dst = out_.indices.data() + first;
+    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
+    const std::uint8_t* slot = cs.slot.data();
+    for (int tri = 0; tri < nt; ++tri, slot += 3, dst += 3) {
+      dst[0] = vid[slot[0]];
+      dst[1] = vid[slot[b]];
+      dst[2] = vid[slot[c]];
     }
   }
 
@@ -1006,7 +1212,7 @@ class BlockMesher {
   // slab tags for the exact order, or one run per stretch of consecutive triangles of one slab
   // (what buildRuns makes), extended when the previous visit ended with the same slab.
   void closeSlabVisit(int z, std::size_t first) {
-    const std::size_t count = out_.indices.size() - first;
+    const std::size_t count = nIndices_ - first;
     if (count == 0) return;
     const std::int32_t slab = std::int32_t(g0_[2] + z);
     if (su_.exact) {
