@@ -179,9 +179,14 @@ struct SphScratch {
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;
   bool verlet_valid = false;
-  std::vector<glm::vec4> gradients;  // per neighbour pair: m_j grad W_ij, 4th component 0 (one 16-byte load)
+  // Per neighbour pair k (same index as neighbors.indices): m_j grad W_ij, one array per component
+  // (SoA: the solver's pair loops read them eight pairs at a time).
+  std::vector<float> grad_x, grad_y, grad_z;
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
+  // DFSPH: copies of the velocities (and of the positions for the viscosity pass) padded to 16
+  // bytes, so the eight-lane pair loops load a neighbour's x, y, z with one 16-byte load.
+  std::vector<glm::vec4> vel4, pos4;
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume, boundary_flux, boundary_product,
       float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;
@@ -190,6 +195,9 @@ struct SphScratch {
   std::vector<ColliderSample> end_samples;
   std::vector<glm::vec3> reduce_force, reduce_torque;
   bool initialised = false;
+  // Testing aid: run the pair loops' portable code even where the CPU has AVX2. Both give
+  // bit-identical results (the same IEEE operations in the same order); tests/sph compares them.
+  bool portable_pair_loops = false;
 };
 
 struct SphWorld {

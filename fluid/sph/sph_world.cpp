@@ -127,6 +127,8 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume, &w.boundary_flux,
                   &w.float_tmp})
     v->reserve(capacity);
+  w.vel4.reserve(capacity);
+  w.pos4.reserve(capacity);
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);
   w.end_samples.reserve(capacity);
