@@ -220,11 +220,11 @@ void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& po
 // solver iteration, Bender & Koschier 2015 eq. 9 / 13) runs "8 lanes wide": lane l of a
 // particle's list [b, e) accumulates the pairs b + l, b + 8 + l, ... and the lanes are summed at
 // the end in one fixed tree, hsum8 below. Where the CPU has AVX2 (checked at run time; the build
-// targets baseline x86-64) the lanes are one 256-bit register and the neighbours' data come in
-// through gathers; elsewhere a portable loop does the same IEEE operations in the same order
-// (no FMA: the AVX2 target does not enable it, so nothing is contracted), so both give
-// bit-identical results (tests/sph checks this through SphScratch::portable_pair_loops). The
-// order does not depend on the thread count either.
+// targets baseline x86-64) the lanes are one 256-bit register; elsewhere a portable loop does
+// the same IEEE operations in the same order (no FMA: the AVX2 target does not enable it, so
+// nothing is contracted), so both give bit-identical results (tests/sph checks this through
+// SphScratch::portable_pair_loops). The order does not depend on the thread count either.
+// Neighbour positions and velocities are read from 16-byte copies (SphScratch::pos4 / vel4).
 constexpr int kLanes = 8;
 
 // The fixed lane tree: ((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7)).
@@ -286,7 +286,7 @@ inline void densityLane(const DensityConsts& c, glm::vec3 x, std::uint32_t id_i,
 
 struct PairLoops {
   // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and returns the sums.
-  DensitySums (*density)(const DensityConsts& c, const glm::vec3* X, const std::uint32_t* id, const std::uint32_t* nbr,
+  DensitySums (*density)(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id, const std::uint32_t* nbr,
                          std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz);
   // sum_k vc[j] (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph).
   glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx, const float* gy,
@@ -301,15 +301,15 @@ struct PairLoops {
 };
 
 // Portable lanes.
-DensitySums densityPortable(const DensityConsts& c, const glm::vec3* X, const std::uint32_t* id,
+DensitySums densityPortable(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
                             const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx,
                             float* gy, float* gz) {
   float sw[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {}, sz[kLanes] = {}, sq[kLanes] = {};
-  const glm::vec3 xi = X[i];
+  const glm::vec4 xi = X[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
     const std::uint32_t j = nbr[k];
-    const glm::vec3 xj = X[j];
+    const glm::vec4 xj = X[j];
     float wv;
     glm::vec3 g;
     densityLane(c, glm::vec3(xi.x - xj.x, xi.y - xj.y, xi.z - xj.z), id[i], id[j], wv, g);
@@ -380,10 +380,13 @@ constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &diverg
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define FLUID_SPH_AVX2_PAIRS 1
-// AVX2 lanes. The last block of a list (fewer than 8 pairs) runs with a lane mask: masked
-// loads and gathers read nothing there and give 0, so those lanes add exact zeros (an
-// accumulator that starts at +0 is never -0, so adding +-0 leaves it unchanged): the same sums
-// as the portable loop, which skips them.
+// AVX2 lanes. Neighbour data come in by one 16-byte load per neighbour (pos4 / vel4) or
+// scalar loads (load8): on the Zen 3 machine we measure on, vgatherdps was slower than the
+// SSE2 loop it replaced. In the last block of a list (fewer than 8 pairs) the lanes past the
+// end repeat the first neighbour (valid data) and are zeroed by a lane mask (masked loads of the
+// gradients, or an and with the mask), so they add exact zeros: an accumulator that starts at +0
+// is never -0, so adding +-0 leaves it unchanged, and the sums equal the portable loop's, which
+// skips those lanes.
 #define FLUID_AVX2 __attribute__((target("avx2")))
 FLUID_AVX2 inline __m256i laneMask(std::uint32_t left) {
   return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(std::min<std::uint32_t>(left, 8))),
@@ -394,16 +397,40 @@ FLUID_AVX2 inline float hsum8(__m256 v) {
   _mm256_store_ps(s, v);
   return hsum8(s);
 }
-// Gathers component c of vec3 element j (idx3 = 3 j) for the lanes in mask.
-FLUID_AVX2 inline __m256 gather3(const glm::vec3* base, int c, __m256i idx3, __m256 mask) {
-  return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), &base->x + c, idx3, mask, 4);
+FLUID_AVX2 inline __m256 loadPair(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&base[a].x)), _mm_loadu_ps(&base[b].x), 1);
 }
-FLUID_AVX2 inline __m256i times3(__m256i j) { return _mm256_add_epi32(_mm256_add_epi32(j, j), j); }
+FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z) {
+  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
+               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // x0 x1 y0 y1 | x4 x5 y4 y5; z.. w..
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+// The last block of a list: lanes past `left` repeat the first neighbour (valid data; their
+// gradient lanes are masked to 0, so they add exact zeros).
+inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
+  for (std::uint32_t l = 0; l < kLanes; ++l) buf[l] = nbr[l < left ? l : 0];
+  return buf;
+}
 
-FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec3* X, const std::uint32_t* id,
+// a[idx[0..7]] by scalar loads (Zen 3 runs these faster than vgatherdps).
+FLUID_AVX2 inline __m256 load8(const float* a, const std::uint32_t* idx) {
+  const __m128 lo = _mm_insert_ps(_mm_insert_ps(_mm_insert_ps(_mm_load_ss(a + idx[0]), _mm_load_ss(a + idx[1]), 0x10),
+                                                _mm_load_ss(a + idx[2]), 0x20),
+                                  _mm_load_ss(a + idx[3]), 0x30);
+  const __m128 hi = _mm_insert_ps(_mm_insert_ps(_mm_insert_ps(_mm_load_ss(a + idx[4]), _mm_load_ss(a + idx[5]), 0x10),
+                                                _mm_load_ss(a + idx[6]), 0x20),
+                                  _mm_load_ss(a + idx[7]), 0x30);
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+
+FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
                                    const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
                                    float* gx, float* gy, float* gz) {
-  const glm::vec3 xi = X[i];
+  const glm::vec4 xi = X[i];
   const __m256 pix = _mm256_set1_ps(xi.x), piy = _mm256_set1_ps(xi.y), piz = _mm256_set1_ps(xi.z);
   const __m256 inv_h = _mm256_set1_ps(c.inv_support), sigma = _mm256_set1_ps(c.sigma),
                sigma2 = _mm256_set1_ps(c.sigma2), c_in = _mm256_set1_ps(c.c_inner), c_out = _mm256_set1_ps(c.c_outer),
@@ -411,13 +438,15 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec3* X, c
                half = _mm256_set1_ps(0.5f), six = _mm256_set1_ps(6.0f), c18 = _mm256_set1_ps(18.0f),
                c12 = _mm256_set1_ps(12.0f);
   __m256 sw = _mm256_setzero_ps(), sx = sw, sy = sw, sz = sw, sq = sw;
+  std::uint32_t buf[kLanes];
   for (std::uint32_t k = b; k < e; k += kLanes) {
     const __m256i mi = laneMask(e - k);
     const __m256 m = _mm256_castsi256_ps(mi);
-    const __m256i j3 = times3(_mm256_maskload_epi32(reinterpret_cast<const int*>(nbr + k), mi));
-    const __m256 x = _mm256_sub_ps(pix, gather3(X, 0, j3, m));
-    const __m256 y = _mm256_sub_ps(piy, gather3(X, 1, j3, m));
-    const __m256 z = _mm256_sub_ps(piz, gather3(X, 2, j3, m));
+    __m256 x, y, z;
+    load8xyz(X, e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf), x, y, z);
+    x = _mm256_sub_ps(pix, x);
+    y = _mm256_sub_ps(piy, y);
+    z = _mm256_sub_ps(piz, z);
     const __m256 r =
         _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)));
     const __m256 q = _mm256_mul_ps(r, inv_h);
@@ -476,25 +505,6 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec3* X, c
 
 // x, y, z of base[idx[0..7]] as three 8-lane vectors: four 32-byte rows of two particles each
 // (one 16-byte load per particle, no gather), transposed in registers.
-FLUID_AVX2 inline __m256 loadPair(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
-  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&base[a].x)), _mm_loadu_ps(&base[b].x), 1);
-}
-FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z) {
-  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
-               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
-  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // x0 x1 y0 y1 | x4 x5 y4 y5; z.. w..
-  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-}
-// The last block of a list: lanes past `left` repeat the first neighbour (valid data; their
-// gradient lanes are masked to 0, so they add exact zeros).
-inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
-  for (std::uint32_t l = 0; l < kLanes; ++l) buf[l] = nbr[l < left ? l : 0];
-  return buf;
-}
-
 FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx,
                                    const float* gy, const float* gz, const std::uint32_t* nbr, std::uint32_t b,
                                    std::uint32_t e, std::uint32_t i, float eps) {
@@ -515,8 +525,7 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
         _mm256_mul_ps(_mm256_sub_ps(viz, wj), z));
     const __m256 denom =
         _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)), ve);
-    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx));
-    const __m256 coef = _mm256_mul_ps(_mm256_i32gather_ps(vc, j, 4), _mm256_div_ps(vx, denom));
+    const __m256 coef = _mm256_mul_ps(load8(vc, idx), _mm256_div_ps(vx, denom));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(coef, _mm256_maskload_ps(gx + k, mi)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_maskload_ps(gy + k, mi)));
     az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_maskload_ps(gz + k, mi)));
@@ -553,17 +562,15 @@ FLUID_AVX2 glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const float*
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
   std::uint32_t k = b;
   for (; k + kLanes <= e; k += kLanes) {
-    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(nbr + k));
-    const __m256 s = _mm256_add_ps(vk, _mm256_i32gather_ps(kr, j, 4));
+    const __m256 s = _mm256_add_ps(vk, load8(kr, nbr + k));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_loadu_ps(gx + k)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_loadu_ps(gy + k)));
     az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_loadu_ps(gz + k)));
   }
   if (k < e) {
     const __m256i mi = laneMask(e - k);
-    const __m256i j = _mm256_maskload_epi32(reinterpret_cast<const int*>(nbr + k), mi);
-    const __m256 s =
-        _mm256_add_ps(vk, _mm256_mask_i32gather_ps(_mm256_setzero_ps(), kr, j, _mm256_castsi256_ps(mi), 4));
+    std::uint32_t buf[kLanes];
+    const __m256 s = _mm256_add_ps(vk, load8(kr, tailIndices(nbr + k, e - k, buf)));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_maskload_ps(gx + k, mi)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_maskload_ps(gy + k, mi)));
     az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_maskload_ps(gz + k, mi)));
@@ -803,6 +810,13 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const std::uint32_t* cand_end = filter_verlet ? w.verlet.offsets.data() + 1 : off + 1;
   const auto& X = S.position;
   auto& V = S.velocity;
+  // 16-byte copies of the step-start positions and velocities for the pair loops.
+  w.pos4.resize(n);
+  w.vel4.resize(n);
+  forEach(n, [&](std::size_t i) {
+    w.pos4[i] = glm::vec4(X[i], 0.0f);
+    w.vel4[i] = glm::vec4(V[i], 0.0f);
+  });
 
   // 2. Collider samples at the step-start positions; boundary volume, its gradient and flux.
   w.start_samples.resize(nc);
@@ -912,7 +926,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   } else {
     const DensityConsts dc = DensityConsts::make(w.kernel, m, r_min, steepest);
     forEach(n, [&](std::size_t i) {
-      const DensitySums ds = loops.density(dc, X.data(), S.id.data(), nbr, off[i], cand_end[i],
+      const DensitySums ds = loops.density(dc, w.pos4.data(), S.id.data(), nbr, off[i], cand_end[i],
                                            static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out);
       S.density[i] = m * (w0 + ds.w) + rho0 * w.boundary_volume[i];
       w.vec_b[i] = ds.grad;
@@ -1013,12 +1027,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   } else if (nu > 0.0f) {
     // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop.
     const float eps = 0.01f * H * H;
-    w.pos4.resize(n);
-    w.vel4.resize(n);
-    forEach(n, [&](std::size_t i) {
-      w.pos4[i] = glm::vec4(X[i], 0.0f);
-      w.vel4[i] = glm::vec4(V[i], 0.0f);
-    });
     forEach(n, [&](std::size_t i) {
       w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), visc_coef.data(), gx, gy, gz, nbr, off[i],
                                                off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
