@@ -383,7 +383,7 @@ constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &diverg
 // AVX2 lanes. Neighbour data come in by one 16-byte load per neighbour (pos4 / vel4) or
 // scalar loads (load8): on the Zen 3 machine we measure on, vgatherdps was slower than the
 // SSE2 loop it replaced. In the last block of a list (fewer than 8 pairs) the lanes past the
-// end repeat the first neighbour (valid data) and are zeroed by a lane mask (masked loads of the
+// end read particle 0 (valid data) and are zeroed by a lane mask (masked loads of the
 // gradients, or an and with the mask), so they add exact zeros: an accumulator that starts at +0
 // is never -0, so adding +-0 leaves it unchanged, and the sums equal the portable loop's, which
 // skips those lanes.
@@ -392,10 +392,11 @@ FLUID_AVX2 inline __m256i laneMask(std::uint32_t left) {
   return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(std::min<std::uint32_t>(left, 8))),
                             _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
 }
+// hsum8's tree in registers: t_l = s_l + s_(l+4), then (t0 + t2) + (t1 + t3).
 FLUID_AVX2 inline float hsum8(__m256 v) {
-  alignas(32) float s[kLanes];
-  _mm256_store_ps(s, v);
-  return hsum8(s);
+  const __m128 t = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  const __m128 u = _mm_add_ps(t, _mm_movehl_ps(t, t));
+  return _mm_cvtss_f32(_mm_add_ss(u, _mm_shuffle_ps(u, u, 1)));
 }
 FLUID_AVX2 inline __m256 loadPair(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&base[a].x)), _mm_loadu_ps(&base[b].x), 1);
@@ -409,10 +410,11 @@ FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx,
   y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
   z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
 }
-// The last block of a list: lanes past `left` repeat the first neighbour (valid data; their
-// gradient lanes are masked to 0, so they add exact zeros).
-inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
-  for (std::uint32_t l = 0; l < kLanes; ++l) buf[l] = nbr[l < left ? l : 0];
+// The last block of a list: lanes past `left` read particle 0 (valid data; their gradient
+// lanes are masked to 0, so they add exact zeros).
+FLUID_AVX2 inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(buf),
+                      _mm256_maskload_epi32(reinterpret_cast<const int*>(nbr), laneMask(left)));
   return buf;
 }
 
