@@ -55,6 +55,26 @@ T reduce(std::size_t n, T identity, F&& body, J&& join) {
       join);
 }
 
+// Chunked variants for loops whose per-particle work is batched: f(b, e) on consecutive
+// blocks of at most kGrain particles (reduceChunks: in the same blocks and order as reduce, so
+// sums are bit-identical for any thread count).
+template <typename F>
+void forChunks(std::size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b < r.end(); b += kGrain) f(b, std::min(r.end(), b + kGrain));
+  });
+}
+template <typename T, typename F, typename J>
+T reduceChunks(std::size_t n, T identity, F&& body, J&& join) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
+      [&](const tbb::blocked_range<std::size_t>& r, T acc) {
+        for (std::size_t b = r.begin(); b < r.end(); b += kGrain) body(b, std::min(r.end(), b + kGrain), acc);
+        return acc;
+      },
+      join);
+}
+
 struct SumMax {
   double sum = 0.0;
   float max = 0.0f;
@@ -284,6 +304,14 @@ inline void densityLane(const DensityConsts& c, glm::vec3 x, std::uint32_t id_i,
   }
 }
 
+// What the solver iterations read: neighbour lists (i's pairs are [off[i], off[i] + cnt[i])),
+// per-pair gradients and the 16-byte velocity copy.
+struct IterationArgs {
+  const glm::vec4* vel4;
+  const float *gx, *gy, *gz;
+  const std::uint32_t *nbr, *off, *cnt;
+};
+
 struct PairLoops {
   // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and returns the sums.
   DensitySums (*density)(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id, const std::uint32_t* nbr,
@@ -292,12 +320,9 @@ struct PairLoops {
   glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx, const float* gy,
                          const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
                          float eps);
-  // sum_k (v_i - v_j) . G[k]
-  float (*divergence)(const glm::vec4* V, const float* gx, const float* gy, const float* gz, const std::uint32_t* nbr,
-                      std::uint32_t b, std::uint32_t e, glm::vec3 vi);
-  // sum_k (k_i + k_j) G[k]
-  glm::vec3 (*kappa_sum)(const float* kr, const float* gx, const float* gy, const float* gz, const std::uint32_t* nbr,
-                         std::uint32_t b, std::uint32_t e, float ki);
+  // The two solver-iteration loops for the particles [i0, i1) (i1 - i0 <= kGrain): out[i - i0].
+  void (*divergence_range)(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out);
+  void (*kappa_range)(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1, glm::vec3* out);
 };
 
 // Portable lanes.
@@ -348,7 +373,7 @@ glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float*
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 
-float divergencePortable(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
+inline float divergencePortable(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
                          const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
   for (std::uint32_t k = b; k < e; ++k) {
@@ -363,7 +388,7 @@ float divergencePortable(const glm::vec4* V, const float* gx, const float* gy, c
   return hsum8(s);
 }
 
-glm::vec3 kappaSumPortable(const float* kr, const float* gx, const float* gy, const float* gz,
+inline glm::vec3 kappaSumPortable(const float* kr, const float* gx, const float* gy, const float* gz,
                            const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
   for (std::uint32_t k = b; k < e; ++k) {
@@ -376,7 +401,16 @@ glm::vec3 kappaSumPortable(const float* kr, const float* gx, const float* gy, co
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 
-constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergencePortable, &kappaSumPortable};
+void divergenceRangePortable(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = divergencePortable(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+}
+void kappaRangePortable(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1, glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = kappaSumPortable(kr, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr[i]);
+}
+
+constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergenceRangePortable, &kappaRangePortable};
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define FLUID_SPH_AVX2_PAIRS 1
@@ -535,7 +569,7 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 
-FLUID_AVX2 float divergenceAvx2(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
+FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
                                 const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
   const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
@@ -558,7 +592,7 @@ FLUID_AVX2 float divergenceAvx2(const glm::vec4* V, const float* gx, const float
   return hsum8(_mm256_add_ps(_mm256_add_ps(ax, ay), az));
 }
 
-FLUID_AVX2 glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const float* gy, const float* gz,
+FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const float* gy, const float* gz,
                                   const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
   const __m256 vk = _mm256_set1_ps(ki);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
@@ -579,9 +613,18 @@ FLUID_AVX2 glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const float*
   }
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
+FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = divergenceAvx2(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+}
+FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1,
+                               glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = kappaSumAvx2(kr, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr[i]);
+}
 #undef FLUID_AVX2
 
-constexpr PairLoops kAvx2Loops{&densityAvx2, &viscosityAvx2, &divergenceAvx2, &kappaSumAvx2};
+constexpr PairLoops kAvx2Loops{&densityAvx2, &viscosityAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
 #endif
 
 const PairLoops& pairLoops(bool portable) {
@@ -1099,9 +1142,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? S.density[i] / denom : 0.0f;
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
-    auto densityRate = [&](std::size_t i) {
-      const float r = loops.divergence(w.vel4.data(), gx, gy, gz, nbr, off[i], off[i] + cnt[i], V[i]);
-      return r + rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
+    // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
+    const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, off, cnt};
+    auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
+      loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
+      for (std::size_t i = b; i < e; ++i)
+        rate[i - b] += rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
     };
     auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
     kr.resize(n);
@@ -1109,17 +1155,19 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     w.float_tmp.assign(n, 0.0f);  // same for the density iterations
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
-      forEach(n, [&](std::size_t i) {
-        const glm::vec3 dv = kMirror * rho0 * kr[i] * w.boundary_gradient[i] +
-                             loops.kappa_sum(kr.data(), gx, gy, gz, nbr, off[i], off[i] + cnt[i], kr[i]);
-        w.vec_b[i] = V[i] - h * dv;
-        w.vel4[i] = glm::vec4(w.vec_b[i], 0.0f);  // the copy the next divergence pass reads
-        total[i] += kr[i];
+      forChunks(n, [&](std::size_t b, std::size_t e) {
+        glm::vec3 sums[kGrain];
+        loops.kappa_range(ia, kr.data(), static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), sums);
+        for (std::size_t i = b; i < e; ++i) {
+          const glm::vec3 dv = kMirror * rho0 * kr[i] * w.boundary_gradient[i] + sums[i - b];
+          w.vec_b[i] = V[i] - h * dv;
+          w.vel4[i] = glm::vec4(w.vec_b[i], 0.0f);  // the copy the next divergence pass reads
+          total[i] += kr[i];
+        }
       });
       V.swap(w.vec_b);  // Jacobi: all updates read the old velocities; swapping keeps both buffers
     };
     w.vec_b.resize(n);
-    w.vel4.resize(n);
     const float dt_prev = world.last_dt > 0.0f ? world.last_dt : max_dt;
 
     // Each solve may change a particle's velocity by at most d / (2 dt_nominal) per step.
@@ -1149,18 +1197,22 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       // (tests/sph), since the solver never pulls particles back once pushed too far.
       const double eta_v = P.max_divergence_error;
       for (;;) {
-        const double err = reduce(
+        const double err = reduceChunks(
                                n, 0.0,
-                               [&](std::size_t i, double& acc) {
-                                 // Only compression is corrected, and only for particles with a full enough
-                                 // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9
-                                 // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
-                                 // free surface is pushed outward every step and the fluid creeps apart.
-                                 const float neighbours =
-                                     static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
-                                 const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
-                                 kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
-                                 acc += rate * dt_prev / rho0;
+                               [&](std::size_t b, std::size_t e, double& acc) {
+                                 float rates[kGrain];
+                                 densityRates(b, e, rates);
+                                 for (std::size_t i = b; i < e; ++i) {
+                                   // Only compression is corrected, and only for particles with a full enough
+                                   // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the
+                                   // 9 lattice neighbours a flat wall replaces per wall_share of volume), otherwise
+                                   // the free surface is pushed outward every step and the fluid creeps apart.
+                                   const float neighbours =
+                                       static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
+                                   const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
+                                   kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
+                                   acc += rate * dt_prev / rho0;
+                                 }
                                },
                                [](double a, double b) { return a + b; }) /
                            static_cast<double>(n);
@@ -1194,19 +1246,26 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         // The share is 0.4 rather than the paper's full kappa: with 0.5 the randomised stability
         // test (a jet against a collider) gains energy; 0.4 passes it and still saves 21-33 % of
         // the iterations on dambreak_box (see SphParams::warm_start).
-        forEach(n, [&](std::size_t i) {
-          kr[i] = S.density[i] + dt * densityRate(i) > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
+        forChunks(n, [&](std::size_t b, std::size_t e) {
+          float rates[kGrain];
+          densityRates(b, e, rates);
+          for (std::size_t i = b; i < e; ++i)
+            kr[i] = S.density[i] + dt * rates[i - b] > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
         });
         applyKappa(dt, w.float_tmp);
       }
       const double eta = P.max_density_error;
       for (;;) {
-        const double err = reduce(
+        const double err = reduceChunks(
                                n, 0.0,
-                               [&](std::size_t i, double& acc) {
-                                 const float excess = std::max(0.0f, S.density[i] + dt * densityRate(i) - rho0);
-                                 kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
-                                 acc += excess / rho0;
+                               [&](std::size_t b, std::size_t e, double& acc) {
+                                 float rates[kGrain];
+                                 densityRates(b, e, rates);
+                                 for (std::size_t i = b; i < e; ++i) {
+                                   const float excess = std::max(0.0f, S.density[i] + dt * rates[i - b] - rho0);
+                                   kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
+                                   acc += excess / rho0;
+                                 }
                                },
                                [](double a, double b) { return a + b; }) /
                            static_cast<double>(n);
