@@ -187,8 +187,8 @@ struct SphScratch {
   // DFSPH: copies of the velocities (and of the positions for the viscosity pass) padded to 16
   // bytes, so the eight-lane pair loops load a neighbour's x, y, z with one 16-byte load.
   std::vector<glm::vec4> vel4, pos4;
-  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume, boundary_flux, boundary_product,
-      float_tmp;
+  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
+      boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;
   std::vector<glm::vec3> local_points;
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions

@@ -316,8 +316,9 @@ struct PairLoops {
   // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and returns the sums.
   DensitySums (*density)(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id, const std::uint32_t* nbr,
                          std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz);
-  // sum_k vc[j] (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph).
-  glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx, const float* gy,
+  // sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph), with
+  // c_j = 10 nu / rho_j in X[j].w.
+  glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
                          const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
                          float eps);
   // The two solver-iteration loops for the particles [i0, i1) (i1 - i0 <= kGrain): out[i - i0].
@@ -354,7 +355,7 @@ DensitySums densityPortable(const DensityConsts& c, const glm::vec4* X, const st
   return out;
 }
 
-glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx, const float* gy,
+glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
                             const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e,
                             std::uint32_t i, float eps) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
@@ -365,7 +366,7 @@ glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float*
     const float x = xi.x - X[j].x, y = xi.y - X[j].y, z = xi.z - X[j].z;
     const float vx = ((vi.x - V[j].x) * x + (vi.y - V[j].y) * y) + (vi.z - V[j].z) * z;
     const float denom = ((x * x + y * y) + z * z) + eps;
-    const float coef = vc[j] * (vx / denom);
+    const float coef = X[j].w * (vx / denom);
     ax[l] += coef * gx[k];
     ay[l] += coef * gy[k];
     az[l] += coef * gz[k];
@@ -443,6 +444,18 @@ FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx,
   x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
   y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
   z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+// The same with the 4th component.
+FLUID_AVX2 inline void load8xyzw(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z,
+                                 __m256& w) {
+  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
+               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 // The last block of a list: lanes past `left` read particle 0 (valid data; their gradient
 // lanes are masked to 0, so they add exact zeros).
@@ -539,9 +552,7 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, c
   return out;
 }
 
-// x, y, z of base[idx[0..7]] as three 8-lane vectors: four 32-byte rows of two particles each
-// (one 16-byte load per particle, no gather), transposed in registers.
-FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const float* vc, const float* gx,
+FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const float* gx,
                                    const float* gy, const float* gz, const std::uint32_t* nbr, std::uint32_t b,
                                    std::uint32_t e, std::uint32_t i, float eps) {
   const __m256 pix = _mm256_set1_ps(X[i].x), piy = _mm256_set1_ps(X[i].y), piz = _mm256_set1_ps(X[i].z);
@@ -552,8 +563,8 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
   for (std::uint32_t k = b; k < e; k += kLanes) {
     const __m256i mi = laneMask(e - k);
     const std::uint32_t* idx = e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf);
-    __m256 xj, yj, zj, uj, vj, wj;
-    load8xyz(X, idx, xj, yj, zj);
+    __m256 xj, yj, zj, vcj, uj, vj, wj;
+    load8xyzw(X, idx, xj, yj, zj, vcj);
     load8xyz(V, idx, uj, vj, wj);
     const __m256 x = _mm256_sub_ps(pix, xj), y = _mm256_sub_ps(piy, yj), z = _mm256_sub_ps(piz, zj);
     const __m256 vx = _mm256_add_ps(
@@ -561,7 +572,7 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
         _mm256_mul_ps(_mm256_sub_ps(viz, wj), z));
     const __m256 denom =
         _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)), ve);
-    const __m256 coef = _mm256_mul_ps(load8(vc, idx), _mm256_div_ps(vx, denom));
+    const __m256 coef = _mm256_mul_ps(vcj, _mm256_div_ps(vx, denom));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(coef, _mm256_maskload_ps(gx + k, mi)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_maskload_ps(gy + k, mi)));
     az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_maskload_ps(gz + k, mi)));
@@ -1028,7 +1039,10 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       pr[i] = S.pressure[i] / (S.density[i] * S.density[i]);
     });
   }
-  forEach(n, [&](std::size_t i) { visc_coef[i] = 10.0f * nu / S.density[i]; });
+  forEach(n, [&](std::size_t i) {
+    visc_coef[i] = 10.0f * nu / S.density[i];
+    w.pos4[i].w = visc_coef[i];  // read with the neighbour's position by the DFSPH viscosity loop
+  });
   auto nonPressure = [&](auto with_pressure, auto with_viscosity) {
     constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
     const glm::vec3* __restrict Xp = X.data();
@@ -1073,7 +1087,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop.
     const float eps = 0.01f * H * H;
     forEach(n, [&](std::size_t i) {
-      w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), visc_coef.data(), gx, gy, gz, nbr, off[i],
+      w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
                                                off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
     });
   } else {
@@ -1151,6 +1165,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     };
     auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
     kr.resize(n);
+    auto& kscale = w.kappa_scale;  // kr_i per unit of compression (or of density rate), per solve
+    kscale.resize(n);
     w.kappa_v.assign(n, 0.0f);    // sum over the divergence iterations of kappa^v_i / rho_i
     w.float_tmp.assign(n, 0.0f);  // same for the density iterations
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
@@ -1196,6 +1212,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       // (2017 §4.3) let a jet hitting a collider gain energy in the randomised stability test
       // (tests/sph), since the solver never pulls particles back once pushed too far.
       const double eta_v = P.max_divergence_error;
+      // kappa^v_i / rho_i = (Drho/Dt)_i alpha_i / (dt rho_i) (2015 eq. 9 with the factor of
+      // §4.1): the per-particle part once per solve, a product per iteration.
+      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt_prev * S.density[i]); });
       for (;;) {
         const double err = reduceChunks(
                                n, 0.0,
@@ -1210,7 +1229,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                                    const float neighbours =
                                        static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
                                    const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
-                                   kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
+                                   kr[i] = rate * kscale[i];
                                    acc += rate * dt_prev / rho0;
                                  }
                                },
@@ -1255,6 +1274,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt, w.float_tmp);
       }
       const double eta = P.max_density_error;
+      // kappa_i / rho_i = (rho*_i - rho_0) alpha_i / (dt^2 rho_i) (2015 eq. 8-9): as above.
+      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt * dt * S.density[i]); });
       for (;;) {
         const double err = reduceChunks(
                                n, 0.0,
@@ -1263,7 +1284,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                                  densityRates(b, e, rates);
                                  for (std::size_t i = b; i < e; ++i) {
                                    const float excess = std::max(0.0f, S.density[i] + dt * rates[i - b] - rho0);
-                                   kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
+                                   kr[i] = excess * kscale[i];
                                    acc += excess / rho0;
                                  }
                                },

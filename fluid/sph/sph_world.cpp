@@ -124,8 +124,8 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel, &w.local_points})
     v->reserve(capacity);
-  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume, &w.boundary_flux,
-                  &w.float_tmp})
+  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
+                  &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
   w.vel4.reserve(capacity);
   w.pos4.reserve(capacity);
