@@ -61,7 +61,7 @@ struct SphParams {
   float max_time_step = 0.005f;          // s, upper bound of the adaptive step (requested steps above are clamped)
   float min_time_step = 1e-6f;           // s, lower bound (a step never gets shorter, even if CFL asks)
   float max_speed = 0.0f;                // m/s, velocities are clamped to this after each step; 0 = no clamp
-  std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count
+  std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count; < 2^28
 
   // WCSPH (Becker & Teschner 2007)
   float sound_speed = 20.0f;          // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
@@ -187,6 +187,8 @@ struct SphScratch {
   // DFSPH: copies of the velocities (and of the positions for the viscosity pass) padded to 16
   // bytes, so the eight-lane pair loops load a neighbour's x, y, z with one 16-byte load.
   std::vector<glm::vec4> vel4, pos4;
+  std::vector<glm::vec4> kappa4;           // DFSPH: .x = kappa_i / rho_i of the current iteration (16-byte records)
+  std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair, 16 j (byte offset of j's 16-byte record)
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;

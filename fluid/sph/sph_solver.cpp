@@ -305,11 +305,12 @@ inline void densityLane(const DensityConsts& c, glm::vec3 x, std::uint32_t id_i,
 }
 
 // What the solver iterations read: neighbour lists (i's pairs are [off[i], off[i] + cnt[i])),
-// per-pair gradients and the 16-byte velocity copy.
+// the same neighbours as byte offsets 16 j (so the AVX2 loops address 16-byte records without a
+// shift per neighbour), per-pair gradients and the 16-byte velocity copy.
 struct IterationArgs {
   const glm::vec4* vel4;
   const float *gx, *gy, *gz;
-  const std::uint32_t *nbr, *off, *cnt;
+  const std::uint32_t *nbr, *nb16, *off, *cnt;
 };
 
 struct PairLoops {
@@ -323,7 +324,9 @@ struct PairLoops {
                          float eps);
   // The two solver-iteration loops for the particles [i0, i1) (i1 - i0 <= kGrain): out[i - i0].
   void (*divergence_range)(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out);
-  void (*kappa_range)(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1, glm::vec3* out);
+  // kr4[j].x = kappa_j / rho_j (16-byte records, addressed like vel4).
+  void (*kappa_range)(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
+                      glm::vec3* out);
 };
 
 // Portable lanes.
@@ -389,12 +392,12 @@ inline float divergencePortable(const glm::vec4* V, const float* gx, const float
   return hsum8(s);
 }
 
-inline glm::vec3 kappaSumPortable(const float* kr, const float* gx, const float* gy, const float* gz,
-                           const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
+inline glm::vec3 kappaSumPortable(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
+                                  const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
-    const float s = ki + kr[nbr[k]];
+    const float s = ki + kr4[nbr[k]].x;
     ax[l] += s * gx[k];
     ay[l] += s * gy[k];
     az[l] += s * gz[k];
@@ -406,9 +409,10 @@ void divergenceRangePortable(const IterationArgs& a, std::uint32_t i0, std::uint
   for (std::uint32_t i = i0; i < i1; ++i)
     out[i - i0] = divergencePortable(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
 }
-void kappaRangePortable(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1, glm::vec3* out) {
+void kappaRangePortable(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
+                        glm::vec3* out) {
   for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = kappaSumPortable(kr, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr[i]);
+    out[i - i0] = kappaSumPortable(kr4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
 }
 
 constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergenceRangePortable, &kappaRangePortable};
@@ -465,16 +469,35 @@ FLUID_AVX2 inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std
   return buf;
 }
 
-// a[idx[0..7]] by scalar loads (Zen 3 runs these faster than vgatherdps).
-FLUID_AVX2 inline __m256 load8(const float* a, const std::uint32_t* idx) {
-  const __m128 lo = _mm_insert_ps(_mm_insert_ps(_mm_insert_ps(_mm_load_ss(a + idx[0]), _mm_load_ss(a + idx[1]), 0x10),
-                                                _mm_load_ss(a + idx[2]), 0x20),
-                                  _mm_load_ss(a + idx[3]), 0x30);
-  const __m128 hi = _mm_insert_ps(_mm_insert_ps(_mm_insert_ps(_mm_load_ss(a + idx[4]), _mm_load_ss(a + idx[5]), 0x10),
-                                                _mm_load_ss(a + idx[6]), 0x20),
-                                  _mm_load_ss(a + idx[7]), 0x30);
+// load8xyz with byte offsets o[l] = 16 idx[l].
+FLUID_AVX2 inline __m256 loadPair16(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
+  const char* p = reinterpret_cast<const char*>(base);
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(reinterpret_cast<const float*>(p + a))),
+                              _mm_loadu_ps(reinterpret_cast<const float*>(p + b)), 1);
+}
+FLUID_AVX2 inline void load8xyz16(const glm::vec4* base, const std::uint32_t* o, __m256& x, __m256& y, __m256& z) {
+  const __m256 r0 = loadPair16(base, o[0], o[4]), r1 = loadPair16(base, o[1], o[5]),
+               r2 = loadPair16(base, o[2], o[6]), r3 = loadPair16(base, o[3], o[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+// base[idx[l]].x for byte offsets o[l] = 16 idx[l], by scalar loads (Zen 3 runs these faster
+// than vgatherdps).
+FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o) {
+  const char* p = reinterpret_cast<const char*>(base);
+  auto at = [p](std::uint32_t off) { return reinterpret_cast<const float*>(p + off); };
+  const __m128 lo = _mm_insert_ps(
+      _mm_insert_ps(_mm_insert_ps(_mm_load_ss(at(o[0])), _mm_load_ss(at(o[1])), 0x10), _mm_load_ss(at(o[2])), 0x20),
+      _mm_load_ss(at(o[3])), 0x30);
+  const __m128 hi = _mm_insert_ps(
+      _mm_insert_ps(_mm_insert_ps(_mm_load_ss(at(o[4])), _mm_load_ss(at(o[5])), 0x10), _mm_load_ss(at(o[6])), 0x20),
+      _mm_load_ss(at(o[7])), 0x30);
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
+
 
 FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
                                    const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
@@ -581,13 +604,13 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
 }
 
 FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
-                                const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
+                                       const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
   const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
   std::uint32_t k = b;
   __m256 vx, vy, vz;
   for (; k + kLanes <= e; k += kLanes) {
-    load8xyz(V, nbr + k, vx, vy, vz);
+    load8xyz16(V, nb16 + k, vx, vy, vz);
     ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_loadu_ps(gx + k)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_loadu_ps(gy + k)));
     az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_loadu_ps(gz + k)));
@@ -595,7 +618,7 @@ FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* V, const float* gx, cons
   if (k < e) {
     const __m256i mi = laneMask(e - k);
     std::uint32_t buf[kLanes];
-    load8xyz(V, tailIndices(nbr + k, e - k, buf), vx, vy, vz);
+    load8xyz16(V, tailIndices(nb16 + k, e - k, buf), vx, vy, vz);
     ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_maskload_ps(gx + k, mi)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_maskload_ps(gy + k, mi)));
     az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_maskload_ps(gz + k, mi)));
@@ -603,13 +626,13 @@ FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* V, const float* gx, cons
   return hsum8(_mm256_add_ps(_mm256_add_ps(ax, ay), az));
 }
 
-FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const float* gy, const float* gz,
-                                  const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
+FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
+                                         const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, float ki) {
   const __m256 vk = _mm256_set1_ps(ki);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
   std::uint32_t k = b;
   for (; k + kLanes <= e; k += kLanes) {
-    const __m256 s = _mm256_add_ps(vk, load8(kr, nbr + k));
+    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, nb16 + k));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_loadu_ps(gx + k)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_loadu_ps(gy + k)));
     az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_loadu_ps(gz + k)));
@@ -617,7 +640,7 @@ FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const
   if (k < e) {
     const __m256i mi = laneMask(e - k);
     std::uint32_t buf[kLanes];
-    const __m256 s = _mm256_add_ps(vk, load8(kr, tailIndices(nbr + k, e - k, buf)));
+    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, tailIndices(nb16 + k, e - k, buf)));
     ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_maskload_ps(gx + k, mi)));
     ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_maskload_ps(gy + k, mi)));
     az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_maskload_ps(gz + k, mi)));
@@ -626,12 +649,12 @@ FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const float* kr, const float* gx, const
 }
 FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
   for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = divergenceAvx2(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+    out[i - i0] = divergenceAvx2(a.vel4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
 }
-FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const float* kr, std::uint32_t i0, std::uint32_t i1,
+FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
                                glm::vec3* out) {
   for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = kappaSumAvx2(kr, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr[i]);
+    out[i - i0] = kappaSumAvx2(kr4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
 }
 #undef FLUID_AVX2
 
@@ -1157,14 +1180,19 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
     // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
-    const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, off, cnt};
+    // Neighbours as byte offsets 16 j (IterationArgs); n < 2^28 (validateSphParams).
+    w.pair_offset.resize(w.neighbors.indices.size());
+    forEach(n, [&](std::size_t i) {
+      for (std::uint32_t k = off[i]; k < off[i] + cnt[i]; ++k) w.pair_offset[k] = nbr[k] << 4;
+    });
+    const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
     auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
       loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
       for (std::size_t i = b; i < e; ++i)
         rate[i - b] += rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
     };
-    auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
-    kr.resize(n);
+    auto& kr4 = w.kappa4;  // kr4[i].x = kappa_i / rho_i of the current iteration
+    kr4.resize(n);
     auto& kscale = w.kappa_scale;  // kr_i per unit of compression (or of density rate), per solve
     kscale.resize(n);
     w.kappa_v.assign(n, 0.0f);    // sum over the divergence iterations of kappa^v_i / rho_i
@@ -1173,12 +1201,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forChunks(n, [&](std::size_t b, std::size_t e) {
         glm::vec3 sums[kGrain];
-        loops.kappa_range(ia, kr.data(), static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), sums);
+        loops.kappa_range(ia, kr4.data(), static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), sums);
         for (std::size_t i = b; i < e; ++i) {
-          const glm::vec3 dv = kMirror * rho0 * kr[i] * w.boundary_gradient[i] + sums[i - b];
+          const glm::vec3 dv = kMirror * rho0 * kr4[i].x * w.boundary_gradient[i] + sums[i - b];
           w.vec_b[i] = V[i] - h * dv;
           w.vel4[i] = glm::vec4(w.vec_b[i], 0.0f);  // the copy the next divergence pass reads
-          total[i] += kr[i];
+          total[i] += kr4[i].x;
         }
       });
       V.swap(w.vec_b);  // Jacobi: all updates read the old velocities; swapping keeps both buffers
@@ -1229,7 +1257,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                                    const float neighbours =
                                        static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
                                    const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
-                                   kr[i] = rate * kscale[i];
+                                   kr4[i].x = rate * kscale[i];
                                    acc += rate * dt_prev / rho0;
                                  }
                                },
@@ -1269,7 +1297,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           float rates[kGrain];
           densityRates(b, e, rates);
           for (std::size_t i = b; i < e; ++i)
-            kr[i] = S.density[i] + dt * rates[i - b] > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
+            kr4[i].x = S.density[i] + dt * rates[i - b] > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
         });
         applyKappa(dt, w.float_tmp);
       }
@@ -1284,7 +1312,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
                                  densityRates(b, e, rates);
                                  for (std::size_t i = b; i < e; ++i) {
                                    const float excess = std::max(0.0f, S.density[i] + dt * rates[i - b] - rho0);
-                                   kr[i] = excess * kscale[i];
+                                   kr4[i].x = excess * kscale[i];
                                    acc += excess / rho0;
                                  }
                                },

@@ -83,6 +83,9 @@ SphStatus validateSphParams(const SphParams& p) {
     if (std::isnan(p.domain_min[a]) || std::isnan(p.domain_max[a]) || p.domain_min[a] > p.domain_max[a])
       return {fieldError("domain_min/domain_max", p.domain_min[a], "finite, min <= max")};
   }
+  // The DFSPH pair loops address neighbours by 32-bit byte offsets 16 j.
+  if (p.max_particles >= (std::size_t{1} << 28))
+    return {fieldError("max_particles", static_cast<float>(p.max_particles), "< 2^28 = 268435456")};
   if (p.min_iterations < 0 || p.max_iterations < 1 || p.min_iterations > p.max_iterations)
     return {
         fieldError("min_iterations/max_iterations", static_cast<float>(p.max_iterations), "0 <= min <= max, max >= 1")};
@@ -128,6 +131,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
                   &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
   w.vel4.reserve(capacity);
+  w.kappa4.reserve(capacity);
   w.pos4.reserve(capacity);
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);
