@@ -314,9 +314,11 @@ struct IterationArgs {
 };
 
 struct PairLoops {
-  // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and returns the sums.
+  // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and nb16[b, e) = 16 nbr[b, e) (see
+  // IterationArgs) and returns the sums.
   DensitySums (*density)(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id, const std::uint32_t* nbr,
-                         std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz);
+                         std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz,
+                         std::uint32_t* nb16);
   // sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph), with
   // c_j = 10 nu / rho_j in X[j].w.
   glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
@@ -332,12 +334,13 @@ struct PairLoops {
 // Portable lanes.
 DensitySums densityPortable(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
                             const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx,
-                            float* gy, float* gz) {
+                            float* gy, float* gz, std::uint32_t* nb16) {
   float sw[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {}, sz[kLanes] = {}, sq[kLanes] = {};
   const glm::vec4 xi = X[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
     const std::uint32_t j = nbr[k];
+    nb16[k] = j << 4;
     const glm::vec4 xj = X[j];
     float wv;
     glm::vec3 g;
@@ -501,7 +504,7 @@ FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o)
 
 FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
                                    const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
-                                   float* gx, float* gy, float* gz) {
+                                   float* gx, float* gy, float* gz, std::uint32_t* nb16) {
   const glm::vec4 xi = X[i];
   const __m256 pix = _mm256_set1_ps(xi.x), piy = _mm256_set1_ps(xi.y), piz = _mm256_set1_ps(xi.z);
   const __m256 inv_h = _mm256_set1_ps(c.inv_support), sigma = _mm256_set1_ps(c.sigma),
@@ -558,6 +561,8 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, c
     g0 = _mm256_and_ps(g0, m);
     g1 = _mm256_and_ps(g1, m);
     g2 = _mm256_and_ps(g2, m);
+    _mm256_maskstore_epi32(reinterpret_cast<int*>(nb16 + k), mi,
+                           _mm256_slli_epi32(_mm256_maskload_epi32(reinterpret_cast<const int*>(nbr + k), mi), 4));
     _mm256_maskstore_ps(gx + k, mi, g0);
     _mm256_maskstore_ps(gy + k, mi, g1);
     _mm256_maskstore_ps(gz + k, mi, g2);
@@ -1004,9 +1009,11 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
   } else {
     const DensityConsts dc = DensityConsts::make(w.kernel, m, r_min, steepest);
+    w.pair_offset.resize(pair_count);  // n < 2^28 (validateSphParams), so 16 j fits
+    std::uint32_t* const nb16_out = w.pair_offset.data();
     forEach(n, [&](std::size_t i) {
       const DensitySums ds = loops.density(dc, w.pos4.data(), S.id.data(), nbr, off[i], cand_end[i],
-                                           static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out);
+                                           static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out, nb16_out);
       S.density[i] = m * (w0 + ds.w) + rho0 * w.boundary_volume[i];
       w.vec_b[i] = ds.grad;
       w.factor[i] = ds.sq;
@@ -1180,11 +1187,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
     // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
-    // Neighbours as byte offsets 16 j (IterationArgs); n < 2^28 (validateSphParams).
-    w.pair_offset.resize(w.neighbors.indices.size());
-    forEach(n, [&](std::size_t i) {
-      for (std::uint32_t k = off[i]; k < off[i] + cnt[i]; ++k) w.pair_offset[k] = nbr[k] << 4;
-    });
     const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
     auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
       loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
