@@ -36,6 +36,9 @@ const KeySpec kFountain[] = {
     {"basin_height", 1.5f, 0.1f, 100.0f, "basin wall height (m)"},
     {"nozzle_speed", 3.5f, 0.01f, 100.0f, "jet speed (m/s)"},
     {"nozzle_radius", 0.04f, 0.0f, 10.0f, "jet radius (m)"},
+    {"nozzle_height", 0.25f, 0.0f, 100.0f,
+     "nozzle above the floor (m); keep it above the water level (budget d^3 / basin_size^2), or new particles "
+     "are inserted into the water"},
     {"rate", 3000.0f, 0.0f, 1e7f, "particles emitted per second"},
     {"budget", 10000.0f, 0.0f, 1e8f, "maximum particle count"},
     {"drain_size", 0.2f, 0.0f, 100.0f, "edge of the square drain in a floor corner (m)"},
@@ -192,7 +195,7 @@ SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
     out.box_min = glm::vec3(-0.5f * b, 0.0f, -0.5f * b);
     out.box_max = glm::vec3(0.5f * b, get("basin_height"), 0.5f * b);
     SphEmitter e;
-    e.position = glm::vec3(0.0f, 2.0f * d, 0.0f);
+    e.position = glm::vec3(0.0f, std::max(get("nozzle_height"), 2.0f * d), 0.0f);
     e.direction = glm::vec3(0.0f, 1.0f, 0.0f);
     e.speed = get("nozzle_speed");
     e.radius = get("nozzle_radius");

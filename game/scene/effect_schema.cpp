@@ -62,6 +62,12 @@ const std::array kSphFluidParams = {
               "particles emitted per second (capped: layers never overlap)"},
     ParamSpec{"viscosity", ParamType::number, 0.0, 1.0, num(0.02), "kinematic viscosity nu (m^2/s)"},
     ParamSpec{"drain", ParamType::boolean, 0.0, 0.0, flag(true), "four drains at the basin wall recycle the water"},
+    ParamSpec{"cfl", ParamType::number, 0.05, 1.0, num(0.4), "CFL number: a step moves no particle more than cfl * 2r"},
+    ParamSpec{"max_time_step", ParamType::number, 0.0005, 0.05, num(0.005), "upper bound of one adaptive SPH step (s)"},
+    ParamSpec{"density_error", ParamType::number, 0.00001, 0.05, num(0.0005),
+              "dfsph: mean density error tolerance of the pressure solve (0.0005 = 0.05 %)"},
+    ParamSpec{"force_bound", ParamType::number, 0.0, 1.0, num(0.0025),
+              "dfsph: force condition |g| dt^2 <= force_bound * cfl * 2r (keeps resting water still); 0 = off"},
     ParamSpec{
         "couple_bodies", ParamType::boolean, 0.0, 0.0, flag(true),
         "crates and water push each other, two-way (only when rigid_bodies is listed too; fixed at construction)"},

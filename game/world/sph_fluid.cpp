@@ -2,6 +2,7 @@
 
 #include "fluid/core/finite.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace game {
@@ -20,6 +21,10 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
   p.rate = static_cast<float>(section.number("rate"));
   p.viscosity = static_cast<float>(section.number("viscosity"));
   p.drain = section.boolean("drain");
+  p.cfl = static_cast<float>(section.number("cfl"));
+  p.max_time_step = static_cast<float>(section.number("max_time_step"));
+  p.density_error = static_cast<float>(section.number("density_error"));
+  p.force_bound = static_cast<float>(section.number("force_bound"));
   out = p;
   return true;
 }
@@ -34,6 +39,11 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   sp.gravity = gravity;
   sp.viscosity = params.viscosity;
   sp.max_particles = params.max_particles;
+  sp.cfl = params.cfl;
+  sp.max_time_step = params.max_time_step;
+  sp.min_time_step = std::min(sp.min_time_step, sp.max_time_step);
+  sp.max_density_error = params.density_error;
+  sp.force_bound = params.force_bound;
   // A cap well above the jet speed: a stray fast particle cannot force tiny CFL steps.
   sp.max_speed = 3.0f * params.jet_speed + 5.0f;
   // WCSPH: the sound speed must stay ~10x the fastest flow (Becker & Teschner 2007 §4).

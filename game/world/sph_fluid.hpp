@@ -24,6 +24,11 @@ struct SphFluidParams {
   float rate = 500.0f;            // particles per second
   float viscosity = 0.02f;        // m^2/s (SphParams::viscosity)
   bool drain = true;
+  // Solver quality knobs (fluid::SphParams): accuracy against time, see docs/sph.md.
+  float cfl = 0.4f;
+  float max_time_step = 0.005f;     // s
+  float density_error = 0.0005f;    // dfsph tolerance (mean predicted compression)
+  float force_bound = 0.0025f;      // dfsph force condition; 0 = off
 };
 
 // Reads the "sph_fluid" section. False + error naming the field when `solver` is unknown.

@@ -1,5 +1,6 @@
 #include "game/world/world.hpp"
 
+#include <algorithm>
 #include <optional>
 
 namespace game {
@@ -108,6 +109,16 @@ void applyLiveParams(World& world) {
       f.params.rate = fresh.rate;
       f.params.viscosity = fresh.viscosity;
       f.world.params.viscosity = fresh.viscosity;
+      // Accuracy against time, live: the step bounds and the pressure-solve tolerance.
+      f.params.cfl = fresh.cfl;
+      f.params.max_time_step = fresh.max_time_step;
+      f.params.density_error = fresh.density_error;
+      f.params.force_bound = fresh.force_bound;
+      f.world.params.cfl = fresh.cfl;
+      f.world.params.max_time_step = fresh.max_time_step;
+      f.world.params.min_time_step = std::min(f.world.params.min_time_step, fresh.max_time_step);
+      f.world.params.max_density_error = fresh.density_error;
+      f.world.params.force_bound = fresh.force_bound;
       for (fluid::SphEmitter& e : f.world.emitters) {
         e.speed = fresh.jet_speed;
         e.rate = fresh.rate;

@@ -1,0 +1,160 @@
+// The game aim of issue 4, measured on the game's own fountain (plain executable, not a ctest test):
+// the `sph_fluid` effect of content/scenes/fountain.json (statue, dish, basin and drains as the
+// game builds them, game::initSphFluid), with its particle budget raised to 10,000, filled with the
+// drains shut until one second of jet is left to the budget, then stepped for 60 frames of 1/60 s
+// exactly as the game steps it (game::stepSphFluid), the jet still running.
+//
+//   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
+//
+// Prints one markdown row per configuration and thread count: particles, ms per frame (median
+// and worst), SPH steps per frame, solver iterations per step (DFSPH: divergence + density), mean
+// and max density error (issue 4's definition: mean over particles of max(0, rho/rho_0 - 1), here
+// averaged over the steps of the timed frames).
+// Configurations: the scene file as written, then each `--config "k=v,k=v"` given (sph_fluid keys).
+#include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
+#include "game/world/sph_fluid.hpp"
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+struct Config {
+  std::string label;
+  std::vector<std::string> assignments;  // "sph_fluid.key=value"
+};
+
+bool buildFluid(const std::string& scene_file, const std::vector<std::string>& assignments, game::SphFluid& fluid,
+                glm::vec3& gravity) {
+  game::SceneConfig scene;
+  game::SceneStatus st = game::loadSceneFile(scene_file, scene);
+  for (const std::string& a : assignments)
+    if (st.ok()) st = game::applyOverride(scene, a);
+  if (!st.ok()) {
+    std::fprintf(stderr, "bench_game_fountain: %s\n", st.error.c_str());
+    return false;
+  }
+  const game::SectionConfig* section = scene.effect("sph_fluid");
+  if (section == nullptr) {
+    std::fprintf(stderr, "bench_game_fountain: %s does not list the sph_fluid effect\n", scene_file.c_str());
+    return false;
+  }
+  gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+  if (const game::SectionConfig* rigid = scene.effect("rigid_bodies")) gravity = rigid->vec3("gravity");
+  game::SphFluidParams params;
+  std::string error;
+  if (!game::sphParamsFrom(*section, params, error) ||
+      !game::initSphFluid(fluid, params, game::FountainGeometry{}, gravity, error)) {
+    std::fprintf(stderr, "bench_game_fountain: %s\n", error.c_str());
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scene_file = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/scenes/fountain.json";
+  std::vector<int> threads{1, 2};
+  int frames = 60;
+  std::vector<std::string> common{"sph_fluid.max_particles=10000"};
+  std::vector<Config> configs{{"as in the scene file", {}}};
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--scene") {
+      scene_file = v;
+    } else if (k == "--frames") {
+      frames = std::atoi(v.c_str());
+    } else if (k == "--set") {
+      common.push_back(v);
+    } else if (k == "--config") {
+      Config c{v, {}};
+      std::size_t start = 0;
+      while (start <= v.size()) {
+        const std::size_t comma = std::min(v.find(',', start), v.size());
+        if (comma > start) c.assignments.push_back("sph_fluid." + v.substr(start, comma - start));
+        start = comma + 1;
+      }
+      configs.push_back(c);
+    } else if (k == "--threads") {
+      threads.clear();
+      for (char ch : v)
+        if (ch >= '1' && ch <= '9') threads.push_back(ch - '0');
+    } else {
+      std::fprintf(stderr, "bench_game_fountain: unknown option %s\n", k.c_str());
+      return 2;
+    }
+  }
+  if (argc % 2 == 0 || frames < 1 || threads.empty()) {
+    std::fprintf(stderr,
+                 "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
+                 "[--config \"k=v,k=v\"]...\n");
+    return 2;
+  }
+
+  std::printf(
+      "| configuration (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
+      "solver iterations per step | mean density error | max density error |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const Config& config : configs) {
+    std::vector<std::string> assignments = common;
+    assignments.insert(assignments.end(), config.assignments.begin(), config.assignments.end());
+    game::SphFluid filled;
+    glm::vec3 gravity;
+    {
+      // Fill with the drains shut (one fill per configuration, all rows of it time the same state).
+      std::vector<std::string> fill = assignments;
+      fill.push_back("sph_fluid.drain=false");
+      if (!buildFluid(scene_file, fill, filled, gravity)) return 1;
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+      const double budget = static_cast<double>(filled.world.params.max_particles);
+      const double target = budget - std::min(0.5 * budget, static_cast<double>(filled.params.rate));
+      while (static_cast<double>(filled.world.particles.size()) < target && filled.world.time < 120.0)
+        if (!game::stepSphFluid(filled, 1.0 / 60.0)) {
+          std::fprintf(stderr, "bench_game_fountain: %s\n", filled.error.c_str());
+          return 1;
+        }
+    }
+    for (int t : threads) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(t));
+      game::SphFluid f = filled;
+      std::vector<double> ms;
+      double steps = 0.0, iterations = 0.0, err = 0.0, max_err = 0.0;
+      for (int frame = 0; frame < frames; ++frame) {
+        double frame_ms = 0.0;
+        const fluid::SphStatus st = fluid::advanceSph(
+            f.world, 1.0 / 60.0,
+            [&](const fluid::SphStepStats& x) {
+              frame_ms += x.step_ms;
+              steps += 1.0;
+              iterations += x.density_iterations + x.divergence_iterations;
+              err += x.avg_density_error;
+              max_err = std::max(max_err, static_cast<double>(x.max_density_error));
+            },
+            10000);
+        if (!st.ok()) {
+          std::fprintf(stderr, "bench_game_fountain: %s\n", st.error.c_str());
+          return 1;
+        }
+        ms.push_back(frame_ms);
+      }
+      const double per_step = 1.0 / std::max(steps, 1.0);
+      std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% |\n", config.label.c_str(), t,
+                  f.world.particles.size(), median(ms), *std::max_element(ms.begin(), ms.end()), steps / frames,
+                  iterations * per_step, 100.0 * err * per_step, 100.0 * max_err);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
