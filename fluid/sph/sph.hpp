@@ -184,8 +184,9 @@ struct SphScratch {
   std::vector<float> grad_x, grad_y, grad_z;
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
-  // DFSPH: copies of the velocities (and of the positions for the viscosity pass) padded to 16
-  // bytes, so the eight-lane pair loops load a neighbour's x, y, z with one 16-byte load.
+  // Step-start positions and the velocities padded to 16 bytes, so the eight-lane pair loops load
+  // a neighbour's x, y, z with one 16-byte load (DFSPH density, viscosity and solver passes);
+  // pos4[i].w carries the viscosity coefficient 10 nu / rho_i once the densities are known.
   std::vector<glm::vec4> vel4, pos4;
   std::vector<glm::vec4> kappa4;           // DFSPH: .x = kappa_i / rho_i of the current iteration (16-byte records)
   std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair, 16 j (byte offset of j's 16-byte record)
