@@ -61,7 +61,7 @@ struct SphParams {
   float max_time_step = 0.005f;          // s, upper bound of the adaptive step (requested steps above are clamped)
   float min_time_step = 1e-6f;           // s, lower bound (a step never gets shorter, even if CFL asks)
   float max_speed = 0.0f;                // m/s, velocities are clamped to this after each step; 0 = no clamp
-  std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count
+  std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count; < 2^28
 
   // WCSPH (Becker & Teschner 2007)
   float sound_speed = 20.0f;          // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
@@ -179,17 +179,28 @@ struct SphScratch {
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;
   bool verlet_valid = false;
-  std::vector<glm::vec4> gradients;  // per neighbour pair: m_j grad W_ij, 4th component 0 (one 16-byte load)
+  // Per neighbour pair k (same index as neighbors.indices): m_j grad W_ij, one array per component
+  // (SoA: the solver's pair loops read them eight pairs at a time).
+  std::vector<float> grad_x, grad_y, grad_z;
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
-  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, boundary_volume, boundary_flux, boundary_product,
-      float_tmp;
+  // Step-start positions and the velocities padded to 16 bytes, so the eight-lane pair loops load
+  // a neighbour's x, y, z with one 16-byte load (DFSPH density, viscosity and solver passes);
+  // pos4[i].w carries the viscosity coefficient 10 nu / rho_i once the densities are known.
+  std::vector<glm::vec4> vel4, pos4;
+  std::vector<glm::vec4> kappa4;           // DFSPH: .x = kappa_i / rho_i of the current iteration (16-byte records)
+  std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair, 16 j (byte offset of j's 16-byte record)
+  std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
+      boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;
   std::vector<glm::vec3> local_points;
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<ColliderSample> end_samples;
   std::vector<glm::vec3> reduce_force, reduce_torque;
   bool initialised = false;
+  // Testing aid: run the pair loops' portable code even where the CPU has AVX2. Both give
+  // bit-identical results (the same IEEE operations in the same order); tests/sph compares them.
+  bool portable_pair_loops = false;
 };
 
 struct SphWorld {

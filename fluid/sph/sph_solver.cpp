@@ -9,8 +9,8 @@
 
 #include <glm/gtc/quaternion.hpp>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
 #endif
 
 #include <algorithm>
@@ -50,6 +50,26 @@ T reduce(std::size_t n, T identity, F&& body, J&& join) {
       tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
       [&](const tbb::blocked_range<std::size_t>& r, T acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) body(i, acc);
+        return acc;
+      },
+      join);
+}
+
+// Chunked variants for loops whose per-particle work is batched: f(b, e) on consecutive
+// blocks of at most kGrain particles (reduceChunks: in the same blocks and order as reduce, so
+// sums are bit-identical for any thread count).
+template <typename F>
+void forChunks(std::size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b < r.end(); b += kGrain) f(b, std::min(r.end(), b + kGrain));
+  });
+}
+template <typename T, typename F, typename J>
+T reduceChunks(std::size_t n, T identity, F&& body, J&& join) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
+      [&](const tbb::blocked_range<std::size_t>& r, T acc) {
+        for (std::size_t b = r.begin(); b < r.end(); b += kGrain) body(b, std::min(r.end(), b + kGrain), acc);
         return acc;
       },
       join);
@@ -214,51 +234,444 @@ void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& po
   });
 }
 
-// The two pair loops of every solver iteration (Bender & Koschier 2015 eq. 9 / 13), on the
-// per-pair gradients G[k] = m_j grad W_ij (stored with a zero 4th component, so a pair's
-// gradient is one 16-byte load). With SSE2 (every x86-64) a pair's three components
-// are one vector operation; the sums run in the same pair order for every thread count.
-#if defined(__SSE2__)
-inline __m128 load3(const glm::vec3& v) {
-  // x, y through one 64-bit load (__m64 may alias), z separately: never reads past the element.
-  return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&v.x)), _mm_load_ss(&v.z));
-}
-inline glm::vec3 store3(__m128 a) {
-  alignas(16) float f[4];
-  _mm_store_ps(f, a);
-  return {f[0], f[1], f[2]};
-}
-#endif
+// --- pair loops ------------------------------------------------------------------------------
+// The per-pair gradients G[k] = m_j grad W_ij live in three float arrays (SoA, 12 bytes a pair).
+// Every pair loop of the DFSPH step (density + gradients, viscosity, and the two loops of each
+// solver iteration, Bender & Koschier 2015 eq. 9 / 13) runs "8 lanes wide": lane l of a
+// particle's list [b, e) accumulates the pairs b + l, b + 8 + l, ... and the lanes are summed at
+// the end in one fixed tree, hsum8 below. Where the CPU has AVX2 (checked at run time; the build
+// targets baseline x86-64) the lanes are one 256-bit register; elsewhere a portable loop does
+// the same IEEE operations in the same order (no FMA: the AVX2 target does not enable it, so
+// nothing is contracted), so both give bit-identical results (tests/sph checks this through
+// SphScratch::portable_pair_loops). The order does not depend on the thread count either.
+// Neighbour positions and velocities are read from 16-byte copies (SphScratch::pos4 / vel4).
+constexpr int kLanes = 8;
 
-// sum_k (v_i - v_j(k)) . G[k]
-inline float pairDivergence(const std::vector<glm::vec3>& V, const glm::vec4* G, const std::uint32_t* nbr,
-                            std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
-#if defined(__SSE2__)
-  __m128 acc = _mm_setzero_ps();
-  const __m128 v = load3(vi);
-  for (std::uint32_t k = b; k < e; ++k)
-    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_sub_ps(v, load3(V[nbr[k]])), _mm_loadu_ps(&G[k].x)));
-  const glm::vec3 c = store3(acc);
-  return c.x + c.y + c.z;
-#else
-  glm::vec3 acc(0.0f);
-  for (std::uint32_t k = b; k < e; ++k) acc += (vi - V[nbr[k]]) * glm::vec3(G[k]);
-  return acc.x + acc.y + acc.z;
-#endif
+// The fixed lane tree: ((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7)).
+inline float hsum8(const float* s) {
+  const float t0 = s[0] + s[4], t1 = s[1] + s[5], t2 = s[2] + s[6], t3 = s[3] + s[7];
+  return (t0 + t2) + (t1 + t3);
 }
 
-// start + sum_k (k_i + k_j(k)) G[k]
-inline glm::vec3 pairKappaSum(const float* kr, const glm::vec4* G, const std::uint32_t* nbr, std::uint32_t b,
-                              std::uint32_t e, float ki, glm::vec3 start) {
-#if defined(__SSE2__)
-  __m128 acc = load3(start);
-  for (std::uint32_t k = b; k < e; ++k)
-    acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(ki + kr[nbr[k]]), _mm_loadu_ps(&G[k].x)));
-  return store3(acc);
-#else
-  for (std::uint32_t k = b; k < e; ++k) start += (ki + kr[nbr[k]]) * glm::vec3(G[k]);
-  return start;
+// Constants of the DFSPH density pass (cubic spline, kernels.hpp, in the same operation order as
+// CubicSplineKernel::evaluateInside, both branches evaluated and one selected per lane).
+struct DensityConsts {
+  float inv_support, sigma, sigma2, c_inner, c_outer;  // sigma2 = 2 sigma, c_inner = sigma/H, c_outer = -sigma/H * 6
+  float mass, r_min, steepest_mass;                     // m, coincidence radius, m W'(H/3)
+  static DensityConsts make(const CubicSplineKernel& k, float m, float r_min, float steepest) {
+    DensityConsts c;
+    c.inv_support = k.inv_support;
+    c.sigma = k.sigma;
+    c.sigma2 = k.sigma * 2.0f;
+    c.c_inner = k.sigma * k.inv_support;
+    c.c_outer = -k.sigma * k.inv_support * 6.0f;
+    c.mass = m;
+    c.r_min = r_min;
+    c.steepest_mass = m * steepest;
+    return c;
+  }
+};
+
+// Per-particle results of the density pass: sum_j W_ij, sum_j m grad W_ij, sum_j |m grad W_ij|^2.
+struct DensitySums {
+  float w = 0.0f;
+  glm::vec3 grad{0.0f};
+  float sq = 0.0f;
+};
+
+// One lane of the density pass for x = x_i - x_j: W and m grad W_ij. Coincident particles
+// (r <= r_min) have grad W = 0 between them and could never separate; they get the kernel's
+// steepest slope along a direction fixed by the two ids (odd in i <-> j, so momentum is still
+// conserved), which pushes stacked particles apart deterministically.
+inline void densityLane(const DensityConsts& c, glm::vec3 x, std::uint32_t id_i, std::uint32_t id_j, float& w,
+                        glm::vec3& g) {
+  const float r = std::sqrt((x.x * x.x + x.y * x.y) + x.z * x.z);
+  const float q = r * c.inv_support;
+  const float t = 1.0f - q;
+  float dw;
+  if (q <= 0.5f) {
+    w = c.sigma * ((6.0f * q * q * q - 6.0f * q * q) + 1.0f);
+    dw = c.c_inner * (18.0f * q * q - 12.0f * q);
+  } else {
+    w = c.sigma2 * t * t * t;
+    dw = c.c_outer * t * t;
+  }
+  if (r > c.r_min) {
+    const float dr = dw / r;
+    g = glm::vec3(c.mass * (dr * x.x), c.mass * (dr * x.y), c.mass * (dr * x.z));
+  } else {
+    g = c.steepest_mass * coincidentDirection(id_i, id_j);
+  }
+}
+
+// What the solver iterations read: neighbour lists (i's pairs are [off[i], off[i] + cnt[i])),
+// the same neighbours as byte offsets 16 j (so the AVX2 loops address 16-byte records without a
+// shift per neighbour), per-pair gradients and the 16-byte velocity copy.
+struct IterationArgs {
+  const glm::vec4* vel4;
+  const float *gx, *gy, *gz;
+  const std::uint32_t *nbr, *nb16, *off, *cnt;
+};
+
+struct PairLoops {
+  // DFSPH density pass of particle i: fills gx/gy/gz[b, e) and nb16[b, e) = 16 nbr[b, e) (see
+  // IterationArgs) and returns the sums.
+  DensitySums (*density)(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id, const std::uint32_t* nbr,
+                         std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz,
+                         std::uint32_t* nb16);
+  // sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph), with
+  // c_j = 10 nu / rho_j in X[j].w.
+  glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
+                         const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
+                         float eps);
+  // The two solver-iteration loops for the particles [i0, i1) (i1 - i0 <= kGrain): out[i - i0].
+  void (*divergence_range)(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out);
+  // kr4[j].x = kappa_j / rho_j (16-byte records, addressed like vel4).
+  void (*kappa_range)(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
+                      glm::vec3* out);
+};
+
+// Portable lanes.
+DensitySums densityPortable(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
+                            const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx,
+                            float* gy, float* gz, std::uint32_t* nb16) {
+  float sw[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {}, sz[kLanes] = {}, sq[kLanes] = {};
+  const glm::vec4 xi = X[i];
+  for (std::uint32_t k = b; k < e; ++k) {
+    const int l = static_cast<int>((k - b) % kLanes);
+    const std::uint32_t j = nbr[k];
+    nb16[k] = j << 4;
+    const glm::vec4 xj = X[j];
+    float wv;
+    glm::vec3 g;
+    densityLane(c, glm::vec3(xi.x - xj.x, xi.y - xj.y, xi.z - xj.z), id[i], id[j], wv, g);
+    gx[k] = g.x;
+    gy[k] = g.y;
+    gz[k] = g.z;
+    sw[l] += wv;
+    sx[l] += g.x;
+    sy[l] += g.y;
+    sz[l] += g.z;
+    sq[l] += (g.x * g.x + g.y * g.y) + g.z * g.z;
+  }
+  DensitySums out;
+  out.w = hsum8(sw);
+  out.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
+  out.sq = hsum8(sq);
+  return out;
+}
+
+glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
+                            const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e,
+                            std::uint32_t i, float eps) {
+  float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  const glm::vec4 xi = X[i], vi = V[i];
+  for (std::uint32_t k = b; k < e; ++k) {
+    const int l = static_cast<int>((k - b) % kLanes);
+    const std::uint32_t j = nbr[k];
+    const float x = xi.x - X[j].x, y = xi.y - X[j].y, z = xi.z - X[j].z;
+    const float vx = ((vi.x - V[j].x) * x + (vi.y - V[j].y) * y) + (vi.z - V[j].z) * z;
+    const float denom = ((x * x + y * y) + z * z) + eps;
+    const float coef = X[j].w * (vx / denom);
+    ax[l] += coef * gx[k];
+    ay[l] += coef * gy[k];
+    az[l] += coef * gz[k];
+  }
+  return {hsum8(ax), hsum8(ay), hsum8(az)};
+}
+
+inline float divergencePortable(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
+                         const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
+  float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  for (std::uint32_t k = b; k < e; ++k) {
+    const int l = static_cast<int>((k - b) % kLanes);
+    const glm::vec4 vj = V[nbr[k]];
+    ax[l] += (vi.x - vj.x) * gx[k];
+    ay[l] += (vi.y - vj.y) * gy[k];
+    az[l] += (vi.z - vj.z) * gz[k];
+  }
+  float s[kLanes];
+  for (int l = 0; l < kLanes; ++l) s[l] = (ax[l] + ay[l]) + az[l];
+  return hsum8(s);
+}
+
+inline glm::vec3 kappaSumPortable(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
+                                  const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
+  float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  for (std::uint32_t k = b; k < e; ++k) {
+    const int l = static_cast<int>((k - b) % kLanes);
+    const float s = ki + kr4[nbr[k]].x;
+    ax[l] += s * gx[k];
+    ay[l] += s * gy[k];
+    az[l] += s * gz[k];
+  }
+  return {hsum8(ax), hsum8(ay), hsum8(az)};
+}
+
+void divergenceRangePortable(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = divergencePortable(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+}
+void kappaRangePortable(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
+                        glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = kappaSumPortable(kr4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
+}
+
+constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergenceRangePortable, &kappaRangePortable};
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define FLUID_SPH_AVX2_PAIRS 1
+// AVX2 lanes. Neighbour data come in by one 16-byte load per neighbour (pos4 / vel4) or
+// scalar loads (load8): on the Zen 3 machine we measure on, vgatherdps was slower than the
+// SSE2 loop it replaced. In the last block of a list (fewer than 8 pairs) the lanes past the
+// end read particle 0 (valid data) and are zeroed by a lane mask (masked loads of the
+// gradients, or an and with the mask), so they add exact zeros: an accumulator that starts at +0
+// is never -0, so adding +-0 leaves it unchanged, and the sums equal the portable loop's, which
+// skips those lanes.
+#define FLUID_AVX2 __attribute__((target("avx2")))
+FLUID_AVX2 inline __m256i laneMask(std::uint32_t left) {
+  return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(std::min<std::uint32_t>(left, 8))),
+                            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
+// hsum8's tree in registers: t_l = s_l + s_(l+4), then (t0 + t2) + (t1 + t3).
+FLUID_AVX2 inline float hsum8(__m256 v) {
+  const __m128 t = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  const __m128 u = _mm_add_ps(t, _mm_movehl_ps(t, t));
+  return _mm_cvtss_f32(_mm_add_ss(u, _mm_shuffle_ps(u, u, 1)));
+}
+FLUID_AVX2 inline __m256 loadPair(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&base[a].x)), _mm_loadu_ps(&base[b].x), 1);
+}
+FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z) {
+  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
+               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // x0 x1 y0 y1 | x4 x5 y4 y5; z.. w..
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+// The same with the 4th component.
+FLUID_AVX2 inline void load8xyzw(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z,
+                                 __m256& w) {
+  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
+               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+// The last block of a list: lanes past `left` read particle 0 (valid data; their gradient
+// lanes are masked to 0, so they add exact zeros).
+FLUID_AVX2 inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(buf),
+                      _mm256_maskload_epi32(reinterpret_cast<const int*>(nbr), laneMask(left)));
+  return buf;
+}
+
+// load8xyz with byte offsets o[l] = 16 idx[l].
+FLUID_AVX2 inline __m256 loadPair16(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
+  const char* p = reinterpret_cast<const char*>(base);
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(reinterpret_cast<const float*>(p + a))),
+                              _mm_loadu_ps(reinterpret_cast<const float*>(p + b)), 1);
+}
+FLUID_AVX2 inline void load8xyz16(const glm::vec4* base, const std::uint32_t* o, __m256& x, __m256& y, __m256& z) {
+  const __m256 r0 = loadPair16(base, o[0], o[4]), r1 = loadPair16(base, o[1], o[5]),
+               r2 = loadPair16(base, o[2], o[6]), r3 = loadPair16(base, o[3], o[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+// base[idx[l]].x for byte offsets o[l] = 16 idx[l], by scalar loads (Zen 3 runs these faster
+// than vgatherdps).
+FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o) {
+  const char* p = reinterpret_cast<const char*>(base);
+  auto at = [p](std::uint32_t off) { return reinterpret_cast<const float*>(p + off); };
+  const __m128 lo = _mm_insert_ps(
+      _mm_insert_ps(_mm_insert_ps(_mm_load_ss(at(o[0])), _mm_load_ss(at(o[1])), 0x10), _mm_load_ss(at(o[2])), 0x20),
+      _mm_load_ss(at(o[3])), 0x30);
+  const __m128 hi = _mm_insert_ps(
+      _mm_insert_ps(_mm_insert_ps(_mm_load_ss(at(o[4])), _mm_load_ss(at(o[5])), 0x10), _mm_load_ss(at(o[6])), 0x20),
+      _mm_load_ss(at(o[7])), 0x30);
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+
+
+FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, const std::uint32_t* id,
+                                   const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
+                                   float* gx, float* gy, float* gz, std::uint32_t* nb16) {
+  const glm::vec4 xi = X[i];
+  const __m256 pix = _mm256_set1_ps(xi.x), piy = _mm256_set1_ps(xi.y), piz = _mm256_set1_ps(xi.z);
+  const __m256 inv_h = _mm256_set1_ps(c.inv_support), sigma = _mm256_set1_ps(c.sigma),
+               sigma2 = _mm256_set1_ps(c.sigma2), c_in = _mm256_set1_ps(c.c_inner), c_out = _mm256_set1_ps(c.c_outer),
+               mass = _mm256_set1_ps(c.mass), r_min = _mm256_set1_ps(c.r_min), one = _mm256_set1_ps(1.0f),
+               half = _mm256_set1_ps(0.5f), six = _mm256_set1_ps(6.0f), c18 = _mm256_set1_ps(18.0f),
+               c12 = _mm256_set1_ps(12.0f);
+  __m256 sw = _mm256_setzero_ps(), sx = sw, sy = sw, sz = sw, sq = sw;
+  std::uint32_t buf[kLanes];
+  for (std::uint32_t k = b; k < e; k += kLanes) {
+    const __m256i mi = laneMask(e - k);
+    const __m256 m = _mm256_castsi256_ps(mi);
+    __m256 x, y, z;
+    load8xyz(X, e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf), x, y, z);
+    x = _mm256_sub_ps(pix, x);
+    y = _mm256_sub_ps(piy, y);
+    z = _mm256_sub_ps(piz, z);
+    const __m256 r =
+        _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)));
+    const __m256 q = _mm256_mul_ps(r, inv_h);
+    const __m256 t = _mm256_sub_ps(one, q);
+    const __m256 q6q = _mm256_mul_ps(_mm256_mul_ps(six, q), q);
+    const __m256 w_in = _mm256_mul_ps(sigma, _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(q6q, q), q6q), one));
+    const __m256 dw_in = _mm256_mul_ps(
+        c_in, _mm256_sub_ps(_mm256_mul_ps(_mm256_mul_ps(c18, q), q), _mm256_mul_ps(c12, q)));
+    const __m256 tt = _mm256_mul_ps(_mm256_mul_ps(sigma2, t), t);
+    const __m256 w_out = _mm256_mul_ps(tt, t);
+    const __m256 dw_out = _mm256_mul_ps(_mm256_mul_ps(c_out, t), t);
+    const __m256 inner = _mm256_cmp_ps(q, half, _CMP_LE_OQ);
+    // Masked lanes have x = x_i, so they are inside or outside the support: their W is zeroed.
+    const __m256 wv = _mm256_and_ps(_mm256_blendv_ps(w_out, w_in, inner), m);
+    const __m256 dr = _mm256_div_ps(_mm256_blendv_ps(dw_out, dw_in, inner), r);
+    __m256 g0 = _mm256_mul_ps(mass, _mm256_mul_ps(dr, x));
+    __m256 g1 = _mm256_mul_ps(mass, _mm256_mul_ps(dr, y));
+    __m256 g2 = _mm256_mul_ps(mass, _mm256_mul_ps(dr, z));
+    const __m256 close = _mm256_and_ps(_mm256_cmp_ps(r, r_min, _CMP_LE_OQ), m);
+    if (_mm256_movemask_ps(close) != 0) {  // rare: coincident particles, lane by lane
+      alignas(32) float a0[kLanes], a1[kLanes], a2[kLanes];
+      _mm256_store_ps(a0, g0);
+      _mm256_store_ps(a1, g1);
+      _mm256_store_ps(a2, g2);
+      const int bits = _mm256_movemask_ps(close);
+      for (int l = 0; l < kLanes; ++l)
+        if (bits & (1 << l)) {
+          const glm::vec3 g = c.steepest_mass * coincidentDirection(id[i], id[nbr[k + l]]);
+          a0[l] = g.x;
+          a1[l] = g.y;
+          a2[l] = g.z;
+        }
+      g0 = _mm256_load_ps(a0);
+      g1 = _mm256_load_ps(a1);
+      g2 = _mm256_load_ps(a2);
+    }
+    g0 = _mm256_and_ps(g0, m);
+    g1 = _mm256_and_ps(g1, m);
+    g2 = _mm256_and_ps(g2, m);
+    _mm256_maskstore_epi32(reinterpret_cast<int*>(nb16 + k), mi,
+                           _mm256_slli_epi32(_mm256_maskload_epi32(reinterpret_cast<const int*>(nbr + k), mi), 4));
+    _mm256_maskstore_ps(gx + k, mi, g0);
+    _mm256_maskstore_ps(gy + k, mi, g1);
+    _mm256_maskstore_ps(gz + k, mi, g2);
+    sw = _mm256_add_ps(sw, wv);
+    sx = _mm256_add_ps(sx, g0);
+    sy = _mm256_add_ps(sy, g1);
+    sz = _mm256_add_ps(sz, g2);
+    sq = _mm256_add_ps(sq, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(g0, g0), _mm256_mul_ps(g1, g1)),
+                                         _mm256_mul_ps(g2, g2)));
+  }
+  DensitySums out;
+  out.w = hsum8(sw);
+  out.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
+  out.sq = hsum8(sq);
+  return out;
+}
+
+FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const float* gx,
+                                   const float* gy, const float* gz, const std::uint32_t* nbr, std::uint32_t b,
+                                   std::uint32_t e, std::uint32_t i, float eps) {
+  const __m256 pix = _mm256_set1_ps(X[i].x), piy = _mm256_set1_ps(X[i].y), piz = _mm256_set1_ps(X[i].z);
+  const __m256 vix = _mm256_set1_ps(V[i].x), viy = _mm256_set1_ps(V[i].y), viz = _mm256_set1_ps(V[i].z);
+  const __m256 ve = _mm256_set1_ps(eps);
+  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+  std::uint32_t buf[kLanes];
+  for (std::uint32_t k = b; k < e; k += kLanes) {
+    const __m256i mi = laneMask(e - k);
+    const std::uint32_t* idx = e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf);
+    __m256 xj, yj, zj, vcj, uj, vj, wj;
+    load8xyzw(X, idx, xj, yj, zj, vcj);
+    load8xyz(V, idx, uj, vj, wj);
+    const __m256 x = _mm256_sub_ps(pix, xj), y = _mm256_sub_ps(piy, yj), z = _mm256_sub_ps(piz, zj);
+    const __m256 vx = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(vix, uj), x), _mm256_mul_ps(_mm256_sub_ps(viy, vj), y)),
+        _mm256_mul_ps(_mm256_sub_ps(viz, wj), z));
+    const __m256 denom =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)), ve);
+    const __m256 coef = _mm256_mul_ps(vcj, _mm256_div_ps(vx, denom));
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(coef, _mm256_maskload_ps(gx + k, mi)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_maskload_ps(gy + k, mi)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_maskload_ps(gz + k, mi)));
+  }
+  return {hsum8(ax), hsum8(ay), hsum8(az)};
+}
+
+FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* V, const float* gx, const float* gy, const float* gz,
+                                       const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
+  const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
+  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+  std::uint32_t k = b;
+  __m256 vx, vy, vz;
+  for (; k + kLanes <= e; k += kLanes) {
+    load8xyz16(V, nb16 + k, vx, vy, vz);
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_loadu_ps(gx + k)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_loadu_ps(gy + k)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_loadu_ps(gz + k)));
+  }
+  if (k < e) {
+    const __m256i mi = laneMask(e - k);
+    std::uint32_t buf[kLanes];
+    load8xyz16(V, tailIndices(nb16 + k, e - k, buf), vx, vy, vz);
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_maskload_ps(gx + k, mi)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_maskload_ps(gy + k, mi)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_maskload_ps(gz + k, mi)));
+  }
+  return hsum8(_mm256_add_ps(_mm256_add_ps(ax, ay), az));
+}
+
+FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
+                                         const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, float ki) {
+  const __m256 vk = _mm256_set1_ps(ki);
+  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+  std::uint32_t k = b;
+  for (; k + kLanes <= e; k += kLanes) {
+    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, nb16 + k));
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_loadu_ps(gx + k)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_loadu_ps(gy + k)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_loadu_ps(gz + k)));
+  }
+  if (k < e) {
+    const __m256i mi = laneMask(e - k);
+    std::uint32_t buf[kLanes];
+    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, tailIndices(nb16 + k, e - k, buf)));
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_maskload_ps(gx + k, mi)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_maskload_ps(gy + k, mi)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_maskload_ps(gz + k, mi)));
+  }
+  return {hsum8(ax), hsum8(ay), hsum8(az)};
+}
+FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = divergenceAvx2(a.vel4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+}
+FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
+                               glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i)
+    out[i - i0] = kappaSumAvx2(kr4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
+}
+#undef FLUID_AVX2
+
+constexpr PairLoops kAvx2Loops{&densityAvx2, &viscosityAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
 #endif
+
+const PairLoops& pairLoops(bool portable) {
+#if defined(FLUID_SPH_AVX2_PAIRS)
+  if (!portable && __builtin_cpu_supports("avx2")) return kAvx2Loops;
+#endif
+  (void)portable;
+  return kPortableLoops;
 }
 
 template <typename T>
@@ -481,6 +894,13 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const std::uint32_t* cand_end = filter_verlet ? w.verlet.offsets.data() + 1 : off + 1;
   const auto& X = S.position;
   auto& V = S.velocity;
+  // 16-byte copies of the step-start positions and velocities for the pair loops.
+  w.pos4.resize(n);
+  w.vel4.resize(n);
+  forEach(n, [&](std::size_t i) {
+    w.pos4[i] = glm::vec4(X[i], 0.0f);
+    w.vel4[i] = glm::vec4(V[i], 0.0f);
+  });
 
   // 2. Collider samples at the step-start positions; boundary volume, its gradient and flux.
   w.start_samples.resize(nc);
@@ -539,57 +959,66 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   // 3. One pass over the pairs: density (the SPH sum, Becker & Teschner 2007 eq. 4, plus the
   // boundary volume's share), the per-pair m grad W_ij reused by every solver iteration, and the
   // sums DFSPH's factor alpha_i needs (S_i = sum_j m grad W_ij, Q_i = sum_j |m grad W_ij|^2).
-  // Coincident particles have grad W = 0 between them and could never separate; for r below
-  // 1e-6 H we use the kernel's steepest slope along a direction fixed by the two ids (odd in
-  // i <-> j, so momentum is still conserved), which pushes stacked particles apart deterministically.
+  // Coincident particles (r below 1e-6 H) get the steepest slope along an id-fixed direction
+  // (densityLane). DFSPH runs the eight-lane pair loop (see PairLoops); WCSPH filters its Verlet
+  // candidates here and stays scalar.
+  const PairLoops& loops = pairLoops(w.portable_pair_loops);
   const float w0 = w.kernel.value(0.0f);
   const float steepest = w.kernel.derivative(H / 3.0f);
-  w.gradients.resize(w.neighbors.indices.size());
+  const std::size_t pair_count = w.neighbors.indices.size();
+  w.grad_x.resize(pair_count);
+  w.grad_y.resize(pair_count);
+  w.grad_z.resize(pair_count);
+  float* const gx_out = w.grad_x.data();
+  float* const gy_out = w.grad_y.data();
+  float* const gz_out = w.grad_z.data();
   w.vec_b.resize(n);   // S_i
   w.factor.resize(n);  // Q_i here, alpha_i after the solver-specific part below
   const float h2 = H * H;
-  auto densityPass = [&](auto filter, auto dfsph_sums) {
+  const float r_min = 1e-6f * H;
+  if (filter_verlet) {
     const glm::vec3* __restrict Xp = X.data();
-    glm::vec4* __restrict Gp = w.gradients.data();
     std::uint32_t* __restrict counts = w.neighbors.counts.data();
     const CubicSplineKernel kernel = w.kernel;
-    const float r_min = 1e-6f * H;
     forEach(n, [&](std::size_t i) {
-      float sum = w0, sq = 0.0f;
-      glm::vec3 grad_sum(0.0f);
+      float sum = w0;
       const glm::vec3 xi = Xp[i];
       const std::uint32_t first = off[i], last = cand_end[i];
       std::uint32_t out = first;
       for (std::uint32_t k = first; k < last; ++k) {
         const std::uint32_t j = cand[k];
         const glm::vec3 x = xi - Xp[j];
-        if constexpr (decltype(filter)::value) {
-          // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
-          // exactly a fresh search's.
-          if (!(glm::dot(x, x) < h2)) continue;
-          nbr_out[out] = j;
-        }
+        // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
+        // exactly a fresh search's.
+        if (!(glm::dot(x, x) < h2)) continue;
+        nbr_out[out] = j;
         const float r = glm::length(x);
         float wr, dr;
         kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
         sum += wr;
         const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
-        Gp[out++] = glm::vec4(g, 0.0f);
-        if constexpr (decltype(dfsph_sums)::value) {
-          grad_sum += g;
-          sq += glm::dot(g, g);
-        }
+        gx_out[out] = g.x;
+        gy_out[out] = g.y;
+        gz_out[out] = g.z;
+        ++out;
       }
-      if constexpr (decltype(filter)::value) counts[i] = out - first;
+      counts[i] = out - first;
       S.density[i] = m * sum + rho0 * w.boundary_volume[i];
-      w.vec_b[i] = grad_sum;
-      w.factor[i] = sq;
+      w.vec_b[i] = glm::vec3(0.0f);
+      w.factor[i] = 0.0f;
     });
-  };
-  if (filter_verlet)
-    densityPass(std::true_type{}, std::false_type{});
-  else
-    densityPass(std::false_type{}, std::true_type{});
+  } else {
+    const DensityConsts dc = DensityConsts::make(w.kernel, m, r_min, steepest);
+    w.pair_offset.resize(pair_count);  // n < 2^28 (validateSphParams), so 16 j fits
+    std::uint32_t* const nb16_out = w.pair_offset.data();
+    forEach(n, [&](std::size_t i) {
+      const DensitySums ds = loops.density(dc, w.pos4.data(), S.id.data(), nbr, off[i], cand_end[i],
+                                           static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out, nb16_out);
+      S.density[i] = m * (w0 + ds.w) + rho0 * w.boundary_volume[i];
+      w.vec_b[i] = ds.grad;
+      w.factor[i] = ds.sq;
+    });
+  }
   {
     const SumMax e = reduce(
         n, SumMax{},
@@ -602,7 +1031,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     stats.avg_density_error = n ? static_cast<float>(e.sum / static_cast<double>(n)) : 0.0f;
     stats.max_density_error = e.max;
   }
-  const auto& G = w.gradients;
+  const float* const gx = w.grad_x.data();
+  const float* const gy = w.grad_y.data();
+  const float* const gz = w.grad_z.data();
 
   // 4. Non-pressure accelerations: gravity + Laplacian viscosity (Monaghan 2005 eq. 6.3 form,
   // a_i = 2(d+2) nu sum_j m_j/rho_j (v_ij . x_ij)/(|x_ij|^2 + 0.01 H^2) grad W_ij, d = 3) and, for
@@ -638,12 +1069,14 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       pr[i] = S.pressure[i] / (S.density[i] * S.density[i]);
     });
   }
-  forEach(n, [&](std::size_t i) { visc_coef[i] = 10.0f * nu / S.density[i]; });
+  forEach(n, [&](std::size_t i) {
+    visc_coef[i] = 10.0f * nu / S.density[i];
+    w.pos4[i].w = visc_coef[i];  // read with the neighbour's position by the DFSPH viscosity loop
+  });
   auto nonPressure = [&](auto with_pressure, auto with_viscosity) {
     constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
     const glm::vec3* __restrict Xp = X.data();
     const glm::vec3* __restrict Vp = V.data();
-    const glm::vec4* __restrict Gp = G.data();
     const float* __restrict vc = visc_coef.data();
     const float* __restrict prp = pr.data();
     const float eps = 0.01f * H * H;
@@ -666,7 +1099,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           }
           // Symmetric pressure force (B&T eq. 6).
           if constexpr (kPressure) coef -= pi + prp[j];
-          a += coef * glm::vec3(Gp[k]);
+          a += coef * glm::vec3(gx[k], gy[k], gz[k]);
         }
         // Boundary: the same symmetric pressure term against the wall volume with the mirrored
         // pressure p_b = p_i, rho_b = rho_i.
@@ -680,11 +1113,15 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       nonPressure(std::true_type{}, std::true_type{});
     else
       nonPressure(std::true_type{}, std::false_type{});
+  } else if (nu > 0.0f) {
+    // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop.
+    const float eps = 0.01f * H * H;
+    forEach(n, [&](std::size_t i) {
+      w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
+                                               off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
+    });
   } else {
-    if (nu > 0.0f)
-      nonPressure(std::false_type{}, std::true_type{});
-    else
-      nonPressure(std::false_type{}, std::false_type{});
+    forEach(n, [&](std::size_t i) { w.accel[i] = P.gravity; });
   }
 
   // Boundary pressure impulse per particle (for the coupling forces): the velocity change the
@@ -749,21 +1186,30 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? S.density[i] / denom : 0.0f;
     });
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
-    auto densityRate = [&](std::size_t i) {
-      const float r = pairDivergence(V, G.data(), nbr, off[i], off[i] + cnt[i], V[i]);
-      return r + rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
+    // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
+    const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
+    auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
+      loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
+      for (std::size_t i = b; i < e; ++i)
+        rate[i - b] += rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
     };
-    auto& kr = w.density_adv;  // kappa_i / rho_i of the current iteration
-    kr.resize(n);
+    auto& kr4 = w.kappa4;  // kr4[i].x = kappa_i / rho_i of the current iteration
+    kr4.resize(n);
+    auto& kscale = w.kappa_scale;  // kr_i per unit of compression (or of density rate), per solve
+    kscale.resize(n);
     w.kappa_v.assign(n, 0.0f);    // sum over the divergence iterations of kappa^v_i / rho_i
     w.float_tmp.assign(n, 0.0f);  // same for the density iterations
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
-      forEach(n, [&](std::size_t i) {
-        const glm::vec3 dv = pairKappaSum(kr.data(), G.data(), nbr, off[i], off[i] + cnt[i], kr[i],
-                                          kMirror * rho0 * kr[i] * w.boundary_gradient[i]);
-        w.vec_b[i] = V[i] - h * dv;
-        total[i] += kr[i];
+      forChunks(n, [&](std::size_t b, std::size_t e) {
+        glm::vec3 sums[kGrain];
+        loops.kappa_range(ia, kr4.data(), static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), sums);
+        for (std::size_t i = b; i < e; ++i) {
+          const glm::vec3 dv = kMirror * rho0 * kr4[i].x * w.boundary_gradient[i] + sums[i - b];
+          w.vec_b[i] = V[i] - h * dv;
+          w.vel4[i] = glm::vec4(w.vec_b[i], 0.0f);  // the copy the next divergence pass reads
+          total[i] += kr4[i].x;
+        }
       });
       V.swap(w.vec_b);  // Jacobi: all updates read the old velocities; swapping keeps both buffers
     };
@@ -788,24 +1234,34 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
     // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0.
     if (P.divergence_solver && n > 0) {
-      forEach(n, [&](std::size_t i) { w.vec_a[i] = V[i]; });
+      forEach(n, [&](std::size_t i) {
+        w.vec_a[i] = V[i];
+        w.vel4[i] = glm::vec4(V[i], 0.0f);
+      });
       // No warm start here: starting the divergence solve from part of the last step's kappa^v
       // (2017 §4.3) let a jet hitting a collider gain energy in the randomised stability test
       // (tests/sph), since the solver never pulls particles back once pushed too far.
       const double eta_v = P.max_divergence_error;
+      // kappa^v_i / rho_i = (Drho/Dt)_i alpha_i / (dt rho_i) (2015 eq. 9 with the factor of
+      // §4.1): the per-particle part once per solve, a product per iteration.
+      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt_prev * S.density[i]); });
       for (;;) {
-        const double err = reduce(
+        const double err = reduceChunks(
                                n, 0.0,
-                               [&](std::size_t i, double& acc) {
-                                 // Only compression is corrected, and only for particles with a full enough
-                                 // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9
-                                 // lattice neighbours a flat wall replaces per wall_share of volume), otherwise the
-                                 // free surface is pushed outward every step and the fluid creeps apart.
-                                 const float neighbours =
-                                     static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
-                                 const float rate = neighbours >= 20.0f ? std::max(0.0f, densityRate(i)) : 0.0f;
-                                 kr[i] = rate * w.factor[i] / (dt_prev * S.density[i]);
-                                 acc += rate * dt_prev / rho0;
+                               [&](std::size_t b, std::size_t e, double& acc) {
+                                 float rates[kGrain];
+                                 densityRates(b, e, rates);
+                                 for (std::size_t i = b; i < e; ++i) {
+                                   // Only compression is corrected, and only for particles with a full enough
+                                   // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the
+                                   // 9 lattice neighbours a flat wall replaces per wall_share of volume), otherwise
+                                   // the free surface is pushed outward every step and the fluid creeps apart.
+                                   const float neighbours =
+                                       static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
+                                   const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
+                                   kr4[i].x = rate * kscale[i];
+                                   acc += rate * dt_prev / rho0;
+                                 }
                                },
                                [](double a, double b) { return a + b; }) /
                            static_cast<double>(n);
@@ -822,7 +1278,10 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(V[i] + max_dt * w.accel[i])); },
         [](float a, float b) { return std::max(a, b); });
     dt = chooseDt(vmax, maxAccel(), false);
-    forEach(n, [&](std::size_t i) { V[i] += dt * w.accel[i]; });
+    forEach(n, [&](std::size_t i) {
+      V[i] += dt * w.accel[i];
+      w.vel4[i] = glm::vec4(V[i], 0.0f);
+    });
 
     // 4c. Constant-density solver (§4.2): rho*_i = rho_i + dt Drho/Dt_i -> rho_0.
     if (n > 0) {
@@ -836,19 +1295,28 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         // The share is 0.4 rather than the paper's full kappa: with 0.5 the randomised stability
         // test (a jet against a collider) gains energy; 0.4 passes it and still saves 21-33 % of
         // the iterations on dambreak_box (see SphParams::warm_start).
-        forEach(n, [&](std::size_t i) {
-          kr[i] = S.density[i] + dt * densityRate(i) > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
+        forChunks(n, [&](std::size_t b, std::size_t e) {
+          float rates[kGrain];
+          densityRates(b, e, rates);
+          for (std::size_t i = b; i < e; ++i)
+            kr4[i].x = S.density[i] + dt * rates[i - b] > rho0 ? kWarmShare * w.warm_kappa[i] : 0.0f;
         });
         applyKappa(dt, w.float_tmp);
       }
       const double eta = P.max_density_error;
+      // kappa_i / rho_i = (rho*_i - rho_0) alpha_i / (dt^2 rho_i) (2015 eq. 8-9): as above.
+      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt * dt * S.density[i]); });
       for (;;) {
-        const double err = reduce(
+        const double err = reduceChunks(
                                n, 0.0,
-                               [&](std::size_t i, double& acc) {
-                                 const float excess = std::max(0.0f, S.density[i] + dt * densityRate(i) - rho0);
-                                 kr[i] = excess * w.factor[i] / (dt * dt * S.density[i]);
-                                 acc += excess / rho0;
+                               [&](std::size_t b, std::size_t e, double& acc) {
+                                 float rates[kGrain];
+                                 densityRates(b, e, rates);
+                                 for (std::size_t i = b; i < e; ++i) {
+                                   const float excess = std::max(0.0f, S.density[i] + dt * rates[i - b] - rho0);
+                                   kr4[i].x = excess * kscale[i];
+                                   acc += excess / rho0;
+                                 }
                                },
                                [](double a, double b) { return a + b; }) /
                            static_cast<double>(n);

@@ -83,6 +83,9 @@ SphStatus validateSphParams(const SphParams& p) {
     if (std::isnan(p.domain_min[a]) || std::isnan(p.domain_max[a]) || p.domain_min[a] > p.domain_max[a])
       return {fieldError("domain_min/domain_max", p.domain_min[a], "finite, min <= max")};
   }
+  // The DFSPH pair loops address neighbours by 32-bit byte offsets 16 j.
+  if (p.max_particles >= (std::size_t{1} << 28))
+    return {fieldError("max_particles", static_cast<float>(p.max_particles), "< 2^28 = 268435456")};
   if (p.min_iterations < 0 || p.max_iterations < 1 || p.min_iterations > p.max_iterations)
     return {
         fieldError("min_iterations/max_iterations", static_cast<float>(p.max_iterations), "0 <= min <= max, max >= 1")};
@@ -124,9 +127,12 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel, &w.local_points})
     v->reserve(capacity);
-  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.boundary_volume, &w.boundary_flux,
-                  &w.float_tmp})
+  for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
+                  &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
+  w.vel4.reserve(capacity);
+  w.kappa4.reserve(capacity);
+  w.pos4.reserve(capacity);
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);
   w.end_samples.reserve(capacity);

@@ -278,6 +278,12 @@ TEST(SphStability, BadParametersAreRejectedWithTheirName) {
   s.world.params.particle_radius = -1.0f;
   st = stepSph(s.world, 0.0f);
   EXPECT_NE(st.error.find("particle_radius"), std::string::npos) << st.error;
+  s.world.params.particle_radius = 0.01f;
+  s.world.params.max_particles = std::size_t{1} << 28;  // the pair loops' 32-bit byte offsets
+  st = stepSph(s.world, 0.0f);
+  EXPECT_NE(st.error.find("max_particles"), std::string::npos) << st.error;
+  s.world.params.max_particles = (std::size_t{1} << 28) - 1;
+  EXPECT_TRUE(stepSph(s.world, 0.0f).ok());
 }
 
 }  // namespace
