@@ -443,26 +443,26 @@ FLUID_AVX2 inline float hsum8(__m256 v) {
 FLUID_AVX2 inline __m256 loadPair(const glm::vec4* base, std::uint32_t a, std::uint32_t b) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&base[a].x)), _mm_loadu_ps(&base[b].x), 1);
 }
-FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z) {
-  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
-               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
+// Rows r0..r3 hold records (0, 4), (1, 5), (2, 6), (3, 7) in their low | high halves; writes
+// the components of the eight records in lane order (w only when asked for).
+FLUID_AVX2 inline void transposeRows(__m256 r0, __m256 r1, __m256 r2, __m256 r3, __m256& x, __m256& y, __m256& z,
+                                     __m256* w) {
   const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // x0 x1 y0 y1 | x4 x5 y4 y5; z.. w..
   const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
   x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
   y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
   z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  if (w != nullptr) *w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z) {
+  transposeRows(loadPair(base, idx[0], idx[4]), loadPair(base, idx[1], idx[5]), loadPair(base, idx[2], idx[6]),
+                loadPair(base, idx[3], idx[7]), x, y, z, nullptr);
 }
 // The same with the 4th component.
 FLUID_AVX2 inline void load8xyzw(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z,
                                  __m256& w) {
-  const __m256 r0 = loadPair(base, idx[0], idx[4]), r1 = loadPair(base, idx[1], idx[5]),
-               r2 = loadPair(base, idx[2], idx[6]), r3 = loadPair(base, idx[3], idx[7]);
-  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-  w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+  transposeRows(loadPair(base, idx[0], idx[4]), loadPair(base, idx[1], idx[5]), loadPair(base, idx[2], idx[6]),
+                loadPair(base, idx[3], idx[7]), x, y, z, &w);
 }
 // The last block of a list: lanes past `left` read particle 0 (valid data; their gradient
 // lanes are masked to 0, so they add exact zeros).
@@ -479,13 +479,8 @@ FLUID_AVX2 inline __m256 loadPair16(const glm::vec4* base, std::uint32_t a, std:
                               _mm_loadu_ps(reinterpret_cast<const float*>(p + b)), 1);
 }
 FLUID_AVX2 inline void load8xyz16(const glm::vec4* base, const std::uint32_t* o, __m256& x, __m256& y, __m256& z) {
-  const __m256 r0 = loadPair16(base, o[0], o[4]), r1 = loadPair16(base, o[1], o[5]),
-               r2 = loadPair16(base, o[2], o[6]), r3 = loadPair16(base, o[3], o[7]);
-  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  transposeRows(loadPair16(base, o[0], o[4]), loadPair16(base, o[1], o[5]), loadPair16(base, o[2], o[6]),
+                loadPair16(base, o[3], o[7]), x, y, z, nullptr);
 }
 // base[idx[l]].x for byte offsets o[l] = 16 idx[l], by scalar loads (Zen 3 runs these faster
 // than vgatherdps).

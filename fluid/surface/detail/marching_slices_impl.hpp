@@ -716,23 +716,13 @@ class BlockMesher {
     }
   }
 
-  // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
-  // (reachMax >= z; the paper's mid_z >= z - window, tightened), walk up while entries can still
-  // reach it (reachMin <= z; the paper's mid_z <= z + window), keep min_z <= z <= max_z, and leave
-  // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
-  // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
-  // bit); the walk stops early when f returns true.
-  // With kTable the offsets along z come from the slice's table (dzt, see fillSliceDz), else from
-  // the offsets table; f(particle, dx, dy, dz, dz * dz).
-  template <bool kTable, class F>
-  void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
-    const std::size_t k = col(x, y);
-    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
-    if (begin == end) return;
+  // The start-pointer update of §6 for column k (entries [begin, end)): moves the column's
+  // cursor to the first element whose reach covers z and returns it. reachMax is non-decreasing,
+  // so the pointer may skip 8 elements at once when the one 8 away is still on the same side
+  // (long moves happen when the sweep jumps between surfaces).
+  std::uint32_t seekColumn(std::size_t k, std::uint32_t begin, std::uint32_t end, int z) {
     std::uint32_t cur = cursor_[k];
     const ColumnEntry* e = entries_;
-    // reachMax is non-decreasing, so the pointer may skip 8 elements at once when the one 8 away
-    // is still on the same side (long moves happen when the sweep jumps between surfaces).
     while (cur > begin && e[cur - 1].reachMax >= z) {
       if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
         cur -= 9;
@@ -746,6 +736,24 @@ class BlockMesher {
         ++cur;
     }
     cursor_[k] = cur;
+    return cur;
+  }
+
+  // §6 lookup: from the column's start pointer find the bottom-most entry that can reach z
+  // (reachMax >= z; the paper's mid_z >= z - window, tightened), walk up while entries can still
+  // reach it (reachMin <= z; the paper's mid_z <= z + window), keep min_z <= z <= max_z, and leave
+  // the start pointer at the first entry found. f(particle, dx, dy, dz) is called in (z, index)
+  // order with the offsets from the particle to the corner (field.hpp's latticeOffset(), bit for
+  // bit); the walk stops early when f returns true.
+  // With kTable the offsets along z come from the slice's table (dzt, see fillSliceDz), else from
+  // the offsets table; f(particle, dx, dy, dz, dz * dz).
+  template <bool kTable, class F>
+  void forEachInfluencing(int x, int y, int z, const SliceDz* dzt, F&& f) {
+    const std::size_t k = col(x, y);
+    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
+    if (begin == end) return;
+    const std::uint32_t cur = seekColumn(k, begin, end, z);
+    const ColumnEntry* e = entries_;
     const float* off = off0_;
     const float* offX = off + x;
     const float* offY = off + y;
@@ -980,22 +988,8 @@ class BlockMesher {
     const std::size_t k = col(x, y);
     const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
     if (begin != end) {
-      std::uint32_t cur = cursor_[k];
+      const std::uint32_t cur = seekColumn(k, begin, end, z);  // start of z's walk
       const ColumnEntry* e = entries_;
-      // Start of z's walk, as forEachInfluencing.
-      while (cur > begin && e[cur - 1].reachMax >= z) {
-        if (cur >= begin + 9 && e[cur - 9].reachMax >= z)
-          cur -= 9;
-        else
-          --cur;
-      }
-      while (cur < end && e[cur].reachMax < z) {
-        if (cur + 8 < end && e[cur + 8].reachMax < z)
-          cur += 9;
-        else
-          ++cur;
-      }
-      cursor_[k] = cur;
       const float* off = off0_;
       const float* offX = off + x;
       const float* offY = off + y;
