@@ -751,6 +751,20 @@ void forDiscLattice(const SphEmitter& e, float d, glm::vec3 dir, F&& f) {
     }
 }
 
+// True when a sphere of radius `room` around p overlaps a collider (its signed distance at p is
+// below `room`). Emitters skip such lattice points: a nozzle placed in or against a solid cannot
+// emit there, and a particle created inside the boundary's filled half-space would start at up to
+// twice the rest density (WCSPH's Tait pressure then fires it off at km/s).
+bool overlapsCollider(const SphWorld& world, glm::vec3 p, float room) {
+  for (const SphCollider& col : world.colliders) {
+    const glm::vec3 local = glm::inverse(col.pose.rotation) * (p - col.pose.translation);
+    ColliderSample sample;
+    col.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
+    if (sample.valid && sample.distance < room) return true;
+  }
+  return false;
+}
+
 std::size_t applyEmitters(SphWorld& world) {
   const float d = sphSpacing(world.params);
   std::size_t emitted = 0;
@@ -770,6 +784,7 @@ std::size_t applyEmitters(SphWorld& world) {
       // The layer was due `accumulator` seconds ago and has travelled that far.
       const glm::vec3 base = e.position + dir * (e.speed * static_cast<float>(e.accumulator));
       forDiscLattice(e, d, dir, [&](glm::vec3 o) {
+        if (overlapsCollider(world, base + o, world.params.particle_radius)) return;
         if (addSphParticle(world, base + o, dir * e.speed)) ++emitted;
       });
     }
