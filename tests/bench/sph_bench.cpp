@@ -9,6 +9,9 @@
 //                                           the game aim: fountain scene filled to its 10k budget
 //                                           (once), then 60 frames of 1/60 s per row: ms per
 //                                           frame, mean error; default and force_bound = 0
+//   bench_sph seeds [--from A] [--to B]   the randomised stability runs of tests/sph for seeds
+//                                           A..B (16 runs x 200 steps each): every run that breaks
+//                                           a bound, and the count
 //   bench_sph steps [--solver S] [--steps N] [--threads T]
 //                                           N steps of dambreak_box from t = 0 (a fixed, short
 //                                           workload for callgrind instruction counts)
@@ -17,6 +20,7 @@
 #include "sph_png.hpp"
 
 #include "fluid/sph/sph_scenes.hpp"
+#include "tests/sph/randomised_runs.hpp"
 
 #include <tbb/global_control.h>
 
@@ -365,18 +369,37 @@ int accuracy(const std::string& png) {
   return 0;
 }
 
+// The randomised stability scenario (tests/sph/randomised_runs.hpp) over seeds from..to; the unit
+// test runs one fixed seed. The second stream is seeded with seed + 1.
+int seedSweep(int from, int to) {
+  int failed = 0, runs = 0;
+  for (int seed = from; seed <= to; ++seed) {
+    std::mt19937 rng(static_cast<unsigned>(seed)), dfsph_rng(static_cast<unsigned>(seed) + 1u);
+    for (int run = 0; run < 16; ++run, ++runs) {
+      SphScene s = randomised::drawRun(run, rng, dfsph_rng);
+      const randomised::RunOutcome outcome = randomised::stepRun(s, 200);
+      if (outcome.ok) continue;
+      ++failed;
+      std::printf("seed %d run %d (%s): step %d: %s\n", seed, run, sphSolverName(s.world.params.solver), outcome.step,
+                  outcome.what.c_str());
+    }
+  }
+  std::printf("%d of %d runs broke a bound (seeds %d..%d)\n", failed, runs, from, to);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] "
-                 "[--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | steps [--solver S] [--steps N] "
+                 "[--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | seeds [--from A] [--to B] | steps [--solver S] [--steps N] "
                  "[--threads T] [--set key=value ...]\n");
     return 2;
   }
   const std::string cmd = argv[1];
-  int steps = 20;
+  int steps = 20, seed_from = 1, seed_to = 12;
   double seconds = 2.0;
   std::string png;
   SphSolverKind solver = SphSolverKind::dfsph;
@@ -387,6 +410,10 @@ int main(int argc, char** argv) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--steps")
       steps = std::atoi(v.c_str());
+    else if (k == "--from")
+      seed_from = std::atoi(v.c_str());
+    else if (k == "--to")
+      seed_to = std::atoi(v.c_str());
     else if (k == "--seconds")
       seconds = std::atof(v.c_str());
     else if (k == "--png")
@@ -422,6 +449,7 @@ int main(int argc, char** argv) {
   if (cmd == "accuracy") return accuracy(png);
   if (cmd == "fountain") return fountain(threads, extra);
   if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
+  if (cmd == "seeds") return seedSweep(seed_from, seed_to);
   std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());
   return 2;
 }

@@ -3,6 +3,7 @@
 // particles starting inside a collider, a thin fast wall, a randomised sweep, and NaN input.
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/sph/sph_scenes.hpp"
+#include "tests/sph/randomised_runs.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,45 +13,16 @@
 namespace {
 
 using namespace fluid;
+using randomised::emptyBox;
+using randomised::finiteState;
+using randomised::inside;
 
 constexpr SphSolverKind kSolvers[] = {SphSolverKind::dfsph, SphSolverKind::wcsph};
-
-// A closed box [0, size]^3 with six planes, no particles.
-SphScene emptyBox(SphSolverKind solver, float size, float radius) {
-  SphScene s;
-  s.name = "box";
-  s.world.params.solver = solver;
-  s.world.params.particle_radius = radius;
-  s.world.params.sound_speed = 20.0f;
-  s.box_min = glm::vec3(0.0f);
-  s.box_max = glm::vec3(size);
-  s.world.params.domain_min = glm::vec3(-0.1f);
-  s.world.params.domain_max = glm::vec3(size + 0.1f);
-  CollisionMaterial m;
-  m.resilience = 0.0f;
-  addSphContainer(s, s.box_min, s.box_max, m);
-  return s;
-}
-
-bool finiteState(const SphWorld& w) {
-  for (std::size_t i = 0; i < w.particles.size(); ++i) {
-    const glm::vec3 x = w.particles.position[i], v = w.particles.velocity[i];
-    if (!std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z)) return false;
-  }
-  return true;
-}
 
 float maxSpeed(const SphWorld& w) {
   float v = 0.0f;
   for (const glm::vec3& x : w.particles.velocity) v = std::max(v, glm::length(x));
   return v;
-}
-
-bool inside(const SphScene& s, float tol = 1e-5f) {
-  for (const glm::vec3& p : s.world.particles.position)
-    for (int a = 0; a < 3; ++a)
-      if (!(p[a] >= s.box_min[a] - tol && p[a] <= s.box_max[a] + tol)) return false;
-  return true;
 }
 
 glm::vec3 extent(const SphWorld& w) {
@@ -238,54 +210,13 @@ TEST(SphStability, ThinFastWallDoesNotLetParticlesThrough) {
 }
 
 TEST(SphStability, RandomisedRunsStayFiniteWithBoundedEnergy) {
-  // Documented ranges: radius 5..20 mm, viscosity 0..0.05, cfl 0.1..0.6 for WCSPH and 0.1..1.0
-  // for DFSPH (the game's fountain and the dambreak_box bench run it at 0.9), and for DFSPH a
-  // longest step of 5..16.7 ms, a tolerance of 0.02..0.5 % and every other run without the force
-  // condition; emitter speed 0.5..4 m/s, rate 200..3000 /s, static sphere/box colliders of
-  // 3..10 cm inside a 0.5 m box. The DFSPH-only knobs come from a second stream, so the WCSPH
-  // runs draw what they drew before DFSPH's ranges were widened.
+  // 16 runs of tests/sph/randomised_runs.hpp (ranges documented there), 200 steps each; a sweep
+  // over other seeds: bench_sph seeds.
   std::mt19937 rng(20240521), dfsph_rng(20261121);
-  auto uni = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
-  auto dfsphUni = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(dfsph_rng); };
   for (int run = 0; run < 16; ++run) {
-    const SphSolverKind solver = run % 2 ? SphSolverKind::wcsph : SphSolverKind::dfsph;
-    const float r = uni(0.005f, 0.02f);
-    SphScene s = emptyBox(solver, 0.5f, r);
-    SphParams& p = s.world.params;
-    p.viscosity = uni(0.0f, 0.05f);
-    p.cfl = uni(0.1f, solver == SphSolverKind::dfsph ? 1.0f : 0.6f);
-    if (solver == SphSolverKind::dfsph) {
-      p.max_time_step = dfsphUni(0.005f, 1.0f / 60.0f);
-      p.max_density_error = dfsphUni(0.0002f, 0.005f);
-      if (run % 4 == 0) p.force_bound = 0.0f;
-    }
-    p.max_particles = 1500;
-    SphEmitter e;
-    e.position = glm::vec3(uni(0.1f, 0.4f), uni(0.1f, 0.4f), uni(0.1f, 0.4f));
-    e.direction = glm::vec3(uni(-1, 1), uni(-1, 1), uni(-1, 1));
-    e.speed = uni(0.5f, 4.0f);
-    e.radius = uni(0.0f, 3.0f * r);
-    e.rate = uni(200.0f, 3000.0f);
-    s.world.emitters.push_back(e);
-    auto shape = run % 3 ? std::shared_ptr<const SignedDistanceShape>(std::make_shared<SphereShape>(uni(0.03f, 0.1f)))
-                         : std::make_shared<BoxShape>(glm::vec3(uni(0.03f, 0.1f)));
-    SphCollider c;
-    c.shape = shape;
-    c.pose.translation = glm::vec3(uni(0.1f, 0.4f), uni(0.05f, 0.3f), uni(0.1f, 0.4f));
-    s.world.colliders.push_back(c);
-    // Energy bound: total energy <= what the emitters brought in (kinetic + potential) + 1 %.
-    const double m = sphParticleMass(p);
-    double injected = 0.0;
-    for (int step = 0; step < 200; ++step) {
-      SphStepStats st;
-      const SphStatus status = stepSph(s.world, 0.0f, &st);
-      ASSERT_TRUE(status.ok()) << "run " << run << ": " << status.error;
-      injected += st.emitted * m * (0.5 * e.speed * e.speed + 9.81 * (e.position.y + 0.1));
-      ASSERT_TRUE(finiteState(s.world)) << "run " << run << " step " << step;
-      const double energy = st.kinetic_energy + sphPotentialEnergy(s.world);
-      ASSERT_LE(energy, injected * 1.01 + 1e-9) << "run " << run << " step " << step;
-      ASSERT_TRUE(inside(s)) << "run " << run << " step " << step;
-    }
+    SphScene s = randomised::drawRun(run, rng, dfsph_rng);
+    const randomised::RunOutcome outcome = randomised::stepRun(s, 200);
+    EXPECT_TRUE(outcome.ok) << "run " << run << " step " << outcome.step << ": " << outcome.what;
   }
 }
 
