@@ -11,6 +11,7 @@ mkdir -p docs
 tmp=$(mktemp -d)
 "$BENCH" accuracy --png docs/sph_accuracy.png > "$tmp/accuracy.md"
 "$BENCH" throughput --steps 20 > "$tmp/throughput.md"
+"$BENCH" seeds --from 1 --to 100 > "$tmp/seeds.txt"
 "$BENCH" dambreak_box --seconds "$BOX_SECONDS" --threads 12 > "$tmp/box.md"
 # The game aim on the game's own fountain (content/scenes/fountain.json as the game builds it); the
 # second row is the same scene with fluid::SphParams' defaults for the four solver knobs.
@@ -62,6 +63,14 @@ fi
     echo "- callgrind: \`valgrind --tool=callgrind --toggle-collect='$TOGGLE' $BENCH steps --steps 8 --threads 1\` counted $instructions instructions in stepSph ($(cat "$tmp/cg.txt"))."
     echo "- callgrind, WCSPH: the same with \`steps --solver wcsph --steps 8 --threads 1 $WCSPH_SET\` counted $instructions_wcsph instructions ($(cat "$tmp/cgw.txt"))."
   fi
+  echo
+  echo "## Randomised stability sweep"
+  echo
+  echo "Command: \`$BENCH seeds --from 1 --to 100\` (the randomised runs of \`tests/sph/randomised_runs.hpp\`, 16 runs x 200 steps per seed; the unit test runs one fixed seed and must pass; a listed run broke a bound at that step)."
+  echo
+  echo '```'
+  cat "$tmp/seeds.txt"
+  echo '```'
   echo
   echo "## Throughput"
   echo
