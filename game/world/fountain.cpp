@@ -103,7 +103,9 @@ fluid::ColliderSample sampleAt(const Cylinders& s, glm::vec3 p) {
 
 }  // namespace
 
-float FountainShape::distance(glm::vec3 p) const { return sampleAt(cylindersOf(g_), p).distance; }
+float FountainShape::distance(glm::vec3 p) const {
+  return evaluate(cylindersOf(g_), std::sqrt(p.x * p.x + p.z * p.z), p.y).d;  // no gradient needed
+}
 
 void FountainShape::query(std::span<const glm::vec3> local_points, std::span<fluid::ColliderSample> out) const {
   assert(local_points.size() == out.size());

@@ -29,6 +29,15 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
   return true;
 }
 
+void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
+  solver.viscosity = params.viscosity;
+  solver.cfl = params.cfl;
+  solver.max_time_step = params.max_time_step;
+  solver.min_time_step = std::min(solver.min_time_step, solver.max_time_step);
+  solver.max_density_error = params.density_error;
+  solver.force_bound = params.force_bound;
+}
+
 bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,
                   std::string& error) {
   out = SphFluid{};
@@ -37,13 +46,8 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   sp.solver = params.solver;
   sp.particle_radius = params.particle_radius;
   sp.gravity = gravity;
-  sp.viscosity = params.viscosity;
   sp.max_particles = params.max_particles;
-  sp.cfl = params.cfl;
-  sp.max_time_step = params.max_time_step;
-  sp.min_time_step = std::min(sp.min_time_step, sp.max_time_step);
-  sp.max_density_error = params.density_error;
-  sp.force_bound = params.force_bound;
+  applySolverKnobs(params, sp);
   // A cap well above the jet speed: a stray fast particle cannot force tiny CFL steps.
   sp.max_speed = 3.0f * params.jet_speed + 5.0f;
   // WCSPH: the sound speed must stay ~10x the fastest flow (Becker & Teschner 2007 §4).
@@ -95,11 +99,16 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   return true;
 }
 
-bool stepSphFluid(SphFluid& f, double dt) {
+bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step) {
   if (!f.error.empty()) return false;
   std::uint64_t sub = 0;
   const fluid::SphStatus st = fluid::advanceSph(
-      f.world, dt, [&](const fluid::SphStepStats&) { ++sub; }, 10000);
+      f.world, dt,
+      [&](const fluid::SphStepStats& stats) {
+        ++sub;
+        if (on_step) on_step(stats);
+      },
+      10000);
   f.solver_steps += sub;
   ++f.steps;
   if (!st.ok()) {

@@ -10,6 +10,7 @@
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -42,15 +43,20 @@ struct SphFluid {
   std::string error;               // first solver error; the system stops stepping after one
 };
 
+// Copies the solver knobs that may change while the fluid runs (viscosity, cfl, max_time_step,
+// density_error, force_bound) into the solver's parameters.
+void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
+
 // Builds the SPH world: parameters, the fountain collider, the nozzle emitter at `nozzle`
 // (pointing up), the drains; reserves every buffer for max_particles. False + error (naming
 // the field and value) on invalid parameters.
 bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
                   std::string& error);
 
-// Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step).
-// Returns false and sets fluid.error when the solver refuses a step.
-bool stepSphFluid(SphFluid& fluid, double dt);
+// Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step),
+// calling `on_step` (when given) with each sub-step's statistics. Returns false and sets
+// fluid.error when the solver refuses a step.
+bool stepSphFluid(SphFluid& fluid, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step = {});
 
 // Empty when every position/velocity/density is finite; otherwise names the first bad value.
 std::string findNonFiniteSph(const SphFluid& fluid);

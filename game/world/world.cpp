@@ -1,6 +1,5 @@
 #include "game/world/world.hpp"
 
-#include <algorithm>
 #include <optional>
 
 namespace game {
@@ -16,13 +15,13 @@ void applyCamera(const SectionConfig& section, engine::FpsCamera& camera, bool i
   camera.move_speed = static_cast<float>(section.number("move_speed"));
 }
 
-glm::vec3 worldGravity(const SceneConfig& scene) {
+}  // namespace
+
+glm::vec3 sceneGravity(const SceneConfig& scene) {
   // Particles fall with the rigid bodies' gravity when that effect is present.
   if (const SectionConfig* rigid = scene.effect("rigid_bodies")) return rigid->vec3("gravity");
   return {0.0f, -9.81f, 0.0f};
 }
-
-}  // namespace
 
 bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error) {
   out = World{};
@@ -49,7 +48,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
   }
   if (const SectionConfig* section = scene.effect("sprite_particles")) {
     auto particles = std::make_unique<SpriteParticles>();
-    initSpriteParticles(*particles, spriteParamsFrom(*section, worldGravity(scene), out.fountain.geometry().nozzle),
+    initSpriteParticles(*particles, spriteParamsFrom(*section, sceneGravity(scene), out.fountain.geometry().nozzle),
                         static_cast<std::size_t>(section->integer("max_particles")), seed ^ 0x9e3779b9u);
     out.sprite_particles = std::move(particles);
     out.systems.emplace_back("sprite_particles");
@@ -58,7 +57,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
     SphFluidParams params;
     auto fluid = std::make_unique<SphFluid>();
     if (!sphParamsFrom(*section, params, error) ||
-        !initSphFluid(*fluid, params, out.fountain.geometry(), worldGravity(scene), error)) {
+        !initSphFluid(*fluid, params, out.fountain.geometry(), sceneGravity(scene), error)) {
       return false;
     }
     out.sph_fluid = std::move(fluid);
@@ -96,7 +95,7 @@ void applyLiveParams(World& world) {
   if (world.sprite_particles) {
     if (const SectionConfig* section = world.scene.effect("sprite_particles")) {
       world.sprite_particles->params =
-          spriteParamsFrom(*section, worldGravity(world.scene), world.fountain.geometry().nozzle);
+          spriteParamsFrom(*section, sceneGravity(world.scene), world.fountain.geometry().nozzle);
     }
   }
   if (world.sph_fluid) {
@@ -108,17 +107,12 @@ void applyLiveParams(World& world) {
       f.params.jet_speed = fresh.jet_speed;
       f.params.rate = fresh.rate;
       f.params.viscosity = fresh.viscosity;
-      f.world.params.viscosity = fresh.viscosity;
       // Accuracy against time, live: the step bounds and the pressure-solve tolerance.
       f.params.cfl = fresh.cfl;
       f.params.max_time_step = fresh.max_time_step;
       f.params.density_error = fresh.density_error;
       f.params.force_bound = fresh.force_bound;
-      f.world.params.cfl = fresh.cfl;
-      f.world.params.max_time_step = fresh.max_time_step;
-      f.world.params.min_time_step = std::min(f.world.params.min_time_step, fresh.max_time_step);
-      f.world.params.max_density_error = fresh.density_error;
-      f.world.params.force_bound = fresh.force_bound;
+      applySolverKnobs(f.params, f.world.params);
       for (fluid::SphEmitter& e : f.world.emitters) {
         e.speed = fresh.jet_speed;
         e.rate = fresh.rate;

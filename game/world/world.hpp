@@ -38,6 +38,10 @@ struct World {
   std::string nonfinite_state;  // first NaN/inf seen (empty while everything is finite)
 };
 
+// Gravity of the scene's particles: the rigid bodies' gravity when that effect is listed, else
+// (0, -9.81, 0) m/s^2.
+glm::vec3 sceneGravity(const SceneConfig& scene);
+
 // Builds the world. `content_dir` is the content/ folder (models for the Bullet meshes).
 // Returns false with a message naming the file/effect on failure (also when fluid_surface is
 // listed without sph_fluid).

@@ -2,7 +2,7 @@
 // the `sph_fluid` effect of content/scenes/fountain.json (statue, dish, basin and drains as the
 // game builds them, game::initSphFluid), with its particle budget raised to 10,000, filled with the
 // drains shut until one second of jet is left to the budget, then stepped for 60 frames of 1/60 s
-// exactly as the game steps it (game::stepSphFluid), the jet still running.
+// by the game's own game::stepSphFluid, the jet still running.
 //
 //   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
 //
@@ -14,6 +14,7 @@
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
+#include "game/world/world.hpp"
 
 #include <tbb/global_control.h>
 
@@ -35,8 +36,7 @@ struct Config {
   std::vector<std::string> assignments;  // "sph_fluid.key=value"
 };
 
-bool buildFluid(const std::string& scene_file, const std::vector<std::string>& assignments, game::SphFluid& fluid,
-                glm::vec3& gravity) {
+bool buildFluid(const std::string& scene_file, const std::vector<std::string>& assignments, game::SphFluid& fluid) {
   game::SceneConfig scene;
   game::SceneStatus st = game::loadSceneFile(scene_file, scene);
   for (const std::string& a : assignments)
@@ -50,12 +50,10 @@ bool buildFluid(const std::string& scene_file, const std::vector<std::string>& a
     std::fprintf(stderr, "bench_game_fountain: %s does not list the sph_fluid effect\n", scene_file.c_str());
     return false;
   }
-  gravity = glm::vec3(0.0f, -9.81f, 0.0f);
-  if (const game::SectionConfig* rigid = scene.effect("rigid_bodies")) gravity = rigid->vec3("gravity");
   game::SphFluidParams params;
   std::string error;
   if (!game::sphParamsFrom(*section, params, error) ||
-      !game::initSphFluid(fluid, params, game::FountainGeometry{}, gravity, error)) {
+      !game::initSphFluid(fluid, params, game::FountainGeometry{}, game::sceneGravity(scene), error)) {
     std::fprintf(stderr, "bench_game_fountain: %s\n", error.c_str());
     return false;
   }
@@ -111,12 +109,11 @@ int main(int argc, char** argv) {
     std::vector<std::string> assignments = common;
     assignments.insert(assignments.end(), config.assignments.begin(), config.assignments.end());
     game::SphFluid filled;
-    glm::vec3 gravity;
     {
       // Fill with the drains shut (one fill per configuration, all rows of it time the same state).
       std::vector<std::string> fill = assignments;
       fill.push_back("sph_fluid.drain=false");
-      if (!buildFluid(scene_file, fill, filled, gravity)) return 1;
+      if (!buildFluid(scene_file, fill, filled)) return 1;
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
       const double budget = static_cast<double>(filled.world.params.max_particles);
       const double target = budget - std::min(0.5 * budget, static_cast<double>(filled.params.rate));
@@ -133,18 +130,15 @@ int main(int argc, char** argv) {
       double steps = 0.0, iterations = 0.0, err = 0.0, max_err = 0.0;
       for (int frame = 0; frame < frames; ++frame) {
         double frame_ms = 0.0;
-        const fluid::SphStatus st = fluid::advanceSph(
-            f.world, 1.0 / 60.0,
-            [&](const fluid::SphStepStats& x) {
-              frame_ms += x.step_ms;
-              steps += 1.0;
-              iterations += x.density_iterations + x.divergence_iterations;
-              err += x.avg_density_error;
-              max_err = std::max(max_err, static_cast<double>(x.max_density_error));
-            },
-            10000);
-        if (!st.ok()) {
-          std::fprintf(stderr, "bench_game_fountain: %s\n", st.error.c_str());
+        const bool ok = game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
+          frame_ms += x.step_ms;
+          steps += 1.0;
+          iterations += x.density_iterations + x.divergence_iterations;
+          err += x.avg_density_error;
+          max_err = std::max(max_err, static_cast<double>(x.max_density_error));
+        });
+        if (!ok) {
+          std::fprintf(stderr, "bench_game_fountain: %s\n", f.error.c_str());
           return 1;
         }
         ms.push_back(frame_ms);
