@@ -757,7 +757,7 @@ void forDiscLattice(const SphEmitter& e, float d, glm::vec3 dir, F&& f) {
 // twice the rest density (WCSPH's Tait pressure then fires it off at km/s).
 bool overlapsCollider(const SphWorld& world, glm::vec3 p, float room) {
   for (const SphCollider& col : world.colliders) {
-    const glm::vec3 local = glm::inverse(col.pose.rotation) * (p - col.pose.translation);
+    const glm::vec3 local = toColliderSpace(col.pose, p);
     ColliderSample sample;
     col.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
     if (sample.valid && sample.distance < room) return true;

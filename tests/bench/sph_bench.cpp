@@ -5,13 +5,9 @@
 //                                           density error over 30 fps frames, compute s per sim s
 //   bench_sph accuracy [--png FILE]         dam break (a = 0.1 m) for 2 s per solver and knob set:
 //                                           density error, volume change, compute time; PNG plot
-//   bench_sph fountain [--threads 1,2] [--set k=v]
-//                                           the game aim: fountain scene filled to its 10k budget
-//                                           (once), then 60 frames of 1/60 s per row: ms per
-//                                           frame, mean error; default and force_bound = 0
-//   bench_sph seeds [--from A] [--to B]   the randomised stability runs of tests/sph for seeds
-//                                           A..B (16 runs x 200 steps each): every run that breaks
-//                                           a bound, and the count
+//   bench_sph seeds [--from A] [--to B]     the randomised stability runs of tests/sph for seeds
+//                                           A..B (tests/sph/randomised_runs.hpp): every run that
+//                                           breaks a bound, and the count
 //   bench_sph steps [--solver S] [--steps N] [--threads T]
 //                                           N steps of dambreak_box from t = 0 (a fixed, short
 //                                           workload for callgrind instruction counts)
@@ -109,55 +105,6 @@ int fixedSteps(SphSolverKind solver, int steps, int threads, const Overrides& ex
   std::printf(
       "%s: %zu particles, %d steps to t = %.4f s, %.2f ms/step (neighbour search %.2f ms), %.2f iterations/step\n",
       sphSolverName(solver), s.world.particles.size(), steps, s.world.time, ms / steps, nb / steps, iters / steps);
-  return 0;
-}
-
-// Game aim of issue 4: the 10k-particle fountain at 60 Hz on 2 cores, <= 1 % mean density error,
-// using at most half of a 16.7 ms frame. Fills the fountain scene (default budget 10,000) for up
-// to 8 simulated seconds, then times 60 frames of 1/60 s each.
-int fountain(const std::vector<int>& thread_counts, const Overrides& extra) {
-  std::printf(
-      "| configuration (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | steps per frame | "
-      "mean density error | max density error |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
-  SphScene filled = makeScene("fountain", SphSolverKind::dfsph, extra);
-  reserveSph(filled.world, filled.world.params.max_particles);
-  const double frame = 1.0 / 60.0;
-  {
-    // One fill (all threads) shared by every row, so the rows time the same state.
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    while (filled.world.time < 8.0 && filled.world.particles.size() < filled.world.params.max_particles * 99 / 100) {
-      if (!advanceSph(filled.world, frame, [](const SphStepStats&) {}).ok()) return 1;
-    }
-  }
-  struct Row {
-    const char* label;
-    float force_bound;
-  };
-  for (const Row& row : {Row{"default", filled.world.params.force_bound}, Row{"force_bound=0", 0.0f}}) {
-    for (int threads : thread_counts) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-      SphScene s = filled;
-      s.world.params.force_bound = row.force_bound;
-      std::vector<double> ms;
-      double steps = 0.0, err = 0.0, max_err = 0.0;
-      for (int f = 0; f < 60; ++f) {
-        double frame_ms = 0.0;
-        const SphStatus st = advanceSph(s.world, frame, [&](const SphStepStats& x) {
-          frame_ms += x.step_ms;
-          steps += 1.0;
-          err += x.avg_density_error;
-          max_err = std::max(max_err, static_cast<double>(x.max_density_error));
-        });
-        if (!st.ok()) return 1;
-        ms.push_back(frame_ms);
-      }
-      std::printf("| dfsph %s (%d) | %zu | %.2f | %.2f | %.1f | %.3f %% | %.2f %% |\n", row.label, threads,
-                  s.world.particles.size(), median(ms), *std::max_element(ms.begin(), ms.end()), steps / 60.0,
-                  100.0 * err / steps, 100.0 * max_err);
-      std::fflush(stdout);
-    }
-  }
   return 0;
 }
 
@@ -375,9 +322,9 @@ int seedSweep(int from, int to) {
   int failed = 0, runs = 0;
   for (int seed = from; seed <= to; ++seed) {
     std::mt19937 rng(static_cast<unsigned>(seed)), dfsph_rng(static_cast<unsigned>(seed) + 1u);
-    for (int run = 0; run < 16; ++run, ++runs) {
+    for (int run = 0; run < randomised::kRunsPerSeed; ++run, ++runs) {
       SphScene s = randomised::drawRun(run, rng, dfsph_rng);
-      const randomised::RunOutcome outcome = randomised::stepRun(s, 200);
+      const randomised::RunOutcome outcome = randomised::stepRun(s, randomised::kStepsPerRun);
       if (outcome.ok) continue;
       ++failed;
       std::printf("seed %d run %d (%s): step %d: %s\n", seed, run, sphSolverName(s.world.params.solver), outcome.step,
@@ -394,7 +341,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] "
-                 "[--set k=v] | accuracy [--png FILE] | fountain [--threads 1,2] | seeds [--from A] [--to B] | steps [--solver S] [--steps N] "
+                 "[--set k=v] | accuracy [--png FILE] | seeds [--from A] [--to B] | steps [--solver S] [--steps N] "
                  "[--threads T] [--set key=value ...]\n");
     return 2;
   }
@@ -447,7 +394,6 @@ int main(int argc, char** argv) {
   if (cmd == "throughput") return throughput(steps);
   if (cmd == "dambreak_box") return damBreakBox(seconds, threads, extra, solver_given ? &solver : nullptr);
   if (cmd == "accuracy") return accuracy(png);
-  if (cmd == "fountain") return fountain(threads, extra);
   if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
   if (cmd == "seeds") return seedSweep(seed_from, seed_to);
   std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());

@@ -12,6 +12,10 @@
 
 namespace fluid::randomised {
 
+// One seed's sweep: this many drawn runs, each stepped this many times.
+constexpr int kRunsPerSeed = 16;
+constexpr int kStepsPerRun = 200;
+
 // A closed box [0, size]^3 with six planes, no particles.
 inline SphScene emptyBox(SphSolverKind solver, float size, float radius) {
   SphScene s;

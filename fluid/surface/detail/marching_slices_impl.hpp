@@ -1026,18 +1026,16 @@ class BlockMesher {
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
     c.x = std::int16_t(x);
     c.y = std::int16_t(y);
-    c.value = v1;
-    c.g[0] = gx1;
-    c.g[1] = gy1;
-    c.g[2] = gz1;
-    hi.corners.push_back(c);
-    cellHi.corner = std::uint32_t(hi.corners.size());
-    c.value = v0;
-    c.g[0] = gx0;
-    c.g[1] = gy0;
-    c.g[2] = gz0;
-    lo.corners.push_back(c);
-    cellLo.corner = std::uint32_t(lo.corners.size());
+    auto store = [&c](Slice<Policy>& slice, SliceCell& cell, float v, float gx, float gy, float gz) {
+      c.value = v;
+      c.g[0] = gx;
+      c.g[1] = gy;
+      c.g[2] = gz;
+      slice.corners.push_back(c);
+      cell.corner = std::uint32_t(slice.corners.size());
+    };
+    store(hi, cellHi, v1, gx1, gy1, gz1);
+    store(lo, cellLo, v0, gx0, gy0, gz0);
     return cellLo.corner;
   }
 
