@@ -111,6 +111,13 @@ struct SphCollider {
   CollisionMaterial material;
   bool boundary_pressure = true;  // also act as SPH boundary (density/pressure), not only as collision
   bool integrate_pose = true;     // advance pose by its velocities during each step
+  // The shape's signed distance is 1-Lipschitz (|d(a) - d(b)| <= |a - b|: an exact SDF, or min/max
+  // of exact ones as in CSG). Only then, and only while the collider does not move during a step
+  // (integrate_pose off or zero velocities), the end-of-step collision check skips the query of a
+  // particle that started at least the support H away and moved less than its start distance
+  // (minus a margin): it cannot have reached the surface, so the check would do nothing. Results
+  // are bit-identical with and without the flag (tests/sph checks this).
+  bool lipschitz_distance = false;
   // Two-way coupling outputs: force (N) and torque (N m, about pose.translation) the fluid
   // exerted on this collider, averaged over the last stepSph/advanceSph call.
   glm::vec3 force{0.0f};
@@ -186,16 +193,20 @@ struct SphScratch {
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
   // Step-start positions and the velocities padded to 16 bytes, so the eight-lane pair loops load
   // a neighbour's x, y, z with one 16-byte load (DFSPH density, viscosity and solver passes);
-  // pos4[i].w carries the viscosity coefficient 10 nu / rho_i once the densities are known.
+  // vel4[i].w carries the viscosity coefficient 10 nu / rho_i from the density pass to the
+  // viscosity pass (the density pass reads pos4 of the neighbours, so it cannot write there).
   std::vector<glm::vec4> vel4, pos4;
   std::vector<glm::vec4> kappa4;           // DFSPH: .x = kappa_i / rho_i of the current iteration (16-byte records)
   std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair, 16 j (byte offset of j's 16-byte record)
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
-  std::vector<std::uint32_t> u32_tmp, keep;
-  std::vector<glm::vec3> local_points;
+  std::vector<std::uint32_t> u32_tmp;
+  std::vector<std::uint32_t> keep;  // per particle: 0 when inside a sink at the start of the step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
-  std::vector<ColliderSample> end_samples;
+  std::vector<std::vector<ColliderSample>> end_samples;  // per collider, at the end-of-step positions
+  // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after
+  // collider c's last query).
+  std::vector<std::uint32_t> collide_stale;
   std::vector<glm::vec3> reduce_force, reduce_torque;
   bool initialised = false;
   // Testing aid: run the pair loops' portable code even where the CPU has AVX2. Both give

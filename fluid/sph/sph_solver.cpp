@@ -208,31 +208,34 @@ ColliderPose advancedPose(const ColliderPose& pose, float dt) {
   return out;
 }
 
-// Queries collider c at `points` (world) with `pose`; samples get world-space normals. One pass
-// in chunks: transform to collider space, batch query (thread-safe on disjoint output ranges per
-// the contract), normals back to world space. An unrotated pose (the common static case: box
-// walls, the fountain) skips both rotations.
-void queryCollider(SphScratch& w, const SphCollider& col, const ColliderPose& pose,
-                   const std::vector<glm::vec3>& points, std::vector<ColliderSample>& out) {
-  const std::size_t n = points.size();
-  w.local_points.resize(n);
-  out.resize(n);
-  const glm::quat inv = glm::inverse(pose.rotation);
-  const bool rotated =
-      !(pose.rotation.w == 1.0f && pose.rotation.x == 0.0f && pose.rotation.y == 0.0f && pose.rotation.z == 0.0f);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    if (rotated)
-      for (std::size_t i = r.begin(); i != r.end(); ++i) w.local_points[i] = inv * (points[i] - pose.translation);
-    else
-      for (std::size_t i = r.begin(); i != r.end(); ++i) w.local_points[i] = points[i] - pose.translation;
-    col.shape->query(std::span<const glm::vec3>(w.local_points.data() + r.begin(), r.size()),
-                     std::span<ColliderSample>(out.data() + r.begin(), r.size()));
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      if (rotated) out[i].normal = pose.rotation * out[i].normal;
-      if (!std::isfinite(out[i].distance)) out[i].valid = false;  // never let a bad shape spread NaN
+// Queries one collider at chosen particles, in chunks: which[0 .. q) are particle indices whose
+// world points are transformed to collider space, queried as one batch and written (normals back in
+// world space, a non-finite distance marked invalid) to out[which[k]]. At most kGrain points.
+struct ColliderQuery {
+  const SphCollider& col;
+  ColliderPose pose;
+  glm::quat inv;
+  bool rotated;
+  ColliderQuery(const SphCollider& c, const ColliderPose& p)
+      : col(c),
+        pose(p),
+        inv(glm::inverse(p.rotation)),
+        rotated(!(p.rotation.w == 1.0f && p.rotation.x == 0.0f && p.rotation.y == 0.0f && p.rotation.z == 0.0f)) {}
+  void run(const std::vector<glm::vec3>& points, const std::uint32_t* which, std::uint32_t q,
+           std::vector<ColliderSample>& out) const {
+    if (q == 0) return;
+    glm::vec3 local[kGrain];
+    ColliderSample smp[kGrain];
+    for (std::uint32_t k = 0; k < q; ++k)
+      local[k] = rotated ? inv * (points[which[k]] - pose.translation) : points[which[k]] - pose.translation;
+    col.shape->query(std::span<const glm::vec3>(local, q), std::span<ColliderSample>(smp, q));
+    for (std::uint32_t k = 0; k < q; ++k) {
+      if (rotated) smp[k].normal = pose.rotation * smp[k].normal;
+      if (!std::isfinite(smp[k].distance)) smp[k].valid = false;  // never let a bad shape spread NaN
+      out[which[k]] = smp[k];
     }
-  });
-}
+  }
+};
 
 // --- pair loops ------------------------------------------------------------------------------
 // The per-pair gradients G[k] = m_j grad W_ij live in three float arrays (SoA, 12 bytes a pair).
@@ -320,7 +323,7 @@ struct PairLoops {
                          std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx, float* gy, float* gz,
                          std::uint32_t* nb16);
   // sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] (Laplacian viscosity, see stepSph), with
-  // c_j = 10 nu / rho_j in X[j].w.
+  // c_j = 10 nu / rho_j in V[j].w.
   glm::vec3 (*viscosity)(const glm::vec4* X, const glm::vec4* V, const float* gx, const float* gy,
                          const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
                          float eps);
@@ -372,7 +375,7 @@ glm::vec3 viscosityPortable(const glm::vec4* X, const glm::vec4* V, const float*
     const float x = xi.x - X[j].x, y = xi.y - X[j].y, z = xi.z - X[j].z;
     const float vx = ((vi.x - V[j].x) * x + (vi.y - V[j].y) * y) + (vi.z - V[j].z) * z;
     const float denom = ((x * x + y * y) + z * z) + eps;
-    const float coef = X[j].w * (vx / denom);
+    const float coef = V[j].w * (vx / denom);
     ax[l] += coef * gx[k];
     ay[l] += coef * gy[k];
     az[l] += coef * gz[k];
@@ -587,8 +590,8 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* X, const glm::vec4* V, const
     const __m256i mi = laneMask(e - k);
     const std::uint32_t* idx = e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf);
     __m256 xj, yj, zj, vcj, uj, vj, wj;
-    load8xyzw(X, idx, xj, yj, zj, vcj);
-    load8xyz(V, idx, uj, vj, wj);
+    load8xyz(X, idx, xj, yj, zj);
+    load8xyzw(V, idx, uj, vj, wj, vcj);
     const __m256 x = _mm256_sub_ps(pix, xj), y = _mm256_sub_ps(piy, yj), z = _mm256_sub_ps(piz, zj);
     const __m256 vx = _mm256_add_ps(
         _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(vix, uj), x), _mm256_mul_ps(_mm256_sub_ps(viy, vj), y)),
@@ -669,27 +672,43 @@ const PairLoops& pairLoops(bool portable) {
   return kPortableLoops;
 }
 
-template <typename T>
-void gather(std::vector<T>& data, std::vector<T>& tmp, const std::vector<std::uint32_t>& order) {
-  tmp.resize(data.size());
-  forEach(data.size(), [&](std::size_t e) { tmp[e] = data[order[e]]; });
-  data.swap(tmp);
-}
-
 // --- validation, sinks, emitters -------------------------------------------------------------
 
-SphStatus checkFinite(const SphWorld& world) {
+// Validation and the sink test in one parallel pass. Returns the refusal naming the first
+// particle with a non-finite position or velocity (the world is left untouched), otherwise
+// marks scratch.keep[i] = 0 for the particles inside a sink box and returns their count in
+// `in_sinks` (applySinks removes them).
+SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks) {
   const auto& x = world.particles.position;
   const auto& v = world.particles.velocity;
+  auto& keep = world.scratch.keep;
+  keep.resize(x.size());
   const std::size_t none = std::numeric_limits<std::size_t>::max();
-  const std::size_t bad = reduce(
-      x.size(), none,
-      [&](std::size_t i, std::size_t& acc) {
-        const bool ok = std::isfinite(x[i].x) && std::isfinite(x[i].y) && std::isfinite(x[i].z) &&
-                        std::isfinite(v[i].x) && std::isfinite(v[i].y) && std::isfinite(v[i].z);
-        if (!ok && i < acc) acc = i;
+  struct Scan {
+    std::size_t bad;
+    std::size_t inside = 0;
+  };
+  const Scan scan = reduce(
+      x.size(), Scan{none},
+      [&](std::size_t i, Scan& acc) {
+        const glm::vec3 p = x[i];
+        const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v[i].x) &&
+                        std::isfinite(v[i].y) && std::isfinite(v[i].z);
+        if (!ok && i < acc.bad) acc.bad = i;
+        bool inside = false;
+        for (const SphSink& k : world.sinks)
+          inside = inside || (p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x &&
+                              p.y <= k.max.y && p.z <= k.max.z);
+        keep[i] = inside ? 0u : 1u;
+        acc.inside += inside ? 1 : 0;
       },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+      [](Scan a, const Scan& b) {
+        a.bad = std::min(a.bad, b.bad);
+        a.inside += b.inside;
+        return a;
+      });
+  in_sinks = scan.inside;
+  const std::size_t bad = scan.bad;
   if (bad == none) return {};
   char buf[320];
   std::snprintf(buf, sizeof buf,
@@ -701,21 +720,17 @@ SphStatus checkFinite(const SphWorld& world) {
   return {buf};
 }
 
-std::size_t applySinks(SphWorld& world) {
-  if (world.sinks.empty()) return 0;
+// Removes the particles checkFiniteAndSinks marked (`in_sinks` of them); nothing to do (and no
+// pass over the data) when none is inside a sink.
+std::size_t applySinks(SphWorld& world, std::size_t in_sinks) {
+  if (in_sinks == 0) return 0;
   ParticleStore& s = world.particles;
   SphScratch& w = world.scratch;
   const std::size_t n = s.size();
   std::size_t out = 0;
   // Stable compaction: survivors keep their relative order, so the result is deterministic.
   for (std::size_t i = 0; i < n; ++i) {
-    bool inside = false;
-    for (const SphSink& k : world.sinks) {
-      const glm::vec3 p = s.position[i];
-      inside = inside || (p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x && p.y <= k.max.y &&
-                          p.z <= k.max.z);
-    }
-    if (inside) continue;
+    if (!w.keep[i]) continue;
     if (out != i) {
       s.position[out] = s.position[i];
       s.velocity[out] = s.velocity[i];
@@ -824,7 +839,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         !std::isfinite(em.rate) || std::isnan(em.start_time) || std::isnan(em.end_time))
       return {"sph emitter " + std::to_string(e) + " has a non-finite field; step refused"};
   }
-  if (SphStatus s = checkFinite(world); !s.ok()) return s;
+  std::size_t in_sinks = 0;
+  if (SphStatus s = checkFiniteAndSinks(world, in_sinks); !s.ok()) return s;
   ensureInit(world);
   SphScratch& w = world.scratch;
   ParticleStore& S = world.particles;
@@ -834,7 +850,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
   // Keep persistent per-particle solver state in step with the store.
   w.warm_kappa.resize(S.size(), 0.0f);
-  stats.removed = applySinks(world);
+  stats.removed = applySinks(world, in_sinks);
   stats.emitted = applyEmitters(world);
   const std::size_t n = S.size();
   w.warm_kappa.resize(n, 0.0f);
@@ -865,14 +881,34 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         [](float a, float b) { return std::max(a, b); });
     rebuild = !(2.0f * moved < verlet_skin);
   }
+  bool copies_made = false;  // pos4 / vel4
   if (rebuild) {
     // Cells 0.2 % wider than the search radius: the query then reaches one cell on each side
     // (neighborReach), with room for float slack at coordinates up to ~400 H from the origin.
     buildNeighborGrid(w.grid, S.position, 1.002f * (H + verlet_skin), P.domain_min, P.domain_max);
-    gather(S.position, w.vec_a, w.grid.order);
-    gather(S.velocity, w.vec_a, w.grid.order);
-    gather(S.id, w.u32_tmp, w.grid.order);
-    gather(w.warm_kappa, w.float_tmp, w.grid.order);
+    // Re-sort by cell in one pass, which also writes the 16-byte copies the pair loops read.
+    const std::uint32_t* order = w.grid.order.data();
+    w.vec_a.resize(n);
+    w.vec_b.resize(n);
+    w.u32_tmp.resize(n);
+    w.float_tmp.resize(n);
+    w.pos4.resize(n);
+    w.vel4.resize(n);
+    forEach(n, [&](std::size_t e) {
+      const std::uint32_t o = order[e];
+      const glm::vec3 x = S.position[o], v = S.velocity[o];
+      w.vec_a[e] = x;
+      w.vec_b[e] = v;
+      w.u32_tmp[e] = S.id[o];
+      w.float_tmp[e] = w.warm_kappa[o];
+      w.pos4[e] = glm::vec4(x, 0.0f);
+      w.vel4[e] = glm::vec4(v, 0.0f);
+    });
+    S.position.swap(w.vec_a);
+    S.velocity.swap(w.vec_b);
+    S.id.swap(w.u32_tmp);
+    w.warm_kappa.swap(w.float_tmp);
+    copies_made = true;
     markGridReordered(w.grid);
     if (verlet_skin > 0.0f) {
       findNeighbors(w.grid, S.position, H + verlet_skin, w.verlet);
@@ -905,66 +941,69 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   const auto& X = S.position;
   auto& V = S.velocity;
   // 16-byte copies of the step-start positions and velocities for the pair loops.
-  w.pos4.resize(n);
-  w.vel4.resize(n);
-  forEach(n, [&](std::size_t i) {
-    w.pos4[i] = glm::vec4(X[i], 0.0f);
-    w.vel4[i] = glm::vec4(V[i], 0.0f);
-  });
+  if (!copies_made) {
+    w.pos4.resize(n);
+    w.vel4.resize(n);
+    forEach(n, [&](std::size_t i) {
+      w.pos4[i] = glm::vec4(X[i], 0.0f);
+      w.vel4[i] = glm::vec4(V[i], 0.0f);
+    });
+  }
 
   // 2. Collider samples at the step-start positions; boundary volume, its gradient and flux.
-  w.start_samples.resize(nc);
-  w.boundary_volume.assign(n, 0.0f);
-  w.boundary_gradient.assign(n, glm::vec3(0.0f));
-  w.boundary_flux.assign(n, 0.0f);
-  w.boundary_product.resize(n);
   // Several colliders: the solid is the union of their solid sides. Summing the volumes would count
   // the overlap twice at edges and corners (17 % density error at a box corner). We combine them as
   // V = 1 - prod_c (1 - V_c), exact for one plane and for orthogonal planes under a separable kernel,
   // close for the cubic spline; collider c's share of grad V is grad V_c prod_{c' != c} (1 - V_c').
-  w.float_tmp.assign(n, 1.0f);  // prod_c (1 - V_c)
-  float collider_speed = 0.0f;
-  for (std::size_t c = 0; c < nc; ++c) {
-    const SphCollider& col = world.colliders[c];
-    queryCollider(w, col, col.pose, X, w.start_samples[c]);
-    const auto& smp = w.start_samples[c];
-    if (col.boundary_pressure) {
-      forEach(n, [&](std::size_t i) {
-        const ColliderSample& s = smp[i];
-        if (!s.valid || s.distance >= H) return;
-        w.float_tmp[i] *= 1.0f - lookup(w.wall_volume, s.distance + w.wall_shift, H);
-      });
-    }
-    // Fastest collider material that could reach a particle within one maximal step: the step is
-    // limited so a moving wall advances at most cfl * d per step and cannot jump over a particle.
-    const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
-                        glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
-    if (moving)
-      collider_speed = std::max(collider_speed, reduce(
-                                                    n, 0.0f,
-                                                    [&](std::size_t i, float& acc) {
-                                                      const ColliderSample& s = smp[i];
-                                                      if (!s.valid) return;
-                                                      const float sp = glm::length(colliderVelocityAt(col.pose, X[i]));
-                                                      if (s.distance < H + sp * P.max_time_step)
-                                                        acc = std::max(acc, sp);
-                                                    },
-                                                    [](float a, float b) { return std::max(a, b); }));
-  }
-  for (std::size_t c = 0; c < nc; ++c) {
-    const SphCollider& col = world.colliders[c];
-    if (!col.boundary_pressure) continue;
-    const auto& smp = w.start_samples[c];
-    const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
-                        glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
-    forEach(n, [&](std::size_t i) {
-      const glm::vec3 grad = boundaryShare(w, smp[i], w.float_tmp[i]);
-      w.boundary_gradient[i] += grad;
-      if (moving) w.boundary_flux[i] += glm::dot(colliderVelocityAt(col.pose, X[i]), grad);
-    });
-  }
-  forEach(n, [&](std::size_t i) { w.boundary_volume[i] = 1.0f - w.float_tmp[i]; });
-  forEach(n, [&](std::size_t i) { w.boundary_product[i] = w.float_tmp[i]; });
+  // One parallel region: each chunk queries every collider, then combines the samples.
+  w.start_samples.resize(nc);
+  for (auto& smp : w.start_samples) smp.resize(n);
+  w.boundary_volume.resize(n);
+  w.boundary_gradient.resize(n);
+  w.boundary_flux.resize(n);
+  w.boundary_product.resize(n);
+  const float collider_speed = reduceChunks(
+      n, 0.0f,
+      [&](std::size_t b, std::size_t e, float& acc) {
+        std::uint32_t which[kGrain];
+        for (std::size_t i = b; i < e; ++i) which[i - b] = static_cast<std::uint32_t>(i);
+        for (std::size_t c = 0; c < nc; ++c)
+          ColliderQuery(world.colliders[c], world.colliders[c].pose)
+              .run(X, which, static_cast<std::uint32_t>(e - b), w.start_samples[c]);
+        for (std::size_t i = b; i < e; ++i) {
+          float product = 1.0f;  // prod_c (1 - V_c)
+          for (std::size_t c = 0; c < nc; ++c) {
+            const ColliderSample& s = w.start_samples[c][i];
+            if (!world.colliders[c].boundary_pressure || !s.valid || s.distance >= H) continue;
+            product *= 1.0f - lookup(w.wall_volume, s.distance + w.wall_shift, H);
+          }
+          glm::vec3 gradient(0.0f);
+          float flux = 0.0f;
+          for (std::size_t c = 0; c < nc; ++c) {
+            const SphCollider& col = world.colliders[c];
+            const ColliderSample& s = w.start_samples[c][i];
+            const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
+                                glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
+            if (col.boundary_pressure) {
+              const glm::vec3 grad = boundaryShare(w, s, product);
+              gradient += grad;
+              if (moving) flux += glm::dot(colliderVelocityAt(col.pose, X[i]), grad);
+            }
+            // Fastest collider material that could reach a particle within one maximal step: the
+            // step is limited so a moving wall advances at most cfl * d per step and cannot jump
+            // over a particle.
+            if (moving && s.valid) {
+              const float sp = glm::length(colliderVelocityAt(col.pose, X[i]));
+              if (s.distance < H + sp * P.max_time_step) acc = std::max(acc, sp);
+            }
+          }
+          w.boundary_gradient[i] = gradient;
+          w.boundary_flux[i] = flux;
+          w.boundary_volume[i] = 1.0f - product;
+          w.boundary_product[i] = product;
+        }
+      },
+      [](float x, float y) { return std::max(x, y); });
 
   // 3. One pass over the pairs: density (the SPH sum, Becker & Teschner 2007 eq. 4, plus the
   // boundary volume's share), the per-pair m grad W_ij reused by every solver iteration, and the
@@ -982,60 +1021,122 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   float* const gx_out = w.grad_x.data();
   float* const gy_out = w.grad_y.data();
   float* const gz_out = w.grad_z.data();
-  w.vec_b.resize(n);   // S_i
-  w.factor.resize(n);  // Q_i here, alpha_i after the solver-specific part below
+  w.vec_b.resize(n);   // WCSPH: S_i (unused)
+  w.factor.resize(n);  // DFSPH: alpha_i
   const float h2 = H * H;
   const float r_min = 1e-6f * H;
-  if (filter_verlet) {
-    const glm::vec3* __restrict Xp = X.data();
-    std::uint32_t* __restrict counts = w.neighbors.counts.data();
-    const CubicSplineKernel kernel = w.kernel;
-    forEach(n, [&](std::size_t i) {
-      float sum = w0;
-      const glm::vec3 xi = Xp[i];
-      const std::uint32_t first = off[i], last = cand_end[i];
-      std::uint32_t out = first;
-      for (std::uint32_t k = first; k < last; ++k) {
-        const std::uint32_t j = cand[k];
-        const glm::vec3 x = xi - Xp[j];
-        // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
-        // exactly a fresh search's.
-        if (!(glm::dot(x, x) < h2)) continue;
-        nbr_out[out] = j;
-        const float r = glm::length(x);
-        float wr, dr;
-        kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
-        sum += wr;
-        const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
-        gx_out[out] = g.x;
-        gy_out[out] = g.y;
-        gz_out[out] = g.z;
-        ++out;
+
+  // Per-particle terms that need only the particle's own density are computed in the same pass
+  // (one parallel region instead of one per term): WCSPH's Tait pressure, the viscosity
+  // coefficient 10 nu / rho_i, DFSPH's factor alpha_i and the divergence solve's kappa scale, and
+  // the copies and clears the later passes start from.
+  w.accel.resize(n);
+  const float nu = P.viscosity;
+  const float alpha_av = P.solver == SphSolverKind::wcsph ? P.artificial_viscosity : 0.0f;
+  const float cs = P.sound_speed;
+  const float h_bt = d;  // B&T's smoothing length h (support 2h = H)
+  const bool wcsph = P.solver == SphSolverKind::wcsph;
+  auto& visc_coef = w.float_tmp;  // WCSPH: 10 nu / rho_j per particle (no division per pair)
+  auto& pr = w.density_adv;       // WCSPH: p_j / rho_j^2 per particle
+  visc_coef.resize(n);
+  pr.resize(n);
+  // Tait equation (B&T eq. 7) with B = rho_0 c_s^2 / gamma; negative pressures are clamped to
+  // zero so the free surface does not clump (tensile instability). Computed before the pair pass
+  // so the pressure force (eq. 6) joins the viscosity terms in one pass over the pairs.
+  const float tait_b = rho0 * cs * cs / P.tait_exponent;
+  const bool gamma7 = P.tait_exponent == 7.0f;
+  // Boundary pressure impulse per particle (for the coupling forces): the velocity change the
+  // boundary term gave particle i during this step is -impulse_i * rho_0 * grad V_ic.
+  w.kappa.resize(n);  // impulse_i
+  w.old_position.resize(n);
+  const float dt_prev = world.last_dt > 0.0f ? world.last_dt : max_dt;
+  auto& kscale = w.kappa_scale;  // DFSPH: kr_i per unit of compression (or of density rate), per solve
+  kscale.resize(n);
+  w.vec_a.resize(n);
+  w.kappa_v.resize(n);
+  auto ownTerms = [&](std::size_t i, glm::vec3 grad_sum, float grad_sq) {
+    const float rho = S.density[i];
+    if (wcsph) {
+      // The ratio is clamped to 1.5: real flows stay within a few per cent, and degenerate input
+      // (particles stacked on one point) would otherwise produce pressures of 1e12 B.
+      const float ratio = std::min(rho / rho0, 1.5f);
+      float power;
+      if (gamma7) {  // the default gamma = 7 by products (a powf call cost more than the rest of the loop)
+        const float r2 = ratio * ratio, r4 = r2 * r2;
+        power = r4 * r2 * ratio;
+      } else {
+        power = std::pow(ratio, P.tait_exponent);
       }
-      counts[i] = out - first;
-      S.density[i] = m * sum + rho0 * w.boundary_volume[i];
-      w.vec_b[i] = glm::vec3(0.0f);
-      w.factor[i] = 0.0f;
-    });
-  } else {
-    const DensityConsts dc = DensityConsts::make(w.kernel, m, r_min, steepest);
-    w.pair_offset.resize(pair_count);  // n < 2^28 (validateSphParams), so 16 j fits
-    std::uint32_t* const nb16_out = w.pair_offset.data();
-    forEach(n, [&](std::size_t i) {
-      const DensitySums ds = loops.density(dc, w.pos4.data(), S.id.data(), nbr, off[i], cand_end[i],
-                                           static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out, nb16_out);
-      S.density[i] = m * (w0 + ds.w) + rho0 * w.boundary_volume[i];
-      w.vec_b[i] = ds.grad;
-      w.factor[i] = ds.sq;
-    });
-  }
+      S.pressure[i] = std::max(0.0f, tait_b * (power - 1.0f));
+      pr[i] = S.pressure[i] / (rho * rho);
+      visc_coef[i] = 10.0f * nu / rho;
+    } else {
+      w.vel4[i].w = 10.0f * nu / rho;  // read with the neighbour's velocity by the viscosity loop
+      // alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_j |m_j grad W_ij|^2) (Bender & Koschier
+      // 2015 eq. 9). The boundary mirrors the particle's pressure (p_b = p_i, so its term has
+      // weight 2 in the velocity update below); it does not move, so it adds
+      // (S + rho_0 g) . (S + 2 rho_0 g) instead of |S|^2 where S = sum_j m_j grad W_ij.
+      const glm::vec3 sum = grad_sum + rho0 * w.boundary_gradient[i];
+      const float denom = glm::dot(sum, sum + (kMirror - 1.0f) * rho0 * w.boundary_gradient[i]) + grad_sq;
+      w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? rho / denom : 0.0f;
+      // kappa^v_i / rho_i = (Drho/Dt)_i alpha_i / (dt rho_i) (2015 eq. 9 with the factor of
+      // §4.1): the per-particle part once per solve, a product per iteration.
+      kscale[i] = w.factor[i] / (dt_prev * rho);
+      w.vec_a[i] = V[i];       // velocities before the divergence solve (capChange)
+      w.kappa_v[i] = 0.0f;     // sum over the divergence iterations of kappa^v_i / rho_i
+      w.float_tmp[i] = 0.0f;   // same for the density iterations
+    }
+    w.kappa[i] = 0.0f;
+    w.old_position[i] = X[i];
+  };
+  const glm::vec3* __restrict Xp = X.data();
+  std::uint32_t* __restrict verlet_counts = w.neighbors.counts.data();
+  const CubicSplineKernel kernel = w.kernel;
+  const DensityConsts dc = DensityConsts::make(w.kernel, m, r_min, steepest);
+  if (!filter_verlet) w.pair_offset.resize(pair_count);  // n < 2^28 (validateSphParams), so 16 j fits
+  std::uint32_t* const nb16_out = w.pair_offset.data();
   {
-    const SumMax e = reduce(
+    const SumMax e = reduceChunks(
         n, SumMax{},
-        [&](std::size_t i, SumMax& acc) {
-          const float err = std::max(0.0f, S.density[i] / rho0 - 1.0f);
-          acc.sum += err;
-          acc.max = std::max(acc.max, err);
+        [&](std::size_t b, std::size_t end, SumMax& acc) {
+          for (std::size_t i = b; i < end; ++i) {
+            if (filter_verlet) {
+              float sum = w0;
+              const glm::vec3 xi = Xp[i];
+              const std::uint32_t first = off[i], last = cand_end[i];
+              std::uint32_t out = first;
+              for (std::uint32_t k = first; k < last; ++k) {
+                const std::uint32_t j = cand[k];
+                const glm::vec3 x = xi - Xp[j];
+                // The same float test as the search (dot(x_ij, x_ij) < H^2), so the filtered list is
+                // exactly a fresh search's.
+                if (!(glm::dot(x, x) < h2)) continue;
+                nbr_out[out] = j;
+                const float r = glm::length(x);
+                float wr, dr;
+                kernel.evaluateInside(r, wr, dr);  // r <= H: the pair is in the list
+                sum += wr;
+                const glm::vec3 g = r > r_min ? m * (dr * x) : (m * steepest) * coincidentDirection(S.id[i], S.id[j]);
+                gx_out[out] = g.x;
+                gy_out[out] = g.y;
+                gz_out[out] = g.z;
+                ++out;
+              }
+              verlet_counts[i] = out - first;
+              S.density[i] = m * sum + rho0 * w.boundary_volume[i];
+              w.vec_b[i] = glm::vec3(0.0f);
+              w.factor[i] = 0.0f;
+              ownTerms(i, glm::vec3(0.0f), 0.0f);
+            } else {
+              const DensitySums ds = loops.density(dc, w.pos4.data(), S.id.data(), nbr, off[i], cand_end[i],
+                                                   static_cast<std::uint32_t>(i), gx_out, gy_out, gz_out, nb16_out);
+              S.density[i] = m * (w0 + ds.w) + rho0 * w.boundary_volume[i];
+              ownTerms(i, ds.grad, ds.sq);
+            }
+            const float err = std::max(0.0f, S.density[i] / rho0 - 1.0f);
+            acc.sum += err;
+            acc.max = std::max(acc.max, err);
+          }
         },
         joinSumMax);
     stats.avg_density_error = n ? static_cast<float>(e.sum / static_cast<double>(n)) : 0.0f;
@@ -1048,44 +1149,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   // 4. Non-pressure accelerations: gravity + Laplacian viscosity (Monaghan 2005 eq. 6.3 form,
   // a_i = 2(d+2) nu sum_j m_j/rho_j (v_ij . x_ij)/(|x_ij|^2 + 0.01 H^2) grad W_ij, d = 3) and, for
   // WCSPH, Becker & Teschner's artificial viscosity Pi_ij (eq. 10-11).
-  w.accel.resize(n);
-  const float nu = P.viscosity;
-  const float alpha_av = P.solver == SphSolverKind::wcsph ? P.artificial_viscosity : 0.0f;
-  const float cs = P.sound_speed;
-  const float h_bt = d;  // B&T's smoothing length h (support 2h = H)
-  const bool wcsph = P.solver == SphSolverKind::wcsph;
-  auto& visc_coef = w.float_tmp;  // 10 nu / rho_j per particle: no division per pair
-  auto& pr = w.density_adv;       // WCSPH: p_j / rho_j^2 per particle
-  visc_coef.resize(n);
-  pr.resize(n);
-  if (wcsph) {
-    // Tait equation (B&T eq. 7) with B = rho_0 c_s^2 / gamma; negative pressures are clamped to
-    // zero so the free surface does not clump (tensile instability). Computed before the pair
-    // pass so the pressure force (eq. 6) joins the viscosity terms in one pass over the pairs.
-    const float B = rho0 * cs * cs / P.tait_exponent;
-    const bool gamma7 = P.tait_exponent == 7.0f;
-    forEach(n, [&](std::size_t i) {
-      // The ratio is clamped to 1.5: real flows stay within a few per cent, and degenerate input
-      // (particles stacked on one point) would otherwise produce pressures of 1e12 B.
-      const float ratio = std::min(S.density[i] / rho0, 1.5f);
-      float power;
-      if (gamma7) {  // the default gamma = 7 by products (a powf call cost more than the rest of the loop)
-        const float r2 = ratio * ratio, r4 = r2 * r2;
-        power = r4 * r2 * ratio;
-      } else {
-        power = std::pow(ratio, P.tait_exponent);
-      }
-      S.pressure[i] = std::max(0.0f, B * (power - 1.0f));
-      pr[i] = S.pressure[i] / (S.density[i] * S.density[i]);
-    });
-  }
-  forEach(n, [&](std::size_t i) {
-    visc_coef[i] = 10.0f * nu / S.density[i];
-    w.pos4[i].w = visc_coef[i];  // read with the neighbour's position by the DFSPH viscosity loop
-  });
   auto nonPressure = [&](auto with_pressure, auto with_viscosity) {
     constexpr bool kPressure = decltype(with_pressure)::value, kViscosity = decltype(with_viscosity)::value;
-    const glm::vec3* __restrict Xp = X.data();
     const glm::vec3* __restrict Vp = V.data();
     const float* __restrict vc = visc_coef.data();
     const float* __restrict prp = pr.data();
@@ -1118,6 +1183,8 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.accel[i] = a;
     });
   };
+  auto maxLength = [](float x, float y) { return std::max(x, y); };
+  float dfsph_amax = 0.0f;  // DFSPH: max |a| of the non-pressure accelerations, from the same pass
   if (wcsph) {
     if (nu > 0.0f)
       nonPressure(std::true_type{}, std::true_type{});
@@ -1126,17 +1193,24 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   } else if (nu > 0.0f) {
     // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop.
     const float eps = 0.01f * H * H;
-    forEach(n, [&](std::size_t i) {
-      w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
-                                               off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
-    });
+    dfsph_amax = reduce(
+        n, 0.0f,
+        [&](std::size_t i, float& acc) {
+          w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
+                                                   off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
+          acc = std::max(acc, glm::length(w.accel[i]));
+        },
+        maxLength);
   } else {
-    forEach(n, [&](std::size_t i) { w.accel[i] = P.gravity; });
+    dfsph_amax = reduce(
+        n, 0.0f,
+        [&](std::size_t i, float& acc) {
+          w.accel[i] = P.gravity;
+          acc = std::max(acc, glm::length(w.accel[i]));
+        },
+        maxLength);
   }
 
-  // Boundary pressure impulse per particle (for the coupling forces): the velocity change the
-  // boundary term gave particle i during this step is -impulse_i * rho_0 * grad V_ic.
-  w.kappa.assign(n, 0.0f);  // impulse_i
   float dt = max_dt;
   int iterations = 0, div_iterations = 0;
 
@@ -1175,8 +1249,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   };
 
   auto& Xmut = S.position;
-  w.old_position.resize(n);
-  forEach(n, [&](std::size_t i) { w.old_position[i] = X[i]; });
+  bool advected = false;  // DFSPH without XSPH advects in its last per-particle pass
 
   if (wcsph) {
     // The pressure force was added to w.accel in the pair pass above (section 4).
@@ -1186,15 +1259,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.kappa[i] = dt * pr[i];
     });
   } else {
-    // DFSPH. alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_j |m_j grad W_ij|^2)
-    // (Bender & Koschier 2015 eq. 9). The boundary mirrors the particle's pressure (p_b = p_i,
-    // so its term has weight 2 in the velocity update below); it does not move, so it adds
-    // (S + rho_0 g) . (S + 2 rho_0 g) instead of |S|^2 where S = sum_j m_j grad W_ij.
-    forEach(n, [&](std::size_t i) {
-      const glm::vec3 sum = w.vec_b[i] + rho0 * w.boundary_gradient[i];
-      const float denom = glm::dot(sum, sum + (kMirror - 1.0f) * rho0 * w.boundary_gradient[i]) + w.factor[i];
-      w.factor[i] = denom > 1e-9f * rho0 * rho0 / (H * H) ? S.density[i] / denom : 0.0f;
-    });
+    // DFSPH (alpha_i was computed in the density pass).
     // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
     // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
     const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
@@ -1205,10 +1270,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     };
     auto& kr4 = w.kappa4;  // kr4[i].x = kappa_i / rho_i of the current iteration
     kr4.resize(n);
-    auto& kscale = w.kappa_scale;  // kr_i per unit of compression (or of density rate), per solve
-    kscale.resize(n);
-    w.kappa_v.assign(n, 0.0f);    // sum over the divergence iterations of kappa^v_i / rho_i
-    w.float_tmp.assign(n, 0.0f);  // same for the density iterations
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forChunks(n, [&](std::size_t b, std::size_t e) {
@@ -1223,38 +1284,29 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       });
       V.swap(w.vec_b);  // Jacobi: all updates read the old velocities; swapping keeps both buffers
     };
-    w.vec_b.resize(n);
-    const float dt_prev = world.last_dt > 0.0f ? world.last_dt : max_dt;
 
     // Each solve may change a particle's velocity by at most d / (2 dt_nominal) per step.
     // Legit flows stay far below (the CFL bound keeps v dt <= cfl d); heavily overlapped input
     // (stacked particles, a grid at half spacing) is then separated over a few steps at a bounded
     // speed instead of being fired apart in one.
     // The cap uses the velocity-independent step bound, so it cannot grow as the CFL shrinks dt.
+    // Applied to one particle in the pass that follows each solve.
     const float nominal_dt = chooseDt(0.0f, 0.0f, false);
-    auto capChange = [&](float) {
-      const float cap = 0.5f * d / nominal_dt;
-      forEach(n, [&](std::size_t i) {
-        const glm::vec3 dv = V[i] - w.vec_a[i];
-        const float len = glm::length(dv);
-        if (len > cap) V[i] = w.vec_a[i] + dv * (cap / len);
-      });
+    const float cap = 0.5f * d / nominal_dt;
+    auto capChange = [&](std::size_t i) {
+      const glm::vec3 dv = V[i] - w.vec_a[i];
+      const float len = glm::length(dv);
+      if (len > cap) V[i] = w.vec_a[i] + dv * (cap / len);
     };
-    w.vec_a.resize(n);
 
-    // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0.
-    if (P.divergence_solver && n > 0) {
-      forEach(n, [&](std::size_t i) {
-        w.vec_a[i] = V[i];
-        w.vel4[i] = glm::vec4(V[i], 0.0f);
-      });
+    // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0. The density pass
+    // set w.vec_a = V, kscale and kappa_v; vel4 holds V since the re-sort.
+    const bool divergence = P.divergence_solver && n > 0;
+    if (divergence) {
       // No warm start here: starting the divergence solve from part of the last step's kappa^v
       // (2017 §4.3) let a jet hitting a collider gain energy in the randomised stability test
       // (tests/sph), since the solver never pulls particles back once pushed too far.
       const double eta_v = P.max_divergence_error;
-      // kappa^v_i / rho_i = (Drho/Dt)_i alpha_i / (dt rho_i) (2015 eq. 9 with the factor of
-      // §4.1): the per-particle part once per solve, a product per iteration.
-      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt_prev * S.density[i]); });
       for (;;) {
         const double err = reduceChunks(
                                n, 0.0,
@@ -1280,22 +1332,28 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt_prev, w.kappa_v);
         ++div_iterations;
       }
-      capChange(dt_prev);
     }
 
-    // 4b. Time step, then predicted velocities v* = v + dt a_nonpressure (Algorithm 1).
+    // 4b. Time step, then predicted velocities v* = v + dt a_nonpressure (Algorithm 1). The
+    // divergence solve's velocity cap runs in the same pass as the speed bound.
     const float vmax = reduce(
-        n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(V[i] + max_dt * w.accel[i])); },
-        [](float a, float b) { return std::max(a, b); });
-    dt = chooseDt(vmax, maxAccel(), false);
+        n, 0.0f,
+        [&](std::size_t i, float& acc) {
+          if (divergence) capChange(i);
+          acc = std::max(acc, glm::length(V[i] + max_dt * w.accel[i]));
+        },
+        maxLength);
+    dt = chooseDt(vmax, dfsph_amax, false);
     forEach(n, [&](std::size_t i) {
       V[i] += dt * w.accel[i];
       w.vel4[i] = glm::vec4(V[i], 0.0f);
+      w.vec_a[i] = V[i];
+      // kappa_i / rho_i = (rho*_i - rho_0) alpha_i / (dt^2 rho_i) (2015 eq. 8-9): as above.
+      kscale[i] = w.factor[i] / (dt * dt * S.density[i]);
     });
 
     // 4c. Constant-density solver (§4.2): rho*_i = rho_i + dt Drho/Dt_i -> rho_0.
     if (n > 0) {
-      forEach(n, [&](std::size_t i) { w.vec_a[i] = V[i]; });
       if (P.warm_start) {
         // Warm start (2017 §4.3): in steady flow (a resting column) kappa/rho is the same every
         // step and independent of dt (a pressure acceleration over a gradient), so a share of the
@@ -1314,8 +1372,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt, w.float_tmp);
       }
       const double eta = P.max_density_error;
-      // kappa_i / rho_i = (rho*_i - rho_0) alpha_i / (dt^2 rho_i) (2015 eq. 8-9): as above.
-      forEach(n, [&](std::size_t i) { kscale[i] = w.factor[i] / (dt * dt * S.density[i]); });
       for (;;) {
         const double err = reduceChunks(
                                n, 0.0,
@@ -1334,18 +1390,23 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt, w.float_tmp);
         ++iterations;
       }
-      capChange(dt);
+      // The velocity cap, the solver outputs and (without XSPH) the advection of section 5 in one pass.
+      advected = P.xsph <= 0.0f;
       forEach(n, [&](std::size_t i) {
+        capChange(i);
         w.warm_kappa[i] = w.float_tmp[i];
         // Effective pressure p_i = rho_i^2 (kappa_i / rho_i summed) for output; impulse for coupling.
         S.pressure[i] = S.density[i] * S.density[i] * (w.float_tmp[i] + w.kappa_v[i] * dt_prev / dt);
         w.kappa[i] = dt * w.float_tmp[i] + dt_prev * w.kappa_v[i];
+        if (advected) Xmut[i] += dt * V[i];
       });
     }
   }
 
   // 5. Advection (symplectic Euler) with optional XSPH smoothing of the advection velocity.
-  if (P.xsph > 0.0f) {
+  if (advected) {
+    // done above
+  } else if (P.xsph > 0.0f) {
     w.vec_b.resize(n);
     forEach(n, [&](std::size_t i) {
       glm::vec3 corr(0.0f);
@@ -1393,69 +1454,106 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   // 7. Collisions: Kolb et al. 2004 §3.3.2 double check against the collider at its end-of-step
   // pose, with the step-start sample as "previous". Repeated while a later collider pushed a
   // particle into an earlier one (corners), so no particle ends the step inside a collider.
+  // One parallel region per (pass, collider): query, reaction and the reaction force/torque sums.
+  // Queries that cannot change the outcome are skipped (bit-identical results):
+  //  - in passes after the first, a particle that has not moved since collider c last queried it
+  //    gets the same sample, so the same (no) reaction: only particles moved since are queried;
+  //  - for a static collider with a 1-Lipschitz distance (SphCollider::lipschitz_distance), a
+  //    particle that started at s0 >= H and moved less than s0 (minus a margin) ends at a
+  //    distance > 0 (no reaction), and the tunnelling test needs s0 < H: no query needed.
   const float skin = P.collision_skin > 0.0f ? P.collision_skin : 0.01f * P.particle_radius;
+  w.end_samples.resize(nc);
+  w.collide_stale.resize(n);
+  const bool track_stale = nc <= 32;
+  const std::uint32_t all_colliders = nc >= 32 ? ~0u : (1u << nc) - 1u;
+  struct Hits {
+    std::size_t count = 0;
+    FT ft{};
+  };
   for (int pass = 0; pass < 4 && nc > 0; ++pass) {
     std::size_t inside_total = 0;
     for (std::size_t c = 0; c < nc; ++c) {
       SphCollider& col = world.colliders[c];
       const ColliderPose pose = col.integrate_pose ? advancedPose(col.pose, dt) : col.pose;
-      queryCollider(w, col, pose, X, w.end_samples);
-      w.vec_b.resize(n);
-      const std::size_t inside = reduce(
-          n, std::size_t{0},
-          [&](std::size_t i, std::size_t& acc) {
-            const ColliderSample& s = w.end_samples[i];
-            const ColliderSample& s0 = w.start_samples[c][i];
-            // Tunnelling through a thin part: outside at both ends of the step but on opposite
-            // sides (the outward normal flipped), e.g. a thin fast wall that moved past the particle.
-            // The particle stays on its side: carried along by the collider, then the §3.3.2
-            // reaction against the side it came from.
-            const bool crossed = s.valid && s0.valid && s.distance >= 0.0f && s0.distance >= 0.0f && s.distance < H &&
-                                 s0.distance < H && glm::dot(s.normal, s0.normal) < 0.0f;
-            if (!crossed && (!s.valid || s.distance >= 0.0f)) {
-              w.vec_b[i] = glm::vec3(0.0f);
-              return;
+      const bool still = !col.integrate_pose || (glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) == 0.0f &&
+                                                 glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) == 0.0f);
+      const bool skip_far = still && col.lipschitz_distance;
+      const std::uint32_t bit = track_stale ? 1u << c : 0u;
+      const ColliderQuery query(col, pose);
+      auto& es = w.end_samples[c];
+      es.resize(n);
+      const auto& s0s = w.start_samples[c];
+      const Hits hits = reduceChunks(
+          n, Hits{},
+          [&](std::size_t b, std::size_t e, Hits& acc) {
+            std::uint32_t which[kGrain];
+            std::uint32_t q = 0;
+            for (std::size_t i = b; i < e; ++i) {
+              if (pass == 0 && c == 0) w.collide_stale[i] = all_colliders;
+              if (track_stale && pass > 0 && !(w.collide_stale[i] & bit)) continue;  // unchanged: same sample
+              w.collide_stale[i] &= ~bit;
+              const ColliderSample& s0 = s0s[i];
+              if (skip_far && s0.valid && s0.distance >= H) {
+                const glm::vec3 p = X[i], p0 = w.old_position[i];
+                // Float slack of the distance evaluation, far above its rounding at these coordinates.
+                const float slack = 1e-6f * (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), std::abs(p0.x),
+                                                       std::abs(p0.y), std::abs(p0.z)}) +
+                                             H);
+                if (s0.distance > glm::length(p - p0) + skin + slack) {
+                  es[i].valid = false;  // cannot have reached the surface: no reaction
+                  continue;
+                }
+              }
+              which[q++] = static_cast<std::uint32_t>(i);
             }
-            ++acc;
-            CollisionResult res;
-            if (crossed) {
-              const glm::vec3 vc = colliderVelocityAt(col.pose, w.old_position[i]);
-              res.position = w.old_position[i] + vc * dt + s0.normal * skin;
-              res.velocity = collisionResponse(V[i] - vc, s0.normal, col.material) + vc;
-            } else {
-              res = resolveCollision(w.old_position[i], s0, X[i], V[i], s, colliderVelocityAt(pose, X[i]), dt, skin,
-                                     col.material);
+            query.run(X, which, q, es);
+            for (std::size_t i = b; i < e; ++i) {
+              const ColliderSample& s = es[i];
+              const ColliderSample& s0 = s0s[i];
+              // Tunnelling through a thin part: outside at both ends of the step but on opposite
+              // sides (the outward normal flipped), e.g. a thin fast wall that moved past the particle.
+              // The particle stays on its side: carried along by the collider, then the §3.3.2
+              // reaction against the side it came from.
+              const bool crossed = s.valid && s0.valid && s.distance >= 0.0f && s0.distance >= 0.0f && s.distance < H &&
+                                   s0.distance < H && glm::dot(s.normal, s0.normal) < 0.0f;
+              if (!crossed && (!s.valid || s.distance >= 0.0f)) continue;
+              ++acc.count;
+              CollisionResult res;
+              if (crossed) {
+                const glm::vec3 vc = colliderVelocityAt(col.pose, w.old_position[i]);
+                res.position = w.old_position[i] + vc * dt + s0.normal * skin;
+                res.velocity = collisionResponse(V[i] - vc, s0.normal, col.material) + vc;
+              } else {
+                res = resolveCollision(w.old_position[i], s0, X[i], V[i], s, colliderVelocityAt(pose, X[i]), dt, skin,
+                                       col.material);
+              }
+              const glm::vec3 reaction = -m * (res.velocity - V[i]) / dt;  // on the collider
+              Xmut[i] = res.position;
+              V[i] = res.velocity;
+              w.collide_stale[i] = all_colliders;  // moved: every collider's sample is out of date
+              // Particles without a reaction add exact zeros in a separate sum (an accumulator
+              // starting at +0 never becomes -0), so skipping them gives the same sums.
+              acc.ft.f += reaction;
+              acc.ft.t += glm::cross(X[i] - pose.translation, reaction);
             }
-            w.vec_b[i] = -m * (res.velocity - V[i]) / dt;  // reaction on the collider
-            Xmut[i] = res.position;
-            V[i] = res.velocity;
           },
-          [](std::size_t a, std::size_t b) { return a + b; });
-      inside_total += inside;
-      stats.collisions += inside;
-      if (inside > 0) {
-        const FT ft = reduce(
-            n, FT{},
-            [&](std::size_t i, FT& acc) {
-              acc.f += w.vec_b[i];
-              acc.t += glm::cross(X[i] - pose.translation, w.vec_b[i]);
-            },
-            joinFT);
-        col.force += ft.f;
-        col.torque += ft.t;
+          [](Hits a, const Hits& b2) {
+            a.count += b2.count;
+            a.ft.f += b2.ft.f;
+            a.ft.t += b2.ft.t;
+            return a;
+          });
+      inside_total += hits.count;
+      stats.collisions += hits.count;
+      if (hits.count > 0) {
+        col.force += hits.ft.f;
+        col.torque += hits.ft.t;
       }
     }
     if (inside_total == 0) break;
   }
   for (SphCollider& col : world.colliders)
     if (col.integrate_pose) col.pose = advancedPose(col.pose, dt);
-
-  if (P.max_speed > 0.0f) {
-    forEach(n, [&](std::size_t i) {
-      const float s = glm::length(V[i]);
-      if (s > P.max_speed) V[i] *= P.max_speed / s;
-    });
-  }
 
   advanceEmitterClocks(world, dt);
   world.time += dt;
@@ -1467,11 +1565,18 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   stats.divergence_iterations = div_iterations;
   stats.particles = n;
   stats.dt_limited_by_request = requested < P.max_time_step && dt >= requested;
-  stats.kinetic_energy =
-      static_cast<float>(0.5 * m *
-                         reduce(
-                             n, 0.0, [&](std::size_t i, double& acc) { acc += glm::dot(V[i], V[i]); },
-                             [](double a, double b) { return a + b; }));
+  // The speed cap and the kinetic energy in one pass (the energy of the capped velocities).
+  stats.kinetic_energy = static_cast<float>(0.5 * m *
+                                            reduce(
+                                                n, 0.0,
+                                                [&](std::size_t i, double& acc) {
+                                                  if (P.max_speed > 0.0f) {
+                                                    const float sp = glm::length(V[i]);
+                                                    if (sp > P.max_speed) V[i] *= P.max_speed / sp;
+                                                  }
+                                                  acc += glm::dot(V[i], V[i]);
+                                                },
+                                                [](double a, double b) { return a + b; }));
   stats.step_ms = msSince(t_start);
   if (stats_out) *stats_out = stats;
   return {};

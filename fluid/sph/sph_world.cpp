@@ -125,7 +125,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   s.pressure.reserve(capacity);
   s.id.reserve(capacity);
   SphScratch& w = world.scratch;
-  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel, &w.local_points})
+  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel})
     v->reserve(capacity);
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
                   &w.boundary_flux, &w.float_tmp})
@@ -135,7 +135,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.pos4.reserve(capacity);
   w.u32_tmp.reserve(capacity);
   w.keep.reserve(capacity);
-  w.end_samples.reserve(capacity);
+  w.collide_stale.reserve(capacity);
   reserveNeighborLists(w.neighbors, capacity);
   reserveNeighborLists(w.verlet, capacity);
   w.verlet_position.reserve(capacity);

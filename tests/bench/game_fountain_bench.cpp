@@ -11,6 +11,10 @@
 // and max density error (issue 4's definition: mean over particles of max(0, rho/rho_0 - 1), here
 // averaged over the steps of the timed frames).
 // Configurations: the scene file as written, then each `--config "k=v,k=v"` given (sph_fluid keys).
+// Instruction counts: under `valgrind --tool=callgrind --instr-atstart=no` only the timed frames
+// are instrumented (the fill runs at valgrind's uninstrumented speed), e.g.
+//   valgrind --tool=callgrind --instr-atstart=no bench_game_fountain --threads 1 --frames 10
+// gives the instructions of 10 frames (plus the per-run constant: compare 10 and 20 frames).
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -18,7 +22,15 @@
 
 #include <tbb/global_control.h>
 
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
+
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -128,6 +140,7 @@ int main(int argc, char** argv) {
       game::SphFluid f = filled;
       std::vector<double> ms;
       double steps = 0.0, iterations = 0.0, err = 0.0, max_err = 0.0;
+      CALLGRIND_START_INSTRUMENTATION;
       for (int frame = 0; frame < frames; ++frame) {
         double frame_ms = 0.0;
         const bool ok = game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
@@ -143,6 +156,19 @@ int main(int argc, char** argv) {
         }
         ms.push_back(frame_ms);
       }
+      CALLGRIND_STOP_INSTRUMENTATION;
+      // A hash of the final state's bits (stderr, keeps the table clean): equal hashes mean
+      // bit-identical runs (thread counts, or builds before/after an optimisation).
+      std::uint64_t hash = 1469598103934665603ull;
+      auto mix = [&hash](const void* data, std::size_t bytes) {
+        const unsigned char* p = static_cast<const unsigned char*>(data);
+        for (std::size_t k = 0; k < bytes; ++k) hash = (hash ^ p[k]) * 1099511628211ull;
+      };
+      mix(f.world.particles.position.data(), f.world.particles.position.size() * sizeof(glm::vec3));
+      mix(f.world.particles.velocity.data(), f.world.particles.velocity.size() * sizeof(glm::vec3));
+      mix(f.world.particles.id.data(), f.world.particles.id.size() * sizeof(std::uint32_t));
+      std::fprintf(stderr, "%s (%d): state hash %016llx\n", config.label.c_str(), t,
+                   static_cast<unsigned long long>(hash));
       const double per_step = 1.0 / std::max(steps, 1.0);
       std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% |\n", config.label.c_str(), t,
                   f.world.particles.size(), median(ms), *std::max_element(ms.begin(), ms.end()), steps / frames,
