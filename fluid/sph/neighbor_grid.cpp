@@ -211,6 +211,54 @@ __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2(const RowScan& a, st
   }
   return out;
 }
+
+// Left-packing (identity order only): per 8-candidate block, the accepted lanes' entry numbers are
+// moved to the front of one 8-wide store by a table lookup (lane numbers in ascending order, one
+// byte each, widened to 32 bits) and the output advances by their count. The per-neighbour loop
+// above costs a hard-to-predict branch per accepted candidate; this costs none. Same entries in
+// the same order: the particle itself is masked out of its block instead of skipped at the store.
+// The store writes 8 entries, so the output needs room for 8 beyond the last neighbour.
+struct PackTable {
+  std::uint64_t lanes[256];
+  std::uint8_t count[256];
+};
+constexpr PackTable makePackTable() {
+  PackTable t{};
+  for (int m = 0; m < 256; ++m) {
+    std::uint64_t v = 0;
+    int k = 0;
+    for (int l = 0; l < 8; ++l)
+      if (m & (1 << l)) v |= static_cast<std::uint64_t>(l) << (8 * k++);
+    t.lanes[m] = v;
+    t.count[m] = static_cast<std::uint8_t>(k);
+  }
+  return t;
+}
+constexpr PackTable kPack = makePackTable();
+
+__attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2Packed(const RowScan& a, std::uint32_t self, glm::vec3 p,
+                                                                  std::uint32_t* out) {
+  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z),
+               rr = _mm256_set1_ps(a.r2);
+  for (std::size_t k = 0; k < a.rows; ++k) {
+    const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
+    for (std::uint32_t t = b; t < e; t += 8) {
+      const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
+      const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
+      const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
+      const __m256 d2 =
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+      unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, rr, _CMP_LT_OQ)));
+      if (e - t < 8) bits &= (1u << (e - t)) - 1u;
+      if (self - t < 8u) bits &= ~(1u << (self - t));  // the particle itself (unsigned: t <= self < t + 8)
+      const __m256i lanes = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kPack.lanes[bits])));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out),
+                          _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(t)), lanes));
+      out += kPack.count[bits];
+    }
+  }
+  return out;
+}
 #endif
 
 }  // namespace
@@ -276,7 +324,7 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   lists.runs.resize(chunks * 2 * max_rows);
   auto scan = &scanRows;
 #if defined(FLUID_SPH_AVX2_SCAN)
-  if (__builtin_cpu_supports("avx2")) scan = &scanRowsAvx2;
+  if (__builtin_cpu_supports("avx2")) scan = identity ? &scanRowsAvx2Packed : &scanRowsAvx2;
 #endif
 
   // 1. Search: chunk c holds sorted entries [c K, (c + 1) K), grouped by cell. The particles of
@@ -309,8 +357,10 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
             candidates += e - b;
           }
         for (; s < group_end; ++s) {
-          // Room for every candidate, so the scan writes through a plain pointer.
-          if (buf.size() < used + candidates) buf.resize(std::max(2 * buf.size(), used + candidates));
+          // Room for every candidate (plus the 8-wide store of the packed scan), so the scan
+          // writes through a plain pointer.
+          const std::size_t room = used + candidates + 8;
+          if (buf.size() < room) buf.resize(std::max(2 * buf.size(), room));
           std::uint32_t* const first = buf.data() + used;
           const RowScan args{sx, sy, sz, runs, rows, identity ? nullptr : order, r2};
           const std::uint32_t* const last =
