@@ -114,9 +114,10 @@ struct SphCollider {
   // The shape's signed distance is 1-Lipschitz (|d(a) - d(b)| <= |a - b|: an exact SDF, or min/max
   // of exact ones as in CSG). Only then, and only while the collider does not move during a step
   // (integrate_pose off or zero velocities), the end-of-step collision check skips the query of a
-  // particle that started at least the support H away and moved less than its start distance
-  // (minus a margin): it cannot have reached the surface, so the check would do nothing. Results
-  // are bit-identical with and without the flag (tests/sph checks this).
+  // particle that moved less than its start distance (minus a margin): its whole step stayed
+  // outside, so it neither reached the surface nor tunnelled through a thin part. Without the
+  // flag the tunnelling test also runs for such particles and can fire where the outward normal
+  // flips across a medial axis without any crossing (a concave corner of a CSG shape).
   bool lipschitz_distance = false;
   // Two-way coupling outputs: force (N) and torque (N m, about pose.translation) the fluid
   // exerted on this collider, averaged over the last stepSph/advanceSph call.

@@ -1459,8 +1459,11 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   //  - in passes after the first, a particle that has not moved since collider c last queried it
   //    gets the same sample, so the same (no) reaction: only particles moved since are queried;
   //  - for a static collider with a 1-Lipschitz distance (SphCollider::lipschitz_distance), a
-  //    particle that started at s0 >= H and moved less than s0 (minus a margin) ends at a
-  //    distance > 0 (no reaction), and the tunnelling test needs s0 < H: no query needed.
+  //    particle that started at s0 and moved less than s0 (minus a margin) stayed outside along
+  //    its whole step (every point of the segment is at least s0 - |displacement| > 0 away): no
+  //    reaction and nothing tunnelled, so no query is needed. (The tunnelling test below could
+  //    only fire there on a normal flip across a medial axis, e.g. between the fountain's spire
+  //    and its dish wall, which is not a crossing for a collider that does not move.)
   const float skin = P.collision_skin > 0.0f ? P.collision_skin : 0.01f * P.particle_radius;
   w.end_samples.resize(nc);
   w.collide_stale.resize(n);
@@ -1493,7 +1496,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
               if (track_stale && pass > 0 && !(w.collide_stale[i] & bit)) continue;  // unchanged: same sample
               w.collide_stale[i] &= ~bit;
               const ColliderSample& s0 = s0s[i];
-              if (skip_far && s0.valid && s0.distance >= H) {
+              if (skip_far && s0.valid) {
                 const glm::vec3 p = X[i], p0 = w.old_position[i];
                 // Float slack of the distance evaluation, far above its rounding at these coordinates.
                 const float slack = 1e-6f * (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), std::abs(p0.x),
