@@ -131,6 +131,12 @@ void markGridReordered(NeighborGrid& grid) {
   grid.identity_order = true;
 }
 
+void markGridReordered(NeighborGrid& grid, std::vector<std::uint32_t>& sorted_keys) {
+  assert(sorted_keys.size() == grid.order.size());
+  grid.particle_key.swap(sorted_keys);
+  grid.identity_order = true;
+}
+
 namespace {
 
 // Calls emit(t) for every sorted entry t in [b, e) with dot(p - x_t, p - x_t) < r2, ascending.

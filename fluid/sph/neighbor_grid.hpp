@@ -52,6 +52,10 @@ void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions,
 // After the caller permuted its particle data by grid.order (new index e = old index order[e]),
 // makes the grid describe the permuted data (order becomes the identity).
 void markGridReordered(NeighborGrid& grid);
+// The same for a caller that permuted its data in its own parallel pass and, in that pass, also
+// wrote sorted_keys[e] = grid.particle_key[grid.order[e]] (the keys in the new order) and
+// grid.order[e] = e: swaps the keys in (sorted_keys gets the old buffer) without another pass.
+void markGridReordered(NeighborGrid& grid, std::vector<std::uint32_t>& sorted_keys);
 
 // Compressed neighbour lists: neighbours of i are indices[offsets[i] .. offsets[i+1]), each j != i
 // with |x_i - x_j| < radius (any radius > 0), in a fixed order (row by row, then by sorted

@@ -202,6 +202,7 @@ struct SphScratch {
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp;
+  std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;  // per particle: 0 when inside a sink at the start of the step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;  // per collider, at the end-of-step positions

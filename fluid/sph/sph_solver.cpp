@@ -559,11 +559,26 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* X, c
     g0 = _mm256_and_ps(g0, m);
     g1 = _mm256_and_ps(g1, m);
     g2 = _mm256_and_ps(g2, m);
-    _mm256_maskstore_epi32(reinterpret_cast<int*>(nb16 + k), mi,
-                           _mm256_slli_epi32(_mm256_maskload_epi32(reinterpret_cast<const int*>(nbr + k), mi), 4));
-    _mm256_maskstore_ps(gx + k, mi, g0);
-    _mm256_maskstore_ps(gy + k, mi, g1);
-    _mm256_maskstore_ps(gz + k, mi, g2);
+    // Full blocks use plain stores; only the last (partial) block goes through a buffer, since
+    // masked stores (vmaskmovps) are microcoded and slow on the AMD machines we measure on.
+    if (e - k >= kLanes) {
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(nb16 + k),
+                          _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(nbr + k)), 4));
+      _mm256_storeu_ps(gx + k, g0);
+      _mm256_storeu_ps(gy + k, g1);
+      _mm256_storeu_ps(gz + k, g2);
+    } else {
+      alignas(32) float t0[kLanes], t1[kLanes], t2[kLanes];
+      _mm256_store_ps(t0, g0);
+      _mm256_store_ps(t1, g1);
+      _mm256_store_ps(t2, g2);
+      for (std::uint32_t l = 0; l < e - k; ++l) {
+        nb16[k + l] = nbr[k + l] << 4;
+        gx[k + l] = t0[l];
+        gy[k + l] = t1[l];
+        gz[k + l] = t2[l];
+      }
+    }
     sw = _mm256_add_ps(sw, wv);
     sx = _mm256_add_ps(sx, g0);
     sy = _mm256_add_ps(sy, g1);
@@ -886,8 +901,11 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // Cells 0.2 % wider than the search radius: the query then reaches one cell on each side
     // (neighborReach), with room for float slack at coordinates up to ~400 H from the origin.
     buildNeighborGrid(w.grid, S.position, 1.002f * (H + verlet_skin), P.domain_min, P.domain_max);
-    // Re-sort by cell in one pass, which also writes the 16-byte copies the pair loops read.
-    const std::uint32_t* order = w.grid.order.data();
+    // Re-sort by cell in one pass, which also writes the 16-byte copies the pair loops read and
+    // the grid's keys in the new order (markGridReordered below).
+    std::uint32_t* const order = w.grid.order.data();
+    const std::uint32_t* const old_keys = w.grid.particle_key.data();
+    w.sorted_keys.resize(n);
     w.vec_a.resize(n);
     w.vec_b.resize(n);
     w.u32_tmp.resize(n);
@@ -903,13 +921,15 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.float_tmp[e] = w.warm_kappa[o];
       w.pos4[e] = glm::vec4(x, 0.0f);
       w.vel4[e] = glm::vec4(v, 0.0f);
+      w.sorted_keys[e] = old_keys[o];
+      order[e] = static_cast<std::uint32_t>(e);  // only this iteration reads order[e]
     });
     S.position.swap(w.vec_a);
     S.velocity.swap(w.vec_b);
     S.id.swap(w.u32_tmp);
     w.warm_kappa.swap(w.float_tmp);
     copies_made = true;
-    markGridReordered(w.grid);
+    markGridReordered(w.grid, w.sorted_keys);
     if (verlet_skin > 0.0f) {
       findNeighbors(w.grid, S.position, H + verlet_skin, w.verlet);
       w.verlet_position.resize(n);

@@ -134,6 +134,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.kappa4.reserve(capacity);
   w.pos4.reserve(capacity);
   w.u32_tmp.reserve(capacity);
+  w.sorted_keys.reserve(capacity);
   w.keep.reserve(capacity);
   w.collide_stale.reserve(capacity);
   reserveNeighborLists(w.neighbors, capacity);
