@@ -41,9 +41,13 @@ class FountainShape final : public fluid::SignedDistanceShape {
   void query(std::span<const glm::vec3> local_points, std::span<fluid::ColliderSample> out) const override;
   float distance(glm::vec3 p) const;
   const FountainGeometry& geometry() const { return g_; }
+  // Testing aid: answer queries with the scalar code even where the CPU has AVX2 (the eight-wide
+  // path gives bit-identical samples).
+  void setPortable(bool portable) { portable_ = portable; }
 
  private:
   FountainGeometry g_;
+  bool portable_ = false;
 };
 
 }  // namespace game
