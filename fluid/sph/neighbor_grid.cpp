@@ -25,7 +25,7 @@ struct Bounds {
 };
 
 constexpr std::size_t kGrain = 1024;
-constexpr std::size_t kPad = 8;  // padding of the SoA position copies (one 8-wide load)
+constexpr std::size_t kPad = NeighborLists::kPad;  // padding of the SoA position copies (one 8-wide load)
 
 }  // namespace
 
@@ -294,7 +294,8 @@ int neighborReach(const NeighborGrid& grid, float radius) {
   return std::max(1, static_cast<int>(std::ceil((radius + slack) / grid.cell_size)));
 }
 
-void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists) {
+void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists,
+                   bool positions_copied) {
   const std::size_t n = positions.size();
   constexpr std::uint32_t K = NeighborLists::kChunk;
   const std::size_t chunks = (n + K - 1) / K;
@@ -312,14 +313,16 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   lists.sx.resize(n + kPad);
   lists.sy.resize(n + kPad);
   lists.sz.resize(n + kPad);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t t = r.begin(); t != r.end(); ++t) {
-      const glm::vec3 x = positions[identity ? t : order[t]];
-      lists.sx[t] = x.x;
-      lists.sy[t] = x.y;
-      lists.sz[t] = x.z;
-    }
-  });
+  if (!positions_copied) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+        const glm::vec3 x = positions[identity ? t : order[t]];
+        lists.sx[t] = x.x;
+        lists.sy[t] = x.y;
+        lists.sz[t] = x.z;
+      }
+    });
+  }
   for (std::size_t t = n; t < n + kPad; ++t) lists.sx[t] = lists.sy[t] = lists.sz[t] = 0.0f;
   const float* sx = lists.sx.data();
   const float* sy = lists.sy.data();

@@ -20,6 +20,7 @@
 
 #include <glm/glm.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -72,6 +73,8 @@ struct NeighborLists {
   // Initial size per particle of a chunk buffer (it grows if a chunk needs more room: it must
   // hold the chunk's lists plus one cell's candidates).
   static constexpr std::uint32_t kReservePerParticle = 64;
+  // Padding of sx/sy/sz beyond the n positions (one 8-wide load past a run's end).
+  static constexpr std::size_t kPad = 8;
   std::vector<std::uint32_t> offsets;
   std::vector<std::uint32_t> indices;
   std::vector<std::uint32_t> counts;                    // scratch: count per particle
@@ -88,6 +91,9 @@ int neighborReach(const NeighborGrid& grid, float radius);
 // Reserves the scratch of `lists` for `capacity` particles.
 void reserveNeighborLists(NeighborLists& lists, std::size_t capacity);
 
-void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists);
+// positions_copied: the caller already wrote the positions in sorted order to lists.sx/sy/sz
+// (sized n + NeighborLists::kPad; the padding is zeroed here), e.g. in its own re-sort pass.
+void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> positions, float radius, NeighborLists& lists,
+                   bool positions_copied = false);
 
 }  // namespace fluid

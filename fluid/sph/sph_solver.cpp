@@ -906,6 +906,12 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     std::uint32_t* const order = w.grid.order.data();
     const std::uint32_t* const old_keys = w.grid.particle_key.data();
     w.sorted_keys.resize(n);
+    // The search's SoA copies of the sorted positions (findNeighbors with positions_copied).
+    NeighborLists& lists = verlet_skin > 0.0f ? w.verlet : w.neighbors;
+    for (auto* v : {&lists.sx, &lists.sy, &lists.sz}) v->resize(n + NeighborLists::kPad);
+    float* const soa_x = lists.sx.data();
+    float* const soa_y = lists.sy.data();
+    float* const soa_z = lists.sz.data();
     w.vec_a.resize(n);
     w.vec_b.resize(n);
     w.u32_tmp.resize(n);
@@ -922,6 +928,9 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.pos4[e] = glm::vec4(x, 0.0f);
       w.vel4[e] = glm::vec4(v, 0.0f);
       w.sorted_keys[e] = old_keys[o];
+      soa_x[e] = x.x;
+      soa_y[e] = x.y;
+      soa_z[e] = x.z;
       order[e] = static_cast<std::uint32_t>(e);  // only this iteration reads order[e]
     });
     S.position.swap(w.vec_a);
@@ -931,13 +940,13 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     copies_made = true;
     markGridReordered(w.grid, w.sorted_keys);
     if (verlet_skin > 0.0f) {
-      findNeighbors(w.grid, S.position, H + verlet_skin, w.verlet);
+      findNeighbors(w.grid, S.position, H + verlet_skin, w.verlet, true);
       w.verlet_position.resize(n);
       forEach(n, [&](std::size_t i) { w.verlet_position[i] = S.position[i]; });
       w.verlet_radius = H + verlet_skin;
       w.verlet_valid = true;
     } else {
-      findNeighbors(w.grid, S.position, H, w.neighbors);
+      findNeighbors(w.grid, S.position, H, w.neighbors, true);
       w.verlet_valid = false;
     }
   }
@@ -1270,6 +1279,24 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
   auto& Xmut = S.position;
   bool advected = false;  // DFSPH without XSPH advects in its last per-particle pass
+  // Coupling sums (section 6) per collider: force and torque about the pose's translation.
+  struct FT {
+    glm::vec3 f{0.0f}, t{0.0f};
+  };
+  auto couplingTerm = [&](std::size_t c, std::size_t i, FT& acc) {
+    const ColliderSample& s = w.start_samples[c][i];
+    if (!s.valid || s.distance >= H) return;
+    const glm::vec3 grad = boundaryShare(w, s, w.boundary_product[i]);
+    const glm::vec3 f = (2.0f * m * w.kappa[i] * rho0 / dt) * grad;  // = -m dv / dt, dv = -2 kappa rho_0 grad
+    acc.f += f;
+    acc.t += glm::cross(w.old_position[i] - world.colliders[c].pose.translation, f);
+  };
+  constexpr std::size_t kFusedColliders = 4;
+  struct CouplingSums {
+    FT c[kFusedColliders];
+  };
+  CouplingSums coupling{};
+  bool coupled = false;  // coupling holds section 6's sums
 
   if (wcsph) {
     // The pressure force was added to w.accel in the pair pass above (section 4).
@@ -1410,16 +1437,36 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         applyKappa(dt, w.float_tmp);
         ++iterations;
       }
-      // The velocity cap, the solver outputs and (without XSPH) the advection of section 5 in one pass.
+      // The velocity cap, the solver outputs, (without XSPH) the advection of section 5 and (up
+      // to kFusedColliders colliders) the coupling sums of section 6 in one pass.
       advected = P.xsph <= 0.0f;
-      forEach(n, [&](std::size_t i) {
+      auto finalTerms = [&](std::size_t i) {
         capChange(i);
         w.warm_kappa[i] = w.float_tmp[i];
         // Effective pressure p_i = rho_i^2 (kappa_i / rho_i summed) for output; impulse for coupling.
         S.pressure[i] = S.density[i] * S.density[i] * (w.float_tmp[i] + w.kappa_v[i] * dt_prev / dt);
         w.kappa[i] = dt * w.float_tmp[i] + dt_prev * w.kappa_v[i];
         if (advected) Xmut[i] += dt * V[i];
-      });
+      };
+      if (nc <= kFusedColliders) {
+        coupled = true;
+        coupling = reduce(
+            n, CouplingSums{},
+            [&](std::size_t i, CouplingSums& acc) {
+              finalTerms(i);
+              for (std::size_t c = 0; c < nc; ++c)
+                if (world.colliders[c].boundary_pressure) couplingTerm(c, i, acc.c[c]);
+            },
+            [](CouplingSums a, const CouplingSums& b) {
+              for (std::size_t c = 0; c < kFusedColliders; ++c) {
+                a.c[c].f += b.c[c].f;
+                a.c[c].t += b.c[c].t;
+              }
+              return a;
+            });
+      } else {
+        forEach(n, finalTerms);
+      }
     }
   }
 
@@ -1441,31 +1488,21 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     forEach(n, [&](std::size_t i) { Xmut[i] += dt * V[i]; });
   }
 
-  // 6. Coupling forces from the boundary pressure terms: F_c = -sum_i m dv_ic / dt.
-  struct FT {
-    glm::vec3 f{0.0f}, t{0.0f};
-  };
-  auto joinFT = [](FT a, const FT& b) {
-    a.f += b.f;
-    a.t += b.t;
-    return a;
-  };
+  // 6. Coupling forces from the boundary pressure terms: F_c = -sum_i m dv_ic / dt (summed in
+  // DFSPH's last per-particle pass when there are few colliders, otherwise here).
   for (std::size_t c = 0; c < nc; ++c) {
     SphCollider& col = world.colliders[c];
-    const auto& smp = w.start_samples[c];
     FT ft{};
-    if (col.boundary_pressure) {
+    if (coupled) {
+      ft = coupling.c[c];
+    } else if (col.boundary_pressure) {
       ft = reduce(
-          n, FT{},
-          [&](std::size_t i, FT& acc) {
-            const ColliderSample& s = smp[i];
-            if (!s.valid || s.distance >= H) return;
-            const glm::vec3 grad = boundaryShare(w, s, w.boundary_product[i]);
-            const glm::vec3 f = (2.0f * m * w.kappa[i] * rho0 / dt) * grad;  // = -m dv / dt, dv = -2 kappa rho_0 grad
-            acc.f += f;
-            acc.t += glm::cross(w.old_position[i] - col.pose.translation, f);
-          },
-          joinFT);
+          n, FT{}, [&](std::size_t i, FT& acc) { couplingTerm(c, i, acc); },
+          [](FT a, const FT& b) {
+            a.f += b.f;
+            a.t += b.t;
+            return a;
+          });
     }
     col.force = ft.f;
     col.torque = ft.t;
