@@ -203,9 +203,9 @@ struct SphScratch {
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp;
   std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
-  std::vector<std::uint32_t> keep;  // per particle: 0 when inside a sink at the start of the step
+  std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
-  std::vector<std::vector<ColliderSample>> end_samples;  // per collider, at the end-of-step positions
+  std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after
   // collider c's last query).
   std::vector<std::uint32_t> collide_stale;

@@ -1213,31 +1213,69 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     });
   };
   auto maxLength = [](float x, float y) { return std::max(x, y); };
-  float dfsph_amax = 0.0f;  // DFSPH: max |a| of the non-pressure accelerations, from the same pass
+  // DFSPH's density rates Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i
+  // (continuity equation) for the particles [b, e) (at most kGrain) into rate[0 .. e - b).
+  const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
+  auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
+    loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
+    for (std::size_t i = b; i < e; ++i)
+      rate[i - b] += rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
+  };
+  auto& kr4 = w.kappa4;  // kr4[i].x = kappa_i / rho_i of the current iteration
+  kr4.resize(n);
+  // One error pass of the divergence-free solve (section 4a): kappa^v_i / rho_i into kr4 and the
+  // summed divergence error.
+  auto divergenceError = [&](std::size_t b, std::size_t e, double& acc) {
+    float rates[kGrain];
+    densityRates(b, e, rates);
+    for (std::size_t i = b; i < e; ++i) {
+      // Only compression is corrected, and only for particles with a full enough neighbourhood
+      // (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the 9 lattice neighbours a
+      // flat wall replaces per wall_share of volume), otherwise the free surface is pushed outward
+      // every step and the fluid creeps apart.
+      const float neighbours = static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
+      const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
+      kr4[i].x = rate * kscale[i];
+      acc += rate * dt_prev / rho0;
+    }
+  };
+  const bool divergence = !wcsph && P.divergence_solver && n > 0;
+  float dfsph_amax = 0.0f;              // DFSPH: max |a| of the non-pressure accelerations, from the same pass
+  double first_divergence_error = 0.0;  // DFSPH: the divergence solve's first error pass, from the same pass
   if (wcsph) {
     if (nu > 0.0f)
       nonPressure(std::true_type{}, std::true_type{});
     else
       nonPressure(std::true_type{}, std::false_type{});
-  } else if (nu > 0.0f) {
-    // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop.
-    const float eps = 0.01f * H * H;
-    dfsph_amax = reduce(
-        n, 0.0f,
-        [&](std::size_t i, float& acc) {
-          w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
-                                                   off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
-          acc = std::max(acc, glm::length(w.accel[i]));
-        },
-        maxLength);
   } else {
-    dfsph_amax = reduce(
-        n, 0.0f,
-        [&](std::size_t i, float& acc) {
-          w.accel[i] = P.gravity;
-          acc = std::max(acc, glm::length(w.accel[i]));
+    // DFSPH: viscosity only (alpha_av is 0), in the eight-lane pair loop. The divergence solve's
+    // first error pass only reads the step-start velocities, so it runs in the same region (in
+    // the same chunks and order as a pass of its own: the same sum).
+    const float eps = 0.01f * H * H;
+    struct AccelError {
+      float amax = 0.0f;
+      double err = 0.0;
+    };
+    const AccelError ae = reduceChunks(
+        n, AccelError{},
+        [&](std::size_t b, std::size_t e, AccelError& acc) {
+          for (std::size_t i = b; i < e; ++i) {
+            if (nu > 0.0f)
+              w.accel[i] = P.gravity + loops.viscosity(w.pos4.data(), w.vel4.data(), gx, gy, gz, nbr, off[i],
+                                                       off[i] + cnt[i], static_cast<std::uint32_t>(i), eps);
+            else
+              w.accel[i] = P.gravity;
+            acc.amax = std::max(acc.amax, glm::length(w.accel[i]));
+          }
+          if (divergence) divergenceError(b, e, acc.err);
         },
-        maxLength);
+        [](AccelError a, const AccelError& b) {
+          a.amax = std::max(a.amax, b.amax);
+          a.err += b.err;
+          return a;
+        });
+    dfsph_amax = ae.amax;
+    first_divergence_error = ae.err;
   }
 
   float dt = max_dt;
@@ -1306,17 +1344,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       w.kappa[i] = dt * pr[i];
     });
   } else {
-    // DFSPH (alpha_i was computed in the density pass).
-    // Drho/Dt_i = sum_j m_j (v_i - v_j) . grad W_ij + rho_0 (v_i - v_b) . grad V_i (continuity eq.)
-    // For the particles [b, e) (at most kGrain) into rate[0 .. e - b).
-    const IterationArgs ia{w.vel4.data(), gx, gy, gz, nbr, w.pair_offset.data(), off, cnt};
-    auto densityRates = [&](std::size_t b, std::size_t e, float* rate) {
-      loops.divergence_range(ia, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e), rate);
-      for (std::size_t i = b; i < e; ++i)
-        rate[i - b] += rho0 * (glm::dot(V[i], w.boundary_gradient[i]) - w.boundary_flux[i]);
-    };
-    auto& kr4 = w.kappa4;  // kr4[i].x = kappa_i / rho_i of the current iteration
-    kr4.resize(n);
+    // DFSPH (alpha_i was computed in the density pass, densityRates is defined in section 4).
     // v_i -= dt (sum_j m_j (k_i + k_j) grad W_ij + 2 rho_0 k_i grad V_i)   (2015 eq. 13 / 15)
     auto applyKappa = [&](float h, std::vector<float>& total) {
       forChunks(n, [&](std::size_t b, std::size_t e) {
@@ -1348,31 +1376,16 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
 
     // 4a. Divergence-free solver (§4.1) on the current velocities: Drho/Dt -> 0. The density pass
     // set w.vec_a = V, kscale and kappa_v; vel4 holds V since the re-sort.
-    const bool divergence = P.divergence_solver && n > 0;
     if (divergence) {
       // No warm start here: starting the divergence solve from part of the last step's kappa^v
       // (2017 §4.3) let a jet hitting a collider gain energy in the randomised stability test
       // (tests/sph), since the solver never pulls particles back once pushed too far.
       const double eta_v = P.max_divergence_error;
       for (;;) {
-        const double err = reduceChunks(
-                               n, 0.0,
-                               [&](std::size_t b, std::size_t e, double& acc) {
-                                 float rates[kGrain];
-                                 densityRates(b, e, rates);
-                                 for (std::size_t i = b; i < e; ++i) {
-                                   // Only compression is corrected, and only for particles with a full enough
-                                   // neighbourhood (2017 paper §4.1: >= 20 neighbours in 3D; the wall counts as the
-                                   // 9 lattice neighbours a flat wall replaces per wall_share of volume), otherwise
-                                   // the free surface is pushed outward every step and the fluid creeps apart.
-                                   const float neighbours =
-                                       static_cast<float>(cnt[i]) + w.boundary_volume[i] * w.wall_neighbours;
-                                   const float rate = neighbours >= 20.0f ? std::max(0.0f, rates[i - b]) : 0.0f;
-                                   kr4[i].x = rate * kscale[i];
-                                   acc += rate * dt_prev / rho0;
-                                 }
-                               },
-                               [](double a, double b) { return a + b; }) /
+        // The first error pass ran together with the viscosity pass (section 4).
+        const double err = (div_iterations == 0 ? first_divergence_error
+                                                : reduceChunks(n, 0.0, divergenceError,
+                                                               [](double a, double b) { return a + b; })) /
                            static_cast<double>(n);
         if ((div_iterations >= 1 && err <= eta_v) || div_iterations >= P.max_iterations)
           break;  // 2017 paper: at least one
@@ -1535,8 +1548,10 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     for (std::size_t c = 0; c < nc; ++c) {
       SphCollider& col = world.colliders[c];
       const ColliderPose pose = col.integrate_pose ? advancedPose(col.pose, dt) : col.pose;
-      const bool still = !col.integrate_pose || (glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) == 0.0f &&
-                                                 glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) == 0.0f);
+      // Does not move during the step: the end pose is the start pose, so are the samples' distances.
+      const bool still = !col.integrate_pose ||
+                         (glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) == 0.0f &&
+                          glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) == 0.0f);
       const bool skip_far = still && col.lipschitz_distance;
       const std::uint32_t bit = track_stale ? 1u << c : 0u;
       const ColliderQuery query(col, pose);

@@ -164,7 +164,8 @@ FOUNTAIN_TARGET void queryAvx2(const Cylinders& s, const glm::vec3* points, std:
     const __m256 x = _mm256_load_ps(xs), y = _mm256_load_ps(ys), z = _mm256_load_ps(zs);
     const __m256 rho = _mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(z, z)));
     const __m256 none = _mm256_setzero_ps();
-    const PickV near = uniteV(PickV{y, _mm256_set1_ps(-1.0f), none}, subtractV(primitiveV(rho, y, s, kBasinOuter), primitiveV(rho, y, s, kBasinInner)));
+    const PickV near = uniteV(PickV{y, _mm256_set1_ps(-1.0f), none},
+                              subtractV(primitiveV(rho, y, s, kBasinOuter), primitiveV(rho, y, s, kBasinInner)));
     const PickV column = uniteV(primitiveV(rho, y, s, kColumn), primitiveV(rho, y, s, kPlinth));
     const PickV dish = subtractV(primitiveV(rho, y, s, kDish), primitiveV(rho, y, s, kDishInner));
     const PickV all = uniteV(near, uniteV(column, uniteV(dish, primitiveV(rho, y, s, kSpire))));
