@@ -119,6 +119,9 @@ struct SphCollider {
 
 // A nozzle: emits discs of particles (square lattice of spacing d inside `radius`) along
 // `direction` at `speed`, `rate` particles per second, while start_time <= t < end_time.
+// A lattice point is skipped (not emitted) where a collider is nearer than the particle radius or an
+// existing particle nearer than 0.99 d: a blocked nozzle emits less instead of packing particles
+// into fluid or solid that is already there.
 struct SphEmitter {
   glm::vec3 position{0.0f};
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y
@@ -194,6 +197,7 @@ struct SphScratch {
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp, keep;
   std::vector<glm::vec3> local_points;
+  std::vector<glm::vec3> emitter_crowd;  // applyEmitters: the particles near the layer being placed
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<ColliderSample> end_samples;
   std::vector<glm::vec3> reduce_force, reduce_torque;
