@@ -29,6 +29,12 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+// The particle-cache fill has a 4-wide AVX2 twin of its SSE2 path, chosen at run time
+// (Setup::avx2): the same double operations lane by lane (no FMA), so the same bits.
+#if defined(__x86_64__) && defined(__SSE2__)
+#define FLUID_SURFACE_AVX2_FILL 1
+#include <immintrin.h>
+#endif
 
 namespace fluid::detail {
 
@@ -211,6 +217,7 @@ struct Setup {
   bool flip = false;
   SweepFrame frame;
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
+  bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -245,7 +252,7 @@ struct Worker {
     colStart.assign(cols + 1, 0);
     cursor.assign(cols, 0);
     runMax.assign(cols, 0);
-    cx.assign(nx + 1, 0);
+    cx.assign(nx + 4, 0);  // 3 past the last corner: the 4-wide fill loads cx[x .. x + 3]
     kx.assign(nx + 1, 0);
     ky.assign(ny + 1, 0);
     kz.assign(nz + 1, 0);
@@ -281,6 +288,16 @@ struct Worker {
     freeSlices.push_back(s);
   }
 };
+
+// Whether the particle-cache fill takes its AVX2 path (Setup::avx2).
+inline bool detectFillAvx2(const SurfaceParams& params) {
+#if defined(FLUID_SURFACE_AVX2_FILL)
+  return !params.portableKernels && __builtin_cpu_supports("avx2");
+#else
+  (void)params;
+  return false;
+#endif
+}
 
 // Lattice origin of a block's expanded region (local corner 0).
 inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0[3]) {
@@ -420,7 +437,7 @@ class BlockMesher {
 
   void begin(const BlockDesc& block) {
     blockOrigin(su_, block, g0_);
-    for (int i = 0; i <= nx_; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;
+    for (int i = 0; i <= nx_ + 3; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;  // + 3: padding (resize)
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
     // edgeKey(i, j, k, axis) = kx[i] | ky[j] | kz[k] | axis for the block's lattice indices.
@@ -531,7 +548,17 @@ class BlockMesher {
       const double fz = p.z * inv - double(g0_[2]);
       // Away from the block's top and bottom (the usual case) the clamps below cannot act.
       const double reach = std::sqrt(p.rc2) * inv + 2.0;
-      if (fz - reach >= 1.0 && fz + reach <= double(zmax))
+      const bool clampFree = fz - reach >= 1.0 && fz + reach <= double(zmax);
+#if defined(FLUID_SURFACE_AVX2_FILL)
+      if (su_.avx2) {
+        if (clampFree)
+          fillDiscAvx2<false>(p, li, fz, span, entries, cursor);
+        else
+          fillDiscAvx2<true>(p, li, fz, span, entries, cursor);
+        continue;
+      }
+#endif
+      if (clampFree)
         fillDisc<false>(p, li, fz, span, entries, cursor);
       else
         fillDisc<true>(p, li, fz, span, entries, cursor);
@@ -557,6 +584,77 @@ class BlockMesher {
     parts_ = w_.local.data();
   }
 
+  // Element for column x of a row: z range [lo, hi] (empty: stored as key 0 with max_z -32000),
+  // reachMax from the column's running max, reachMin set after the fill.
+  // `key` is columnKey(lo, hi), or 0 when empty.
+  static void storeEntry(ColumnEntry* entries, std::uint32_t* rowCursor, std::int16_t* rowRun, int x,
+                         std::uint32_t key, int hi, std::uint32_t li) {
+    const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
+    rowRun[x] = rm;
+    ColumnEntry& en = entries[rowCursor[x]++];
+    en.zKey = key;
+    en.reachMax = rm;
+    en.particle8 = 8 * li;
+  }
+
+  // One column, scalar: the closed form, bounds near a lattice slice settled by the exact
+  // predicate (influences()), so the cache returns precisely the particles within Rc_i.
+  // fz = the particle's z in local cubes; dy2 = its row's dy * dy (see fillDisc).
+  template <bool kClamp>
+  void fillColumn(const Particle& p, std::uint32_t li, double fz, ColumnEntry* entries, std::uint32_t* rowCursor,
+                  std::int16_t* rowRun, int x, double dy2) const {
+    const double inv = 1.0 / su_.s;
+    const double* cz = w_.cz.data();
+    const int zmax = nz_ - 1;
+    const double pz = p.z, rc2 = p.rc2;
+    auto inside = [&](double dxy, int z) {
+      const double dz = cz[z] - pz;
+      return dxy + dz * dz < rc2;
+    };
+    const double dx = w_.cx[x] - p.x;
+    const double dxy = dx * dx + dy2;
+    int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
+    if (dxy < rc2) {
+      const double h = std::sqrt(rc2 - dxy) * inv;
+      const double zlo = fz - h, zhi = fz + h;
+      // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
+      const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
+      const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
+      int l = c, u = f;
+      if constexpr (kClamp) {
+        // Intersect with [1, zmax] (not clamp each bound: a range wholly below 1 or above zmax,
+        // possible for a particle in the outermost margin cube, must stay empty).
+        l = std::max(c, 1);
+        u = std::min(f, zmax);
+      }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
+      // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
+      // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
+      // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
+      // so where exactly the 1e-6 cut falls does not matter.
+      // One test for both bounds; settling a bound the closed form already got right
+      // leaves it unchanged, so both are settled when either is close.
+      if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
+        if (l > 1 && inside(dxy, l - 1)) {
+          do --l;
+          while (l > 1 && inside(dxy, l - 1));
+        } else {
+          while (l <= u && !inside(dxy, l)) ++l;
+        }
+        if (u < zmax && inside(dxy, u + 1)) {
+          do ++u;
+          while (u < zmax && inside(dxy, u + 1));
+        } else {
+          while (u >= l && !inside(dxy, u)) --u;
+        }
+      }
+      if (l <= u) {
+        lo = l;
+        hi = u;
+      }
+    }
+    storeEntry(entries, rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi, li);
+  }
+
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
   // Without clamping (the particle is away from the block's top and bottom: fz -/+ (Rc / S + 2)
   // lies in [1, zmax]) two columns go through the closed form at once (SSE2, the same double
@@ -567,72 +665,10 @@ class BlockMesher {
                 ColumnEntry* entries, std::uint32_t* cursor) {
     const double inv = 1.0 / su_.s;
     const double* cx = w_.cx.data();
-    const double* cz = w_.cz.data();
     const int zmax = nz_ - 1;
-    const double px = p.x, pz = p.z, rc2 = p.rc2;
-    // Candidate z range from the closed form, then corrected with the exact predicate
-    // (influences()) so the cache returns precisely the particles within Rc_i.
-    auto inside = [&](double dxy, int z) {
-      const double dz = cz[z] - pz;
-      return dxy + dz * dz < rc2;
-    };
+    const double px = p.x, rc2 = p.rc2;
+    (void)cx, (void)zmax, (void)px, (void)rc2;  // used by the SSE2 path only
     std::int16_t* runMax = w_.runMax.data();
-    // Element for column x of this row: z range [lo, hi] (empty: -32000, -32000, stored as key 0),
-    // reachMax from the column's running max, reachMin set after the fill.
-    // `key` is columnKey(lo, hi), or 0 when empty.
-    auto store = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, std::uint32_t key, int hi) {
-      const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
-      rowRun[x] = rm;
-      ColumnEntry& en = entries[rowCursor[x]++];
-      en.zKey = key;
-      en.reachMax = rm;
-      en.particle8 = 8 * li;
-    };
-    // One column, scalar: the closed form, bounds near a lattice slice settled by the predicate.
-    auto column = [&](std::uint32_t* rowCursor, std::int16_t* rowRun, int x, double dy2) {
-      const double dx = cx[x] - px;
-      const double dxy = dx * dx + dy2;
-      int lo = -32000, hi = -32000;  // an empty range, which no corner (z >= 0) falls in
-      if (dxy < rc2) {
-        const double h = std::sqrt(rc2 - dxy) * inv;
-        const double zlo = fz - h, zhi = fz + h;
-        // ceil / floor without clamping first: c - 1 < zlo <= c and f <= zhi < f + 1.
-        const int c = static_cast<int>(zlo) + (zlo > double(static_cast<int>(zlo)));
-        const int f = static_cast<int>(zhi) - (zhi < double(static_cast<int>(zhi)));
-        int l = c, u = f;
-        if constexpr (kClamp) {
-          // Intersect with [1, zmax] (not clamp each bound: a range wholly below 1 or above zmax,
-          // possible for a particle in the outermost margin cube, must stay empty).
-          l = std::max(c, 1);
-          u = std::min(f, zmax);
-        }  // else fz -/+ (Rc / S + 2) lies in [1, zmax], so c >= 1 and f <= zmax
-        // The closed form differs from the predicate only by rounding (~1e-12 cubes); when a
-        // bound is within about 1e-6 of a lattice slice (c - zlo in [0, 1) near 0 or 1, resp.
-        // zhi - f), settle it with the predicate itself. Elsewhere the closed form is exact,
-        // so where exactly the 1e-6 cut falls does not matter.
-        // One test for both bounds; settling a bound the closed form already got right
-        // leaves it unchanged, so both are settled when either is close.
-        if (std::max(std::abs(double(c) - zlo - 0.5), std::abs(zhi - double(f) - 0.5)) > 0.5 - 1e-6) [[unlikely]] {
-          if (l > 1 && inside(dxy, l - 1)) {
-            do --l;
-            while (l > 1 && inside(dxy, l - 1));
-          } else {
-            while (l <= u && !inside(dxy, l)) ++l;
-          }
-          if (u < zmax && inside(dxy, u + 1)) {
-            do ++u;
-            while (u < zmax && inside(dxy, u + 1));
-          } else {
-            while (u >= l && !inside(dxy, u)) --u;
-          }
-        }
-        if (l <= u) {
-          lo = l;
-          hi = u;
-        }
-      }
-      store(rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi);
-    };
     int y0, y1;
     discRows(p, inv, y0, y1);
     for (int y = y0; y <= y1; ++y, ++span) {
@@ -666,8 +702,8 @@ class BlockMesher {
           const __m128d b = _mm_and_pd(_mm_sub_pd(_mm_sub_pd(zhi, _mm_cvtepi32_pd(f)), half), absMask);
           const __m128d settle = _mm_cmpgt_pd(_mm_max_pd(a, b), cut);
           if (_mm_movemask_pd(_mm_andnot_pd(settle, in)) != 3) [[unlikely]] {
-            column(rowCursor, rowRun, x, dy2);
-            if (pair) column(rowCursor, rowRun, x + 1, dy2);
+            fillColumn<kClamp>(p, li, fz, entries, rowCursor, rowRun, x, dy2);
+            if (pair) fillColumn<kClamp>(p, li, fz, entries, rowCursor, rowRun, x + 1, dy2);
             continue;
           }
           // Both columns are inside the disc with clear bounds; c <= f holds unless the range
@@ -686,8 +722,8 @@ class BlockMesher {
           const __m128i hi = _mm_or_si128(_mm_andnot_si128(empty, ff), _mm_and_si128(empty, _mm_set1_epi32(-32000)));
           if (!pair) [[unlikely]] {
             const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
-            store(rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
-                  _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)));
+            storeEntry(entries, rowCursor, rowRun, x, std::uint32_t(_mm_cvtsi128_si32(kh)),
+                       _mm_cvtsi128_si32(_mm_shuffle_epi32(kh, 1)), li);
             break;
           }
           // Columns x and x + 1 are neighbours, so their running max_z (int16) and cursors
@@ -712,9 +748,101 @@ class BlockMesher {
         continue;
       }
 #endif
-      for (; x <= x1; ++x) column(rowCursor, rowRun, x, dy2);
+      for (; x <= x1; ++x) fillColumn<kClamp>(p, li, fz, entries, rowCursor, rowRun, x, dy2);
     }
   }
+
+#if defined(FLUID_SURFACE_AVX2_FILL)
+  // fillDisc's twin for CPUs with AVX2 (Setup::avx2): four columns of a row at once, the same
+  // double operations lane by lane as the SSE2 path and fillColumn (no FMA contraction: the
+  // target is avx2 alone), so every element gets the same bits; a group with a column that needs
+  // the scalar path sends each of its columns there, as the SSE2 path does for a pair.
+  // Reads cx[x .. x + 3] (Worker::cx is padded by 3); lanes past the row's last column are
+  // computed but neither stored nor counted (their running max and cursor are rewritten unchanged:
+  // they lie inside the column arrays since x1 + 3 <= nx + 2 and y <= ny - 1).
+  template <bool kClamp>
+  [[gnu::target("avx2")]] void fillDiscAvx2(const Particle& p, std::uint32_t li, double fz,
+                                           const std::array<std::int16_t, 2>*& span, ColumnEntry* entries,
+                                           std::uint32_t* cursor) {
+    const double inv = 1.0 / su_.s;
+    const double* cx = w_.cx.data();
+    const int zmax = nz_ - 1;
+    std::int16_t* runMax = w_.runMax.data();
+    const __m256d vpx = _mm256_set1_pd(p.x), vrc2 = _mm256_set1_pd(p.rc2), vinv = _mm256_set1_pd(inv);
+    const __m256d vfz = _mm256_set1_pd(fz), half = _mm256_set1_pd(0.5), cut = _mm256_set1_pd(0.5 - 1e-6);
+    const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffll));
+    const __m128i one = _mm_set1_epi32(1), lanes = _mm_setr_epi32(0, 1, 2, 3);
+    const __m128i none = _mm_set1_epi32(-32000);
+    const std::uint32_t p8 = 8 * li;
+    int y0, y1;
+    discRows(p, inv, y0, y1);
+    for (int y = y0; y <= y1; ++y, ++span) {
+      const double dyr = w_.cy[y] - p.y;  // as discRow()
+      const double dy2 = dyr * dyr;
+      const std::size_t rowBase = std::size_t(y) * std::size_t(stride_);
+      std::uint32_t* rowCursor = cursor + rowBase;
+      std::int16_t* rowRun = runMax + rowBase;
+      const int x1 = (*span)[1];
+      const __m256d vdy2 = _mm256_set1_pd(dy2);
+      for (int x = (*span)[0]; x <= x1; x += 4) {
+        const int cnt = std::min(4, x1 - x + 1);
+        const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(cx + x), vpx);
+        const __m256d dxy = _mm256_add_pd(_mm256_mul_pd(dx, dx), vdy2);
+        const __m256d in = _mm256_cmp_pd(dxy, vrc2, _CMP_LT_OS);
+        const __m256d h =
+            _mm256_mul_pd(_mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(vrc2, dxy), _mm256_setzero_pd())), vinv);
+        const __m256d zlo = _mm256_sub_pd(vfz, h), zhi = _mm256_add_pd(vfz, h);
+        const __m128i c = _mm_add_epi32(_mm256_cvttpd_epi32(zlo), one), f = _mm256_cvttpd_epi32(zhi);
+        const __m256d a = _mm256_and_pd(_mm256_sub_pd(_mm256_sub_pd(_mm256_cvtepi32_pd(c), zlo), half), absMask);
+        const __m256d b = _mm256_and_pd(_mm256_sub_pd(_mm256_sub_pd(zhi, _mm256_cvtepi32_pd(f)), half), absMask);
+        const __m256d settle = _mm256_cmp_pd(_mm256_max_pd(a, b), cut, _CMP_GT_OS);
+        const int want = (1 << cnt) - 1;
+        if ((_mm256_movemask_pd(_mm256_andnot_pd(settle, in)) & want) != want) [[unlikely]] {
+          for (int l = 0; l < cnt; ++l) fillColumn<kClamp>(p, li, fz, entries, rowCursor, rowRun, x + l, dy2);
+          continue;
+        }
+        __m128i cc = c, ff = f;
+        if constexpr (kClamp) {  // intersect with [1, zmax], as the scalar path
+          const __m128i vz = _mm_set1_epi32(zmax);
+          cc = _mm_max_epi32(cc, one);
+          ff = _mm_min_epi32(ff, vz);
+        }
+        const __m128i empty = _mm_cmpgt_epi32(cc, ff);
+        const __m128i key =
+            _mm_andnot_si128(empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
+        // max_z, or -32000 for an empty range and for the lanes past the row's end (a no-op in
+        // the running max below).
+        const __m128i active = _mm_cmpgt_epi32(_mm_set1_epi32(cnt), lanes);
+        const __m128i hi = _mm_blendv_epi8(none, ff, _mm_andnot_si128(empty, active));
+        const __m128i rm = _mm_max_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rowRun + x)),
+                                         _mm_packs_epi32(hi, hi));  // reachMax of columns x .. x + 3
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(rowRun + x), rm);
+        const __m128i cur = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rowCursor + x));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(rowCursor + x), _mm_sub_epi32(cur, active));
+        const __m128i r32 = _mm_unpacklo_epi16(rm, _mm_setzero_si128());
+        const __m128i kr01 = _mm_unpacklo_epi32(key, r32), kr23 = _mm_unpackhi_epi32(key, r32);  // k0 r0 k1 r1, k2 r2 k3 r3
+        ColumnEntry* e = entries + std::uint32_t(_mm_cvtsi128_si32(cur));
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(e), kr01);
+        e->particle8 = p8;
+        if (cnt > 1) {
+          e = entries + std::uint32_t(_mm_extract_epi32(cur, 1));
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(e), _mm_unpackhi_epi64(kr01, kr01));
+          e->particle8 = p8;
+          if (cnt > 2) {
+            e = entries + std::uint32_t(_mm_extract_epi32(cur, 2));
+            _mm_storel_epi64(reinterpret_cast<__m128i*>(e), kr23);
+            e->particle8 = p8;
+            if (cnt > 3) {
+              e = entries + std::uint32_t(_mm_extract_epi32(cur, 3));
+              _mm_storel_epi64(reinterpret_cast<__m128i*>(e), _mm_unpackhi_epi64(kr23, kr23));
+              e->particle8 = p8;
+            }
+          }
+        }
+      }
+    }
+  }
+#endif
 
   // The start-pointer update of §6 for column k (entries [begin, end)): moves the column's
   // cursor to the first element whose reach covers z and returns it. reachMax is non-decreasing,
@@ -1469,6 +1597,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   su.plainFrame = su.frame.axis[0] == 0 && su.frame.axis[1] == 1 && su.frame.axis[2] == 2 && su.frame.sign[0] == 1 &&
                   su.frame.sign[1] == 1 && su.frame.sign[2] == 1;
   su.flip = su.frame.flipsWinding();
+  su.avx2 = detectFillAvx2(params);
   su.exact = params.order != SurfaceOrder::none && params.exactSlabOrder;
   su.origin[0] = params.originX;
   su.origin[1] = params.originY;
