@@ -1758,7 +1758,11 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       if (user) out.attributes.insert(out.attributes.end(), o.attributes.begin(), o.attributes.end());
       out.indices.insert(out.indices.end(), o.indices.begin(), o.indices.end());
       const std::uint32_t vb = st.vertexBase[i];
-      for (std::size_t k = st.indexBase[i]; k < st.indexBase[i + 1]; ++k) out.indices[k] += vb;
+      // Local bounds and pointer: out.indices may alias st.indexBase (both uint32) as far as the
+      // compiler knows, which would keep it from vectorising the loop.
+      std::uint32_t* dst = out.indices.data() + st.indexBase[i];
+      const std::size_t count = o.indices.size();
+      for (std::size_t k = 0; k < count; ++k) dst[k] += vb;
     }
   } else {
     out.positions.resize(st.vertexBase[nb]);
@@ -1777,7 +1781,10 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
       std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
       if (user) std::copy(o.attributes.begin(), o.attributes.end(), out.attributes.begin() + vb);
-      for (std::size_t k = 0; k < o.indices.size(); ++k) out.indices[ib + k] = o.indices[k] + vb;
+      std::uint32_t* dst = out.indices.data() + ib;  // local pointers, as in the append path
+      const std::uint32_t* src = o.indices.data();
+      const std::size_t count = o.indices.size();
+      for (std::size_t k = 0; k < count; ++k) dst[k] = src[k] + vb;
     }
     for (std::size_t k = 0; k < o.runs.size(); ++k) {
       SurfaceSlabRun r = o.runs[k];
