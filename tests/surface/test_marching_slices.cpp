@@ -138,6 +138,23 @@ TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
       EXPECT_TRUE(m.indices == one.indices) << threads;
       EXPECT_TRUE(m.edgeKeys == one.edgeKeys) << threads;
       EXPECT_EQ(m.stats.cubesVisited, one.stats.cubesVisited);
+      // Block and slab index ranges too (one thread appends the blocks to the mesh directly,
+      // more threads concatenate per-block outputs).
+      ASSERT_EQ(m.blocks.size(), one.blocks.size());
+      for (std::size_t b = 0; b < m.blocks.size(); ++b) {
+        const fluid::SurfaceBlockRange &x = m.blocks[b], &r = one.blocks[b];
+        EXPECT_TRUE(x.bx == r.bx && x.by == r.by && x.bz == r.bz && x.indices.first == r.indices.first &&
+                    x.indices.count == r.indices.count && x.firstVertex == r.firstVertex &&
+                    x.vertexCount == r.vertexCount && x.firstSlabRun == r.firstSlabRun &&
+                    x.slabRunCount == r.slabRunCount)
+            << "block " << b << ", " << threads << " threads";
+      }
+      ASSERT_EQ(m.slabRuns.size(), one.slabRuns.size());
+      for (std::size_t k = 0; k < m.slabRuns.size(); ++k)
+        EXPECT_TRUE(m.slabRuns[k].slab == one.slabRuns[k].slab &&
+                    m.slabRuns[k].indices.first == one.slabRuns[k].indices.first &&
+                    m.slabRuns[k].indices.count == one.slabRuns[k].indices.count)
+            << "run " << k << ", " << threads << " threads";
     }
   }
 }

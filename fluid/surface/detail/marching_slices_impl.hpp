@@ -178,6 +178,10 @@ struct BlockDesc {
   double sortKey;
 };
 
+// One block's output. Normally each block has its own (blocks run concurrently, then
+// extractImpl concatenates them). On one thread with several blocks the blocks instead append,
+// in emission order, to one shared BlockOut holding the SurfaceMesh's own arrays (see
+// runBlocks: no copy), and the block's own BlockOut keeps only its counts and statistics.
 struct BlockOut {
   std::vector<glm::vec3> positions, normals;
   std::vector<glm::vec4> attributes;
@@ -189,6 +193,8 @@ struct BlockOut {
   std::vector<SurfaceSlabRun> runs;
   SurfaceStats stats;
   std::uint64_t cornerBytes = 0, particleBytes = 0;
+  // This block's vertices, indices and slab runs (also when they went to a shared BlockOut).
+  std::uint32_t vertexCount = 0, indexCount = 0, runCount = 0;
   void reset() {
     positions.clear();
     normals.clear();
@@ -199,6 +205,7 @@ struct BlockOut {
     runs.clear();
     stats = {};
     cornerBytes = particleBytes = 0;
+    vertexCount = indexCount = runCount = 0;
   }
 };
 
@@ -364,7 +371,9 @@ inline void buildRuns(BlockOut& out) {
 template <class Policy>
 class BlockMesher {
  public:
-  BlockMesher(Worker<Policy>& w, const Setup& setup, const Policy& policy, BlockOut& out)
+  // `append`: add to `out`'s arrays after what earlier blocks put there (vertex ids and index
+  // positions continue from theirs; not with exact slab order), instead of replacing them.
+  BlockMesher(Worker<Policy>& w, const Setup& setup, const Policy& policy, BlockOut& out, bool append = false)
       : w_(w),
         su_(setup),
         pol_(policy),
@@ -372,13 +381,24 @@ class BlockMesher {
         nx_(setup.n[0]),
         ny_(setup.n[1]),
         nz_(setup.n[2]),
-        stride_(setup.n[0] + 1) {}
+        stride_(setup.n[0] + 1),
+        append_(append) {
+    assert(!(append && setup.exact));
+  }
 
   void run(const BlockDesc& block, std::span<const Particle> particles) {
     particles_ = particles;
-    out_.reset();
-    vertexCount_ = 0;
-    nIndices_ = 0;
+    if (append_) {
+      out_.stats = {};
+      out_.cornerBytes = out_.particleBytes = 0;
+    } else {
+      out_.reset();
+    }
+    vertexBase_ = std::uint32_t(out_.positions.size());
+    indexBase_ = out_.indices.size();
+    runBase_ = out_.runs.size();
+    vertexCount_ = vertexBase_;
+    nIndices_ = indexBase_;
     begin(block);
     buildParticleCache(particles);
     seed(particles);
@@ -387,8 +407,11 @@ class BlockMesher {
       sortBySlab();
       buildRuns(out_);
     }
-    out_.stats.triangles = out_.indices.size() / 3;
-    out_.stats.vertices = out_.positions.size();
+    out_.indexCount = std::uint32_t(out_.indices.size() - indexBase_);
+    out_.vertexCount = std::uint32_t(out_.positions.size() - vertexBase_);
+    out_.runCount = std::uint32_t(out_.runs.size() - runBase_);
+    out_.stats.triangles = out_.indexCount / 3;
+    out_.stats.vertices = out_.vertexCount;
     out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
                          std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
                          std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
@@ -422,7 +445,10 @@ class BlockMesher {
   int activeSlices_ = 0;
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
-  std::uint32_t vertexCount_ = 0;        // vertices made in this block (out_.positions.size())
+  const bool append_;
+  std::uint32_t vertexBase_ = 0;         // out_'s vertices before this block (0 unless append_)
+  std::size_t indexBase_ = 0, runBase_ = 0;  // likewise its indices and slab runs
+  std::uint32_t vertexCount_ = 0;        // vertex id of the next vertex (out_.positions.size())
   std::size_t nIndices_ = 0;             // used length of out_.indices while marching (polygonize)
   // The particle cache's arrays, set once it is built (they do not move while the block runs).
   const std::uint32_t* colStart_ = nullptr;
@@ -1338,7 +1364,7 @@ class BlockMesher {
     if (su_.exact) {
       out_.triSlab.insert(out_.triSlab.end(), count / 3, slab);
     } else {
-      if (out_.runs.empty() || out_.runs.back().slab != slab)
+      if (out_.runs.size() == runBase_ || out_.runs.back().slab != slab)
         out_.runs.push_back(SurfaceSlabRun{slab, IndexRange{std::uint32_t(first), 0}});
       out_.runs.back().indices.count += std::uint32_t(count);
     }
@@ -1398,6 +1424,7 @@ struct ExtractorState {
   std::vector<Particle> blockParticles;
   std::vector<BlockDesc> blocks;
   std::vector<BlockOut> outs;
+  BlockOut shared;  // one thread, several blocks: they append here (runBlocks), holding the mesh's arrays
   // Per-worker scratch of each policy type used with this extractor (type-erased).
   std::unordered_map<std::type_index, std::shared_ptr<void>> policyWorkers;
   std::vector<std::unique_ptr<FollowWorker>> followWorkers;
@@ -1530,15 +1557,56 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   }
 }
 
+// Whether runBlocks has the blocks append to ExtractorState::shared: one worker, several blocks,
+// no exact slab order (which sorts each block's own arrays).
+inline bool appendBlocks(const ExtractorState& st, const Setup& su) {
+  return st.arena->max_concurrency() == 1 && st.blocks.size() > 1 && !su.exact;
+}
+
+// `out`: the mesh, whose arrays the blocks append to directly when appendBlocks() (swapped into
+// ExtractorState::shared for the run and back after it; extractImpl then copies nothing).
 template <class Policy>
 void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
-               std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
+               std::vector<std::unique_ptr<Worker<Policy>>>& workers, SurfaceMesh& out) {
   const int slots = st.arena->max_concurrency();
   if (int(workers.size()) < slots) workers.resize(slots);
   for (auto& w : workers) {
     if (!w) w = std::make_unique<Worker<Policy>>();
     w->resize(su.n);
     w->peakBytes = 0;
+  }
+  if (appendBlocks(st, su)) {
+    // One thread: the blocks in emission order, each appending to the mesh's own arrays. The
+    // same vertices and indices as concatenating per-block outputs (ids continue from the
+    // blocks before), without the copy.
+    BlockOut& sh = st.shared;
+    sh.reset();
+    sh.positions.swap(out.positions);
+    sh.normals.swap(out.normals);
+    sh.attributes.swap(out.attributes);
+    sh.keys.swap(out.edgeKeys);
+    sh.indices.swap(out.indices);
+    sh.runs.swap(out.slabRuns);
+    for (std::size_t i = 0; i < st.blocks.size(); ++i) {
+      const BlockDesc& b = st.blocks[i];
+      BlockMesher<Policy> mesher(*workers[0], su, policy, sh, true);
+      mesher.run(b, std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
+      BlockOut& o = st.outs[i];
+      o.reset();
+      o.stats = sh.stats;
+      o.cornerBytes = sh.cornerBytes;
+      o.particleBytes = sh.particleBytes;
+      o.vertexCount = sh.vertexCount;
+      o.indexCount = sh.indexCount;
+      o.runCount = sh.runCount;
+    }
+    sh.positions.swap(out.positions);
+    sh.normals.swap(out.normals);
+    sh.attributes.swap(out.attributes);
+    sh.keys.swap(out.edgeKeys);
+    sh.indices.swap(out.indices);
+    sh.runs.swap(out.slabRuns);
+    return;
   }
   runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
     const BlockDesc& b = st.blocks[i];
@@ -1711,12 +1779,19 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (st.method == 2)
     runFollow(st, su);
   else
-    runBlocks(st, su, policy, st.workersFor<Policy>());
+    runBlocks(st, su, policy, st.workersFor<Policy>(), out);
 
   // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
   // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
-  // zero-fill of resize()).
+  // zero-fill of resize()). When the blocks appended to the mesh's arrays themselves
+  // (appendBlocks), only the block ranges are left to fill in.
   const std::size_t nb = st.blocks.size();
+  const bool appended = st.method != 2 && appendBlocks(st, su);
+  auto counts = [&](const BlockOut& o, std::uint64_t c[3]) {
+    c[0] = appended ? o.vertexCount : o.positions.size();
+    c[1] = appended ? o.indexCount : o.indices.size();
+    c[2] = appended ? o.runCount : o.runs.size();
+  };
   st.vertexBase.resize(nb + 1);
   st.indexBase.resize(nb + 1);
   st.runBase.resize(nb + 1);
@@ -1724,12 +1799,15 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   SurfaceStats& stats = out.stats;
   for (std::size_t i = 0; i < nb; ++i) {
     const BlockOut& o = st.outs[i];
-    if (std::uint64_t(st.vertexBase[i]) + o.positions.size() > 0xffffffffull ||
-        std::uint64_t(st.indexBase[i]) + o.indices.size() > 0xffffffffull)
+    std::uint64_t c[3];
+    counts(o, c);
+    if (std::uint64_t(st.vertexBase[i]) + c[0] > 0xffffffffull || std::uint64_t(st.indexBase[i]) + c[1] > 0xffffffffull) {
+      out.clear();
       return {"surface: mesh exceeds 2^32 vertices or indices"};
-    st.vertexBase[i + 1] = st.vertexBase[i] + std::uint32_t(o.positions.size());
-    st.indexBase[i + 1] = st.indexBase[i] + std::uint32_t(o.indices.size());
-    st.runBase[i + 1] = st.runBase[i] + std::uint32_t(o.runs.size());
+    }
+    st.vertexBase[i + 1] = st.vertexBase[i] + std::uint32_t(c[0]);
+    st.indexBase[i + 1] = st.indexBase[i] + std::uint32_t(c[1]);
+    st.runBase[i + 1] = st.runBase[i] + std::uint32_t(c[2]);
     stats.cubesVisited += o.stats.cubesVisited;
     stats.cornersEvaluated += o.stats.cornersEvaluated;
     stats.seedEvaluations += o.stats.seedEvaluations;
@@ -1740,8 +1818,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }
   const bool user = Policy::kHasUser && st.method == 1;
-  // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block.
-  const int gather = nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
+  // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block;
+  // 3: the blocks wrote into the mesh's arrays (appendBlocks).
+  const int gather = appended ? 3 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
   if (gather == 1) {
     BlockOut& o = st.outs[0];
     out.positions.swap(o.positions);
@@ -1764,7 +1843,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       const std::size_t count = o.indices.size();
       for (std::size_t k = 0; k < count; ++k) dst[k] += vb;
     }
-  } else {
+  } else if (gather == 0) {
     out.positions.resize(st.vertexBase[nb]);
     out.normals.resize(st.vertexBase[nb]);
     out.edgeKeys.resize(st.vertexBase[nb]);
@@ -1786,11 +1865,12 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       const std::size_t count = o.indices.size();
       for (std::size_t k = 0; k < count; ++k) dst[k] = src[k] + vb;
     }
-    for (std::size_t k = 0; k < o.runs.size(); ++k) {
-      SurfaceSlabRun r = o.runs[k];
-      r.indices.first += ib;
-      out.slabRuns[rb + k] = r;
-    }
+    if (gather != 3)  // (appended runs are in place already, with mesh index positions)
+      for (std::size_t k = 0; k < o.runs.size(); ++k) {
+        SurfaceSlabRun r = o.runs[k];
+        r.indices.first += ib;
+        out.slabRuns[rb + k] = r;
+      }
     SurfaceBlockRange& br = out.blocks[i];
     br.bx = st.blocks[i].bx;
     br.by = st.blocks[i].by;
@@ -1808,7 +1888,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     br.firstVertex = vb;
     br.vertexCount = st.vertexBase[i + 1] - vb;
     br.firstSlabRun = rb;
-    br.slabRunCount = std::uint32_t(o.runs.size());
+    br.slabRunCount = st.runBase[i + 1] - rb;
   });
   stats.triangles = out.indices.size() / 3;
   stats.vertices = out.positions.size();
