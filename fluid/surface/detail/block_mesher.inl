@@ -81,10 +81,10 @@ class BlockMesher {
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
   const bool append_;
-  std::uint32_t vertexBase_ = 0;         // out_'s vertices before this block (0 unless append_)
+  std::uint32_t vertexBase_ = 0;             // out_'s vertices before this block (0 unless append_)
   std::size_t indexBase_ = 0, runBase_ = 0;  // likewise its indices and slab runs
-  std::uint32_t vertexCount_ = 0;        // vertex id of the next vertex (out_.positions.size())
-  std::size_t nIndices_ = 0;             // used length of out_.indices while marching (polygonize)
+  std::uint32_t vertexCount_ = 0;            // vertex id of the next vertex (out_.positions.size())
+  std::size_t nIndices_ = 0;                 // used length of out_.indices while marching (polygonize)
   // The particle cache's arrays, set once it is built (they do not move while the block runs).
   const std::uint32_t* colStart_ = nullptr;
   std::uint32_t* cursor_ = nullptr;
@@ -248,8 +248,8 @@ class BlockMesher {
   // Element for column x of a row: z range [lo, hi] (empty: stored as key 0 with max_z -32000),
   // reachMax from the column's running max, reachMin set after the fill.
   // `key` is columnKey(lo, hi), or 0 when empty.
-  static void storeEntry(ColumnEntry* entries, std::uint32_t* rowCursor, std::int16_t* rowRun, int x,
-                         std::uint32_t key, int hi, std::uint32_t li) {
+  static void storeEntry(ColumnEntry* entries, std::uint32_t* rowCursor, std::int16_t* rowRun, int x, std::uint32_t key,
+                         int hi, std::uint32_t li) {
     const std::int16_t rm = std::max(rowRun[x], std::int16_t(hi));
     rowRun[x] = rm;
     ColumnEntry& en = entries[rowCursor[x]++];
@@ -378,8 +378,8 @@ class BlockMesher {
             ff = _mm_or_si128(_mm_andnot_si128(above, ff), _mm_and_si128(above, vz));
           }
           const __m128i empty = _mm_cmpgt_epi32(cc, ff);
-          const __m128i key = _mm_andnot_si128(
-              empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
+          const __m128i key =
+              _mm_andnot_si128(empty, _mm_or_si128(_mm_slli_epi32(ff, 16), _mm_sub_epi32(_mm_set1_epi32(0x8000), cc)));
           const __m128i hi = _mm_or_si128(_mm_andnot_si128(empty, ff), _mm_and_si128(empty, _mm_set1_epi32(-32000)));
           if (!pair) [[unlikely]] {
             const __m128i kh = _mm_unpacklo_epi32(key, hi);  // key0 hi0 key1 hi1
@@ -423,8 +423,8 @@ class BlockMesher {
   // they lie inside the column arrays since x1 + 3 <= nx + 2 and y <= ny - 1).
   template <bool kClamp>
   [[gnu::target("avx2")]] void fillDiscAvx2(const Particle& p, std::uint32_t li, double fz,
-                                           const std::array<std::int16_t, 2>*& span, ColumnEntry* entries,
-                                           std::uint32_t* cursor) {
+                                            const std::array<std::int16_t, 2>*& span, ColumnEntry* entries,
+                                            std::uint32_t* cursor) {
     const double inv = 1.0 / su_.s;
     const double* cx = w_.cx.data();
     const int zmax = nz_ - 1;
@@ -481,7 +481,8 @@ class BlockMesher {
         const __m128i cur = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rowCursor + x));
         _mm_storeu_si128(reinterpret_cast<__m128i*>(rowCursor + x), _mm_sub_epi32(cur, active));
         const __m128i r32 = _mm_unpacklo_epi16(rm, _mm_setzero_si128());
-        const __m128i kr01 = _mm_unpacklo_epi32(key, r32), kr23 = _mm_unpackhi_epi32(key, r32);  // k0 r0 k1 r1, k2 r2 k3 r3
+        const __m128i kr01 = _mm_unpacklo_epi32(key, r32),
+                      kr23 = _mm_unpackhi_epi32(key, r32);  // k0 r0 k1 r1, k2 r2 k3 r3
         ColumnEntry* e = entries + std::uint32_t(_mm_cvtsi128_si32(cur));
         _mm_storel_epi64(reinterpret_cast<__m128i*>(e), kr01);
         e->particle8 = p8;
@@ -552,7 +553,7 @@ class BlockMesher {
     const unsigned zb = 0x8000u - unsigned(z);
     for (std::uint32_t i = cur; i < end; ++i) {
       const ColumnEntry& en = e[i];
-      if (en.reachMinB < zb) break;  // reachMin > z
+      if (en.reachMinB < zb) break;              // reachMin > z
       if (!coversCorner(en.zKey, ck)) continue;  // min_z <= z <= max_z
       const CacheParticle& p = atParticle8(parts, en.particle8);
       float dz, dz2;
@@ -770,8 +771,8 @@ class BlockMesher {
   // corner's index + 1 (the upper one is cached in its slice).
   // Scalar sums: GCC's SLP vectoriser would pack each corner's four sums into one register and
   // repack them on every term (about 10 more instructions per term for the second corner).
-  [[gnu::noinline, gnu::optimize("no-tree-slp-vectorize")]] std::uint32_t evaluatePairInto(Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi,
-                                                   SliceCell& cellHi, int x, int y, int z) {
+  [[gnu::noinline, gnu::optimize("no-tree-slp-vectorize")]] std::uint32_t evaluatePairInto(
+      Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi, SliceCell& cellHi, int x, int y, int z) {
     float v0 = 0, gx0 = 0, gy0 = 0, gz0 = 0, v1 = 0, gx1 = 0, gy1 = 0, gz1 = 0;
     std::uint64_t looked = 0;
     const std::size_t k = col(x, y);
@@ -960,7 +961,7 @@ class BlockMesher {
       out_.attributes.push_back(pol_.vertex(ca.user, cb.user, tf));
     }
     out_.keys.push_back(w_.kx[lx] | w_.ky[ly] | w_.kz[lz] | std::uint64_t(axis));  // edgeKey(g0 + l, axis)
-    const std::uint32_t id = vertexCount_++;  // == out_.positions.size() - 1
+    const std::uint32_t id = vertexCount_++;                                       // == out_.positions.size() - 1
     ca.vert[axis] = id + 1;
     return id;
   }

@@ -790,7 +790,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     const BlockOut& o = st.outs[i];
     std::uint64_t c[3];
     counts(o, c);
-    if (std::uint64_t(st.vertexBase[i]) + c[0] > 0xffffffffull || std::uint64_t(st.indexBase[i]) + c[1] > 0xffffffffull) {
+    if (std::uint64_t(st.vertexBase[i]) + c[0] > 0xffffffffull ||
+        std::uint64_t(st.indexBase[i]) + c[1] > 0xffffffffull) {
       out.clear();
       return {"surface: mesh exceeds 2^32 vertices or indices"};
     }
