@@ -127,6 +127,9 @@ struct SphCollider {
 
 // A nozzle: emits discs of particles (square lattice of spacing d inside `radius`) along
 // `direction` at `speed`, `rate` particles per second, while start_time <= t < end_time.
+// A lattice point is skipped (not emitted) where a collider is nearer than the particle radius or an
+// existing particle nearer than 0.99 d: a blocked nozzle emits less instead of packing particles
+// into fluid or solid that is already there.
 struct SphEmitter {
   glm::vec3 position{0.0f};
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y
@@ -204,6 +207,7 @@ struct SphScratch {
   std::vector<std::uint32_t> u32_tmp;
   std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
+  std::vector<glm::vec3> emitter_crowd;    // applyEmitters: the particles near the layer being placed
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -353,16 +354,35 @@ int main(int argc, char** argv) {
   bool solver_given = false;  // dambreak_box: only that solver's rows
   Overrides extra;            // --set key=value, applied after each configuration's own keys
   std::vector<int> threads{1, 2};
-  for (int i = 2; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
+  // A whole number or a finite real, the whole value (so "--from 1x" is an error, not 1).
+  auto wholeInt = [](const std::string& v, int& out) {
+    char* end = nullptr;
+    const long x = std::strtol(v.c_str(), &end, 10);
+    if (v.empty() || *end != '\0' || x < INT_MIN || x > INT_MAX) return false;
+    out = static_cast<int>(x);
+    return true;
+  };
+  auto wholeReal = [](const std::string& v, double& out) {
+    char* end = nullptr;
+    out = std::strtod(v.c_str(), &end);
+    return !v.empty() && *end == '\0' && std::isfinite(out);
+  };
+  for (int i = 2; i < argc; i += 2) {
+    const std::string k = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "bench_sph: %s needs a value\n", k.c_str());
+      return 2;
+    }
+    const std::string v = argv[i + 1];
+    bool number_ok = true;
     if (k == "--steps")
-      steps = std::atoi(v.c_str());
+      number_ok = wholeInt(v, steps);
     else if (k == "--from")
-      seed_from = std::atoi(v.c_str());
+      number_ok = wholeInt(v, seed_from);
     else if (k == "--to")
-      seed_to = std::atoi(v.c_str());
+      number_ok = wholeInt(v, seed_to);
     else if (k == "--seconds")
-      seconds = std::atof(v.c_str());
+      number_ok = wholeReal(v, seconds);
     else if (k == "--png")
       png = v;
     else if (k == "--set") {
@@ -386,9 +406,17 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_sph: unknown option %s\n", k.c_str());
       return 2;
     }
+    if (!number_ok) {
+      std::fprintf(stderr, "bench_sph: %s expects a number, got '%s'\n", k.c_str(), v.c_str());
+      return 2;
+    }
   }
   if (steps < 1 || !(seconds > 0.0) || threads.empty()) {
     std::fprintf(stderr, "bench_sph: --steps must be >= 1, --seconds > 0, --threads non-empty\n");
+    return 2;
+  }
+  if (cmd == "seeds" && seed_from > seed_to) {
+    std::fprintf(stderr, "bench_sph: seeds --from %d is after --to %d: no seed to run\n", seed_from, seed_to);
     return 2;
   }
   if (cmd == "throughput") return throughput(steps);

@@ -11,7 +11,7 @@ mkdir -p docs
 tmp=$(mktemp -d)
 "$BENCH" accuracy --png docs/sph_accuracy.png > "$tmp/accuracy.md"
 "$BENCH" throughput --steps 20 > "$tmp/throughput.md"
-"$BENCH" seeds --from 1 --to 100 > "$tmp/seeds.txt"
+"$BENCH" seeds --from 1 --to 300 > "$tmp/seeds.txt"
 "$BENCH" dambreak_box --seconds "$BOX_SECONDS" --threads 12 > "$tmp/box.md"
 # The game aim on the game's own fountain (content/scenes/fountain.json as the game builds it); the
 # second row is the same scene with fluid::SphParams' defaults for the four solver knobs.
@@ -66,7 +66,7 @@ fi
   echo
   echo "## Randomised stability sweep"
   echo
-  echo "Command: \`$BENCH seeds --from 1 --to 100\` (the randomised runs of \`tests/sph/randomised_runs.hpp\`, 16 runs x 200 steps per seed; the unit test runs one fixed seed and must pass; a listed run broke a bound at that step)."
+  echo "Command: \`$BENCH seeds --from 1 --to 300\` (the randomised runs of \`tests/sph/randomised_runs.hpp\`, 16 runs x 200 steps per seed; the unit test runs one fixed seed and must pass; a listed run broke a bound at that step)."
   echo
   echo '```'
   cat "$tmp/seeds.txt"

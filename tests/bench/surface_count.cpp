@@ -12,7 +12,8 @@
 // SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto. SURFACE_COUNT_RATIO=N times N
 // interleaved rounds of approach 1 and approach 3 (hashed baseline) on the calling thread's CPU
 // clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
-// bench_surface runs (1 thread).
+// bench_surface runs (1 thread). SURFACE_COUNT_PORTABLE=1 sets SurfaceParams::portableKernels
+// (the SSE2 particle-cache fill even where the CPU has AVX2), to compare the two paths.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
   if (const char* t = std::getenv("SURFACE_COUNT_THREADS"))
     params.threads = std::max(1, std::atoi(t));                                              // timing checks
   if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
+  if (const char* pk = std::getenv("SURFACE_COUNT_PORTABLE")) params.portableKernels = std::atoi(pk) != 0;
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;

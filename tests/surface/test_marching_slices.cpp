@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <tuple>
 
 using namespace surface_test;
 
@@ -137,6 +138,54 @@ TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
       EXPECT_TRUE(m.indices == one.indices) << threads;
       EXPECT_TRUE(m.edgeKeys == one.edgeKeys) << threads;
       EXPECT_EQ(m.stats.cubesVisited, one.stats.cubesVisited);
+      // Block and slab index ranges too (one thread appends the blocks to the mesh directly,
+      // more threads concatenate per-block outputs).
+      ASSERT_EQ(m.blocks.size(), one.blocks.size());
+      for (std::size_t b = 0; b < m.blocks.size(); ++b) {
+        const fluid::SurfaceBlockRange &x = m.blocks[b], &r = one.blocks[b];
+        EXPECT_TRUE(x.bx == r.bx && x.by == r.by && x.bz == r.bz && x.indices.first == r.indices.first &&
+                    x.indices.count == r.indices.count && x.firstVertex == r.firstVertex &&
+                    x.vertexCount == r.vertexCount && x.firstSlabRun == r.firstSlabRun &&
+                    x.slabRunCount == r.slabRunCount)
+            << "block " << b << ", " << threads << " threads";
+      }
+      ASSERT_EQ(m.slabRuns.size(), one.slabRuns.size());
+      for (std::size_t k = 0; k < m.slabRuns.size(); ++k)
+        EXPECT_TRUE(m.slabRuns[k].slab == one.slabRuns[k].slab &&
+                    m.slabRuns[k].indices.first == one.slabRuns[k].indices.first &&
+                    m.slabRuns[k].indices.count == one.slabRuns[k].indices.count)
+            << "run " << k << ", " << threads << " threads";
+    }
+  }
+}
+
+// The particle-cache fill has an AVX2 path (four columns at once) chosen at run time and a
+// portable SSE2 one; they must give the same cache, hence the same mesh bit for bit.
+TEST(MarchingSlices, Avx2AndPortableCacheFillGiveTheSameMesh) {
+  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2: only the portable fill runs";
+  const std::tuple<const char*, float> sets[] = {
+      {"fountain.xyz", 1.0f}, {"blob.xyz", 0.3f}, {"explosion.xyz", 0.6f}, {"spray.xyz", 1.0f}};
+  for (const auto& [name, cube] : sets) {
+    const fluid::ParticlePositions ps = loadSet(name);
+    for (int order = 0; order < 2; ++order) {
+      fluid::SurfaceParams p;
+      p.cube = cube;
+      p.threads = 1;
+      if (order) {  // a rotated sweep frame (other clamp and span cases)
+        p.order = fluid::SurfaceOrder::backToFront;
+        p.eye = {40.0f, -25.0f, 10.0f};
+        p.viewDir = {-0.8f, 0.5f, -0.2f};
+      }
+      p.portableKernels = true;
+      const fluid::SurfaceMesh portable = slices(inputOf(ps), p);
+      p.portableKernels = false;
+      const fluid::SurfaceMesh fast = slices(inputOf(ps), p);
+      ASSERT_GT(portable.indices.size(), 0u) << name;
+      EXPECT_TRUE(fast.positions == portable.positions) << name << " order " << order;
+      EXPECT_TRUE(fast.normals == portable.normals) << name << " order " << order;
+      EXPECT_TRUE(fast.indices == portable.indices) << name << " order " << order;
+      EXPECT_EQ(fast.stats.particlesLookedUp, portable.stats.particlesLookedUp) << name << " order " << order;
+      EXPECT_EQ(fast.stats.particleCacheBytesPeakBlock, portable.stats.particleCacheBytesPeakBlock) << name;
     }
   }
 }
@@ -331,6 +380,7 @@ TEST(ParticleCache, EveryLookupIsExactlyTheBruteForceSet) {
     double rcMax = 0;
     fluid::detail::prepareParticles(in, p, frame, all, rcMax);
     const int bc[3] = {trial % 3 - 1, 0, -1};
+    p.portableKernels = (trial / 2) % 2 == 1;  // the AVX2 fill (where the CPU has it) and the portable one
     fluid::detail::BlockCacheProbe probe(in, p, bc[0], bc[1], bc[2]);
     const std::int64_t g0[3] = {std::int64_t(bc[0]) * p.blockCubes - probe.margin,
                                 std::int64_t(bc[1]) * p.blockCubes - probe.margin,

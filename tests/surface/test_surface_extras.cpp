@@ -135,6 +135,27 @@ TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
   EXPECT_TRUE(plain.indices == b.indices);
 }
 
+// With several blocks, one thread has the blocks append to the mesh's arrays directly while
+// more threads concatenate per-block outputs: attributes, like positions, must not differ.
+TEST(SurfaceAttributes, SameForOneAndTwoThreadsOverSeveralBlocks) {
+  const fluid::ParticlePositions ps = loadSet("explosion.xyz");
+  std::vector<glm::vec4> user(ps.x.size());
+  for (std::size_t i = 0; i < user.size(); ++i) user[i] = {float(i % 7), float(i % 3), 1.0f, float(i) * 1e-3f};
+  fluid::SurfaceParams p;
+  p.cube = 0.6f;
+  p.blockCubes = 24;
+  p.threads = 1;
+  const fluid::SurfaceInput in{ps.x, ps.y, ps.z, {}, {}, user};
+  const fluid::SurfaceMesh one = run(in, p);
+  p.threads = 2;
+  const fluid::SurfaceMesh two = run(in, p);
+  ASSERT_GT(one.blocks.size(), 1u);
+  ASSERT_EQ(one.attributes.size(), one.positions.size());
+  EXPECT_TRUE(one.attributes == two.attributes);
+  EXPECT_TRUE(one.positions == two.positions);
+  EXPECT_TRUE(one.indices == two.indices);
+}
+
 TEST(SurfaceStrength, StrengthAndRadiusScaleChangeTheLoneRadius) {
   const std::vector<float> x = {0}, y = {0}, z = {0}, scale = {0.5f}, strength = {2.0f};
   fluid::SurfaceParams p;
