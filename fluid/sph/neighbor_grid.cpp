@@ -193,6 +193,18 @@ std::uint32_t* scanRows(const RowScan& a, std::uint32_t self, glm::vec3 p, std::
 // The same scan eight candidates at a time where the CPU has AVX2 (picked at run time; the build
 // targets baseline x86-64). The arithmetic is the same IEEE sequence without FMA (the target
 // does not enable it, so nothing is contracted): the lists are identical to the SSE2 scan's.
+// Bit l set: candidate t + l (< e) lies within the radius, |p - x|^2 < r^2 (the SSE2 scan's test).
+__attribute__((target("avx2"))) inline unsigned inRange8(const RowScan& a, std::uint32_t t, std::uint32_t e, __m256 px,
+                                                          __m256 py, __m256 pz, __m256 rr) {
+  const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
+  const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
+  const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
+  const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+  unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, rr, _CMP_LT_OQ)));
+  if (e - t < 8) bits &= (1u << (e - t)) - 1u;
+  return bits;
+}
+
 __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2(const RowScan& a, std::uint32_t self, glm::vec3 p,
                                                             std::uint32_t* out) {
   const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z),
@@ -200,13 +212,7 @@ __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2(const RowScan& a, st
   for (std::size_t k = 0; k < a.rows; ++k) {
     const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
     for (std::uint32_t t = b; t < e; t += 8) {
-      const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
-      const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
-      const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
-      const __m256 d2 =
-          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-      unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, rr, _CMP_LT_OQ)));
-      if (e - t < 8) bits &= (1u << (e - t)) - 1u;
+      unsigned bits = inRange8(a, t, e, px, py, pz, rr);
       while (bits) {
         const std::uint32_t u = t + static_cast<std::uint32_t>(__builtin_ctz(bits));
         *out = a.order ? a.order[u] : u;
@@ -249,13 +255,7 @@ __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2Packed(const RowScan&
   for (std::size_t k = 0; k < a.rows; ++k) {
     const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
     for (std::uint32_t t = b; t < e; t += 8) {
-      const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
-      const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
-      const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
-      const __m256 d2 =
-          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-      unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, rr, _CMP_LT_OQ)));
-      if (e - t < 8) bits &= (1u << (e - t)) - 1u;
+      unsigned bits = inRange8(a, t, e, px, py, pz, rr);
       if (self - t < 8u) bits &= ~(1u << (self - t));  // the particle itself (unsigned: t <= self < t + 8)
       const __m256i lanes = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kPack.lanes[bits])));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(out),

@@ -570,12 +570,16 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     // blocks before), without the copy.
     BlockOut& sh = st.shared;
     sh.reset();
-    sh.positions.swap(out.positions);
-    sh.normals.swap(out.normals);
-    sh.attributes.swap(out.attributes);
-    sh.keys.swap(out.edgeKeys);
-    sh.indices.swap(out.indices);
-    sh.runs.swap(out.slabRuns);
+    // The mesh's arrays become the shared block output's for the run; the same swap hands them back.
+    auto swapArrays = [&] {
+      sh.positions.swap(out.positions);
+      sh.normals.swap(out.normals);
+      sh.attributes.swap(out.attributes);
+      sh.keys.swap(out.edgeKeys);
+      sh.indices.swap(out.indices);
+      sh.runs.swap(out.slabRuns);
+    };
+    swapArrays();
     for (std::size_t i = 0; i < st.blocks.size(); ++i) {
       const BlockDesc& b = st.blocks[i];
       runMesher(*workers[0], su, policy, sh, true, b,
@@ -589,12 +593,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
       o.indexCount = sh.indexCount;
       o.runCount = sh.runCount;
     }
-    sh.positions.swap(out.positions);
-    sh.normals.swap(out.normals);
-    sh.attributes.swap(out.attributes);
-    sh.keys.swap(out.edgeKeys);
-    sh.indices.swap(out.indices);
-    sh.runs.swap(out.slabRuns);
+    swapArrays();
     return;
   }
   runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
