@@ -1,11 +1,8 @@
 // The SPH step: neighbour search, boundary terms, WCSPH / DFSPH, collisions, coupling forces.
 // See sph.hpp for the papers; equations are cited where they are implemented.
 #include "fluid/core/finite.hpp"
+#include "fluid/core/parallel.hpp"
 #include "fluid/sph/sph.hpp"
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -39,14 +36,14 @@ float msSince(Clock::time_point t0) { return std::chrono::duration<float, std::m
 
 template <typename F>
 void forEach(std::size_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
   });
 }
 
 template <typename T, typename F, typename J>
 T reduce(std::size_t n, T identity, F&& body, J&& join) {
-  return tbb::parallel_deterministic_reduce(
+  return par::parallel_deterministic_reduce(
       tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
       [&](const tbb::blocked_range<std::size_t>& r, T acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) body(i, acc);
@@ -60,13 +57,13 @@ T reduce(std::size_t n, T identity, F&& body, J&& join) {
 // sums are bit-identical for any thread count).
 template <typename F>
 void forChunks(std::size_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b < r.end(); b += kGrain) f(b, std::min(r.end(), b + kGrain));
   });
 }
 template <typename T, typename F, typename J>
 T reduceChunks(std::size_t n, T identity, F&& body, J&& join) {
-  return tbb::parallel_deterministic_reduce(
+  return par::parallel_deterministic_reduce(
       tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
       [&](const tbb::blocked_range<std::size_t>& r, T acc) {
         for (std::size_t b = r.begin(); b < r.end(); b += kGrain) body(b, std::min(r.end(), b + kGrain), acc);

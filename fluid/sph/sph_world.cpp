@@ -2,8 +2,7 @@
 // diagnostics and the substepping driver. The solvers are in sph_solver.cpp.
 #include "fluid/sph/sph.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include "fluid/core/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -152,7 +151,7 @@ double sphKineticEnergy(const SphWorld& world) {
   const auto& v = world.particles.velocity;
   const double m = sphParticleMass(world.params);
   return 0.5 * m *
-         tbb::parallel_deterministic_reduce(
+         par::parallel_deterministic_reduce(
              tbb::blocked_range<std::size_t>(0, v.size(), kGrain), 0.0,
              [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                for (std::size_t i = r.begin(); i != r.end(); ++i) acc += static_cast<double>(glm::dot(v[i], v[i]));
@@ -165,7 +164,7 @@ double sphPotentialEnergy(const SphWorld& world) {
   const auto& x = world.particles.position;
   const double m = sphParticleMass(world.params);
   const glm::vec3 g = world.params.gravity;
-  return m * tbb::parallel_deterministic_reduce(
+  return m * par::parallel_deterministic_reduce(
                  tbb::blocked_range<std::size_t>(0, x.size(), kGrain), 0.0,
                  [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                    for (std::size_t i = r.begin(); i != r.end(); ++i) acc -= static_cast<double>(glm::dot(g, x[i]));
@@ -181,7 +180,7 @@ void sphDensityError(const SphWorld& world, float& mean, float& max) {
     double sum = 0.0;
     float max = 0.0f;
   };
-  const Acc a = tbb::parallel_deterministic_reduce(
+  const Acc a = par::parallel_deterministic_reduce(
       tbb::blocked_range<std::size_t>(0, rho.size(), kGrain), Acc{},
       [&](const tbb::blocked_range<std::size_t>& r, Acc acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -204,7 +203,7 @@ double sphCompressedVolume(const SphWorld& world) {
   const auto& rho = world.particles.density;
   const double m = sphParticleMass(world.params);
   const float rho0 = world.params.rest_density;
-  return m * tbb::parallel_deterministic_reduce(
+  return m * par::parallel_deterministic_reduce(
                  tbb::blocked_range<std::size_t>(0, rho.size(), kGrain), 0.0,
                  [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                    for (std::size_t i = r.begin(); i != r.end(); ++i) acc += 1.0 / std::max(rho[i], rho0);
