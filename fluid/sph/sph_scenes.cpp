@@ -105,6 +105,10 @@ void addSphContainer(SphScene& scene, glm::vec3 lo, glm::vec3 hi, const Collisio
       c.shape = shape;
       c.material = material;
       c.integrate_pose = false;
+      // An exact distance that never moves: the end-of-step check may skip particles whose step
+      // stayed farther from the wall than they moved (a plane's normal never flips, so the result
+      // is the same as querying them).
+      c.lipschitz_distance = true;
       scene.world.colliders.push_back(c);
     }
   }
