@@ -208,6 +208,7 @@ struct SphScratch {
   std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
   std::vector<glm::vec3> emitter_crowd;    // applyEmitters: the particles near the layer being placed
+  std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after

@@ -841,11 +841,13 @@ std::size_t applyEmitters(SphWorld& world) {
       // The layer was due `accumulator` seconds ago and has travelled that far.
       const glm::vec3 base = e.position + dir * (e.speed * static_cast<float>(e.accumulator));
       // Layers placed earlier in this loop are d apart along the jet (interval >= d / speed), so
-      // they never block each other; gathering before the layer keeps them out anyway.
+      // they do not block this one; the points of this layer are not in the crowd (gathered before
+      // any is added), so they do not block each other either.
       gatherCrowd(world, base, std::max(e.radius, 0.0f) + room + 1e-3f * d, crowd);
       forDiscLattice(e, d, dir, [&](glm::vec3 o) {
-        if (overlapsCollider(world, base + o, world.params.particle_radius)) return;
+        // The crowd test first: a few distances, where the collider test is a query per collider.
         if (crowded(crowd, base + o, room * room)) return;
+        if (overlapsCollider(world, base + o, world.params.particle_radius)) return;
         if (addSphParticle(world, base + o, dir * e.speed)) ++emitted;
       });
     }
@@ -1022,6 +1024,14 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   w.boundary_gradient.resize(n);
   w.boundary_flux.resize(n);
   w.boundary_product.resize(n);
+  // Whether collider c moves (its wall velocity enters the flux and the speed bound): once per
+  // step, not per particle.
+  w.collider_moving.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const ColliderPose& pose = world.colliders[c].pose;
+    w.collider_moving[c] = glm::dot(pose.linear_velocity, pose.linear_velocity) > 0.0f ||
+                           glm::dot(pose.angular_velocity, pose.angular_velocity) > 0.0f;
+  }
   const float collider_speed = reduceChunks(
       n, 0.0f,
       [&](std::size_t b, std::size_t e, float& acc) {
@@ -1042,8 +1052,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
           for (std::size_t c = 0; c < nc; ++c) {
             const SphCollider& col = world.colliders[c];
             const ColliderSample& s = w.start_samples[c][i];
-            const bool moving = glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) > 0.0f ||
-                                glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) > 0.0f;
+            const bool moving = w.collider_moving[c] != 0;
             if (col.boundary_pressure) {
               const glm::vec3 grad = boundaryShare(w, s, product);
               gradient += grad;
