@@ -94,13 +94,6 @@ Pick evaluate(const Cylinders& s, float rho, float y) {
 
 // The sample for a pick: the gradient of a CSG union/difference is the gradient of the primitive
 // that decides the value; exact inside each primitive, a direction to the nearest face across joins.
-fluid::ColliderSample finish(const Cylinders& s, glm::vec3 p, float rho, const Pick& pick);
-
-fluid::ColliderSample sampleAt(const Cylinders& s, glm::vec3 p) {
-  const float rho = std::sqrt(p.x * p.x + p.z * p.z);
-  return finish(s, p, rho, evaluate(s, rho, p.y));
-}
-
 fluid::ColliderSample finish(const Cylinders& s, glm::vec3 p, float rho, const Pick& pick) {
   fluid::ColliderSample out;
   out.distance = pick.d;
@@ -108,6 +101,11 @@ fluid::ColliderSample finish(const Cylinders& s, glm::vec3 p, float rho, const P
   out.normal = pick.negated ? -g : g;
   out.valid = std::isfinite(pick.d);
   return out;
+}
+
+fluid::ColliderSample sampleAt(const Cylinders& s, glm::vec3 p) {
+  const float rho = std::sqrt(p.x * p.x + p.z * p.z);
+  return finish(s, p, rho, evaluate(s, rho, p.y));
 }
 
 #if defined(__x86_64__) && defined(__GNUC__)
