@@ -11,9 +11,18 @@
 // Both paths split a blocked_range exactly as oneTBB's simple partitioner does for the
 // deterministic reduce (halve while size > grain, left half first) and join left with right, so
 // deterministic reductions give the same bits in TSan builds as in normal ones.
+//
+// Thread cap: both paths honour oneTBB's max_allowed_parallelism (a tbb::global_control, as
+// `fluiddemo simulate --threads N` and the thread-count tests set it; default: the number of
+// cores): at most that many threads run a loop's body at once. The TSan path runs at most
+// detail::kMaxThreads of them.
 #include <tbb/blocked_range.h>
 
 #if defined(__SANITIZE_THREAD__)
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstddef>
 #include <thread>
 #else
 #include <tbb/parallel_for.h>
@@ -27,51 +36,65 @@ using Range = tbb::blocked_range<Value>;
 
 #if defined(__SANITIZE_THREAD__)
 namespace detail {
-// Levels of the halving that fork a thread (2^2 = up to four ranges run at once).
-constexpr int kForkLevels = 2;
+// Most threads one loop runs on at once (the caller's included): each loop starts its own
+// threads, which is slow under TSan, and four already exercise every hand-over.
+constexpr std::size_t kMaxThreads = 4;
 
+// Threads a loop may use: oneTBB's active max_allowed_parallelism (the smallest live
+// tbb::global_control, else the core count), at most kMaxThreads. Only reads a value inside
+// libtbb; no oneTBB task or thread is involved.
+inline std::size_t threadBudget() {
+  const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  return std::clamp<std::size_t>(allowed, 1, kMaxThreads);
+}
+
+// `threads` is how many threads this subrange may occupy (this one included): a split hands the
+// right half threads / 2 of them on a new thread and keeps the rest, so at most `threads` run at
+// once. Forking never changes how the range is split, only which thread runs a piece.
 template <class Value, class Body>
-void forRange(const Range<Value>& r, const Body& body, int level) {
+void forRange(const Range<Value>& r, const Body& body, std::size_t threads) {
   if (!r.is_divisible()) {
     body(r);
     return;
   }
   Range<Value> left = r;
   const Range<Value> right(left, tbb::split());  // left keeps [begin, middle)
-  if (level < kForkLevels) {
-    std::thread t([&] { forRange(right, body, level + 1); });
-    forRange(left, body, level + 1);
+  if (threads > 1) {
+    const std::size_t right_threads = threads / 2;
+    std::thread t([&] { forRange(right, body, right_threads); });
+    forRange(left, body, threads - right_threads);
     t.join();
   } else {
-    forRange(left, body, level + 1);
-    forRange(right, body, level + 1);
+    forRange(left, body, 1);
+    forRange(right, body, 1);
   }
 }
 
 template <class Value, class T, class Body, class Join>
-T reduceRange(const Range<Value>& r, const T& identity, const Body& body, const Join& join, int level) {
+T reduceRange(const Range<Value>& r, const T& identity, const Body& body, const Join& join, std::size_t threads) {
   if (!r.is_divisible()) return body(r, identity);
   Range<Value> left = r;
   const Range<Value> right(left, tbb::split());
-  if (level < kForkLevels) {
+  if (threads > 1) {
+    const std::size_t right_threads = threads / 2;
     T right_value = identity;
-    std::thread t([&] { right_value = reduceRange(right, identity, body, join, level + 1); });
-    const T left_value = reduceRange(left, identity, body, join, level + 1);
+    std::thread t([&] { right_value = reduceRange(right, identity, body, join, right_threads); });
+    const T left_value = reduceRange(left, identity, body, join, threads - right_threads);
     t.join();
     return join(left_value, right_value);
   }
-  const T left_value = reduceRange(left, identity, body, join, level + 1);
-  return join(left_value, reduceRange(right, identity, body, join, level + 1));
+  const T left_value = reduceRange(left, identity, body, join, 1);
+  return join(left_value, reduceRange(right, identity, body, join, 1));
 }
 }  // namespace detail
 
 template <class Value, class Body>
 void parallel_for(const Range<Value>& r, const Body& body) {
-  if (!r.empty()) detail::forRange(r, body, 0);
+  if (!r.empty()) detail::forRange(r, body, detail::threadBudget());
 }
 template <class Value, class T, class Body, class Join>
 T parallel_deterministic_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
-  return r.empty() ? identity : detail::reduceRange(r, identity, body, join, 0);
+  return r.empty() ? identity : detail::reduceRange(r, identity, body, join, detail::threadBudget());
 }
 template <class Value, class T, class Body, class Join>
 T parallel_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {

@@ -68,6 +68,9 @@ const std::array kSphFluidParams = {
               "dfsph: mean density error tolerance of the pressure solve (0.0005 = 0.05 %)"},
     ParamSpec{"force_bound", ParamType::number, 0.0, 1.0, num(0.0025),
               "dfsph: force condition |g| dt^2 <= force_bound * cfl * 2r (keeps resting water still); 0 = off"},
+    ParamSpec{"warm_start", ParamType::boolean, 0.0, 0.0, flag(true),
+              "dfsph: start the density solve from 0.4 x the previous step's stiffness (Bender & Koschier 2017 "
+              "sec. 4.3; fluid::SphParams::warm_start); false = from zero"},
     ParamSpec{
         "couple_bodies", ParamType::boolean, 0.0, 0.0, flag(true),
         "crates and water push each other, two-way (only when rigid_bodies is listed too; fixed at construction)"},

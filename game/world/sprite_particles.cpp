@@ -1,7 +1,6 @@
 #include "game/world/sprite_particles.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include "fluid/core/parallel.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -138,21 +137,24 @@ void stepSpriteParticles(SpriteParticles& s, const fluid::SignedDistanceShape& s
   material.resilience = p.restitution;
   material.friction = p.friction;
   // Every particle is independent from here on, so ranges run in parallel and the result does
-  // not depend on the thread count; each range counts its own bounces.
+  // not depend on the thread count; each range counts its own bounces. fluid::par rather than
+  // oneTBB directly: same splitting, but TSan builds run it on std::threads that TSan can follow
+  // (the system oneTBB is not instrumented; see fluid/core/parallel.hpp).
   std::atomic<std::uint64_t> bounces{0};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
-    const std::size_t begin = range.begin(), count = range.size();
-    // Integrate (semi-implicit Euler): v* = v + g dt, x* = x + v* dt; then the double check.
-    for (std::size_t i = begin; i < range.end(); ++i) {
-      s.velocity[i] += p.gravity * dt;
-      s.predicted[i] = s.position[i] + s.velocity[i] * dt;
-    }
-    shape.query(std::span(s.position.data() + begin, count), std::span(s.previous_samples.data() + begin, count));
-    shape.query(std::span(s.predicted.data() + begin, count), std::span(s.predicted_samples.data() + begin, count));
-    std::uint64_t range_bounces = 0;
-    for (std::size_t i = begin; i < range.end(); ++i) range_bounces += collideParticle(s, shape, material, dt, i);
-    bounces += range_bounces;
-  });
+  fluid::par::parallel_for(
+      fluid::par::Range<std::size_t>(0, n, 1024), [&](const fluid::par::Range<std::size_t>& range) {
+        const std::size_t begin = range.begin(), count = range.size();
+        // Integrate (semi-implicit Euler): v* = v + g dt, x* = x + v* dt; then the double check.
+        for (std::size_t i = begin; i < range.end(); ++i) {
+          s.velocity[i] += p.gravity * dt;
+          s.predicted[i] = s.position[i] + s.velocity[i] * dt;
+        }
+        shape.query(std::span(s.position.data() + begin, count), std::span(s.previous_samples.data() + begin, count));
+        shape.query(std::span(s.predicted.data() + begin, count), std::span(s.predicted_samples.data() + begin, count));
+        std::uint64_t range_bounces = 0;
+        for (std::size_t i = begin; i < range.end(); ++i) range_bounces += collideParticle(s, shape, material, dt, i);
+        bounces += range_bounces;
+      });
   s.bounces += bounces.load();
   ++s.steps;
 }

@@ -2,9 +2,10 @@
 // The `sprite_particles` effect: a fountain jet of plain gravity particles that bounce on the
 // ground, the basin and the statue (FountainShape) and are drawn as point sprites. Stands in
 // for the SPH fluid until that lands. SoA storage sized once at construction (max_particles);
-// stepping never allocates. Deterministic: a seeded generator, one fixed dt per step, and the
-// per-particle work split over oneTBB ranges with no cross-particle dependency (results do not
-// depend on the thread count).
+// stepping never allocates (outside TSan builds, whose fluid::par loops start std::threads).
+// Deterministic: a seeded generator, one fixed dt per step, and the per-particle work split over
+// fluid::par ranges (oneTBB) with no cross-particle dependency (results do not depend on the
+// thread count).
 
 #include "fluid/core/collider.hpp"
 #include "game/scene/scene_config.hpp"

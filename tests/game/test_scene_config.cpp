@@ -133,6 +133,33 @@ TEST(SceneConfig, OverridesUseTheSameValidation) {
   EXPECT_DOUBLE_EQ(scene.camera.number("fov_degrees"), 75.0);  // failed overrides change nothing
 }
 
+// fluid::SphParams::warm_start (DFSPH 2017 §4.3) as the optional sph_fluid key `warm_start`:
+// default on, false accepted from a file and from --set, anything but a JSON boolean refused
+// with file, key path and value.
+TEST(SceneConfig, SphFluidWarmStartKey) {
+  SceneConfig scene;
+  ASSERT_TRUE(game::parseSceneText(R"({"effects": {"sph_fluid": {}}})", "w.json", scene).ok());
+  EXPECT_TRUE(scene.effect("sph_fluid")->boolean("warm_start"));
+  auto status = game::parseSceneText(R"({"effects": {"sph_fluid": {"warm_start": false}}})", "w.json", scene);
+  ASSERT_TRUE(status.ok()) << status.error;
+  EXPECT_FALSE(scene.effect("sph_fluid")->boolean("warm_start"));
+  scene.name = "w";
+  EXPECT_TRUE(game::applyOverride(scene, "sph_fluid.warm_start=true").ok());
+  EXPECT_TRUE(scene.effect("sph_fluid")->boolean("warm_start"));
+
+  status = game::parseSceneText(R"({"effects": {"sph_fluid": {"warm_start": 0}}})", "bad.json", scene);
+  EXPECT_EQ(status.error, "bad.json: effects.sph_fluid.warm_start: expected true or false (got 0)");
+  EXPECT_TRUE(scene.effects.empty());
+  status = game::parseSceneText(R"({"effects": {"sph_fluid": {"warm_start": "off"}}})", "bad.json", scene);
+  EXPECT_EQ(status.error, R"(bad.json: effects.sph_fluid.warm_start: expected true or false (got "off"))");
+
+  ASSERT_TRUE(game::parseSceneText(R"({"effects": {"sph_fluid": {}}})", "w.json", scene).ok());
+  scene.name = "w";
+  EXPECT_TRUE(contains(game::applyOverride(scene, "sph_fluid.warm_start=2").error,
+                       "--set sph_fluid.warm_start=2: expected true or false"));
+  EXPECT_TRUE(scene.effect("sph_fluid")->boolean("warm_start"));  // a refused override changes nothing
+}
+
 TEST(SceneConfig, FilesLoadAndMissingOnesAreNamed) {
   const auto dir = std::filesystem::temp_directory_path() / "fluiddemo_scene_test";
   std::filesystem::create_directories(dir);
