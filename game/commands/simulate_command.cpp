@@ -58,7 +58,9 @@ int simulateCommand(const Args& args) {
   app.add_option("--fps", fps, "frames per simulated second (default 30)");
   app.add_option("--set", sets, "scene/solver parameter override key=value (repeatable)");
   app.add_flag("--force", force, "replace existing frame and stats files in --out");
-  app.add_option("--threads", threads, "worker threads (default: all cores)");
+  app.add_option("--threads", threads,
+                 "most threads a parallel loop runs on (default 0: all cores); the same cap in TSan builds "
+                 "(fluid/core/parallel.hpp)");
   app.footer(keyHelp());
 
   std::vector<std::string> argv_rev(args.rbegin(), args.rend());
@@ -75,6 +77,10 @@ int simulateCommand(const Args& args) {
     std::fprintf(stderr, "fluiddemo simulate: --fps must be in (0, 10000], got %g\n", fps);
     return 2;
   }
+  if (threads < 0) {
+    std::fprintf(stderr, "fluiddemo simulate: --threads must be >= 0 (0 = all cores), got %d\n", threads);
+    return 2;
+  }
   fluid::SphSolverKind solver;
   if (!fluid::parseSphSolver(solver_name, solver)) {
     std::fprintf(stderr, "fluiddemo simulate: unknown --solver '%s' (expected dfsph or wcsph)\n", solver_name.c_str());
@@ -89,6 +95,8 @@ int simulateCommand(const Args& args) {
     }
     overrides.emplace_back(s.substr(0, eq), s.substr(eq + 1));
   }
+  // oneTBB's max_allowed_parallelism caps both builds' loops: oneTBB's workers, and the
+  // std::threads fluid::par starts instead in TSan builds.
   std::optional<tbb::global_control> limit;
   if (threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
 

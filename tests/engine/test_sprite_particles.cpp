@@ -1,11 +1,15 @@
+#include "fluid/core/parallel.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sprite_particles.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <atomic>
+#include <chrono>
 #include <limits>
 #include <random>
+#include <thread>
 
 namespace {
 
@@ -117,6 +121,29 @@ TEST(SpriteParticles, ResultsDoNotDependOnTheThreadCount) {
   const auto four = run(4);
   EXPECT_EQ(one.first, four.first);
   EXPECT_EQ(one.second, four.second);
+}
+
+// The sprite loop runs through fluid::par, whose cap is oneTBB's max_allowed_parallelism in every
+// build (`simulate --threads N`, the test above): the most bodies running at once never exceeds
+// it, including in TSan builds where fluid::par starts std::threads of its own.
+TEST(SpriteParticles, ParallelLoopsHonourTheThreadCap) {
+  for (const std::size_t cap : {1u, 2u, 3u}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cap);
+    std::atomic<int> running{0}, most{0};
+    std::atomic<std::size_t> visited{0};
+    fluid::par::parallel_for(fluid::par::Range<std::size_t>(0, 48, 1), [&](const fluid::par::Range<std::size_t>& r) {
+      const int now = ++running;
+      int seen = most.load();
+      while (now > seen && !most.compare_exchange_weak(seen, now)) {
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));  // long enough for bodies to overlap
+      visited += r.size();
+      --running;
+    });
+    EXPECT_EQ(visited.load(), 48u);
+    EXPECT_GE(most.load(), 1);
+    EXPECT_LE(most.load(), static_cast<int>(cap)) << "cap " << cap;
+  }
 }
 
 TEST(SpriteParticles, NonFiniteValuesAreNamed) {
