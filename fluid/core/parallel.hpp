@@ -12,14 +12,16 @@
 // deterministic reduce (halve while size > grain, left half first) and join left with right, so
 // deterministic reductions give the same bits in TSan builds as in normal ones.
 //
-// Thread cap: both paths honour oneTBB's max_allowed_parallelism (a tbb::global_control, as
-// `fluiddemo simulate --threads N` and the thread-count tests set it; default: the number of
-// cores): at most that many threads run a loop's body at once. The TSan path runs at most
-// detail::kMaxThreads of them.
+// Thread cap: both paths run a loop's body on at most min(N, cores) threads at once, N being
+// oneTBB's max_allowed_parallelism (the smallest live tbb::global_control, as `fluiddemo
+// simulate --threads N` and the thread-count tests set it; default: the number of cores). oneTBB
+// does that itself; the TSan path reads the same two values and also stops at
+// detail::kMaxThreads.
 #include <tbb/blocked_range.h>
 
 #if defined(__SANITIZE_THREAD__)
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 
 #include <algorithm>
 #include <cstddef>
@@ -40,12 +42,13 @@ namespace detail {
 // threads, which is slow under TSan, and four already exercise every hand-over.
 constexpr std::size_t kMaxThreads = 4;
 
-// Threads a loop may use: oneTBB's active max_allowed_parallelism (the smallest live
-// tbb::global_control, else the core count), at most kMaxThreads. Only reads a value inside
-// libtbb; no oneTBB task or thread is involved.
+// Threads a loop may use, as oneTBB's default arena would: its active max_allowed_parallelism,
+// at most the core count (the arena's slots), and here also at most kMaxThreads. Only reads
+// values inside libtbb; no oneTBB task or thread is involved.
 inline std::size_t threadBudget() {
   const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  return std::clamp<std::size_t>(allowed, 1, kMaxThreads);
+  const auto cores = static_cast<std::size_t>(std::max(1, tbb::info::default_concurrency()));
+  return std::clamp<std::size_t>(std::min(allowed, cores), 1, kMaxThreads);
 }
 
 // `threads` is how many threads this subrange may occupy (this one included): a split hands the
