@@ -25,6 +25,7 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
   p.max_time_step = static_cast<float>(section.number("max_time_step"));
   p.density_error = static_cast<float>(section.number("density_error"));
   p.force_bound = static_cast<float>(section.number("force_bound"));
+  p.warm_start = section.boolean("warm_start");
   out = p;
   return true;
 }
@@ -36,6 +37,7 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.min_time_step = std::min(solver.min_time_step, solver.max_time_step);
   solver.max_density_error = params.density_error;
   solver.force_bound = params.force_bound;
+  solver.warm_start = params.warm_start;
 }
 
 bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,

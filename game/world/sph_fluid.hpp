@@ -27,9 +27,10 @@ struct SphFluidParams {
   bool drain = true;
   // Solver quality knobs (fluid::SphParams): accuracy against time, see docs/sph.md.
   float cfl = 0.4f;
-  float max_time_step = 0.005f;     // s
-  float density_error = 0.0005f;    // dfsph tolerance (mean predicted compression)
-  float force_bound = 0.0025f;      // dfsph force condition; 0 = off
+  float max_time_step = 0.005f;   // s
+  float density_error = 0.0005f;  // dfsph tolerance (mean predicted compression)
+  float force_bound = 0.0025f;    // dfsph force condition; 0 = off
+  bool warm_start = true;         // dfsph warm start of the density solve (2017 §4.3)
 };
 
 // Reads the "sph_fluid" section. False + error naming the field when `solver` is unknown.
@@ -44,7 +45,7 @@ struct SphFluid {
 };
 
 // Copies the solver knobs that may change while the fluid runs (viscosity, cfl, max_time_step,
-// density_error, force_bound) into the solver's parameters.
+// density_error, force_bound, warm_start) into the solver's parameters.
 void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
 
 // Builds the SPH world: parameters, the fountain collider, the nozzle emitter at `nozzle`

@@ -112,6 +112,7 @@ void applyLiveParams(World& world) {
       f.params.max_time_step = fresh.max_time_step;
       f.params.density_error = fresh.density_error;
       f.params.force_bound = fresh.force_bound;
+      f.params.warm_start = fresh.warm_start;
       applySolverKnobs(f.params, f.world.params);
       for (fluid::SphEmitter& e : f.world.emitters) {
         e.speed = fresh.jet_speed;

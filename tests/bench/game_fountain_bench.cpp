@@ -5,9 +5,8 @@
 // by the game's own game::stepSphFluid, the jet still running.
 //
 //   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
-//                       [--warm-start 0|1]
-// --warm-start 0 turns DFSPH's warm start (fluid::SphParams::warm_start, not a scene key) off
-// for the whole run, fill included: a measurement aid for deciding whether the scene should.
+// Every solver knob is a scene key, e.g. --set sph_fluid.warm_start=false turns DFSPH's warm start
+// off for the whole run, fill included.
 //
 // Prints one markdown row per configuration and thread count: particles, ms per frame (median
 // and worst), SPH steps per frame, solver iterations per step (DFSPH: divergence + density), mean
@@ -81,7 +80,6 @@ int main(int argc, char** argv) {
   std::string scene_file = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/scenes/fountain.json";
   std::vector<int> threads{1, 2};
   int frames = 60;
-  bool warm_start = true;
   std::vector<std::string> common{"sph_fluid.max_particles=10000"};
   std::vector<Config> configs{{"as in the scene file", {}}};
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -101,12 +99,6 @@ int main(int argc, char** argv) {
         start = comma + 1;
       }
       configs.push_back(c);
-    } else if (k == "--warm-start") {
-      if (v != "0" && v != "1") {
-        std::fprintf(stderr, "bench_game_fountain: --warm-start takes 0 or 1, not '%s'\n", v.c_str());
-        return 2;
-      }
-      warm_start = v == "1";
     } else if (k == "--threads") {
       threads.clear();
       for (char ch : v)
@@ -119,7 +111,7 @@ int main(int argc, char** argv) {
   if (argc % 2 == 0 || frames < 1 || threads.empty()) {
     std::fprintf(stderr,
                  "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
-                 "[--warm-start 0|1] [--config \"k=v,k=v\"]...\n");
+                 "[--config \"k=v,k=v\"]...\n");
     return 2;
   }
 
@@ -136,7 +128,6 @@ int main(int argc, char** argv) {
       std::vector<std::string> fill = assignments;
       fill.push_back("sph_fluid.drain=false");
       if (!buildFluid(scene_file, fill, filled)) return 1;
-      filled.world.params.warm_start = warm_start;
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
       const double budget = static_cast<double>(filled.world.params.max_particles);
       const double target = budget - std::min(0.5 * budget, static_cast<double>(filled.params.rate));

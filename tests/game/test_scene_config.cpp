@@ -2,6 +2,7 @@
 // that names the file, the key path and the value.
 #include "game/paths.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/sph_fluid.hpp"
 
 #include <gtest/gtest.h>
 
@@ -158,6 +159,23 @@ TEST(SceneConfig, SphFluidWarmStartKey) {
   EXPECT_TRUE(contains(game::applyOverride(scene, "sph_fluid.warm_start=2").error,
                        "--set sph_fluid.warm_start=2: expected true or false"));
   EXPECT_TRUE(scene.effect("sph_fluid")->boolean("warm_start"));  // a refused override changes nothing
+}
+
+// The key reaches the solver: sph_fluid's parameters and the SphWorld built from them.
+TEST(SceneConfig, SphFluidWarmStartReachesTheSolver) {
+  for (const bool on : {false, true}) {
+    SceneConfig scene;
+    const std::string text = std::string(R"({"effects": {"sph_fluid": {"max_particles": 50, "warm_start": )") +
+                             (on ? "true" : "false") + "}}}";
+    ASSERT_TRUE(game::parseSceneText(text, "w.json", scene).ok());
+    game::SphFluidParams params;
+    std::string error;
+    ASSERT_TRUE(game::sphParamsFrom(*scene.effect("sph_fluid"), params, error)) << error;
+    EXPECT_EQ(params.warm_start, on);
+    game::SphFluid fluid;
+    ASSERT_TRUE(game::initSphFluid(fluid, params, game::FountainGeometry{}, glm::vec3(0, -9.81f, 0), error)) << error;
+    EXPECT_EQ(fluid.world.params.warm_start, on);
+  }
 }
 
 TEST(SceneConfig, FilesLoadAndMissingOnesAreNamed) {
