@@ -5,8 +5,8 @@
 // point of the triangle), cube texels by the ray through the texel centre; double precision, triangles in index order,
 // strict compare: the result is deterministic and independent of the thread count.
 #include "fluid/collide/collide.hpp"
+#include "fluid/core/parallel.hpp"
 
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
@@ -120,7 +120,7 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
   if (want_greater) greater.reset(texels, -std::numeric_limits<double>::infinity());
   const double h = 0.5 / n;  // half a texel in map coordinates
   const int band = 8;
-  tbb::parallel_for(0, (n + band - 1) / band, [&](int b) {
+  auto raster_band = [&](int b) {
     const int row0 = b * band, row1 = std::min(n - 1, row0 + band - 1);
     for (std::size_t tri = 0; tri < tris; ++tri) {
       const TexelBox& box = boxes[tri];
@@ -181,6 +181,9 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
         }
       }
     }
+  };
+  par::parallel_for(par::Range<int>(0, (n + band - 1) / band, 1), [&](const par::Range<int>& r) {
+    for (int b = r.begin(); b != r.end(); ++b) raster_band(b);
   });
 }
 
@@ -228,7 +231,7 @@ void rasterCube(const MeshView& mesh, const std::vector<char>& skip, const glm::
   }
   const int band = 8;
   const int bands = (n + band - 1) / band;
-  tbb::parallel_for(0, kFaces * bands, [&](int job) {
+  auto raster_job = [&](int job) {
     const int f = job / bands;
     const int row0 = (job % bands) * band, row1 = std::min(n - 1, row0 + band - 1);
     const FaceBasis& fb = kFaceBasis[f];
@@ -266,6 +269,9 @@ void rasterCube(const MeshView& mesh, const std::vector<char>& skip, const glm::
         }
       }
     }
+  };
+  par::parallel_for(par::Range<int>(0, kFaces * bands, 1), [&](const par::Range<int>& r) {
+    for (int job = r.begin(); job != r.end(); ++job) raster_job(job);
   });
 }
 

@@ -1,9 +1,8 @@
 // Depth-map collider queries: eq. (1) per ortho map, the §4.3 depth-cube distance, and rule (2)
 // of Kolb et al. 2004 §4.1 combining the votes. Encodings: see collide.hpp.
 #include "fluid/collide/collide.hpp"
+#include "fluid/core/parallel.hpp"
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
@@ -256,10 +255,9 @@ std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm:
   assert(points.size() == out.size());
   const std::size_t grain = std::max<std::size_t>(desc.grain, 1);
   auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), grain),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
-                      });
+    par::parallel_for(par::Range<std::size_t>(0, points.size(), grain), [&](const par::Range<std::size_t>& r) {
+      shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
+    });
   };
   if (desc.threads == 1 || points.size() <= grain) {
     shape.query(points, out);

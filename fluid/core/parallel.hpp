@@ -12,16 +12,17 @@
 // deterministic reduce (halve while size > grain, left half first) and join left with right, so
 // deterministic reductions give the same bits in TSan builds as in normal ones.
 //
-// Thread cap: both paths run a loop's body on at most min(N, cores) threads at once, N being
+// Thread cap: both paths run a loop's body on at most min(N, slots) threads at once, N being
 // oneTBB's max_allowed_parallelism (the smallest live tbb::global_control, as `fluiddemo
-// simulate --threads N` and the thread-count tests set it; default: the number of cores). oneTBB
+// simulate --threads N` and the thread-count tests set it; default: the number of cores) and
+// slots the caller's task arena's (the core count unless inside a tbb::task_arena). oneTBB
 // does that itself; the TSan path reads the same two values and also stops at
 // detail::kMaxThreads.
 #include <tbb/blocked_range.h>
 
 #if defined(__SANITIZE_THREAD__)
 #include <tbb/global_control.h>
-#include <tbb/info.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cstddef>
@@ -42,13 +43,14 @@ namespace detail {
 // threads, which is slow under TSan, and four already exercise every hand-over.
 constexpr std::size_t kMaxThreads = 4;
 
-// Threads a loop may use, as oneTBB's default arena would: its active max_allowed_parallelism,
-// at most the core count (the arena's slots), and here also at most kMaxThreads. Only reads
-// values inside libtbb; no oneTBB task or thread is involved.
+// Threads a loop may use, as oneTBB would run it: its active max_allowed_parallelism, at most
+// the slots of the caller's arena (the core count in the implicit arena, N inside a
+// tbb::task_arena(N).execute, as the depth-map bake and batch queries use), and here also at most
+// kMaxThreads. Only reads values inside libtbb; no oneTBB task or thread is involved.
 inline std::size_t threadBudget() {
   const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  const auto cores = static_cast<std::size_t>(std::max(1, tbb::info::default_concurrency()));
-  return std::clamp<std::size_t>(std::min(allowed, cores), 1, kMaxThreads);
+  const auto slots = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  return std::clamp<std::size_t>(std::min(allowed, slots), 1, kMaxThreads);
 }
 
 // `threads` is how many threads this subrange may occupy (this one included): a split hands the
