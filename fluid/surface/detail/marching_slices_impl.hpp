@@ -429,6 +429,7 @@ struct ExtractorState {
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
+  bool firstInPlace = false;  // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
 };
 
 inline SweepFrame chooseFrame(const SurfaceParams& p) {
@@ -552,6 +553,23 @@ inline bool appendBlocks(const ExtractorState& st, const Setup& su) {
   return st.arena->max_concurrency() == 1 && st.blocks.size() > 1 && !su.exact;
 }
 
+// Whether runBlocks lets the first block in emission order write into the mesh's own arrays
+// (several workers, or a single block; method 1 only). One worker with several blocks either
+// appends (appendBlocks) or, with exact slab order, is gathered by appending block by block.
+inline bool firstBlockInPlace(const ExtractorState& st) {
+  return st.method == 1 && !st.blocks.empty() && (st.arena->max_concurrency() > 1 || st.blocks.size() == 1);
+}
+
+// Exchanges a block output's arrays with the mesh's (vertex data and indices; not the slab runs,
+// which a block keeps with block-local index positions).
+inline void swapMeshArrays(BlockOut& o, SurfaceMesh& out) {
+  o.positions.swap(out.positions);
+  o.normals.swap(out.normals);
+  o.attributes.swap(out.attributes);
+  o.keys.swap(out.edgeKeys);
+  o.indices.swap(out.indices);
+}
+
 // `out`: the mesh, whose arrays the blocks append to directly when appendBlocks() (swapped into
 // ExtractorState::shared for the run and back after it; extractImpl then copies nothing).
 template <class Policy>
@@ -596,6 +614,11 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     swapArrays();
     return;
   }
+  // Several workers (or one block): the first block in emission order writes into the mesh's own
+  // arrays (its vertex ids and index positions start at 0 there too), so extractImpl neither
+  // copies nor zero-fills its part; the other blocks are copied in after it (firstInPlace).
+  st.firstInPlace = firstBlockInPlace(st);
+  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);
   runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
     const BlockDesc& b = st.blocks[i];
     runMesher(w, su, policy, st.outs[i], false, b,
@@ -764,20 +787,25 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     st.arena = std::make_unique<tbb::task_arena>(threads);
     st.arenaThreads = threads;
   }
+  st.firstInPlace = false;
   if (st.method == 2)
     runFollow(st, su);
   else
     runBlocks(st, su, policy, st.workersFor<Policy>(), out);
+  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);  // block 0's vertices and indices, at base 0
 
   // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
   // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
   // zero-fill of resize()). When the blocks appended to the mesh's arrays themselves
-  // (appendBlocks), only the block ranges are left to fill in.
+  // (appendBlocks), only the block ranges are left to fill in; when the first block wrote into
+  // them (firstInPlace), only the later blocks are copied.
   const std::size_t nb = st.blocks.size();
   const bool appended = st.method != 2 && appendBlocks(st, su);
-  auto counts = [&](const BlockOut& o, std::uint64_t c[3]) {
-    c[0] = appended ? o.vertexCount : o.positions.size();
-    c[1] = appended ? o.indexCount : o.indices.size();
+  auto counts = [&](std::size_t i, std::uint64_t c[3]) {
+    const BlockOut& o = st.outs[i];
+    const bool inMesh = i == 0 && st.firstInPlace;
+    c[0] = appended ? o.vertexCount : inMesh ? out.positions.size() : o.positions.size();
+    c[1] = appended ? o.indexCount : inMesh ? out.indices.size() : o.indices.size();
     c[2] = appended ? o.runCount : o.runs.size();
   };
   st.vertexBase.resize(nb + 1);
@@ -788,7 +816,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   for (std::size_t i = 0; i < nb; ++i) {
     const BlockOut& o = st.outs[i];
     std::uint64_t c[3];
-    counts(o, c);
+    counts(i, c);
     if (std::uint64_t(st.vertexBase[i]) + c[0] > 0xffffffffull ||
         std::uint64_t(st.indexBase[i]) + c[1] > 0xffffffffull) {
       out.clear();
@@ -808,8 +836,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
   const bool user = Policy::kHasUser && st.method == 1;
   // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block;
-  // 3: the blocks wrote into the mesh's arrays (appendBlocks).
-  const int gather = appended ? 3 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
+  // 3: the blocks wrote into the mesh's arrays (appendBlocks); 4: block 0 wrote into them
+  // (firstInPlace), the others are copied in after it as in 0.
+  const int gather = appended ? 3 : st.firstInPlace ? 4 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
   if (gather == 1) {
     BlockOut& o = st.outs[0];
     out.positions.swap(o.positions);
@@ -832,7 +861,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       const std::size_t count = o.indices.size();
       for (std::size_t k = 0; k < count; ++k) dst[k] += vb;
     }
-  } else if (gather == 0) {
+  } else if (gather == 0 || gather == 4) {  // (4: block 0's part is kept, only the rest is zero-filled)
     out.positions.resize(st.vertexBase[nb]);
     out.normals.resize(st.vertexBase[nb]);
     out.edgeKeys.resize(st.vertexBase[nb]);
@@ -844,7 +873,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   parallelItems(*st.arena, nb, [&](int, std::size_t i) {
     const BlockOut& o = st.outs[i];
     const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
-    if (gather == 0) {
+    if (gather == 0 || (gather == 4 && i > 0)) {
       std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
       std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
       std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
