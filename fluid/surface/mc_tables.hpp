@@ -33,6 +33,9 @@ struct CaseTable {
   // vertices in the same order as walking `edges`), and each triangle corner as an index into it.
   std::uint8_t edgeCount = 0;
   std::array<std::uint8_t, 12> firstUse{};
+  // The same edges as kEdgeBase[e] | kEdgeAxis[e] << 3 (what the vertex routine needs, without
+  // two table lookups per edge).
+  std::array<std::uint8_t, 12> firstCorner{};
   std::array<std::uint8_t, 36> slot{};
 };
 

@@ -78,6 +78,7 @@ class BlockMesher {
   std::int64_t g0_[3] = {0, 0, 0};
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
+  int activeLo_ = std::numeric_limits<int>::max(), activeHi_ = -1;  // lowest, highest active slice z
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
   const bool append_;
@@ -701,9 +702,11 @@ class BlockMesher {
     const int lo = z - offsetRange_, hi = z + offsetRange_;  // offsetRange_ = m + 2
     const CacheParticle* first =
         std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < lo; });
+    const CacheParticle* last =
+        std::partition_point(first, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) <= hi; });
     const float* offZ = w_.offsets.data() + offsetRange_ + z;
     SliceDz* out = slice.dz.data();
-    for (const CacheParticle* p = first; p != parts + n && -int(p->na[2]) <= hi; ++p) {
+    for (const CacheParticle* p = first; p != last; ++p) {
       const float dz = offZ[p->na[2]] - p->rest[2];
       out[p - parts] = {dz, dz * dz};
     }
@@ -714,6 +717,8 @@ class BlockMesher {
       w_.active[z] = w_.acquireSlice();
       fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
+      activeLo_ = std::min(activeLo_, z);
+      activeHi_ = std::max(activeHi_, z);
       out_.stats.maxActiveSlices = std::max<std::uint32_t>(out_.stats.maxActiveSlices, activeSlices_);
     }
     return w_.active[z];
@@ -726,11 +731,18 @@ class BlockMesher {
     w_.releaseSlice(w_.active[z]);
     w_.active[z] = nullptr;
     --activeSlices_;
+    if (activeSlices_ == 0) {
+      activeLo_ = std::numeric_limits<int>::max();
+      activeHi_ = -1;
+      return;
+    }
+    while (!w_.active[activeLo_]) ++activeLo_;  // (some slice in [lo, hi] is still active)
+    while (!w_.active[activeHi_]) --activeHi_;
   }
   void notePeak(int z) {
     // Active slices are z, z+1 and any abandoned below after a reversal; count all of them.
     std::uint64_t bytes = 0;
-    for (int i = 0; i <= nz_; ++i)
+    for (int i = activeLo_; i <= activeHi_; ++i)  // (every active slice lies in that range)
       if (w_.active[i])
         bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
                  w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
@@ -946,8 +958,9 @@ class BlockMesher {
     lowestTodo_ = std::numeric_limits<int>::max();
   }
 
-  std::uint32_t vertexOn(Corner<Policy>* cp[8], int edge, int x, int y, int z) {
-    const int base = mc::kEdgeBase[edge], axis = mc::kEdgeAxis[edge];
+  // `baseAxis`: the edge's base corner | axis << 3 (mc::CaseTable::firstCorner).
+  std::uint32_t vertexOn(Corner<Policy>* cp[8], unsigned baseAxis, int x, int y, int z) {
+    const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
     Corner<Policy>& ca = *cp[base];
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
@@ -972,7 +985,7 @@ class BlockMesher {
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
     std::uint32_t vid[12];
     const int ne = cs.edgeCount;
-    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstUse[u], x, y, z);
+    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstCorner[u], x, y, z);
     const int nt = cs.triangleCount;
     // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
     // cube); nIndices_ is its used length, and march() trims it to that at the end.
