@@ -798,7 +798,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
   // zero-fill of resize()). When the blocks appended to the mesh's arrays themselves
   // (appendBlocks), only the block ranges are left to fill in; when the first block wrote into
-  // them (firstInPlace), only the later blocks are copied.
+  // them (firstInPlace), only the later blocks are appended.
   const std::size_t nb = st.blocks.size();
   const bool appended = st.method != 2 && appendBlocks(st, su);
   auto counts = [&](std::size_t i, std::uint64_t c[3]) {
@@ -837,7 +837,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   const bool user = Policy::kHasUser && st.method == 1;
   // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block;
   // 3: the blocks wrote into the mesh's arrays (appendBlocks); 4: block 0 wrote into them
-  // (firstInPlace), the others are copied in after it as in 0.
+  // (firstInPlace), the others are appended after it as in 2.
   const int gather = appended ? 3 : st.firstInPlace ? 4 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
   if (gather == 1) {
     BlockOut& o = st.outs[0];
@@ -846,8 +846,10 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     out.edgeKeys.swap(o.keys);
     if (user) out.attributes.swap(o.attributes);
     out.indices.swap(o.indices);  // vertex base 0: no rebasing
-  } else if (gather == 2) {
-    for (std::size_t i = 0; i < nb; ++i) {
+  } else if (gather == 2 || gather == 4) {
+    // Appended in turn (4: after block 0, which is in place): insert copies without the zero-fill
+    // a resize would do first, and with block 0 in place there is little left to share out.
+    for (std::size_t i = gather == 4 ? 1 : 0; i < nb; ++i) {
       const BlockOut& o = st.outs[i];
       out.positions.insert(out.positions.end(), o.positions.begin(), o.positions.end());
       out.normals.insert(out.normals.end(), o.normals.begin(), o.normals.end());
@@ -861,7 +863,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       const std::size_t count = o.indices.size();
       for (std::size_t k = 0; k < count; ++k) dst[k] += vb;
     }
-  } else if (gather == 0 || gather == 4) {  // (4: block 0's part is kept, only the rest is zero-filled)
+  } else if (gather == 0) {
     out.positions.resize(st.vertexBase[nb]);
     out.normals.resize(st.vertexBase[nb]);
     out.edgeKeys.resize(st.vertexBase[nb]);
@@ -873,7 +875,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   parallelItems(*st.arena, nb, [&](int, std::size_t i) {
     const BlockOut& o = st.outs[i];
     const std::uint32_t vb = st.vertexBase[i], ib = st.indexBase[i], rb = st.runBase[i];
-    if (gather == 0 || (gather == 4 && i > 0)) {
+    if (gather == 0) {
       std::copy(o.positions.begin(), o.positions.end(), out.positions.begin() + vb);
       std::copy(o.normals.begin(), o.normals.end(), out.normals.begin() + vb);
       std::copy(o.keys.begin(), o.keys.end(), out.edgeKeys.begin() + vb);
