@@ -417,7 +417,7 @@ class BlockMesher {
 #if defined(FLUID_SURFACE_AVX2_FILL)
   // fillDisc's twin for CPUs with AVX2 (Setup::avx2): four columns of a row at once, the same
   // double operations lane by lane as the SSE2 path and fillColumn (no FMA contraction: the
-  // target is avx2 alone), so every element gets the same bits; a group with a column that needs
+  // targets add no FMA), so every element gets the same bits; a group with a column that needs
   // the scalar path sends each of its columns there, as the SSE2 path does for a pair.
   // Reads cx[x .. x + 3] (Worker::cx is padded by 3); lanes past the row's last column are
   // computed but neither stored nor counted (their running max and cursor are rewritten unchanged:

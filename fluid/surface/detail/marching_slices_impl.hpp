@@ -299,7 +299,10 @@ struct Worker {
 // Whether the particle-cache fill takes its AVX2 path (Setup::avx2).
 inline bool detectFillAvx2(const SurfaceParams& params) {
 #if defined(FLUID_SURFACE_AVX2_FILL)
-  return !params.portableKernels && __builtin_cpu_supports("avx2");
+  // The AVX2 mesher copy is also compiled with BMI1/BMI2/POPCNT (non-destructive shifts and bit
+  // operations; integer only, so the same results), which every AVX2 CPU so far also has.
+  return !params.portableKernels && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
+         __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt");
 #else
   (void)params;
   return false;
@@ -369,15 +372,15 @@ inline void buildRuns(BlockOut& out) {
 // ---------------------------------------------------------------------------------------------
 // The per-block algorithm, BlockMesher<Policy> (block_mesher.inl). A second copy in namespace
 // avx2 is compiled for AVX2 (VEX three-operand encoding, 4-wide doubles in the cache fill) and
-// chosen at run time (Setup::avx2, see runMesher). No FMA: the target is avx2 alone, so every
-// float and double operation is the same as in the portable copy and so are the results (a test
-// compares both meshes bit for bit).
+// chosen at run time (Setup::avx2, see runMesher). No FMA: the target is avx2 plus the integer
+// BMI1/BMI2/POPCNT extensions, so every float and double operation is the same as in the portable
+// copy and so are the results (a test compares both meshes bit for bit).
 #include "fluid/surface/detail/block_mesher.inl"
 #if defined(FLUID_SURFACE_AVX2_FILL) && defined(__GNUC__) && !defined(__clang__)
 #define FLUID_SURFACE_AVX2_MESHER 1
 namespace avx2 {
 #pragma GCC push_options
-#pragma GCC target("avx2")
+#pragma GCC target("avx2,bmi,bmi2,popcnt")
 #include "fluid/surface/detail/block_mesher.inl"
 #pragma GCC pop_options
 }  // namespace avx2
