@@ -38,6 +38,8 @@ class BlockMesher {
     buildParticleCache(particles);
     seed(particles);
     march();
+    out_.stats.particlesLookedUp += looked_;
+    looked_ = 0;
     if (su_.exact) {  // otherwise polygonize() built the runs as it went
       sortBySlab();
       buildRuns(out_);
@@ -78,6 +80,9 @@ class BlockMesher {
   std::int64_t g0_[3] = {0, 0, 0};
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
+  // Particle contributions summed (SurfaceStats::particlesLookedUp), kept here rather than in
+  // out_.stats, which the compiler must reload through out_ after every call that may write it.
+  std::uint64_t looked_ = 0;
   int activeLo_ = std::numeric_limits<int>::max(), activeHi_ = -1;  // lowest, highest active slice z
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
@@ -588,7 +593,7 @@ class BlockMesher {
         return false;
       });
     }
-    out_.stats.particlesLookedUp += looked;
+    looked_ += looked;
     c.value = v;
     c.g[0] = gx;
     c.g[1] = gy;
@@ -822,7 +827,7 @@ class BlockMesher {
         }
       }
     }
-    out_.stats.particlesLookedUp += looked;
+    looked_ += looked;
     Corner<Policy> c;
     c.user = {};
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
@@ -864,6 +869,7 @@ class BlockMesher {
     const auto& table = mc::tables().cases[su_.octant];
     const int ia = su_.m, ibx = su_.m + su_.b[0], iby = su_.m + su_.b[1], ibz = su_.m + su_.b[2];
     int z = lowestTodo_;
+    std::uint64_t cubes = 0;  // cubes visited (a local: out_ is written through by the calls below)
     while (true) {
       while (z < nz_ && w_.todo[z].empty()) ++z;  // lowest slab with work
       if (z >= nz_) break;
@@ -887,7 +893,7 @@ class BlockMesher {
         if (cb.doneAbove || ca.doneBelow) continue;
         cb.doneAbove = 1;
         ca.doneBelow = 1;
-        ++out_.stats.cubesVisited;
+        ++cubes;
         // A cube of the block's interior (the ones polygonize() emits): all eight corners interior.
         const bool emit = interiorSlab && x >= ia && x < ibx && y >= ia && y < iby;
         std::uint32_t ci[8];
@@ -954,6 +960,7 @@ class BlockMesher {
       }
     }
     for (int i = 0; i <= nz_; ++i) freeSlice(i);
+    out_.stats.cubesVisited += cubes;
     out_.indices.resize(nIndices_);  // drop the unused tail of the last step (polygonize)
     lowestTodo_ = std::numeric_limits<int>::max();
   }
