@@ -36,7 +36,8 @@ struct CaseTable {
   // The same edges as kEdgeBase[e] | kEdgeAxis[e] << 3 (what the vertex routine needs, without
   // two table lookups per edge).
   std::array<std::uint8_t, 12> firstCorner{};
-  std::array<std::uint8_t, 36> slot{};
+  // 4 zero bytes of padding after the 36 slots: the AVX2 polygonizer reads them in groups of 8.
+  std::array<std::uint8_t, 40> slot{};
 };
 
 struct Tables {

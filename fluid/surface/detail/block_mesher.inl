@@ -990,19 +990,46 @@ class BlockMesher {
   // case's triangles (the order walking the triangles would make them in), then the triangles
   // are written from those.
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    // Zeroed first, so that the permutes below never read an unset lane (ids past the case's edges
+    // are computed but never picked).
+    alignas(32) std::uint32_t vid[16];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(vid), _mm256_setzero_si256());
+    _mm256_store_si256(reinterpret_cast<__m256i*>(vid + 8), _mm256_setzero_si256());
+#else
     std::uint32_t vid[12];
+#endif
     const int ne = cs.edgeCount;
     for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstCorner[u], x, y, z);
     const int nt = cs.triangleCount;
     // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
-    // cube); nIndices_ is its used length, and march() trims it to that at the end.
+    // cube); nIndices_ is its used length, and march() trims it to that at the end. 40 = 3 x the
+    // most triangles of one case (12), rounded up to the AVX2 path's groups of 8.
     const std::size_t first = nIndices_;
-    if (out_.indices.size() < first + 36) [[unlikely]]
-      out_.indices.resize(first + 256 + 36);  // 36 = 3 x the most triangles of one case (12)
+    if (out_.indices.size() < first + 40) [[unlikely]]
+      out_.indices.resize(first + 256 + 40);
     nIndices_ = first + 3 * std::size_t(nt);
     std::uint32_t* dst = out_.indices.data() + first;
-    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
     const std::uint8_t* slot = cs.slot.data();
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    if (!su_.flip) {
+      // The AVX2 copy: eight triangle corners at a time pick their vertex ids from vid with two
+      // 8-lane permutes (slot < 8: the low half, else the high half), the same ids as the loop
+      // below. A group may run past the case's 3 nt slots (into the table's padding and the
+      // index storage's slack); what it writes there is overwritten or trimmed.
+      const __m256i lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(vid));
+      const __m256i hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(vid + 8));
+      for (int i = 0; i < 3 * nt; i += 8) {
+        const __m256i idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(slot + i)));
+        const __m256 a = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, idx));
+        const __m256 h = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, idx));
+        const __m256 pick = _mm256_castsi256_ps(_mm256_slli_epi32(idx, 28));  // bit 3 -> sign
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + i), _mm256_castps_si256(_mm256_blendv_ps(a, h, pick)));
+      }
+      return;
+    }
+#endif
+    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
     for (int tri = 0; tri < nt; ++tri, slot += 3, dst += 3) {
       dst[0] = vid[slot[0]];
       dst[1] = vid[slot[b]];

@@ -381,7 +381,9 @@ inline void buildRuns(BlockOut& out) {
 namespace avx2 {
 #pragma GCC push_options
 #pragma GCC target("avx2,bmi,bmi2,popcnt")
+#define FLUID_SURFACE_IN_AVX2_COPY 1  // (the target pragma does not define __AVX2__)
 #include "fluid/surface/detail/block_mesher.inl"
+#undef FLUID_SURFACE_IN_AVX2_COPY
 #pragma GCC pop_options
 }  // namespace avx2
 #endif
