@@ -50,7 +50,7 @@ class BlockMesher {
     out_.stats.triangles = out_.indexCount / 3;
     out_.stats.vertices = out_.vertexCount;
     out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
-                         std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
+                         std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
                          std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
                          std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
@@ -194,7 +194,9 @@ class BlockMesher {
     std::copy(start, start + cols, cursor);
     // Running max_z per column while filling: reachMax of each element as it is written.
     std::fill(w_.runMax.begin(), w_.runMax.end(), std::int16_t(-32000));
-    w_.entries.resize(start[cols]);
+    // Grown, never shrunk: a block with fewer elements than the last one uses a prefix (no
+    // zero-fill of the part that a larger block's build then overwrites anyway).
+    if (w_.entries.size() < start[cols]) w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
     const int zmax = nz_ - 1;
@@ -965,6 +967,41 @@ class BlockMesher {
     lowestTodo_ = std::numeric_limits<int>::max();
   }
 
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+  // makeVertexAt (marching_slices_impl.hpp) for the plain frame, in vector registers: a corner's
+  // value and gradient are one 4-float load, the interpolation, squares and normal run lane by
+  // lane, and the position is one 4-double add, blend and convert. The same float and double
+  // operations in the same order as makeVertexAt (no FMA), so the same bits; a flat gradient
+  // (rare) takes makeVertexAt itself.
+  VertexOut makeVertexPlainAvx2(const Corner<Policy>& ca, const Corner<Policy>& cb, unsigned axis,
+                                double local[3]) const {
+    static_assert(offsetof(Corner<Policy>, g) == sizeof(float));
+    const float va = ca.value, vb = cb.value;
+    const double tt = (double(su_.threshold) - double(va)) / (double(vb) - double(va));
+    const float tf = float(tt);
+    const __m128 a = _mm_loadu_ps(&ca.value), b = _mm_loadu_ps(&cb.value);  // value, g[0..2]
+    const __m128 g = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(tf), _mm_sub_ps(b, a)));  // lanes 1-3
+    const __m128 sq = _mm_mul_ps(g, g);
+    const float len2 = (_mm_cvtss_f32(_mm_movehdup_ps(sq)) + _mm_cvtss_f32(_mm_unpackhi_ps(sq, sq))) +
+                       _mm_cvtss_f32(_mm_shuffle_ps(sq, sq, 3));  // (g0 g0 + g1 g1) + g2 g2
+    if (!(len2 > 1e-30f && std::isfinite(len2))) [[unlikely]]
+      return makeVertexAt(su_, local, int(axis), va, ca.g, vb, cb.g);
+    const float inv = -1.0f / _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(len2)));
+    const __m128 n = _mm_mul_ps(g, _mm_set1_ps(inv));
+    // local[axis] += tt S, then float(local - origin) per axis.
+    const __m256d l = _mm256_setr_pd(local[0], local[1], local[2], 0.0);
+    const __m256d on = _mm256_castsi256_pd(
+        _mm256_cmpeq_epi64(_mm256_set1_epi64x(std::int64_t(axis)), _mm256_setr_epi64x(0, 1, 2, 3)));
+    const __m256d moved = _mm256_blendv_pd(l, _mm256_add_pd(l, _mm256_set1_pd(tt * su_.s)), on);
+    const __m128 pos = _mm256_cvtpd_ps(
+        _mm256_sub_pd(moved, _mm256_setr_pd(su_.origin[0], su_.origin[1], su_.origin[2], 0.0)));
+    alignas(16) float pf[4], nf[4];
+    _mm_store_ps(pf, pos);
+    _mm_store_ps(nf, n);
+    return {glm::vec3(pf[0], pf[1], pf[2]), glm::vec3(nf[1], nf[2], nf[3])};
+  }
+#endif
+
   // `baseAxis`: the edge's base corner | axis << 3 (mc::CaseTable::firstCorner).
   std::uint32_t vertexOn(Corner<Policy>* cp[8], unsigned baseAxis, int x, int y, int z) {
     const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
@@ -973,7 +1010,12 @@ class BlockMesher {
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
     const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
     double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(g0 + l) * S, see begin()
-    const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    const VertexOut v = su_.plainFrame ? makeVertexPlainAvx2(ca, cb, axis, local)
+                                       : makeVertexAt(su_, local, int(axis), ca.value, ca.g, cb.value, cb.g);
+#else
+    const VertexOut v = makeVertexAt(su_, local, int(axis), ca.value, ca.g, cb.value, cb.g);
+#endif
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
     if constexpr (Policy::kHasUser) {
