@@ -833,8 +833,7 @@ class BlockMesher {
     Corner<Policy> c;
     c.user = {};
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
-    c.x = std::int16_t(x);
-    c.y = std::int16_t(y);
+    c.cell = std::uint32_t(col(x, y));
     auto store = [&c](Slice<Policy>& slice, SliceCell& cell, float v, float gx, float gy, float gz) {
       c.value = v;
       c.g[0] = gx;
@@ -858,8 +857,7 @@ class BlockMesher {
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
-    c.x = std::int16_t(x);
-    c.y = std::int16_t(y);
+    c.cell = std::uint32_t(col(x, y));
     slice.corners.push_back(c);
     cell.corner = std::uint32_t(slice.corners.size());
     return cell.corner;

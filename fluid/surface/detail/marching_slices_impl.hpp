@@ -136,7 +136,7 @@ struct Corner {
   float value;
   float g[3];             // field gradient (normals are -g)
   std::uint32_t vert[3];  // Ix, Iy, Iz: vertex index + 1 on the edge to +x, +y, +z (0 = none)
-  std::int16_t x, y;      // for clearing the index array when the slice is returned (§4)
+  std::uint32_t cell;     // y (Nx + 1) + x: for clearing the index array when the slice is returned (§4)
   [[no_unique_address]] typename Policy::CornerData user;
 };
 
@@ -290,7 +290,7 @@ struct Worker {
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
   void releaseSlice(Slice<Policy>* s) {
-    for (const Corner<Policy>& c : s->corners) s->cells[std::size_t(c.y) * std::size_t(nx + 1) + c.x] = SliceCell{};
+    for (const Corner<Policy>& c : s->corners) s->cells[c.cell] = SliceCell{};
     s->corners.clear();
     freeSlices.push_back(s);
   }
