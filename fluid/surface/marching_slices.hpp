@@ -66,8 +66,9 @@ struct SurfaceParams {
   // Output positions are written as float(p - origin); put it near the particles when they sit
   // far from zero (e.g. 1e5) so float vertices keep their precision. Double precision inside.
   double originX = 0.0, originY = 0.0, originZ = 0.0;
-  // Testing aid: build the particle cache with the portable (SSE2) code even where the CPU has
-  // AVX2. Both paths give the same bits (a test checks it); the AVX2 one does fewer instructions.
+  // Testing aid: run the portable (SSE2) copy of the block mesher even where the CPU has AVX2
+  // (with BMI1/BMI2/POPCNT): particle-cache fill, triangle index writes and vertex interpolation.
+  // Both copies give the same bits (a test checks it); the AVX2 one does fewer instructions.
   bool portableKernels = false;
 };
 

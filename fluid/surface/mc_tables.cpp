@@ -170,6 +170,7 @@ Tables buildTables() {
         const int e = t.edges[i];
         if (local[e] < 0) {
           local[e] = t.edgeCount;
+          t.firstCorner[t.edgeCount] = std::uint8_t(kEdgeBase[e] | (kEdgeAxis[e] << 3));
           t.firstUse[t.edgeCount++] = std::uint8_t(e);
         }
         t.slot[i] = std::uint8_t(local[e]);

@@ -33,7 +33,11 @@ struct CaseTable {
   // vertices in the same order as walking `edges`), and each triangle corner as an index into it.
   std::uint8_t edgeCount = 0;
   std::array<std::uint8_t, 12> firstUse{};
-  std::array<std::uint8_t, 36> slot{};
+  // The same edges as kEdgeBase[e] | kEdgeAxis[e] << 3 (what the vertex routine needs, without
+  // two table lookups per edge).
+  std::array<std::uint8_t, 12> firstCorner{};
+  // 4 zero bytes of padding after the 36 slots: the AVX2 polygonizer reads them in groups of 8.
+  std::array<std::uint8_t, 40> slot{};
 };
 
 struct Tables {

@@ -14,6 +14,10 @@
 // clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
 // bench_surface runs (1 thread). SURFACE_COUNT_PORTABLE=1 sets SurfaceParams::portableKernels
 // (the SSE2 particle-cache fill even where the CPU has AVX2), to compare the two paths.
+// SURFACE_COUNT_SCALING=N times N interleaved rounds of approach 1 on 1 thread and on
+// SURFACE_COUNT_THREADS (default 2) threads, wall clock, each timed extraction right after an
+// untimed one with the same extractor (as bench_surface's thread-scaling table), and prints both
+// medians and their ratio: a quick check of the two-thread bar between full bench_surface runs.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -23,6 +27,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -102,6 +107,33 @@ int main(int argc, char** argv) {
     const double m1 = t1[t1.size() / 2], m3 = t3[t3.size() / 2];
     std::printf("cpu ms median of %d: a1 %.3f a3 %.3f a3/a1 %.2f (a3 triangles %zu)\n", rounds, m1, m3, m3 / m1,
                 other.indices.size() / 3);
+  }
+  if (const char* sc = std::getenv("SURFACE_COUNT_SCALING")) {
+    const int rounds = std::max(1, std::atoi(sc));
+    fluid::SurfaceParams p1 = params, pn = params;
+    p1.threads = 1;
+    pn.threads = params.threads > 1 ? params.threads : 2;
+    fluid::SurfaceExtractor e1, en;
+    fluid::SurfaceMesh m1, mn;
+    auto wallMs = [&](fluid::SurfaceExtractor& e, const fluid::SurfaceParams& p, fluid::SurfaceMesh& m) {
+      (void)e.extract(in, p, m);  // untimed: steady state, as when a game meshes every frame
+      const auto t0 = std::chrono::steady_clock::now();
+      (void)e.extract(in, p, m);
+      return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    };
+    std::vector<double> t1, tn, ratio;
+    for (int r = 0; r < rounds; ++r) {
+      t1.push_back(wallMs(e1, p1, m1));
+      tn.push_back(wallMs(en, pn, mn));
+      ratio.push_back(t1.back() / tn.back());
+    }
+    const bool same = m1.positions == mn.positions && m1.normals == mn.normals && m1.indices == mn.indices;
+    std::sort(t1.begin(), t1.end());
+    std::sort(tn.begin(), tn.end());
+    std::sort(ratio.begin(), ratio.end());
+    const double a = t1[t1.size() / 2], b = tn[tn.size() / 2];
+    std::printf("wall ms median of %d: 1 thr %.3f, %d thr %.3f, ratio of medians %.3f, median of per-round ratios %.3f%s\n",
+                rounds, a, pn.threads, b, a / b, ratio[ratio.size() / 2], same ? "" : " MESHES DIFFER");
   }
   return 0;
 }

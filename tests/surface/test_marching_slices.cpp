@@ -1,12 +1,15 @@
 // Marching slices against the dense oracle, watertightness, hard cases, determinism.
 #include "fluid/surface/baselines.hpp"
+#include "fluid/surface/detail/field.hpp"
 #include "fluid/surface/detail/testing.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "mesh_checks.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <tuple>
@@ -161,6 +164,48 @@ TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
 
 // The particle-cache fill has an AVX2 path (four columns at once) chosen at run time and a
 // portable SSE2 one; they must give the same cache, hence the same mesh bit for bit.
+TEST(MarchingSlices, ParticleOrderIsZThenIndexForRadixAndComparisonSorts) {
+  // prepareParticles orders by (z, input index): a radix sort of the z bits for 256 or more
+  // particles, a comparison sort below. Ties, -0 next to +0, negative z, and a rotated sweep
+  // frame (z = -y) must give exactly the (z, index) order in both.
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> pick(-40, 40);
+  for (std::size_t n : {std::size_t(37), std::size_t(255), std::size_t(256), std::size_t(3000)}) {
+    std::vector<float> x(n), y(n), z(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = 0.25f * float(pick(rng));
+      y[i] = i % 7 == 0 ? (i % 2 ? -0.0f : 0.0f) : 0.125f * float(pick(rng));  // many ties, signed zeros
+      z[i] = i % 5 == 0 ? (i % 2 ? -0.0f : 0.0f) : 0.5f * float(pick(rng)) + 1e-3f * float(i % 3);
+    }
+    for (int frame = 0; frame < 2; ++frame) {
+      fluid::detail::SweepFrame f;
+      if (frame) {  // sweep along -y: z' = -y
+        f.axis[0] = 2, f.axis[1] = 0, f.axis[2] = 1;
+        f.sign[2] = -1;
+      }
+      const std::vector<float>& w = frame ? y : z;
+      const double sign = frame ? -1.0 : 1.0;
+      std::vector<std::uint32_t> expect(n);
+      for (std::uint32_t i = 0; i < n; ++i) expect[i] = i;
+      std::sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const double za = sign * double(w[a]), zb = sign * double(w[b]);
+        return za < zb || (za == zb && a < b);
+      });
+      fluid::SurfaceParams params;
+      std::vector<fluid::detail::Particle> ps;
+      std::vector<fluid::detail::ParticleSortKey> scratch;
+      double rcMax = 0;
+      fluid::detail::prepareParticles(fluid::SurfaceInput{x, y, z, {}, {}, {}}, params, f, ps, rcMax, &scratch);
+      ASSERT_EQ(ps.size(), n);
+      for (std::size_t r = 0; r < n; ++r) {
+        ASSERT_EQ(ps[r].index, expect[r]) << "n " << n << " frame " << frame << " rank " << r;
+        const double zr = sign * double(w[expect[r]]);
+        ASSERT_EQ(std::memcmp(&ps[r].z, &zr, sizeof zr), 0) << "n " << n << " rank " << r;  // same bits
+      }
+    }
+  }
+}
+
 TEST(MarchingSlices, Avx2AndPortableCacheFillGiveTheSameMesh) {
   if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2: only the portable fill runs";
   const std::tuple<const char*, float> sets[] = {

@@ -38,6 +38,8 @@ class BlockMesher {
     buildParticleCache(particles);
     seed(particles);
     march();
+    out_.stats.particlesLookedUp += looked_;
+    looked_ = 0;
     if (su_.exact) {  // otherwise polygonize() built the runs as it went
       sortBySlab();
       buildRuns(out_);
@@ -48,7 +50,7 @@ class BlockMesher {
     out_.stats.triangles = out_.indexCount / 3;
     out_.stats.vertices = out_.vertexCount;
     out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
-                         std::uint64_t(w_.entries.size()) * sizeof(ColumnEntry) +
+                         std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
                          std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
                          std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
@@ -78,6 +80,10 @@ class BlockMesher {
   std::int64_t g0_[3] = {0, 0, 0};
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
+  // Particle contributions summed (SurfaceStats::particlesLookedUp), kept here rather than in
+  // out_.stats, which the compiler must reload through out_ after every call that may write it.
+  std::uint64_t looked_ = 0;
+  int activeLo_ = std::numeric_limits<int>::max(), activeHi_ = -1;  // lowest, highest active slice z
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
   const bool append_;
@@ -188,7 +194,9 @@ class BlockMesher {
     std::copy(start, start + cols, cursor);
     // Running max_z per column while filling: reachMax of each element as it is written.
     std::fill(w_.runMax.begin(), w_.runMax.end(), std::int16_t(-32000));
-    w_.entries.resize(start[cols]);
+    // Grown, never shrunk: a block with fewer elements than the last one uses a prefix (no
+    // zero-fill of the part that a larger block's build then overwrites anyway).
+    if (w_.entries.size() < start[cols]) w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
     ColumnEntry* entries = w_.entries.data();
     const int zmax = nz_ - 1;
@@ -416,7 +424,7 @@ class BlockMesher {
 #if defined(FLUID_SURFACE_AVX2_FILL)
   // fillDisc's twin for CPUs with AVX2 (Setup::avx2): four columns of a row at once, the same
   // double operations lane by lane as the SSE2 path and fillColumn (no FMA contraction: the
-  // target is avx2 alone), so every element gets the same bits; a group with a column that needs
+  // targets add no FMA), so every element gets the same bits; a group with a column that needs
   // the scalar path sends each of its columns there, as the SSE2 path does for a pair.
   // Reads cx[x .. x + 3] (Worker::cx is padded by 3); lanes past the row's last column are
   // computed but neither stored nor counted (their running max and cursor are rewritten unchanged:
@@ -587,7 +595,7 @@ class BlockMesher {
         return false;
       });
     }
-    out_.stats.particlesLookedUp += looked;
+    looked_ += looked;
     c.value = v;
     c.g[0] = gx;
     c.g[1] = gy;
@@ -701,9 +709,11 @@ class BlockMesher {
     const int lo = z - offsetRange_, hi = z + offsetRange_;  // offsetRange_ = m + 2
     const CacheParticle* first =
         std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < lo; });
+    const CacheParticle* last =
+        std::partition_point(first, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) <= hi; });
     const float* offZ = w_.offsets.data() + offsetRange_ + z;
     SliceDz* out = slice.dz.data();
-    for (const CacheParticle* p = first; p != parts + n && -int(p->na[2]) <= hi; ++p) {
+    for (const CacheParticle* p = first; p != last; ++p) {
       const float dz = offZ[p->na[2]] - p->rest[2];
       out[p - parts] = {dz, dz * dz};
     }
@@ -714,6 +724,8 @@ class BlockMesher {
       w_.active[z] = w_.acquireSlice();
       fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
+      activeLo_ = std::min(activeLo_, z);
+      activeHi_ = std::max(activeHi_, z);
       out_.stats.maxActiveSlices = std::max<std::uint32_t>(out_.stats.maxActiveSlices, activeSlices_);
     }
     return w_.active[z];
@@ -726,11 +738,18 @@ class BlockMesher {
     w_.releaseSlice(w_.active[z]);
     w_.active[z] = nullptr;
     --activeSlices_;
+    if (activeSlices_ == 0) {
+      activeLo_ = std::numeric_limits<int>::max();
+      activeHi_ = -1;
+      return;
+    }
+    while (!w_.active[activeLo_]) ++activeLo_;  // (some slice in [lo, hi] is still active)
+    while (!w_.active[activeHi_]) --activeHi_;
   }
   void notePeak(int z) {
     // Active slices are z, z+1 and any abandoned below after a reversal; count all of them.
     std::uint64_t bytes = 0;
-    for (int i = 0; i <= nz_; ++i)
+    for (int i = activeLo_; i <= activeHi_; ++i)  // (every active slice lies in that range)
       if (w_.active[i])
         bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
                  w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
@@ -810,12 +829,11 @@ class BlockMesher {
         }
       }
     }
-    out_.stats.particlesLookedUp += looked;
+    looked_ += looked;
     Corner<Policy> c;
     c.user = {};
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
-    c.x = std::int16_t(x);
-    c.y = std::int16_t(y);
+    c.cell = std::uint32_t(col(x, y));
     auto store = [&c](Slice<Policy>& slice, SliceCell& cell, float v, float gx, float gy, float gz) {
       c.value = v;
       c.g[0] = gx;
@@ -839,8 +857,7 @@ class BlockMesher {
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
-    c.x = std::int16_t(x);
-    c.y = std::int16_t(y);
+    c.cell = std::uint32_t(col(x, y));
     slice.corners.push_back(c);
     cell.corner = std::uint32_t(slice.corners.size());
     return cell.corner;
@@ -852,6 +869,7 @@ class BlockMesher {
     const auto& table = mc::tables().cases[su_.octant];
     const int ia = su_.m, ibx = su_.m + su_.b[0], iby = su_.m + su_.b[1], ibz = su_.m + su_.b[2];
     int z = lowestTodo_;
+    std::uint64_t cubes = 0;  // cubes visited (a local: out_ is written through by the calls below)
     while (true) {
       while (z < nz_ && w_.todo[z].empty()) ++z;  // lowest slab with work
       if (z >= nz_) break;
@@ -875,7 +893,7 @@ class BlockMesher {
         if (cb.doneAbove || ca.doneBelow) continue;
         cb.doneAbove = 1;
         ca.doneBelow = 1;
-        ++out_.stats.cubesVisited;
+        ++cubes;
         // A cube of the block's interior (the ones polygonize() emits): all eight corners interior.
         const bool emit = interiorSlab && x >= ia && x < ibx && y >= ia && y < iby;
         std::uint32_t ci[8];
@@ -942,18 +960,60 @@ class BlockMesher {
       }
     }
     for (int i = 0; i <= nz_; ++i) freeSlice(i);
+    out_.stats.cubesVisited += cubes;
     out_.indices.resize(nIndices_);  // drop the unused tail of the last step (polygonize)
     lowestTodo_ = std::numeric_limits<int>::max();
   }
 
-  std::uint32_t vertexOn(Corner<Policy>* cp[8], int edge, int x, int y, int z) {
-    const int base = mc::kEdgeBase[edge], axis = mc::kEdgeAxis[edge];
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+  // makeVertexAt (marching_slices_impl.hpp) for the plain frame, in vector registers: a corner's
+  // value and gradient are one 4-float load, the interpolation, squares and normal run lane by
+  // lane, and the position is one 4-double add, blend and convert. The same float and double
+  // operations in the same order as makeVertexAt (no FMA), so the same bits; a flat gradient
+  // (rare) takes makeVertexAt itself.
+  VertexOut makeVertexPlainAvx2(const Corner<Policy>& ca, const Corner<Policy>& cb, unsigned axis,
+                                double local[3]) const {
+    static_assert(offsetof(Corner<Policy>, g) == sizeof(float));
+    const float va = ca.value, vb = cb.value;
+    const double tt = (double(su_.threshold) - double(va)) / (double(vb) - double(va));
+    const float tf = float(tt);
+    const __m128 a = _mm_loadu_ps(&ca.value), b = _mm_loadu_ps(&cb.value);  // value, g[0..2]
+    const __m128 g = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(tf), _mm_sub_ps(b, a)));  // lanes 1-3
+    const __m128 sq = _mm_mul_ps(g, g);
+    const float len2 = (_mm_cvtss_f32(_mm_movehdup_ps(sq)) + _mm_cvtss_f32(_mm_unpackhi_ps(sq, sq))) +
+                       _mm_cvtss_f32(_mm_shuffle_ps(sq, sq, 3));  // (g0 g0 + g1 g1) + g2 g2
+    if (!(len2 > 1e-30f && std::isfinite(len2))) [[unlikely]]
+      return makeVertexAt(su_, local, int(axis), va, ca.g, vb, cb.g);
+    const float inv = -1.0f / _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(len2)));
+    const __m128 n = _mm_mul_ps(g, _mm_set1_ps(inv));
+    // local[axis] += tt S, then float(local - origin) per axis.
+    const __m256d l = _mm256_setr_pd(local[0], local[1], local[2], 0.0);
+    const __m256d on = _mm256_castsi256_pd(
+        _mm256_cmpeq_epi64(_mm256_set1_epi64x(std::int64_t(axis)), _mm256_setr_epi64x(0, 1, 2, 3)));
+    const __m256d moved = _mm256_blendv_pd(l, _mm256_add_pd(l, _mm256_set1_pd(tt * su_.s)), on);
+    const __m128 pos = _mm256_cvtpd_ps(
+        _mm256_sub_pd(moved, _mm256_setr_pd(su_.origin[0], su_.origin[1], su_.origin[2], 0.0)));
+    alignas(16) float pf[4], nf[4];
+    _mm_store_ps(pf, pos);
+    _mm_store_ps(nf, n);
+    return {glm::vec3(pf[0], pf[1], pf[2]), glm::vec3(nf[1], nf[2], nf[3])};
+  }
+#endif
+
+  // `baseAxis`: the edge's base corner | axis << 3 (mc::CaseTable::firstCorner).
+  std::uint32_t vertexOn(Corner<Policy>* cp[8], unsigned baseAxis, int x, int y, int z) {
+    const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
     Corner<Policy>& ca = *cp[base];
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
     const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
     double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(g0 + l) * S, see begin()
-    const VertexOut v = makeVertexAt(su_, local, axis, ca.value, ca.g, cb.value, cb.g);
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    const VertexOut v = su_.plainFrame ? makeVertexPlainAvx2(ca, cb, axis, local)
+                                       : makeVertexAt(su_, local, int(axis), ca.value, ca.g, cb.value, cb.g);
+#else
+    const VertexOut v = makeVertexAt(su_, local, int(axis), ca.value, ca.g, cb.value, cb.g);
+#endif
     out_.positions.push_back(v.position);
     out_.normals.push_back(v.normal);
     if constexpr (Policy::kHasUser) {
@@ -970,19 +1030,46 @@ class BlockMesher {
   // case's triangles (the order walking the triangles would make them in), then the triangles
   // are written from those.
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    // Zeroed first, so that the permutes below never read an unset lane (ids past the case's edges
+    // are computed but never picked).
+    alignas(32) std::uint32_t vid[16];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(vid), _mm256_setzero_si256());
+    _mm256_store_si256(reinterpret_cast<__m256i*>(vid + 8), _mm256_setzero_si256());
+#else
     std::uint32_t vid[12];
+#endif
     const int ne = cs.edgeCount;
-    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstUse[u], x, y, z);
+    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstCorner[u], x, y, z);
     const int nt = cs.triangleCount;
     // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
-    // cube); nIndices_ is its used length, and march() trims it to that at the end.
+    // cube); nIndices_ is its used length, and march() trims it to that at the end. 40 = 3 x the
+    // most triangles of one case (12), rounded up to the AVX2 path's groups of 8.
     const std::size_t first = nIndices_;
-    if (out_.indices.size() < first + 36) [[unlikely]]
-      out_.indices.resize(first + 256 + 36);  // 36 = 3 x the most triangles of one case (12)
+    if (out_.indices.size() < first + 40) [[unlikely]]
+      out_.indices.resize(first + 256 + 40);
     nIndices_ = first + 3 * std::size_t(nt);
     std::uint32_t* dst = out_.indices.data() + first;
-    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
     const std::uint8_t* slot = cs.slot.data();
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    if (!su_.flip) {
+      // The AVX2 copy: eight triangle corners at a time pick their vertex ids from vid with two
+      // 8-lane permutes (slot < 8: the low half, else the high half), the same ids as the loop
+      // below. A group may run past the case's 3 nt slots (into the table's padding and the
+      // index storage's slack); what it writes there is overwritten or trimmed.
+      const __m256i lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(vid));
+      const __m256i hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(vid + 8));
+      for (int i = 0; i < 3 * nt; i += 8) {
+        const __m256i idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(slot + i)));
+        const __m256 a = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, idx));
+        const __m256 h = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, idx));
+        const __m256 pick = _mm256_castsi256_ps(_mm256_slli_epi32(idx, 28));  // bit 3 -> sign
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + i), _mm256_castps_si256(_mm256_blendv_ps(a, h, pick)));
+      }
+      return;
+    }
+#endif
+    const int b = su_.flip ? 2 : 1, c = su_.flip ? 1 : 2;  // flipped winding: swap the last two
     for (int tri = 0; tri < nt; ++tri, slot += 3, dst += 3) {
       dst[0] = vid[slot[0]];
       dst[1] = vid[slot[b]];

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 
 namespace fluid::detail {
 
@@ -22,14 +23,46 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
   // Sort by (z, index): the summation order every method uses (see the header). The keys are
   // unique, so sorting 16-byte (z, index) keys and building the records in that order gives the
   // same order as sorting the 80-byte records, with far less data moved.
+  //
+  // A least-significant-digit radix sort (8-bit digits) of the z values' float bits mapped to
+  // unsigned integers in the order of the values (sign bit set: all bits flipped, else the sign
+  // bit set; -0 counts as +0, which compares equal to it). z is a float input value times +-1,
+  // so its float is exact and orders the keys as the doubles do. The passes start from index
+  // order and are stable, so equal z keep index order: the same order as sorting by (z, index).
+  // A digit on which all keys agree needs no pass. The caller's scratch holds both buffers (2n).
+  // Fewer than 256 keys are sorted by comparison instead (the same order).
   std::vector<ParticleSortKey> local;
-  std::vector<ParticleSortKey>& order = keys ? *keys : local;
-  order.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    order[i] = {frame.sign[2] * double(world[frame.axis[2]][i]), static_cast<std::uint32_t>(i)};
-  std::sort(order.begin(), order.end(), [](const ParticleSortKey& a, const ParticleSortKey& b) {
-    return a.z < b.z || (a.z == b.z && a.index < b.index);
-  });
+  std::vector<ParticleSortKey>& scratch = keys ? *keys : local;
+  scratch.resize(2 * n);
+  ParticleSortKey* order = scratch.data();
+  ParticleSortKey* other = scratch.data() + n;
+  std::uint32_t hist[4][256] = {};
+  for (std::size_t i = 0; i < n; ++i) {
+    const float zf = float(frame.sign[2]) * world[frame.axis[2]][i];
+    const float zc = zf == 0.0f ? 0.0f : zf;  // -0 -> +0
+    std::uint32_t bits;
+    std::memcpy(&bits, &zc, sizeof bits);
+    const std::uint32_t k = (bits >> 31) ? ~bits : (bits | 0x80000000u);
+    order[i] = {double(zf), static_cast<std::uint32_t>(i), k};
+    for (int d = 0; d < 4; ++d) ++hist[d][(k >> (8 * d)) & 0xff];
+  }
+  if (n < 256) {  // few keys: a comparison sort is cheaper than the radix passes' fixed cost
+    std::sort(order, order + n, [](const ParticleSortKey& a, const ParticleSortKey& b) {
+      return a.z < b.z || (a.z == b.z && a.index < b.index);
+    });
+  }
+  for (int d = 0; d < 4 && n >= 256; ++d) {
+    std::uint32_t* h = hist[d];
+    if (h[(order[0].key >> (8 * d)) & 0xff] == n) continue;  // one bucket: nothing to reorder
+    std::uint32_t sum = 0;
+    for (int b = 0; b < 256; ++b) {
+      const std::uint32_t c = h[b];
+      h[b] = sum;
+      sum += c;
+    }
+    for (std::size_t i = 0; i < n; ++i) other[h[(order[i].key >> (8 * d)) & 0xff]++] = order[i];
+    std::swap(order, other);
+  }
   out.resize(n);
   const double rc = params.rc;
   rcMax = 0.0;
@@ -47,7 +80,10 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
     p.index = static_cast<std::uint32_t>(i);
     const double pc[3] = {p.x, p.y, p.z};
     for (int a = 0; a < 3; ++a) {
-      p.anchor[a] = static_cast<std::int64_t>(std::floor(pc[a] / double(params.cube)));
+      // floor without a libm call (|pc / S| <= 4e5 after validateSurface: far inside int64).
+      const double q = pc[a] / double(params.cube);
+      const std::int64_t t = static_cast<std::int64_t>(q);
+      p.anchor[a] = t - (q < double(t));
       p.rest[a] = float(pc[a] - double(p.anchor[a]) * double(params.cube));
     }
     rcMax = std::max(rcMax, rci);

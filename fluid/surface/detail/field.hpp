@@ -89,6 +89,7 @@ struct SweepFrame {
 struct ParticleSortKey {
   double z;
   std::uint32_t index;
+  std::uint32_t key;  // radix key of z (prepareParticles)
 };
 
 // Prepares particles in sweep-frame coordinates, sorted by (z, index). Fills rcMax with the

@@ -136,7 +136,7 @@ struct Corner {
   float value;
   float g[3];             // field gradient (normals are -g)
   std::uint32_t vert[3];  // Ix, Iy, Iz: vertex index + 1 on the edge to +x, +y, +z (0 = none)
-  std::int16_t x, y;      // for clearing the index array when the slice is returned (§4)
+  std::uint32_t cell;     // y (Nx + 1) + x: for clearing the index array when the slice is returned (§4)
   [[no_unique_address]] typename Policy::CornerData user;
 };
 
@@ -290,7 +290,7 @@ struct Worker {
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
   void releaseSlice(Slice<Policy>* s) {
-    for (const Corner<Policy>& c : s->corners) s->cells[std::size_t(c.y) * std::size_t(nx + 1) + c.x] = SliceCell{};
+    for (const Corner<Policy>& c : s->corners) s->cells[c.cell] = SliceCell{};
     s->corners.clear();
     freeSlices.push_back(s);
   }
@@ -299,7 +299,10 @@ struct Worker {
 // Whether the particle-cache fill takes its AVX2 path (Setup::avx2).
 inline bool detectFillAvx2(const SurfaceParams& params) {
 #if defined(FLUID_SURFACE_AVX2_FILL)
-  return !params.portableKernels && __builtin_cpu_supports("avx2");
+  // The AVX2 mesher copy is also compiled with BMI1/BMI2/POPCNT (non-destructive shifts and bit
+  // operations; integer only, so the same results), which every AVX2 CPU so far also has.
+  return !params.portableKernels && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
+         __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt");
 #else
   (void)params;
   return false;
@@ -369,16 +372,18 @@ inline void buildRuns(BlockOut& out) {
 // ---------------------------------------------------------------------------------------------
 // The per-block algorithm, BlockMesher<Policy> (block_mesher.inl). A second copy in namespace
 // avx2 is compiled for AVX2 (VEX three-operand encoding, 4-wide doubles in the cache fill) and
-// chosen at run time (Setup::avx2, see runMesher). No FMA: the target is avx2 alone, so every
-// float and double operation is the same as in the portable copy and so are the results (a test
-// compares both meshes bit for bit).
+// chosen at run time (Setup::avx2, see runMesher). No FMA: the target is avx2 plus the integer
+// BMI1/BMI2/POPCNT extensions, so every float and double operation is the same as in the portable
+// copy and so are the results (a test compares both meshes bit for bit).
 #include "fluid/surface/detail/block_mesher.inl"
 #if defined(FLUID_SURFACE_AVX2_FILL) && defined(__GNUC__) && !defined(__clang__)
 #define FLUID_SURFACE_AVX2_MESHER 1
 namespace avx2 {
 #pragma GCC push_options
-#pragma GCC target("avx2")
+#pragma GCC target("avx2,bmi,bmi2,popcnt")
+#define FLUID_SURFACE_IN_AVX2_COPY 1  // (the target pragma does not define __AVX2__)
 #include "fluid/surface/detail/block_mesher.inl"
+#undef FLUID_SURFACE_IN_AVX2_COPY
 #pragma GCC pop_options
 }  // namespace avx2
 #endif
@@ -429,6 +434,7 @@ struct ExtractorState {
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
+  bool firstInPlace = false;  // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
 };
 
 inline SweepFrame chooseFrame(const SurfaceParams& p) {
@@ -552,6 +558,23 @@ inline bool appendBlocks(const ExtractorState& st, const Setup& su) {
   return st.arena->max_concurrency() == 1 && st.blocks.size() > 1 && !su.exact;
 }
 
+// Whether runBlocks lets the first block in emission order write into the mesh's own arrays
+// (several workers, or a single block; method 1 only). One worker with several blocks either
+// appends (appendBlocks) or, with exact slab order, is gathered by appending block by block.
+inline bool firstBlockInPlace(const ExtractorState& st) {
+  return st.method == 1 && !st.blocks.empty() && (st.arena->max_concurrency() > 1 || st.blocks.size() == 1);
+}
+
+// Exchanges a block output's arrays with the mesh's (vertex data and indices; not the slab runs,
+// which a block keeps with block-local index positions).
+inline void swapMeshArrays(BlockOut& o, SurfaceMesh& out) {
+  o.positions.swap(out.positions);
+  o.normals.swap(out.normals);
+  o.attributes.swap(out.attributes);
+  o.keys.swap(out.edgeKeys);
+  o.indices.swap(out.indices);
+}
+
 // `out`: the mesh, whose arrays the blocks append to directly when appendBlocks() (swapped into
 // ExtractorState::shared for the run and back after it; extractImpl then copies nothing).
 template <class Policy>
@@ -596,6 +619,11 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     swapArrays();
     return;
   }
+  // Several workers (or one block): the first block in emission order writes into the mesh's own
+  // arrays (its vertex ids and index positions start at 0 there too), so extractImpl neither
+  // copies nor zero-fills its part; the other blocks are copied in after it (firstInPlace).
+  st.firstInPlace = firstBlockInPlace(st);
+  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);
   runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
     const BlockDesc& b = st.blocks[i];
     runMesher(w, su, policy, st.outs[i], false, b,
@@ -764,20 +792,25 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     st.arena = std::make_unique<tbb::task_arena>(threads);
     st.arenaThreads = threads;
   }
+  st.firstInPlace = false;
   if (st.method == 2)
     runFollow(st, su);
   else
     runBlocks(st, su, policy, st.workersFor<Policy>(), out);
+  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);  // block 0's vertices and indices, at base 0
 
   // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
   // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
   // zero-fill of resize()). When the blocks appended to the mesh's arrays themselves
-  // (appendBlocks), only the block ranges are left to fill in.
+  // (appendBlocks), only the block ranges are left to fill in; when the first block wrote into
+  // them (firstInPlace), only the later blocks are appended.
   const std::size_t nb = st.blocks.size();
   const bool appended = st.method != 2 && appendBlocks(st, su);
-  auto counts = [&](const BlockOut& o, std::uint64_t c[3]) {
-    c[0] = appended ? o.vertexCount : o.positions.size();
-    c[1] = appended ? o.indexCount : o.indices.size();
+  auto counts = [&](std::size_t i, std::uint64_t c[3]) {
+    const BlockOut& o = st.outs[i];
+    const bool inMesh = i == 0 && st.firstInPlace;
+    c[0] = appended ? o.vertexCount : inMesh ? out.positions.size() : o.positions.size();
+    c[1] = appended ? o.indexCount : inMesh ? out.indices.size() : o.indices.size();
     c[2] = appended ? o.runCount : o.runs.size();
   };
   st.vertexBase.resize(nb + 1);
@@ -788,7 +821,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   for (std::size_t i = 0; i < nb; ++i) {
     const BlockOut& o = st.outs[i];
     std::uint64_t c[3];
-    counts(o, c);
+    counts(i, c);
     if (std::uint64_t(st.vertexBase[i]) + c[0] > 0xffffffffull ||
         std::uint64_t(st.indexBase[i]) + c[1] > 0xffffffffull) {
       out.clear();
@@ -808,8 +841,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
   const bool user = Policy::kHasUser && st.method == 1;
   // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block;
-  // 3: the blocks wrote into the mesh's arrays (appendBlocks).
-  const int gather = appended ? 3 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
+  // 3: the blocks wrote into the mesh's arrays (appendBlocks); 4: block 0 wrote into them
+  // (firstInPlace), the others are appended after it as in 2.
+  const int gather = appended ? 3 : st.firstInPlace ? 4 : nb == 1 ? 1 : (st.arena->max_concurrency() == 1 ? 2 : 0);
   if (gather == 1) {
     BlockOut& o = st.outs[0];
     out.positions.swap(o.positions);
@@ -817,8 +851,10 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     out.edgeKeys.swap(o.keys);
     if (user) out.attributes.swap(o.attributes);
     out.indices.swap(o.indices);  // vertex base 0: no rebasing
-  } else if (gather == 2) {
-    for (std::size_t i = 0; i < nb; ++i) {
+  } else if (gather == 2 || gather == 4) {
+    // Appended in turn (4: after block 0, which is in place): insert copies without the zero-fill
+    // a resize would do first, and with block 0 in place there is little left to share out.
+    for (std::size_t i = gather == 4 ? 1 : 0; i < nb; ++i) {
       const BlockOut& o = st.outs[i];
       out.positions.insert(out.positions.end(), o.positions.begin(), o.positions.end());
       out.normals.insert(out.normals.end(), o.normals.begin(), o.normals.end());
