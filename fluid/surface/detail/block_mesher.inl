@@ -188,8 +188,16 @@ class BlockMesher {
         addRow(y, r.x0, r.x1);
       }
     }
-    for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // per-column counts
-    for (std::size_t c = 1; c <= cols; ++c) start[c] += start[c - 1];  // CSR starts
+    // Difference array -> per-column counts -> CSR starts, as two running sums in one pass (the
+    // same integers as two prefix-sum passes, one loop instead of two).
+    {
+      std::uint32_t count = 0, at = 0;
+      for (std::size_t c = 1; c <= cols; ++c) {
+        count += start[c];
+        at += count;
+        start[c] = at;
+      }
+    }
     std::uint32_t* cursor = w_.cursor.data();
     std::copy(start, start + cols, cursor);
     // Running max_z per column while filling: reachMax of each element as it is written.
@@ -240,9 +248,20 @@ class BlockMesher {
       // The low half of a key is 0x8000 - min_z (0 when empty), so the smallest min_z is the largest
       // low half; 768 = 0x8000 - 32000 stands for "none" (reachMin 32000) and is below every real one.
       std::uint32_t run = 0x8000u - 32000u;
-      for (std::uint32_t i = en; i-- > b;) {
-        run = std::max(run, entries[i].zKey & 0xffffu);
-        entries[i].reachMinB = std::uint16_t(run);  // 0x8000 - reachMin
+      // Two elements per step (one loop test per pair; same values as one at a time).
+      ColumnEntry* p = entries + en;
+      ColumnEntry* const first = entries + b;
+      if ((en - b) & 1u) {
+        --p;
+        run = std::max(run, p->zKey & 0xffffu);
+        p->reachMinB = std::uint16_t(run);  // 0x8000 - reachMin
+      }
+      while (p != first) {
+        p -= 2;
+        run = std::max(run, p[1].zKey & 0xffffu);
+        p[1].reachMinB = std::uint16_t(run);
+        run = std::max(run, p[0].zKey & 0xffffu);
+        p[0].reachMinB = std::uint16_t(run);
       }
     }
     std::copy(start, start + cols, cursor);
