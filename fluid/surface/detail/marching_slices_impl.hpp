@@ -594,12 +594,9 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     BlockOut& sh = st.shared;
     sh.reset();
     // The mesh's arrays become the shared block output's for the run; the same swap hands them back.
+    // The slab runs go along: appended blocks write theirs with mesh index positions.
     auto swapArrays = [&] {
-      sh.positions.swap(out.positions);
-      sh.normals.swap(out.normals);
-      sh.attributes.swap(out.attributes);
-      sh.keys.swap(out.edgeKeys);
-      sh.indices.swap(out.indices);
+      swapMeshArrays(sh, out);
       sh.runs.swap(out.slabRuns);
     };
     swapArrays();
