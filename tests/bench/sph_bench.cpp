@@ -13,7 +13,7 @@
 //                                           workload for callgrind instruction counts)
 // All tables are printed as markdown on stdout. Timings are wall time of stepSph (steady_clock)
 // and process CPU time; on a loaded machine compare within one run only.
-#include "sph_png.hpp"
+#include "plot_png.hpp"
 
 #include "fluid/sph/sph_scenes.hpp"
 #include "tests/sph/randomised_runs.hpp"
@@ -254,61 +254,20 @@ int accuracy(const std::string& png) {
     points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, c.solver});
   }
   if (png.empty()) return 0;
-  // Log-log plot: x = CPU s per simulated s, y = mean density error (%).
-  sphbench::Canvas cv(720, 480);
-  const int L = 90, R = 690, T = 40, B = 400;
-  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
-  for (const Point& p : points) {
-    xmin = std::min(xmin, std::log10(std::max(p.x, 1e-6)));
-    xmax = std::max(xmax, std::log10(std::max(p.x, 1e-6)));
-    ymin = std::min(ymin, std::log10(std::max(p.y, 1e-6)));
-    ymax = std::max(ymax, std::log10(std::max(p.y, 1e-6)));
-  }
-  xmin = std::floor(xmin);
-  xmax = std::ceil(xmax + 1e-9);
-  ymin = std::floor(ymin);
-  ymax = std::ceil(ymax + 1e-9);
-  if (xmax <= xmin) xmax = xmin + 1;
-  if (ymax <= ymin) ymax = ymin + 1;
-  auto px = [&](double x) {
-    return L + static_cast<int>((std::log10(std::max(x, 1e-6)) - xmin) / (xmax - xmin) * (R - L));
-  };
-  auto py = [&](double y) {
-    return B - static_cast<int>((std::log10(std::max(y, 1e-6)) - ymin) / (ymax - ymin) * (B - T));
-  };
-  cv.rect(L, T, R, B, 0x000000);
-  for (double e = xmin; e <= xmax + 1e-9; e += 1) {
-    const int x = L + static_cast<int>((e - xmin) / (xmax - xmin) * (R - L));
-    cv.line(x, B, x, B + 6, 0x000000);
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", std::pow(10.0, e));
-    cv.text(x - 8, B + 12, buf, 0x000000);
-  }
-  for (double e = ymin; e <= ymax + 1e-9; e += 1) {
-    const int y = B - static_cast<int>((e - ymin) / (ymax - ymin) * (B - T));
-    cv.line(L - 6, y, L, y, 0x000000);
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", std::pow(10.0, e));
-    cv.text(L - 12 - 8 * static_cast<int>(std::strlen(buf)), y - 5, buf, 0x000000);
-  }
-  cv.text(L + 120, B + 40, "CPU S PER SIMULATED S (LOG)", 0x000000);
-  cv.text(20, B - 60, "MEAN DENSITY ERROR % (LOG)", 0x000000, 2, true);
-  cv.text(L + 10, 12, "DAM BREAK 2 S: ERROR AGAINST TIME", 0x000000);
+  // Log-log plot: x = CPU s per simulated s, y = mean density error (%), one curve per solver.
+  benchplot::Canvas cv(720, 480);
+  std::vector<benchplot::Series> series;
   for (SphSolverKind solver : {SphSolverKind::dfsph, SphSolverKind::wcsph}) {
-    const std::uint32_t color = solver == SphSolverKind::dfsph ? 0x1f5fd0 : 0xd03020;
-    std::vector<Point> ps;
+    benchplot::Series s;
+    s.label = solver == SphSolverKind::dfsph ? "DFSPH" : "WCSPH";
+    s.color = solver == SphSolverKind::dfsph ? 0x1f5fd0 : 0xd03020;
     for (const Point& p : points)
-      if (p.solver == solver) ps.push_back(p);
-    std::sort(ps.begin(), ps.end(), [](const Point& a, const Point& b) { return a.x < b.x; });
-    for (std::size_t i = 0; i < ps.size(); ++i) {
-      cv.marker(px(ps[i].x), py(ps[i].y), color);
-      if (i) cv.line(px(ps[i - 1].x), py(ps[i - 1].y), px(ps[i].x), py(ps[i].y), color);
-    }
-    const int ly = solver == SphSolverKind::dfsph ? T + 12 : T + 32;
-    cv.marker(R - 120, ly + 4, color);
-    cv.text(R - 110, ly, solver == SphSolverKind::dfsph ? "DFSPH" : "WCSPH", color);
+      if (p.solver == solver) s.points.push_back({p.x, p.y});
+    std::sort(s.points.begin(), s.points.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+    series.push_back(std::move(s));
   }
-  const std::string err = sphbench::writePng(png, cv);
+  benchplot::drawLogLogChart(cv, {}, {"DAM BREAK 2 S: ERROR AGAINST TIME", "CPU S PER SIMULATED S (LOG)", "MEAN DENSITY ERROR % (LOG)"}, series);
+  const std::string err = benchplot::writePng(png, cv);
   if (!err.empty()) {
     std::fprintf(stderr, "bench_sph: %s\n", err.c_str());
     return 1;

@@ -1,6 +1,8 @@
 // bench_surface: reproduces the marching-slices paper's Figure 7 on the project's particle sets,
 // plus thread scaling, accuracy against time and back-to-front quality, and writes the markdown
 // that docs/surface.md is made of. Every number in that file comes from one run of this program.
+// With --out it also draws the accuracy and order tables as charts (error against ms, log-log),
+// written next to FILE as <stem>_accuracy.png and <stem>_order.png and linked from the page.
 //
 //   bench_surface [--reps N] [--out FILE [--force]] [--quick]
 //
@@ -12,6 +14,7 @@
 #include "fluid/surface/marching_slices.hpp"
 #include "mesh_checks.hpp"
 #include "order_metrics.hpp"
+#include "plot_png.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -150,10 +153,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (!outPath.empty() && std::filesystem::exists(outPath) && !force) {
-    std::fprintf(stderr, "bench_surface: %s exists; pass --force to replace it\n", outPath.c_str());
-    return 1;
+  // The charts go next to the page, named after it (docs/surface.md: docs/surface_accuracy.png and
+  // docs/surface_order.png), and the page links them by file name.
+  std::string accuracyPng, orderPng;
+  if (!outPath.empty()) {
+    const std::filesystem::path out(outPath);
+    accuracyPng = (out.parent_path() / (out.stem().string() + "_accuracy.png")).string();
+    orderPng = (out.parent_path() / (out.stem().string() + "_order.png")).string();
   }
+  for (const std::string& path : {outPath, accuracyPng, orderPng})
+    if (!path.empty() && std::filesystem::exists(path) && !force) {
+      std::fprintf(stderr, "bench_surface: %s exists; pass --force to replace it\n", path.c_str());
+      return 1;
+    }
   std::ostringstream md;
   std::string command = "bench_surface";
   for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
@@ -351,6 +363,7 @@ int main(int argc, char** argv) {
         "volume error = mesh volume (divergence theorem) vs true volume. ms = median extraction time, 1 thread.\n\n"
      << "| shape | S | triangles | ms per mesh | volume error % | max vertex error | mean vertex error |\n"
      << "|---|---|---|---|---|---|---|\n";
+  std::vector<benchplot::Series> volumeSeries, vertexSeries;  // per shape: (ms, |volume error| %), (ms, max error)
   {
     struct Shape {
       const char* name;
@@ -367,6 +380,9 @@ int main(int argc, char** argv) {
           if (x * x + y * y + z * z <= 16.0) ball.ps.push_back(ball.centre + glm::dvec3(x, y, z));
     shapes.push_back(ball);
     for (Shape& sh : shapes) {
+      benchplot::Series vol, vtx;
+      vol.label = vtx.label = sh.name;
+      vol.color = vtx.color = volumeSeries.empty() ? 0x1f5fd0 : 0xd03020;
       // Round particle positions to float first: that is what the extractor sees.
       for (glm::dvec3& p : sh.ps) p = glm::dvec3(glm::vec3(p));
       std::vector<float> xs, ys, zs;
@@ -404,12 +420,23 @@ int main(int argc, char** argv) {
           maxErr = std::max(maxErr, std::abs(len - rt));
           sumErr += std::abs(len - rt);
         }
+        const double volumeErrorPct = 100.0 * (topo.signedVolume - trueVol) / trueVol;
         md << "| " << sh.name << " | " << cube << " | " << m.stats.triangles << " | " << fmt("%.3f", median(t)) << " | "
-           << fmt("%+.3f", 100.0 * (topo.signedVolume - trueVol) / trueVol) << " | " << fmt("%.5f", maxErr) << " | "
+           << fmt("%+.3f", volumeErrorPct) << " | " << fmt("%.5f", maxErr) << " | "
            << fmt("%.5f", sumErr / double(std::max<std::size_t>(1, m.positions.size()))) << " |\n";
+        const std::string label = "S=" + fmt("%g", cube);
+        vol.points.push_back({median(t), std::abs(volumeErrorPct)});
+        vol.pointLabels.push_back(label);
+        vtx.points.push_back({median(t), maxErr});
+        vtx.pointLabels.push_back(label);
       }
+      volumeSeries.push_back(std::move(vol));
+      vertexSeries.push_back(std::move(vtx));
     }
   }
+  if (!accuracyPng.empty())
+    md << "\n![volume error and largest vertex error against ms per mesh, log-log, one point per cube size S]("
+       << std::filesystem::path(accuracyPng).filename().string() << ")\n";
 
   // ---------------------------------------------------------------------------------------------
   md << "\n## Back-to-front order: fraction of triangle pairs out of order\n\n"
@@ -420,6 +447,8 @@ int main(int argc, char** argv) {
         "`b2f exact` = plus one index range per slab in sweep order. ms = median over the 8 views, 1 thread.\n\n"
      << "| set | S | none: mean | b2f: mean | b2f: worst | b2f exact: mean | ms none | ms b2f | ms b2f exact |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<benchplot::Series> orderSeries;  // per set: (ms, mean fraction out of order) for none, b2f, exact
+  const std::uint32_t setColors[] = {0x1f5fd0, 0xd03020, 0x20a040, 0x9040b0};
   for (const SetConfig& cfg : kSets) {
     if (cfg.cube != 1.0f && std::string(cfg.label) == "fountain") continue;
     const fluid::ParticlePositions ps = surface_test::loadSet(cfg.file);
@@ -460,7 +489,16 @@ int main(int argc, char** argv) {
     md << "| " << cfg.label << " | " << cfg.cube << " | " << fmt("%.4f", sNone / views) << " | "
        << fmt("%.4f", sB / views) << " | " << fmt("%.4f", wB) << " | " << fmt("%.4f", sE / views) << " | "
        << fmt("%.2f", median(tNone)) << " | " << fmt("%.2f", median(tB)) << " | " << fmt("%.2f", median(tE)) << " |\n";
+    benchplot::Series ser;
+    ser.label = cfg.label;
+    ser.color = setColors[orderSeries.size() % 4];
+    ser.points = {{median(tNone), sNone / views}, {median(tB), sB / views}, {median(tE), sE / views}};
+    ser.pointLabels = {"NONE", "B2F", "EXACT"};
+    orderSeries.push_back(std::move(ser));
   }
+  if (!orderPng.empty())
+    md << "\n![mean fraction of triangle pairs out of order against ms per mesh, log-log, per set: none, b2f, b2f exact]("
+       << std::filesystem::path(orderPng).filename().string() << ")\n";
 
   md << "\nLoad average (1, 5, 15 min) from /proc/loadavg: " << loadBefore << " at the start, " << loadAverage()
      << " at the end of the run, on " << hw << " hardware threads.\n";
@@ -477,6 +515,29 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::fprintf(stderr, "bench_surface: wrote %s\n", outPath.c_str());
+    // Accuracy: two charts side by side, one point per cube size S (finer = slower, more exact).
+    benchplot::Canvas acc(1400, 480);
+    int skipped = benchplot::drawLogLogChart(
+        acc, {90, 40, 690, 400},
+        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "ABS VOLUME ERROR % (LOG)"}, volumeSeries, true);
+    skipped += benchplot::drawLogLogChart(acc, {790, 40, 1390, 400},
+                                          {"LARGEST VERTEX ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)",
+                                           "MAX VERTEX ERROR (LOG)"},
+                                          vertexSeries, true);
+    benchplot::Canvas ord(720, 480);
+    skipped += benchplot::drawLogLogChart(
+        ord, {}, {"BACK-TO-FRONT ORDER AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "PAIRS OUT OF ORDER (LOG)"},
+        orderSeries, true);
+    if (skipped)  // a zero error or time cannot sit on a log axis; say so rather than hide it
+      std::fprintf(stderr, "bench_surface: %d chart points were zero and are not drawn\n", skipped);
+    for (const auto& [path, canvas] : {std::pair{accuracyPng, &acc}, std::pair{orderPng, &ord}}) {
+      const std::string err = benchplot::writePng(path, *canvas);
+      if (!err.empty()) {
+        std::fprintf(stderr, "bench_surface: %s\n", err.c_str());
+        return 1;
+      }
+      std::fprintf(stderr, "bench_surface: wrote %s\n", path.c_str());
+    }
   }
   return 0;
 }
