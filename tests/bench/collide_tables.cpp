@@ -2,9 +2,12 @@
 //   1. L1 normal index angular error against resolution (§4.2, eq. (3));
 //   2. accuracy against time per shape, map set, format and resolution, measured against the
 //      exact mesh distance (fluid::MeshDistance) on seeded random points.
-// Usage: bench_collide_tables [--points N] [--l1-samples N] [--res 64,128,...] [--quick]
+// Usage: bench_collide_tables [--points N] [--l1-samples N] [--res 64,128,...] [--png FILE [--force]]
+// --png also draws table 2 as charts (error against ns per query, log-log; one curve per map set,
+// one point per resolution) into FILE.
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
+#include "plot_png.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <random>
 #include <sstream>
 #include <string>
@@ -97,7 +101,24 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
+// Chart curves of one shape: per map set, (ns/query, misclass %) and (ns/query, mean |Δd|) per resolution.
+struct ShapeCurves {
+  std::vector<benchplot::Series> misclass, distance;
+};
+
+// Legend name of a map set: the table's name, shortened to fit beside the chart.
+std::string legendName(std::string name) {
+  auto replace = [&](const std::string& from, const std::string& to) {
+    for (std::size_t at = name.find(from); at != std::string::npos; at = name.find(from, at + to.size()))
+      name.replace(at, from.size(), to);
+  };
+  replace("1 cube8 (GREATER, centre)", "1 cube8, centre");
+  replace("paper Fig. 6: ", "fig. 6 ");
+  replace("front-back16", "fb16");
+  return name;
+}
+
+void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::vector<ShapeCurves>* curves) {
   std::vector<Shape> shapes = {{"sphere", collide_test::makeSphere(1.0f, 48, 96)},
                                {"torus", collide_test::makeTorus(1.0f, 0.35f, 96, 32)},
                                {"basin", collide_test::makeBasin(96)}};
@@ -118,6 +139,7 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
       "max normal err (deg) | ns/query | bytes | bake ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Shape& shape : shapes) {
+    ShapeCurves sc;
     const fluid::Bounds b = fluid::meshBounds(shape.mesh.view());
     const glm::vec3 ext = b.hi - b.lo;
     const float size = std::max({ext.x, ext.y, ext.z});
@@ -130,7 +152,9 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
     std::vector<fluid::ColliderSample> reference(count), got(count);
     fluid::queryParallel(exact, points, reference, {0, 256});
     for (int res : resolutions) {
-      for (const Config& config : configsFor(shape.name, shape.mesh, res)) {
+      const std::vector<Config> configs = configsFor(shape.name, shape.mesh, res);
+      for (std::size_t ci = 0; ci < configs.size(); ++ci) {
+        const Config& config = configs[ci];
         fluid::DepthMapCollider collider;
         const auto t0 = Clock::now();
         const fluid::BakeStatus st = fluid::bakeDepthMaps(shape.mesh.view(), config.specs, {}, collider);
@@ -166,8 +190,21 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions) {
                     100.0 * double(wrong) / double(count), band ? sum_d / double(band) : 0.0, max_d,
                     band ? sum_n / double(band) : 0.0, max_n, median(times), collider.bytes(), bake_ms);
         std::fflush(stdout);
+        static const std::uint32_t kColors[] = {0x1f5fd0, 0xd03020, 0x20a040, 0x9040b0, 0xd08000};
+        if (sc.misclass.size() <= ci) {
+          sc.misclass.resize(ci + 1);
+          sc.distance.resize(ci + 1);
+          for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) {
+            s->label = legendName(config.name);
+            s->color = kColors[ci % 5];
+          }
+        }
+        sc.misclass[ci].points.push_back({median(times), 100.0 * double(wrong) / double(count)});
+        sc.distance[ci].points.push_back({median(times), band ? sum_d / double(band) : 0.0});
+        for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) s->pointLabels.push_back(std::to_string(res));
       }
     }
+    if (curves) curves->push_back(std::move(sc));
   }
   std::printf("\n");
 }
@@ -178,6 +215,8 @@ int main(int argc, char** argv) {
   std::size_t points = 100000;
   int l1_samples = 1000000;
   std::vector<int> resolutions = {64, 128, 256, 512, 1024};
+  std::string png;
+  bool force = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--points" && i + 1 < argc) {
@@ -189,8 +228,13 @@ int main(int argc, char** argv) {
       std::stringstream list(argv[++i]);
       std::string item;
       while (std::getline(list, item, ',')) resolutions.push_back(std::atoi(item.c_str()));
+    } else if (a == "--png" && i + 1 < argc) {
+      png = argv[++i];
+    } else if (a == "--force") {
+      force = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--points N] [--l1-samples N] [--res 64,128,...]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--points N] [--l1-samples N] [--res 64,128,...] [--png FILE [--force]]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -198,7 +242,37 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bad arguments\n");
     return 2;
   }
+  if (!png.empty() && std::filesystem::exists(png) && !force) {
+    std::fprintf(stderr, "%s: %s exists; pass --force to replace it\n", argv[0], png.c_str());
+    return 1;
+  }
   l1Table(l1_samples);
-  accuracyTable(points, resolutions);
+  std::vector<ShapeCurves> curves;
+  accuracyTable(points, resolutions, png.empty() ? nullptr : &curves);
+  if (png.empty()) return 0;
+  // One column per shape: misclassification on top, mean |Δd| below, both against ns per query.
+  const char* const kShapes[] = {"SPHERE", "TORUS", "BASIN"};
+  benchplot::Canvas canvas(2120, 960);
+  int skipped = 0;
+  for (std::size_t c = 0; c < curves.size() && c < 3; ++c) {
+    // Plot area 400 px wide, legend (up to 24 characters) beside it.
+    const int left = 90 + 700 * int(c), right = left + 400;
+    const std::string shape = kShapes[c];
+    skipped += benchplot::drawLogLogChart(
+        canvas, {left, 40, right, 400, 0, true},
+        {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED % (LOG)"},
+        curves[c].misclass, true);
+    skipped += benchplot::drawLogLogChart(
+        canvas, {left, 520, right, 880, 0, true},
+        {shape + " - DISTANCE ERROR", "NS PER QUERY, 1 THREAD (LOG)", "MEAN DISTANCE ERROR (LOG)"},
+        curves[c].distance, true);
+  }
+  if (skipped) std::fprintf(stderr, "%s: %d chart points with zero error are not drawn (log axes)\n", argv[0], skipped);
+  const std::string err = benchplot::writePng(png, canvas);
+  if (!err.empty()) {
+    std::fprintf(stderr, "%s: %s\n", argv[0], err.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "%s: wrote %s\n", argv[0], png.c_str());
   return 0;
 }

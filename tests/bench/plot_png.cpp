@@ -30,6 +30,8 @@ int glyph(char c, int row) {
     code = "00002";
   else if (c == ',')
     code = "00012";
+  else if (c == '+')
+    code = "02720";
   else if (c == '-')
     code = "00700";
   else if (c == '%')
@@ -153,11 +155,13 @@ int drawLogLogChart(Canvas& cv, const ChartFrame& f, const ChartText& text, cons
         cv.line(xm, B, xm, B + 3, 0x000000);
       }
   }
+  int widestYTick = 0;  // characters
   for (double e = ymin; e <= ymax + 1e-9; e += 1) {
     const int y = B - static_cast<int>((e - ymin) / (ymax - ymin) * (B - T));
     cv.line(L - 6, y, L, y, 0x000000);
     char buf[32];
     std::snprintf(buf, sizeof buf, "%g", std::pow(10.0, e));
+    widestYTick = std::max(widestYTick, static_cast<int>(std::strlen(buf)));
     cv.text(L - 12 - 8 * static_cast<int>(std::strlen(buf)), y - 5, buf, 0x000000);
     if (minorTicks && e < ymax - 1e-9)
       for (int m = 2; m <= 9; ++m) {
@@ -166,7 +170,7 @@ int drawLogLogChart(Canvas& cv, const ChartFrame& f, const ChartText& text, cons
       }
   }
   cv.text(L + 120, B + 40, text.xLabel, 0x000000);
-  cv.text(L - 70, B - 60, text.yLabel, 0x000000, 2, true);
+  cv.text(std::min(L - 70, L - 26 - 8 * widestYTick), B - 60, text.yLabel, 0x000000, 2, true);  // left of the ticks
   cv.text(L + 10, T - 28, text.title, 0x000000);
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
@@ -183,8 +187,9 @@ int drawLogLogChart(Canvas& cv, const ChartFrame& f, const ChartText& text, cons
       havePrev = true;
     }
     const int ly = T + 12 + 20 * static_cast<int>(k);
-    cv.marker(R - 120, ly + 4, s.color);
-    cv.text(R - 110, ly, s.label, s.color);
+    const int lx = f.legendOutside ? R + 15 : R - f.legendInset;
+    cv.marker(lx, ly + 4, s.color);
+    cv.text(lx + 10, ly, s.label, s.color);
   }
   return skipped;
 }

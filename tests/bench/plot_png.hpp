@@ -18,7 +18,7 @@ struct Canvas {
   void rect(int x0, int y0, int x1, int y1, std::uint32_t color);
   void marker(int x, int y, std::uint32_t color);
   // Text in a 3x5 font scaled by `scale`, 4 * scale pixels per character: letters (drawn
-  // upper-case), digits, . , - % / ( ) = and space; any other character is left blank.
+  // upper-case), digits, . , - + % / ( ) = and space; any other character is left blank.
   void text(int x, int y, const std::string& s, std::uint32_t color, int scale = 2, bool vertical = false);
 };
 
@@ -33,9 +33,12 @@ struct Series {
 };
 
 // A chart's plot area in canvas pixels; the axis labels and the title are drawn outside it
-// (about 90 px left, 60 px below, 30 px above), the legend inside its top-right corner.
+// (about 90 px left, 60 px below, 30 px above), the legend inside its top-right corner or, with
+// legendOutside, beside it.
 struct ChartFrame {
   int left = 90, top = 40, right = 690, bottom = 400;
+  int legendInset = 120;  // legend markers this far left of `right`, their labels 10 px further right
+  bool legendOutside = false;  // legend to the right of the plot area instead (15 px from `right`)
 };
 
 struct ChartText {
