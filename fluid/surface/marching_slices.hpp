@@ -108,6 +108,14 @@ struct SurfaceStats {
   std::uint64_t cornerCacheBytesPeakBlock = 0;    // slice caches (index arrays, corner caches, z offsets)
   std::uint64_t particleCacheBytesPeakBlock = 0;  // projection slice + column lists + block particles
   std::uint64_t workingBytesAllWorkers = 0;       // sum over workers of their peak (both caches)
+  // Where the time went, ms of steady clock. The block phases are filled by approach 1 (this
+  // extractor's marching slices; 0 for the approach-2 baseline) and summed over blocks, so on
+  // several threads they add up to more than the call's wall time.
+  double prepareMs = 0;     // checks, sweep frame, particles sorted into (z, index) order, block lists (§3)
+  double cacheBuildMs = 0;  // §6 particle caches of all blocks
+  double seedMs = 0;        // §4 seeding
+  double marchMs = 0;       // Alg. 1 sweeps: corner evaluations (§6 lookups), cubes, triangles, slab order
+  double gatherMs = 0;      // block outputs joined into the mesh
 };
 
 struct SurfaceMesh {

@@ -211,6 +211,7 @@ int main(int argc, char** argv) {
   };
   struct SetResults {
     Result a1, a2, a3, dense;
+    double phase[5] = {};  // approach 1, 1 thread: medians of SurfaceStats' prepare, cache, seed, march, gather ms
   };
   std::vector<SetResults> all;
   std::string barLines;
@@ -226,6 +227,7 @@ int main(int argc, char** argv) {
     fluid::BaselineExtractor b2, b2N, b3, bd;
     fluid::SurfaceMesh m1, mN, m2, m2N, m3, md0;
     std::vector<double> t1, tN, t2, t2N, t3, td, u1, u2, u3, ud;
+    std::vector<double> phases[5];
     const int r = quick ? 3 : reps;
     for (int i = 0; i < r + 1; ++i) {  // first round warms caches and buffers, not counted
       double ca = 0, cc = 0, cd = 0, ce = 0;
@@ -237,6 +239,9 @@ int main(int argc, char** argv) {
       const double e = timeWarmBoth([&] { bd.extract(fluid::BaselineMethod::dense, in, p1, md0); }, ce);
       if (i == 0) continue;
       t1.push_back(a), tN.push_back(b), t2.push_back(c), t2N.push_back(c2), t3.push_back(d), td.push_back(e);
+      const fluid::SurfaceStats& st1 = m1.stats;  // m1 still holds the timed approach-1 mesh
+      const double ph[5] = {st1.prepareMs, st1.cacheBuildMs, st1.seedMs, st1.marchMs, st1.gatherMs};
+      for (int k = 0; k < 5; ++k) phases[k].push_back(ph[k]);
       u1.push_back(ca), u2.push_back(cc), u3.push_back(cd), ud.push_back(ce);
     }
     SetResults sr;
@@ -256,6 +261,7 @@ int main(int argc, char** argv) {
              m2N.stats.workingBytesAllWorkers};
     sr.a3 = {median(t3), 0, median(u3), m3.stats, b3.cornerBytes(), b3.particleBytes(), 0};
     sr.dense = {median(td), 0, median(ud), md0.stats, bd.cornerBytes(), bd.particleBytes(), 0};
+    for (int k = 0; k < 5; ++k) sr.phase[k] = median(phases[k]);
     all.push_back(sr);
     auto row = [&](const char* name, const Result& res, bool threaded) {
       const double s = res.ms1 / 1000.0;
@@ -322,6 +328,30 @@ int main(int argc, char** argv) {
          << (sr.a1.cpu1 <= cfg.peerMs1 ? "met" : "**not met**") << " | " << fmt("%.2f", r2) << "x"
          << (r2 >= 1.5 ? " (met)" : " (**not met**)") << " | " << fmt("%.2f", r3) << "x"
          << (r3 >= 3.5 ? " (met)" : " (**not met**)") << " | " << fmt("%.2f", sr.dense.cpu1 / sr.a1.cpu1) << "x |\n";
+    }
+  }
+
+  {
+    // Where the one-thread time goes: SurfaceStats' phase clocks in the timed runs above.
+    md << "\n### Where approach 1's time goes (1 thread)\n\n"
+          "Phase times that the extractor measures itself (`SurfaceStats::prepareMs` ... `gatherMs`, steady clock "
+          "read at the phase boundaries) in the timed one-thread runs of the Figure 7 table, medians per column "
+          "(so a row need not add up exactly to its total). prepare = checks, particles sorted into (z, index) "
+          "order, block lists (§3); particle cache = the 2D-projection 1D-lookup cache of every block (§6); "
+          "seeding = §4; march = Alg. 1's sweeps including every corner evaluation (§6 lookups) and the "
+          "triangle output; gather = block outputs joined. The last column compares the particle cache alone with "
+          "the peer's whole mesh.\n\n"
+       << "| set | S | ms per mesh | prepare | particle cache | seeding | march + corner evaluations | gather | peer ms "
+          "(whole mesh) | particle cache / peer |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|\n";
+    std::size_t i = 0;
+    for (const SetConfig& cfg : kSets) {
+      const SetResults& sr = all[i++];
+      auto cell = [&](double v) { return fmt("%.2f", v) + " (" + fmt("%.0f", 100.0 * v / sr.a1.ms1) + " %)"; };
+      md << "| " << cfg.label << " | " << cfg.cube << " | " << fmt("%.2f", sr.a1.ms1) << " | " << cell(sr.phase[0])
+         << " | " << cell(sr.phase[1]) << " | " << cell(sr.phase[2]) << " | " << cell(sr.phase[3]) << " | "
+         << cell(sr.phase[4]) << " | " << (cfg.peerMs1 > 0 ? fmt("%.2f", cfg.peerMs1) : std::string("—")) << " | "
+         << (cfg.peerMs1 > 0 ? fmt("%.2f", sr.phase[1] / cfg.peerMs1) + "x" : std::string("—")) << " |\n";
     }
   }
 

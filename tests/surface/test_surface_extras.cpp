@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 
@@ -221,4 +222,35 @@ TEST(SurfacePolicy, CallerPolicyIsInterpolatedAndGeometryUnchanged) {
     EXPECT_LE(a.w, 1.0f);
     EXPECT_LE(a.y, 2.0f);  // never more particles than exist there
   }
+}
+
+// SurfaceStats' phase clocks: every phase of a one-thread extraction is measured (the particle
+// cache, seeding and march of a non-empty block take time), and the phases fit inside the call as
+// timed by the caller, since on one thread they do not overlap.
+TEST(SurfaceStats, PhaseTimesAreMeasuredAndFitInTheCall) {
+  const fluid::ParticlePositions ps = loadSet("explosion.xyz");
+  fluid::SurfaceParams p;
+  p.cube = 0.6f;
+  p.threads = 1;
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh m;
+  for (int round = 0; round < 3; ++round) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(ex.extract(inputOf(ps), p, m).ok());
+    const double callMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const fluid::SurfaceStats& s = m.stats;
+    for (double v : {s.prepareMs, s.cacheBuildMs, s.seedMs, s.marchMs, s.gatherMs}) {
+      EXPECT_TRUE(std::isfinite(v));
+      EXPECT_GE(v, 0.0);
+    }
+    EXPECT_GT(s.prepareMs, 0.0);
+    EXPECT_GT(s.cacheBuildMs, 0.0);
+    EXPECT_GT(s.seedMs, 0.0);
+    EXPECT_GT(s.marchMs, 0.0);
+    EXPECT_LE(s.prepareMs + s.cacheBuildMs + s.seedMs + s.marchMs + s.gatherMs, callMs);
+  }
+  // An empty input has nothing to time.
+  ASSERT_TRUE(ex.extract({}, p, m).ok());
+  EXPECT_EQ(m.stats.cacheBuildMs, 0.0);
+  EXPECT_EQ(m.stats.marchMs, 0.0);
 }

@@ -34,9 +34,12 @@ class BlockMesher {
     runBase_ = out_.runs.size();
     vertexCount_ = vertexBase_;
     nIndices_ = indexBase_;
+    const PhaseClock::time_point start = PhaseClock::now();
     begin(block);
     buildParticleCache(particles);
+    const PhaseClock::time_point cached = PhaseClock::now();
     seed(particles);
+    const PhaseClock::time_point seeded = PhaseClock::now();
     march();
     out_.stats.particlesLookedUp += looked_;
     looked_ = 0;
@@ -44,6 +47,10 @@ class BlockMesher {
       sortBySlab();
       buildRuns(out_);
     }
+    const PhaseClock::time_point marched = PhaseClock::now();
+    out_.stats.cacheBuildMs = phaseMs(start, cached);
+    out_.stats.seedMs = phaseMs(cached, seeded);
+    out_.stats.marchMs = phaseMs(seeded, marched);
     out_.indexCount = std::uint32_t(out_.indices.size() - indexBase_);
     out_.vertexCount = std::uint32_t(out_.positions.size() - vertexBase_);
     out_.runCount = std::uint32_t(out_.runs.size() - runBase_);

@@ -15,6 +15,7 @@
 #include <array>
 #include <atomic>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -208,6 +209,12 @@ struct BlockOut {
     vertexCount = indexCount = runCount = 0;
   }
 };
+
+// SurfaceStats' phase times: a steady clock read a few times per block (tens of ns each).
+using PhaseClock = std::chrono::steady_clock;
+inline double phaseMs(PhaseClock::time_point from, PhaseClock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
 
 // Block grid and everything else fixed for one extract() call.
 struct Setup {
@@ -667,6 +674,7 @@ std::uint64_t followPeakBytes(const ExtractorState& st);
 template <class Policy>
 SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const SurfaceParams& params,
                           const Policy& policy, SurfaceMesh& out) {
+  const PhaseClock::time_point start = PhaseClock::now();
   out.clear();
   SurfaceStatus status = validateSurface(input, params);
   if (!status.ok()) return status;
@@ -790,10 +798,12 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     st.arenaThreads = threads;
   }
   st.firstInPlace = false;
+  const PhaseClock::time_point prepared = PhaseClock::now();
   if (st.method == 2)
     runFollow(st, su);
   else
     runBlocks(st, su, policy, st.workersFor<Policy>(), out);
+  const PhaseClock::time_point meshed = PhaseClock::now();
   if (st.firstInPlace) swapMeshArrays(st.outs[0], out);  // block 0's vertices and indices, at base 0
 
   // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
@@ -833,6 +843,9 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     stats.particlesLookedUp += o.stats.particlesLookedUp;
     stats.maxActiveSlices = std::max(stats.maxActiveSlices, o.stats.maxActiveSlices);
     stats.slabReversals += o.stats.slabReversals;
+    stats.cacheBuildMs += o.stats.cacheBuildMs;
+    stats.seedMs += o.stats.seedMs;
+    stats.marchMs += o.stats.marchMs;
     stats.cornerCacheBytesPeakBlock = std::max(stats.cornerCacheBytesPeakBlock, o.cornerBytes);
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }
@@ -920,6 +933,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     for (auto& w : st.workersFor<Policy>())
       if (w) workBytes += w->peakBytes;
   stats.workingBytesAllWorkers = workBytes;
+  stats.prepareMs = phaseMs(start, prepared);
+  stats.gatherMs = phaseMs(meshed, PhaseClock::now());
   return {};
 }
 
