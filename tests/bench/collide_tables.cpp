@@ -260,7 +260,7 @@ int main(int argc, char** argv) {
     const std::string shape = kShapes[c];
     skipped += benchplot::drawLogLogChart(
         canvas, {left, 40, right, 400, 0, true},
-        {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED % (LOG)"},
+        {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED, PERCENT (LOG)"},
         curves[c].misclass, true);
     skipped += benchplot::drawLogLogChart(
         canvas, {left, 520, right, 880, 0, true},

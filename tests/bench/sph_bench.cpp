@@ -205,25 +205,32 @@ int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Ove
 }
 
 int accuracy(const std::string& png) {
+  // `sweep`: the chart's curve this run belongs to (runs of one sweep differ in one knob and are
+  // joined in table order); `point`: its label at the marker.
   struct Config {
     SphSolverKind solver;
     Overrides o;
+    const char* sweep;
+    const char* point;
   };
   // Knobs: the CFL number (it also scales the force bound, so it sets DFSPH's step), the DFSPH
   // tolerance, the force condition (force_bound = 0: CFL only), the WCSPH sound speed (its
   // stiffness), and the particle spacing.
   const std::vector<Config> configs = {
-      {SphSolverKind::dfsph, {{"cfl", "0.2"}}},
-      {SphSolverKind::dfsph, {{"cfl", "0.4"}}},
-      {SphSolverKind::dfsph, {{"cfl", "0.8"}}},
-      {SphSolverKind::dfsph, {{"cfl", "0.8"}, {"density_error", "0.01"}}},
-      {SphSolverKind::dfsph, {{"cfl", "0.9"}, {"density_error", "0.0002"}, {"force_bound", "0"}}},
-      {SphSolverKind::dfsph, {{"cfl", "0.4"}, {"spacing", "0.0067"}}},
-      {SphSolverKind::wcsph, {{"sound_speed", "14"}}},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}}},
-      {SphSolverKind::wcsph, {{"sound_speed", "56"}}},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}},
+      {SphSolverKind::dfsph, {{"cfl", "0.2"}}, "DFSPH, CFL", "0.2"},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}}, "DFSPH, CFL", "0.4"},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}}, "DFSPH, CFL", "0.8"},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}, {"density_error", "0.01"}}, "DFSPH, OTHER", "CFL 0.8, ETA 1 PERCENT"},
+      {SphSolverKind::dfsph,
+       {{"cfl", "0.9"}, {"density_error", "0.0002"}, {"force_bound", "0"}},
+       "DFSPH, OTHER",
+       "CFL 0.9, ETA 0.02 PERCENT, NO FORCE"},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}, {"spacing", "0.0067"}}, "DFSPH, OTHER", "SPACING 0.0067"},
+      {SphSolverKind::wcsph, {{"sound_speed", "14"}}, "WCSPH, SOUND SPEED", "14"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}}, "WCSPH, SOUND SPEED", "28"},
+      {SphSolverKind::wcsph, {{"sound_speed", "56"}}, "WCSPH, SOUND SPEED", "56"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}, "WCSPH, OTHER", "C 28, CFL 0.8"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}, "WCSPH, OTHER", "C 28, SPACING 0.0067"},
   };
   std::printf(
       "| solver | knobs | particles | steps | mean dt (ms) | iterations/step | mean density error (frames) | max "
@@ -231,7 +238,7 @@ int accuracy(const std::string& png) {
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Point {
     double x, y;
-    SphSolverKind solver;
+    const Config* config;
   };
   std::vector<Point> points;
   for (const Config& c : configs) {
@@ -251,22 +258,32 @@ int accuracy(const std::string& png) {
                 100.0 * r.frame_error, 100.0 * r.max_error, 100.0 * r.volume_change, r.wall_ms / r.sim_seconds,
                 r.cpu_s / r.sim_seconds);
     std::fflush(stdout);
-    points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, c.solver});
+    points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, &c});
   }
   if (png.empty()) return 0;
-  // Log-log plot: x = CPU s per simulated s, y = mean density error (%), one curve per solver.
-  benchplot::Canvas cv(720, 480);
+  // Log-log plot: x = CPU s per simulated s, y = mean density error (%). One curve per knob sweep
+  // (joined in table order: the knob rising), and the single-knob-set runs as labelled points.
+  benchplot::Canvas cv(900, 480);
   std::vector<benchplot::Series> series;
-  for (SphSolverKind solver : {SphSolverKind::dfsph, SphSolverKind::wcsph}) {
-    benchplot::Series s;
-    s.label = solver == SphSolverKind::dfsph ? "DFSPH" : "WCSPH";
-    s.color = solver == SphSolverKind::dfsph ? 0x1f5fd0 : 0xd03020;
-    for (const Point& p : points)
-      if (p.solver == solver) s.points.push_back({p.x, p.y});
-    std::sort(s.points.begin(), s.points.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
-    series.push_back(std::move(s));
+  for (const Point& p : points) {
+    auto it = std::find_if(series.begin(), series.end(),
+                           [&](const benchplot::Series& s) { return s.label == p.config->sweep; });
+    if (it == series.end()) {
+      static const std::uint32_t kColors[] = {0x1f5fd0, 0x7fa8f0, 0xd03020, 0xf09070};
+      benchplot::Series s;
+      s.label = p.config->sweep;
+      s.color = kColors[series.size() % 4];
+      s.connect = s.label.find("OTHER") == std::string::npos;
+      series.push_back(std::move(s));
+      it = series.end() - 1;
+    }
+    it->points.push_back({p.x, p.y});
+    it->pointLabels.push_back(p.config->point);
   }
-  benchplot::drawLogLogChart(cv, {}, {"DAM BREAK 2 S: ERROR AGAINST TIME", "CPU S PER SIMULATED S (LOG)", "MEAN DENSITY ERROR % (LOG)"}, series);
+  benchplot::drawLogLogChart(cv, {90, 40, 690, 400, 0, true},
+                             {"DAM BREAK 2 S - ERROR AGAINST TIME", "CPU S PER SIMULATED S (LOG)",
+                              "MEAN DENSITY ERROR, PERCENT (LOG)"},
+                             series, true);
   const std::string err = benchplot::writePng(png, cv);
   if (!err.empty()) {
     std::fprintf(stderr, "bench_sph: %s\n", err.c_str());

@@ -549,7 +549,7 @@ int main(int argc, char** argv) {
     benchplot::Canvas acc(1400, 480);
     int skipped = benchplot::drawLogLogChart(
         acc, {90, 40, 690, 400},
-        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "ABS VOLUME ERROR % (LOG)"}, volumeSeries, true);
+        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "VOLUME ERROR, ABS. PERCENT (LOG)"}, volumeSeries, true);
     skipped += benchplot::drawLogLogChart(acc, {790, 40, 1390, 400},
                                           {"LARGEST VERTEX ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)",
                                            "MAX VERTEX ERROR (LOG)"},
