@@ -341,6 +341,13 @@ int main(int argc, char** argv) {
           "seeding = §4; march = Alg. 1's sweeps including every corner evaluation (§6 lookups) and the "
           "triangle output; gather = block outputs joined. The last column compares the particle cache alone with "
           "the peer's whole mesh.\n\n"
+          "Why the two routes cost what they do: the peer splats each particle once into contiguous rows of a "
+          "dense lattice (vectorisable, no search) and then runs Flying Edges over every lattice cell; approach 1 "
+          "evaluates only the corners next to the surface, so it sums fewer particle-corner pairs, but it pays for "
+          "the §6 cache per particle and column, and per corner for the walk along a z-sorted column list (an "
+          "unpredictable in-range test per entry, and a dependent load of the particle record). The figures this "
+          "trade depends on for each set are in the Figure 7 table's cubes and in `fluiddemo mesh --stats` "
+          "(corners evaluated, particles looked up).\n\n"
        << "| set | S | ms per mesh | prepare | particle cache | seeding | march + corner evaluations | gather | peer ms "
           "(whole mesh) | particle cache / peer |\n"
        << "|---|---|---|---|---|---|---|---|---|---|\n";

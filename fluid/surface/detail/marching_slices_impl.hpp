@@ -465,27 +465,33 @@ inline SweepFrame chooseFrame(const SurfaceParams& p) {
 }
 
 // Runs fn(slot, i) for i in [0, n) on the arena's workers; slot < max_concurrency identifies the
-// worker (its scratch). ThreadSanitizer cannot see the synchronisation inside the uninstrumented
-// system oneTBB, so TSan builds run the same per-item work on plain std::threads instead.
+// worker (its scratch). At most n workers take part; one item (a set that fits one block) or one
+// slot runs on the calling thread as slot 0, with no hand-off to a worker that would first have
+// to wake up. ThreadSanitizer cannot see the synchronisation inside the uninstrumented system
+// oneTBB, so TSan builds run the same per-item work on plain std::threads instead.
 template <class Fn>
 void parallelItems(tbb::task_arena& arena, std::size_t n, Fn&& fn) {
+  const int tasks = int(std::min<std::size_t>(std::size_t(arena.max_concurrency()), n));
+  if (tasks <= 1) {
+    for (std::size_t i = 0; i < n; ++i) fn(0, i);
+    return;
+  }
 #if defined(__SANITIZE_THREAD__)
-  const int slots = arena.max_concurrency();
   std::atomic<std::size_t> next{0};
   std::vector<std::thread> pool;
-  for (int t = 0; t < slots; ++t)
+  for (int t = 0; t < tasks; ++t)
     pool.emplace_back([&, t] {
       for (std::size_t i = next++; i < n; i = next++) fn(t, i);
     });
   for (std::thread& th : pool) th.join();
 #else
-  // One task per slot, each taking the next item from a shared counter as it becomes free: with
-  // few, uneven items (2-4 blocks) this balances better than splitting the index range in halves.
-  const int slots = arena.max_concurrency();
+  // One task per taking part slot, each taking the next item from a shared counter as it becomes
+  // free: with few, uneven items (2-4 blocks) this balances better than splitting the index range
+  // in halves.
   std::atomic<std::size_t> next{0};
   arena.execute([&] {
     tbb::parallel_for(
-        tbb::blocked_range<int>(0, slots, 1),
+        tbb::blocked_range<int>(0, tasks, 1),
         [&](const tbb::blocked_range<int>&) {
           const int slot = tbb::this_task_arena::current_thread_index();
           for (std::size_t i = next++; i < n; i = next++) fn(slot, i);
