@@ -129,6 +129,14 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*world.rigid_bodies->physics),
                 world.rigid_bodies->thrown);
   }
+  if (world.fluid_surface) {
+    // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases summed
+    // over blocks).
+    const fluid::SurfaceStats& ms = world.fluid_surface->mesh.stats;
+    ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(ms.triangles), ms.blocks);
+    ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  other %.2f", ms.cacheBuildMs, ms.seedMs, ms.marchMs,
+                ms.prepareMs + ms.gatherMs);
+  }
   ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
   ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);
   auto edit_section = [&](SectionConfig& section) {
