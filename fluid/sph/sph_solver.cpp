@@ -892,13 +892,17 @@ std::size_t applyEmitters(SphWorld& world) {
       // the density test sees them; they are d apart, so they do not block each other by distance.
       const float disc = std::max(e.radius, 0.0f) + 1e-3f * d;  // a lattice point is at most this far from base
       gatherCrowd(world, base, disc + 2.0f * H + 1e-3f * d, crowd);
-      crowdDensities(world, base, disc + H + 1e-3f * d, crowd, crowd_density);
+      bool densities = false;  // crowd_density is filled when the first point passes the cheaper tests
       forDiscLattice(e, d, dir, [&](glm::vec3 o) {
         const glm::vec3 p = base + o;
         // The crowd test first: a few distances, where the collider test is a query per collider.
         if (crowded(crowd, p, room * room)) return;
         float volume = 0.0f;
         if (overlapsCollider(world, p, world.params.particle_radius, volume)) return;
+        if (!densities) {
+          crowdDensities(world, base, disc + H + 1e-3f * d, crowd, crowd_density);
+          densities = true;
+        }
         float rho = self + rho0 * volume;
         for (std::size_t k = 0; k < crowd.size(); ++k) {
           const glm::vec3 q = p - crowd[k];
