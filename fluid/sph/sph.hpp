@@ -127,8 +127,10 @@ struct SphCollider {
 
 // A nozzle: emits discs of particles (square lattice of spacing d inside `radius`) along
 // `direction` at `speed`, `rate` particles per second, while start_time <= t < end_time.
-// A lattice point is skipped (not emitted) where a collider is nearer than the particle radius or an
-// existing particle nearer than 0.99 d: a blocked nozzle emits less instead of packing particles
+// A lattice point is skipped (not emitted) where a collider is nearer than the particle radius, an
+// existing particle nearer than 0.99 d, or where the new particle would start above the rest density
+// or push an existing particle within its support above it (SPH density with the boundary volume, at
+// the positions when the layer is placed): a blocked nozzle emits less instead of packing particles
 // into fluid or solid that is already there.
 struct SphEmitter {
   glm::vec3 position{0.0f};
@@ -208,6 +210,7 @@ struct SphScratch {
   std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
   std::vector<glm::vec3> emitter_crowd;    // applyEmitters: the particles near the layer being placed
+  std::vector<float> emitter_crowd_density;  // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
