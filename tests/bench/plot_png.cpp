@@ -134,10 +134,11 @@ int drawLogLogChart(Canvas& cv, const ChartFrame& f, const ChartText& text, cons
       ymax = std::max(ymax, std::log10(p[1]));
     }
   if (xmin > xmax) xmin = xmax = ymin = ymax = 0;  // nothing placeable: an empty decade
-  xmin = std::floor(xmin);
-  xmax = std::ceil(xmax + 1e-9);
-  ymin = std::floor(ymin);
-  ymax = std::ceil(ymax + 1e-9);
+  // A point on a decade (log10 within 1e-9 of a whole number) ends the axis there.
+  xmin = std::floor(xmin + 1e-9);
+  xmax = std::ceil(xmax - 1e-9);
+  ymin = std::floor(ymin + 1e-9);
+  ymax = std::ceil(ymax - 1e-9);
   if (xmax <= xmin) xmax = xmin + 1;
   if (ymax <= ymin) ymax = ymin + 1;
   auto px = [&](double x) { return L + static_cast<int>((std::log10(x) - xmin) / (xmax - xmin) * (R - L)); };
