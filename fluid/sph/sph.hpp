@@ -130,8 +130,9 @@ struct SphCollider {
 // A lattice point is skipped (not emitted) where a collider is nearer than the particle radius, an
 // existing particle nearer than 0.99 d, or where the new particle would start above the rest density
 // or push an existing particle within its support above it (SPH density with the boundary volume, at
-// the positions when the layer is placed): a blocked nozzle emits less instead of packing particles
-// into fluid or solid that is already there.
+// the positions when the layer is placed; 0.1 % slack for rounding): a blocked nozzle emits less
+// instead of packing particles into fluid or solid that is already there. A free jet emits every
+// lattice point of every layer.
 struct SphEmitter {
   glm::vec3 position{0.0f};
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // normalised when used; zero means +y

@@ -255,6 +255,47 @@ TEST(SphStability, ANewLayerDoesNotSqueezeFluidPressedAgainstACollider) {
   }
 }
 
+TEST(SphStability, AFreeJetEmitsEveryLatticePointOfEveryLayer) {
+  // The density test must not cost a free jet any particle. Layers exactly d apart (rate high enough
+  // that the interval is d / speed) complete lattice neighbourhoods whose SPH density is rho_0 to
+  // the last bit (sphParticleMass), so a test without slack for rounding dropped points here: with
+  // discs of radius 1.5 d, 2.5 d and 4 d it emitted 87 of 90, 206 of 210 and 478 of 490 particles.
+  for (SphSolverKind solver : kSolvers) {
+    for (const float radiusInSpacings : {1.5f, 2.5f, 4.0f}) {
+      for (const bool gravity : {false, true}) {
+        SphScene s = emptyBox(solver, 1.0f, 0.01f);
+        s.world.params.gravity = gravity ? glm::vec3(0.0f, -9.81f, 0.0f) : glm::vec3(0.0f);
+        s.world.params.max_particles = 20000;
+        const float d = sphSpacing(s.world.params);
+        SphEmitter e;
+        e.position = glm::vec3(0.5f, 0.2f, 0.5f);
+        e.direction = glm::vec3(0.0f, 1.0f, 0.0f);  // up, into free space
+        e.speed = 2.0f;
+        e.radius = radiusInSpacings * d;
+        e.rate = 1e5f;  // interval d / speed: one layer per d of travel
+        s.world.emitters.push_back(e);
+        // A whole disc: the lattice points within the radius, as forDiscLattice places them.
+        std::size_t disc = 0;
+        const int n = int(radiusInSpacings) + 1;
+        for (int i = -n; i <= n; ++i)
+          for (int k = -n; k <= n; ++k)
+            if (float(i * i + k * k) * d * d <= e.radius * e.radius + 1e-6f * d * d) ++disc;
+        std::size_t emitted = 0;
+        for (int step = 0; step < 3000 && emitted < 10 * disc; ++step) {
+          SphStepStats st;
+          ASSERT_TRUE(stepSph(s.world, 0.0f, &st).ok());
+          EXPECT_EQ(st.emitted % disc, 0u) << sphSolverName(solver) << " radius " << radiusInSpacings << " d, step "
+                                           << step << ": a layer lost points";
+          emitted += st.emitted;
+        }
+        ASSERT_GE(emitted, 10 * disc) << "fewer than 10 layers emitted";
+        EXPECT_EQ(emitted % disc, 0u) << sphSolverName(solver) << " radius " << radiusInSpacings << " d, gravity "
+                                      << gravity << ": " << emitted << " particles, discs of " << disc;
+      }
+    }
+  }
+}
+
 TEST(SphStability, RandomisedSeed177Run10NozzleAboveASphere) {
   // The one run of `bench_sph seeds --from 1 --to 300` that broke a bound before emitters tested
   // the density (seed 177 run 10, its drawn values written out; DFSPH): a downward nozzle 1 cm above
@@ -292,8 +333,9 @@ TEST(SphStability, RandomisedSeed177Run10NozzleAboveASphere) {
     fastest = std::max(fastest, maxSpeed(s.world));
   }
   EXPECT_EQ(compression_at_emission, 0.0f);
-  // A single particle from the nozzle reaches at most sqrt(v^2 + 2 g h) = 3.95 m/s at the floor.
-  EXPECT_LT(fastest, 3.95f);
+  // A single particle from the nozzle reaches at most sqrt(v^2 + 2 g h) = 3.94 m/s at the floor;
+  // pressure may pass some energy between particles, hence 5 m/s. The squeeze launched 9.6-15 m/s.
+  EXPECT_LT(fastest, 5.0f);
   EXPECT_TRUE(finiteState(s.world));
   EXPECT_TRUE(inside(s));
 }
