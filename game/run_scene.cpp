@@ -132,10 +132,11 @@ std::pair<bool, bool> drawScenePanel(World& world) {
   if (world.fluid_surface) {
     // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases summed
     // over blocks).
-    const fluid::SurfaceStats& ms = world.fluid_surface->mesh.stats;
-    ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(ms.triangles), ms.blocks);
-    ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  other %.2f", ms.cacheBuildMs, ms.seedMs, ms.marchMs,
-                ms.prepareMs + ms.gatherMs);
+    const fluid::SurfaceStats& surface = world.fluid_surface->mesh.stats;
+    ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(surface.triangles),
+                surface.blocks);
+    ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
+                surface.marchMs, surface.prepareMs + surface.gatherMs);
   }
   ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
   ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);

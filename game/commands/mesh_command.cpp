@@ -122,10 +122,12 @@ int meshCommand(const Args& args) {
     std::printf("particle cache       %.3f MB (largest block)\n", double(s.particleCacheBytesPeakBlock) / 1e6);
     std::printf("working memory       %.3f MB (all workers)\n", double(s.workingBytesAllWorkers) / 1e6);
     std::printf("time                 %.3f ms\n", ms);
+    // The block phases are summed over blocks: on several threads they can add up to more than the time.
+    const char* summed = s.blocks > 1 ? ", summed over blocks" : "";
     std::printf("  prepare            %.3f ms (checks, particle sort, block lists)\n", s.prepareMs);
-    std::printf("  particle cache     %.3f ms (all blocks%s)\n", s.cacheBuildMs, s.blocks > 1 ? ", summed" : "");
-    std::printf("  seeding            %.3f ms\n", s.seedMs);
-    std::printf("  march              %.3f ms (with corner evaluations)\n", s.marchMs);
+    std::printf("  particle cache     %.3f ms (§6 cache%s)\n", s.cacheBuildMs, summed);
+    std::printf("  seeding            %.3f ms (§4 seeding%s)\n", s.seedMs, summed);
+    std::printf("  march              %.3f ms (with corner evaluations%s)\n", s.marchMs, summed);
     std::printf("  gather             %.3f ms\n", s.gatherMs);
   }
   return 0;

@@ -10,6 +10,7 @@
 #include "plot_png.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -103,7 +104,9 @@ double median(std::vector<double> v) {
 
 // Chart curves of one shape: per map set, (ns/query, misclass %) and (ns/query, mean |Δd|) per resolution.
 struct ShapeCurves {
+  std::string shape;
   std::vector<benchplot::Series> misclass, distance;
+  std::vector<std::string> zeroPoints;  // "map set at res²" rows with an error of 0 (not drawable on log axes)
 };
 
 // Legend name of a map set: the table's name, shortened to fit beside the chart.
@@ -140,6 +143,7 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Shape& shape : shapes) {
     ShapeCurves sc;
+    sc.shape = shape.name;
     const fluid::Bounds b = fluid::meshBounds(shape.mesh.view());
     const glm::vec3 ext = b.hi - b.lo;
     const float size = std::max({ext.x, ext.y, ext.z});
@@ -190,17 +194,20 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::
                     100.0 * double(wrong) / double(count), band ? sum_d / double(band) : 0.0, max_d,
                     band ? sum_n / double(band) : 0.0, max_n, median(times), collider.bytes(), bake_ms);
         std::fflush(stdout);
-        static const std::uint32_t kColors[] = {0x1f5fd0, 0xd03020, 0x20a040, 0x9040b0, 0xd08000};
         if (sc.misclass.size() <= ci) {
           sc.misclass.resize(ci + 1);
           sc.distance.resize(ci + 1);
           for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) {
             s->label = legendName(config.name);
-            s->color = kColors[ci % 5];
+            s->color = benchplot::seriesColor(ci);
           }
         }
-        sc.misclass[ci].points.push_back({median(times), 100.0 * double(wrong) / double(count)});
-        sc.distance[ci].points.push_back({median(times), band ? sum_d / double(band) : 0.0});
+        const double misclassPct = 100.0 * double(wrong) / double(count), meanDd = band ? sum_d / double(band) : 0.0;
+        sc.misclass[ci].points.push_back({median(times), misclassPct});
+        sc.distance[ci].points.push_back({median(times), meanDd});
+        if (!(misclassPct > 0.0) || !(meanDd > 0.0))
+          sc.zeroPoints.push_back(config.name + " at " + std::to_string(res) + "²" +
+                                  (!(misclassPct > 0.0) ? " (misclassification)" : " (distance error)"));
         for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) s->pointLabels.push_back(std::to_string(res));
       }
     }
@@ -246,28 +253,59 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s exists; pass --force to replace it\n", argv[0], png.c_str());
     return 1;
   }
+  auto loadAverage = [] {
+    std::FILE* f = std::fopen("/proc/loadavg", "r");
+    char buf[64] = "unknown";
+    if (f) {
+      double a = 0, b = 0, c = 0;
+      if (std::fscanf(f, "%lf %lf %lf", &a, &b, &c) == 3) std::snprintf(buf, sizeof buf, "%.2f %.2f %.2f", a, b, c);
+      std::fclose(f);
+    }
+    return std::string(buf);
+  };
+  const std::string loadBefore = loadAverage();
   l1Table(l1_samples);
   std::vector<ShapeCurves> curves;
   accuracyTable(points, resolutions, png.empty() ? nullptr : &curves);
+  std::printf("Load average (1, 5, 15 min) from /proc/loadavg: %s at the start, %s at the end of the tables.\n",
+              loadBefore.c_str(), loadAverage().c_str());
   if (png.empty()) return 0;
   // One column per shape: misclassification on top, mean |Δd| below, both against ns per query.
-  const char* const kShapes[] = {"SPHERE", "TORUS", "BASIN"};
   benchplot::Canvas canvas(2120, 960);
-  int skipped = 0;
+  std::vector<std::string> zeroPoints;
   for (std::size_t c = 0; c < curves.size() && c < 3; ++c) {
     // Plot area 400 px wide, legend (up to 24 characters) beside it.
     const int left = 90 + 700 * int(c), right = left + 400;
-    const std::string shape = kShapes[c];
-    skipped += benchplot::drawLogLogChart(
-        canvas, {left, 40, right, 400, 0, true},
-        {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED, PERCENT (LOG)"},
-        curves[c].misclass, true);
-    skipped += benchplot::drawLogLogChart(
-        canvas, {left, 520, right, 880, 0, true},
-        {shape + " - DISTANCE ERROR", "NS PER QUERY, 1 THREAD (LOG)", "MEAN DISTANCE ERROR (LOG)"},
-        curves[c].distance, true);
+    std::string shape = curves[c].shape;
+    for (char& ch : shape) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+    const int skipped =
+        benchplot::drawLogLogChart(
+            canvas, {.left = left, .top = 40, .right = right, .bottom = 400, .legendOutside = true},
+            {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED, PERCENT (LOG)"},
+            curves[c].misclass, true) +
+        benchplot::drawLogLogChart(
+            canvas, {.left = left, .top = 520, .right = right, .bottom = 880, .legendOutside = true},
+            {shape + " - DISTANCE ERROR", "NS PER QUERY, 1 THREAD (LOG)", "MEAN DISTANCE ERROR (LOG)"},
+            curves[c].distance, true);
+    if (skipped != int(curves[c].zeroPoints.size())) {
+      std::fprintf(stderr, "%s: %d points left off the chart, %zu with zero error\n", argv[0], skipped,
+                   curves[c].zeroPoints.size());
+      return 1;
+    }
+    for (const std::string& z : curves[c].zeroPoints) zeroPoints.push_back(curves[c].shape + ", " + z);
   }
-  if (skipped) std::fprintf(stderr, "%s: %d chart points with zero error are not drawn (log axes)\n", argv[0], skipped);
+  // The chart's link and what it leaves out, for the page (named after the file written).
+  std::printf("\n![misclassified points and mean distance error against ns per query, per shape and map set, one "
+              "point per resolution](%s)\n\n",
+              std::filesystem::path(png).filename().string().c_str());
+  std::printf("The chart draws the accuracy table above (log-log; the labels at the points are the resolutions).");
+  if (zeroPoints.empty()) {
+    std::printf(" Every point has a non-zero error and is drawn.\n");
+  } else {
+    std::printf(" Points with zero error cannot sit on a log axis and are left out:");
+    for (std::size_t i = 0; i < zeroPoints.size(); ++i) std::printf("%s %s", i ? ";" : "", zeroPoints[i].c_str());
+    std::printf(".\n");
+  }
   const std::string err = benchplot::writePng(png, canvas);
   if (!err.empty()) {
     std::fprintf(stderr, "%s: %s\n", argv[0], err.c_str());

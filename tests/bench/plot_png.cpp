@@ -113,6 +113,11 @@ void Canvas::text(int x, int y, const std::string& s, std::uint32_t color, int s
   }
 }
 
+std::uint32_t seriesColor(std::size_t index) {
+  static const std::uint32_t kPalette[] = {0x1f5fd0, 0xd03020, 0x20a040, 0x9040b0, 0xd08000, 0x008080};
+  return kPalette[index % std::size(kPalette)];
+}
+
 int drawLogLogChart(Canvas& cv, const ChartFrame& f, const ChartText& text, const std::vector<Series>& series,
                     bool minorTicks) {
   const int L = f.left, R = f.right, T = f.top, B = f.bottom;

@@ -45,11 +45,14 @@ struct ChartText {
   std::string title, xLabel, yLabel;
 };
 
+// Distinct series colours (0xRRGGBB) for up to six series; the seventh repeats the first.
+std::uint32_t seriesColor(std::size_t index);
+
 // Log-log axes spanning whole decades around the positive points, one labelled tick per decade
 // (`minorTicks`: unlabelled ticks at 2..9 as well), then every series and a legend. Points with a
 // coordinate <= 0 or not finite cannot be placed on log axes: they are left out, and their number
 // is returned so the caller can say so next to the figure.
-int drawLogLogChart(Canvas& canvas, const ChartFrame& frame, const ChartText& text, const std::vector<Series>& series,
+[[nodiscard]] int drawLogLogChart(Canvas& canvas, const ChartFrame& frame, const ChartText& text, const std::vector<Series>& series,
                     bool minorTicks = false);
 
 // Returns an empty string on success, else an error naming the file.

@@ -341,13 +341,13 @@ int main(int argc, char** argv) {
           "seeding = §4; march = Alg. 1's sweeps including every corner evaluation (§6 lookups) and the "
           "triangle output; gather = block outputs joined. The last column compares the particle cache alone with "
           "the peer's whole mesh.\n\n"
-          "Why the two routes cost what they do: the peer splats each particle once into contiguous rows of a "
-          "dense lattice (vectorisable, no search) and then runs Flying Edges over every lattice cell; approach 1 "
-          "evaluates only the corners next to the surface, so it sums fewer particle-corner pairs, but it pays for "
-          "the §6 cache per particle and column, and per corner for the walk along a z-sorted column list (an "
-          "unpredictable in-range test per entry, and a dependent load of the particle record). The figures this "
-          "trade depends on for each set are in the Figure 7 table's cubes and in `fluiddemo mesh --stats` "
-          "(corners evaluated, particles looked up).\n\n"
+          "What each route does per unit of work: the peer splats each particle once into contiguous rows of a "
+          "dense lattice and then runs Flying Edges over every lattice cell; approach 1 evaluates only the corners "
+          "next to the surface, so it sums fewer particle-corner pairs, but it builds the §6 cache (an entry per "
+          "particle and column of its disc) and, per corner, walks a z-sorted column list with an in-range test "
+          "per entry and a load of the particle record per term. The counts behind that trade for a set (cubes, "
+          "corners evaluated, particles looked up) are printed by `fluiddemo mesh --in tests/data/SET.xyz "
+          "--out /tmp/m.obj --cube S --stats`.\n\n"
        << "| set | S | ms per mesh | prepare | particle cache | seeding | march + corner evaluations | gather | peer ms "
           "(whole mesh) | particle cache / peer |\n"
        << "|---|---|---|---|---|---|---|---|---|---|\n";
@@ -419,7 +419,7 @@ int main(int argc, char** argv) {
     for (Shape& sh : shapes) {
       benchplot::Series vol, vtx;
       vol.label = vtx.label = sh.name;
-      vol.color = vtx.color = volumeSeries.empty() ? 0x1f5fd0 : 0xd03020;
+      vol.color = vtx.color = benchplot::seriesColor(volumeSeries.size());
       // Round particle positions to float first: that is what the extractor sees.
       for (glm::dvec3& p : sh.ps) p = glm::dvec3(glm::vec3(p));
       std::vector<float> xs, ys, zs;
@@ -471,9 +471,25 @@ int main(int argc, char** argv) {
       vertexSeries.push_back(std::move(vtx));
     }
   }
-  if (!accuracyPng.empty())
+  // The charts are drawn here so that the page can say how many points a log axis could not hold.
+  benchplot::Canvas accuracyChart(1400, 480), orderChart(720, 480);
+  auto notDrawn = [&](int skipped) {
+    if (skipped > 0) md << "\n" << skipped << " chart points are zero and cannot be drawn on log axes.\n";
+  };
+  if (!accuracyPng.empty()) {
+    // Two charts side by side, one point per cube size S (finer = slower, more exact).
+    int skipped = benchplot::drawLogLogChart(
+        accuracyChart, {.left = 90, .top = 40, .right = 690, .bottom = 400},
+        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "VOLUME ERROR, ABS. PERCENT (LOG)"}, volumeSeries,
+        true);
+    skipped += benchplot::drawLogLogChart(
+        accuracyChart, {.left = 790, .top = 40, .right = 1390, .bottom = 400},
+        {"LARGEST VERTEX ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "MAX VERTEX ERROR (LOG)"}, vertexSeries,
+        true);
     md << "\n![volume error and largest vertex error against ms per mesh, log-log, one point per cube size S]("
        << std::filesystem::path(accuracyPng).filename().string() << ")\n";
+    notDrawn(skipped);
+  }
 
   // ---------------------------------------------------------------------------------------------
   md << "\n## Back-to-front order: fraction of triangle pairs out of order\n\n"
@@ -485,7 +501,6 @@ int main(int argc, char** argv) {
      << "| set | S | none: mean | b2f: mean | b2f: worst | b2f exact: mean | ms none | ms b2f | ms b2f exact |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   std::vector<benchplot::Series> orderSeries;  // per set: (ms, mean fraction out of order) for none, b2f, exact
-  const std::uint32_t setColors[] = {0x1f5fd0, 0xd03020, 0x20a040, 0x9040b0};
   for (const SetConfig& cfg : kSets) {
     if (cfg.cube != 1.0f && std::string(cfg.label) == "fountain") continue;
     const fluid::ParticlePositions ps = surface_test::loadSet(cfg.file);
@@ -528,14 +543,20 @@ int main(int argc, char** argv) {
        << fmt("%.2f", median(tNone)) << " | " << fmt("%.2f", median(tB)) << " | " << fmt("%.2f", median(tE)) << " |\n";
     benchplot::Series ser;
     ser.label = cfg.label;
-    ser.color = setColors[orderSeries.size() % 4];
+    ser.color = benchplot::seriesColor(orderSeries.size());
     ser.points = {{median(tNone), sNone / views}, {median(tB), sB / views}, {median(tE), sE / views}};
     ser.pointLabels = {"NONE", "B2F", "EXACT"};
     orderSeries.push_back(std::move(ser));
   }
-  if (!orderPng.empty())
+  if (!orderPng.empty()) {
+    const int skipped = benchplot::drawLogLogChart(orderChart, {},
+                                                   {"BACK-TO-FRONT ORDER AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)",
+                                                    "FRACTION OF PAIRS OUT OF ORDER (LOG)"},
+                                                   orderSeries, true);
     md << "\n![mean fraction of triangle pairs out of order against ms per mesh, log-log, per set: none, b2f, b2f exact]("
        << std::filesystem::path(orderPng).filename().string() << ")\n";
+    notDrawn(skipped);
+  }
 
   md << "\nLoad average (1, 5, 15 min) from /proc/loadavg: " << loadBefore << " at the start, " << loadAverage()
      << " at the end of the run, on " << hw << " hardware threads.\n";
@@ -552,22 +573,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::fprintf(stderr, "bench_surface: wrote %s\n", outPath.c_str());
-    // Accuracy: two charts side by side, one point per cube size S (finer = slower, more exact).
-    benchplot::Canvas acc(1400, 480);
-    int skipped = benchplot::drawLogLogChart(
-        acc, {90, 40, 690, 400},
-        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "VOLUME ERROR, ABS. PERCENT (LOG)"}, volumeSeries, true);
-    skipped += benchplot::drawLogLogChart(acc, {790, 40, 1390, 400},
-                                          {"LARGEST VERTEX ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)",
-                                           "MAX VERTEX ERROR (LOG)"},
-                                          vertexSeries, true);
-    benchplot::Canvas ord(720, 480);
-    skipped += benchplot::drawLogLogChart(
-        ord, {}, {"BACK-TO-FRONT ORDER AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "PAIRS OUT OF ORDER (LOG)"},
-        orderSeries, true);
-    if (skipped)  // a zero error or time cannot sit on a log axis; say so rather than hide it
-      std::fprintf(stderr, "bench_surface: %d chart points were zero and are not drawn\n", skipped);
-    for (const auto& [path, canvas] : {std::pair{accuracyPng, &acc}, std::pair{orderPng, &ord}}) {
+    for (const auto& [path, canvas] : {std::pair{accuracyPng, &accuracyChart}, std::pair{orderPng, &orderChart}}) {
       const std::string err = benchplot::writePng(path, *canvas);
       if (!err.empty()) {
         std::fprintf(stderr, "bench_surface: %s\n", err.c_str());

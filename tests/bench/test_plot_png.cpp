@@ -7,6 +7,9 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <string>
+
+#include <unistd.h>
 
 namespace {
 
@@ -29,7 +32,7 @@ TEST(BenchPlot, LogLogChartPlacesPointsAndCountsTheOnesItCannotDraw) {
   s.points = {{1.0, 0.1}, {100.0, 10.0}, {10.0, 1.0}, {0.0, 1.0}, {5.0, -1.0},
               {std::numeric_limits<double>::quiet_NaN(), 1.0}};
   const benchplot::ChartFrame frame;  // plot area x 90..690, y 40..400
-  EXPECT_EQ(benchplot::drawLogLogChart(canvas, frame, {"T", "X", "Y"}, {s}), 3);
+  EXPECT_EQ(benchplot::drawLogLogChart(canvas, frame, {"T", "X", "Y"}, {s}), 3);  // 0, -1 and NaN
   EXPECT_EQ(pixel(canvas, 390, 220), 0x1f5fd0u);  // (10, 1): the middle of both axes
   EXPECT_EQ(pixel(canvas, 90 + 2, 400 - 2), 0x1f5fd0u);  // (1, 0.1): the lower left corner
   EXPECT_EQ(pixel(canvas, 690 - 2, 40 + 2), 0x1f5fd0u);  // (100, 10): the upper right corner
@@ -40,7 +43,9 @@ TEST(BenchPlot, LogLogChartPlacesPointsAndCountsTheOnesItCannotDraw) {
 TEST(BenchPlot, PngRoundTripAndUnwritablePath) {
   benchplot::Canvas canvas(40, 30);
   canvas.line(0, 0, 39, 29, 0xd03020);
-  const std::filesystem::path path = std::filesystem::temp_directory_path() / "fluiddemo_test_plot.png";
+  // A name of this process's own: the Release and sanitizer test runs may run side by side.
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("fluiddemo_test_plot_" + std::to_string(::getpid()) + ".png");
   ASSERT_EQ(benchplot::writePng(path.string(), canvas), "");
   int w = 0, h = 0, n = 0;
   unsigned char* data = stbi_load(path.string().c_str(), &w, &h, &n, 3);
