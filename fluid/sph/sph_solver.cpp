@@ -126,6 +126,15 @@ inline float lookup(const std::vector<float>& table, float s, float H) {
   return table[i] + f * (table[i + 1] - table[i]);
 }
 
+// 1 - V_c: the part of a particle's support that collider c leaves to fluid (V_c = its boundary
+// volume from the wall table at that distance; 1 when c does not push back or is out of reach).
+// The union rule in stepSph multiplies these over the colliders.
+inline float openFraction(const SphScratch& w, const SphCollider& c, const ColliderSample& s) {
+  const float H = w.kernel.support;
+  if (!c.boundary_pressure || !s.valid || s.distance >= H) return 1.0f;
+  return 1.0f - lookup(w.wall_volume, s.distance + w.wall_shift, H);
+}
+
 // collider c's share of grad V at a particle (see the union rule in stepSph); product = prod_c (1 - V_c).
 inline glm::vec3 boundaryShare(const SphScratch& w, const ColliderSample& s, float product) {
   const float H = w.kernel.support;
@@ -785,18 +794,14 @@ void forDiscLattice(const SphEmitter& e, float d, glm::vec3 dir, F&& f) {
 // collider serves both tests: otherwise `volume` is the boundary volume at p, combined over the
 // colliders as in the step (section 2 of stepSph); when it returns true, `volume` is 0.
 bool overlapsCollider(const SphWorld& world, glm::vec3 p, float room, float& volume) {
-  const SphScratch& w = world.scratch;
-  const float H = w.kernel.support;
   float product = 1.0f;  // prod_c (1 - V_c)
   volume = 0.0f;
   for (const SphCollider& col : world.colliders) {
     const glm::vec3 local = toColliderSpace(col.pose, p);
     ColliderSample sample;
     col.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
-    if (!sample.valid) continue;
-    if (sample.distance < room) return true;
-    if (col.boundary_pressure && sample.distance < H)
-      product *= 1.0f - lookup(w.wall_volume, sample.distance + w.wall_shift, H);
+    if (sample.valid && sample.distance < room) return true;
+    product *= openFraction(world.scratch, col, sample);
   }
   volume = 1.0f - product;
   return false;
@@ -919,23 +924,28 @@ std::size_t applyEmitters(SphWorld& world) {
           crowdDensities(world, base, disc + H + 1e-3f * d, crowd, crowd_density);
           densities = true;
         }
+        // f(k, m W(|p - crowd[k]|)) for the crowd members within the support of p, in crowd order;
+        // stops early when f returns false.
+        auto forSupport = [&](auto&& f) {
+          for (std::size_t k = 0; k < crowd.size(); ++k) {
+            const glm::vec3 q = p - crowd[k];
+            const float q2 = glm::dot(q, q);
+            if (q2 < h2 && !f(k, m * sw.kernel.value(std::sqrt(q2)))) return false;
+          }
+          return true;
+        };
         float rho = self + rho0 * volume;
-        for (std::size_t k = 0; k < crowd.size(); ++k) {
-          const glm::vec3 q = p - crowd[k];
-          const float q2 = glm::dot(q, q);
-          if (!(q2 < h2)) continue;
-          const float wk = m * sw.kernel.value(std::sqrt(q2));
-          if (crowd_density[k] + wk > rhoLimit) return;  // would compress an existing particle
+        const bool room_left = forSupport([&](std::size_t k, float wk) {
           rho += wk;
-        }
-        if (rho > rhoLimit) return;  // would start compressed
+          return crowd_density[k] + wk <= rhoLimit;  // else it would compress an existing particle
+        });
+        if (!room_left || rho > rhoLimit) return;  // (rho > limit: it would start compressed)
         if (!addSphParticle(world, p, dir * e.speed)) return;
         ++emitted;
-        for (std::size_t k = 0; k < crowd.size(); ++k) {
-          const glm::vec3 q = p - crowd[k];
-          const float q2 = glm::dot(q, q);
-          if (q2 < h2) crowd_density[k] += m * sw.kernel.value(std::sqrt(q2));
-        }
+        forSupport([&](std::size_t k, float wk) {
+          crowd_density[k] += wk;
+          return true;
+        });
         crowd.push_back(p);
         crowd_density.push_back(rho);
       });
@@ -1131,11 +1141,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
               .run(X, which, static_cast<std::uint32_t>(e - b), w.start_samples[c]);
         for (std::size_t i = b; i < e; ++i) {
           float product = 1.0f;  // prod_c (1 - V_c)
-          for (std::size_t c = 0; c < nc; ++c) {
-            const ColliderSample& s = w.start_samples[c][i];
-            if (!world.colliders[c].boundary_pressure || !s.valid || s.distance >= H) continue;
-            product *= 1.0f - lookup(w.wall_volume, s.distance + w.wall_shift, H);
-          }
+          for (std::size_t c = 0; c < nc; ++c) product *= openFraction(w, world.colliders[c], w.start_samples[c][i]);
           glm::vec3 gradient(0.0f);
           float flux = 0.0f;
           for (std::size_t c = 0; c < nc; ++c) {
