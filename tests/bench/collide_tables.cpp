@@ -7,6 +7,7 @@
 // one point per resolution) into FILE.
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
+#include "load_average.hpp"
 #include "plot_png.hpp"
 
 #include <algorithm>
@@ -253,16 +254,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s exists; pass --force to replace it\n", argv[0], png.c_str());
     return 1;
   }
-  auto loadAverage = [] {
-    std::FILE* f = std::fopen("/proc/loadavg", "r");
-    char buf[64] = "unknown";
-    if (f) {
-      double a = 0, b = 0, c = 0;
-      if (std::fscanf(f, "%lf %lf %lf", &a, &b, &c) == 3) std::snprintf(buf, sizeof buf, "%.2f %.2f %.2f", a, b, c);
-      std::fclose(f);
-    }
-    return std::string(buf);
-  };
+  using benchplot::loadAverage;
   const std::string loadBefore = loadAverage();
   l1Table(l1_samples);
   std::vector<ShapeCurves> curves;
