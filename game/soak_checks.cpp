@@ -1,6 +1,9 @@
 #include "game/soak_checks.hpp"
 
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -16,9 +19,9 @@ std::uint64_t medianOf(std::span<const std::uint64_t> values) {
   return sorted[sorted.size() / 2];
 }
 
-std::string megabytes(std::uint64_t bytes) {
+std::string mebibytes(std::uint64_t bytes) {
   char text[32];
-  std::snprintf(text, sizeof(text), "%.1f MB", static_cast<double>(bytes) / (1024.0 * 1024.0));
+  std::snprintf(text, sizeof(text), "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
   return text;
 }
 
@@ -46,6 +49,12 @@ std::uint64_t residentBytes() {
   return resident * static_cast<std::uint64_t>(page);
 }
 
+void releaseFreeMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+
 MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const MemoryGrowthDesc& desc) {
   MemoryGrowth out;
   if (samples.size() < 3) return out;
@@ -57,12 +66,12 @@ MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const Mem
                        static_cast<std::uint64_t>(desc.max_growth_fraction * static_cast<double>(out.first_level)));
   const std::uint64_t limit = out.first_level + out.bound;
   if (out.last_level > limit) {
-    out.failure = "memory grows after warm-up: resident set " + megabytes(out.first_level) + " -> " +
-                  megabytes(out.last_level) + " (medians of the first and last thirds of " +
-                  std::to_string(samples.size()) + " samples; allowed growth " + megabytes(out.bound) + ")";
+    out.failure = "memory grows after warm-up: resident set " + mebibytes(out.first_level) + " -> " +
+                  mebibytes(out.last_level) + " (medians of the first and last thirds of " +
+                  std::to_string(samples.size()) + " samples; allowed growth " + mebibytes(out.bound) + ")";
   } else if (out.final_sample > limit) {
-    out.failure = "memory ends high: resident set " + megabytes(out.final_sample) + " at the end against " +
-                  megabytes(out.first_level) + " after warm-up (allowed growth " + megabytes(out.bound) + ")";
+    out.failure = "memory ends high: resident set " + mebibytes(out.final_sample) + " at the end against " +
+                  mebibytes(out.first_level) + " after warm-up (allowed growth " + mebibytes(out.bound) + ")";
   }
   return out;
 }

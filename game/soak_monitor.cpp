@@ -150,6 +150,7 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   const auto warmup = static_cast<std::uint64_t>(m.desc.warmup_fraction * static_cast<double>(m.desc.steps));
   const bool go_on = m.failure.empty() && world.steps < m.desc.steps;
   if (world.steps >= warmup && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
+    releaseFreeMemory();
     const std::uint64_t rss = residentBytes();
     if (m.rss_samples.empty()) s.rss_warmup = rss;
     m.rss_samples.push_back(rss);
@@ -161,7 +162,7 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
 void finishSoak(SoakMonitor& m) {
   m.stats.memory = checkMemoryGrowth(m.rss_samples, m.desc.memory);
   // A run that already failed stopped early: its samples say nothing about the trend.
-  if (m.failure.empty() && !m.stats.memory.failure.empty()) m.failure = m.stats.memory.failure;
+  if (m.failure.empty() && !m.stats.memory.failure.empty()) fail(m, m.stats.steps, m.stats.memory.failure);
 }
 
 std::string soakSummary(const SoakMonitor& m) {
@@ -170,7 +171,7 @@ std::string soakSummary(const SoakMonitor& m) {
   char text[512];
   std::snprintf(
       text, sizeof(text),
-      "%llu steps, %d throws, sph %zu..%zu, sprites %zu..%zu, max speed %.2f m/s (crates %.2f), RSS %.1f -> %.1f MB, "
+      "%llu steps, %d throws, sph %zu..%zu, sprites %zu..%zu, max speed %.2f m/s (crates %.2f), RSS %.1f -> %.1f MiB, "
       "worst penetration/radius: sph %.3f (step %llu), sprites %.3f (step %llu), crates %.3f (step %llu)",
       static_cast<unsigned long long>(s.steps), s.throws, s.sph_min, s.sph_max, s.sprite_min, s.sprite_max,
       static_cast<double>(s.max_speed), static_cast<double>(s.max_crate_speed), static_cast<double>(s.rss_warmup) / mb,

@@ -38,6 +38,7 @@ struct SoakOptions {
   std::vector<std::string> overrides;
   int progress_fd = -1;
   std::uint64_t abort_at_step = 0;  // testing aid: abort() before this step (0 = never)
+  std::size_t leak_per_step = 0;    // testing aid: bytes allocated, touched and kept every step
 };
 
 int parseSoakArgs(CLI::App& app, const Args& args) {
@@ -90,9 +91,15 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   options.show_ui = false;
   options.fixed_frame_time = true;  // one fixed step per frame, whatever the machine's speed
   options.frames = static_cast<int>(std::min<std::uint64_t>(desc.steps, 2000000000ull));
+  std::vector<std::vector<char>> leaked;  // --leak-per-step: kept until the run ends
   options.before_step = [&](World& world, std::uint64_t step) {
     soakBeforeStep(monitor, world, step);
     if (step + 1 == o.abort_at_step) std::abort();  // what a failed assertion does (tests the report)
+    if (o.leak_per_step > 0) {
+      // Every page written through a volatile pointer: resident, and not optimised away.
+      volatile char* bytes = leaked.emplace_back(o.leak_per_step).data();
+      for (std::size_t i = 0; i < o.leak_per_step; i += 512) bytes[i] = 1;
+    }
   };
   options.after_frame = [&](const World& world, const FrameInfo&) {
     const bool go_on = soakAfterFrame(monitor, world);
@@ -150,6 +157,7 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
                                     std::to_string(fds[1])};
   for (const std::string& assignment : o.overrides) words.insert(words.end(), {"--set", assignment});
   if (o.abort_at_step > 0) words.insert(words.end(), {"--abort-at-step", std::to_string(o.abort_at_step)});
+  if (o.leak_per_step > 0) words.insert(words.end(), {"--leak-per-step", std::to_string(o.leak_per_step)});
   std::vector<char*> argv;
   for (std::string& word : words) argv.push_back(word.data());
   argv.push_back(nullptr);
@@ -226,6 +234,9 @@ int soakCommand(const Args& args) {
   app.add_flag("--in-process", in_process, "run the scenes in this process (no child per scene)");
   app.add_option("--progress-fd", o.progress_fd, "(internal) write each step's number to this fd")->group("");
   app.add_option("--abort-at-step", o.abort_at_step, "(testing) abort before step N, to check the crash report")
+      ->group("");
+  app.add_option("--leak-per-step", o.leak_per_step,
+                 "(testing) keep N more bytes every step, to check the memory check")
       ->group("");
   if (int code = parseSoakArgs(app, args); code >= 0) return code;
 

@@ -20,7 +20,7 @@ namespace {
 constexpr std::uint64_t kMB = 1ull << 20;
 
 // 96 samples (a 3,600-step run after 20 % warm-up, one sample per 30 steps) around `level` with
-// +-1.5 MB of alternating noise, plus `slope` bytes per sample.
+// +-1.5 MiB of alternating noise, plus `slope` bytes per sample.
 std::vector<std::uint64_t> samples(std::uint64_t level, double slope) {
   std::vector<std::uint64_t> out;
   for (int i = 0; i < 96; ++i) {
@@ -33,25 +33,25 @@ std::vector<std::uint64_t> samples(std::uint64_t level, double slope) {
 TEST(SoakMemory, FlatNoisyResidentSetPasses) {
   const game::MemoryGrowth m = game::checkMemoryGrowth(samples(300 * kMB, 0.0));
   EXPECT_TRUE(m.failure.empty()) << m.failure;
-  EXPECT_EQ(m.bound, static_cast<std::uint64_t>(0.05 * static_cast<double>(m.first_level)));  // 5 % of ~300 MB > 8 MB
+  EXPECT_EQ(m.bound, static_cast<std::uint64_t>(0.05 * static_cast<double>(m.first_level)));  // 5 % of ~300 MiB > 8 MiB
 }
 
 TEST(SoakMemory, SteadyGrowthFails) {
-  // 0.3 MB per sample: about 19 MB between the thirds' medians, above max(8 MB, 5 % of 100 MB).
+  // 0.3 MiB per sample: about 19 MiB between the thirds' medians, above max(8 MiB, 5 % of 100 MiB).
   const game::MemoryGrowth m = game::checkMemoryGrowth(samples(100 * kMB, 0.3 * kMB));
   EXPECT_NE(m.failure.find("memory grows after warm-up"), std::string::npos) << m.failure;
   EXPECT_GT(m.last_level, m.first_level + 8 * kMB);
 }
 
 TEST(SoakMemory, GrowthBelowTheFloorPasses) {
-  // 0.1 MB per sample: about 6 MB between the medians, under the 8 MB floor (5 % of 100 MB = 5 MB).
+  // 0.1 MiB per sample: about 6 MiB between the medians, under the 8 MiB floor (5 % of 100 MiB = 5 MiB).
   const game::MemoryGrowth m = game::checkMemoryGrowth(samples(100 * kMB, 0.1 * kMB));
   EXPECT_TRUE(m.failure.empty()) << m.failure;
   EXPECT_EQ(m.bound, 8 * kMB);
 }
 
 TEST(SoakMemory, TheRelativeBoundScalesWithTheLevel) {
-  // 1 GB process: 5 % = 51 MB allowed. 40 MB of growth passes, 80 MB fails.
+  // 1 GiB process: 5 % = 51 MiB allowed. 40 MiB of growth passes, 80 MiB fails.
   EXPECT_TRUE(game::checkMemoryGrowth(samples(1024 * kMB, 40.0 * kMB / 64.0)).failure.empty());
   EXPECT_FALSE(game::checkMemoryGrowth(samples(1024 * kMB, 80.0 * kMB / 64.0)).failure.empty());
 }
