@@ -32,7 +32,8 @@ struct SoakDesc {
   // centre reached the surface: the crate sank or went through a wall.
   float crate_tolerance = 0.5f;
   MemoryGrowthDesc memory;
-  int progress_fd = -1;  // when >= 0: "N\n" is written here before step N (1-based) runs
+  bool check_memory = true;  // false: the resident set is still sampled and printed, never judged
+  int progress_fd = -1;      // when >= 0: "N\n" is written here before step N (1-based) runs
 };
 
 struct SoakStats {

@@ -36,6 +36,7 @@ struct SoakOptions {
   int height = 90;
   double throw_every = 2.0;
   std::vector<std::string> overrides;
+  bool no_memory_check = false;
   int progress_fd = -1;
   std::uint64_t abort_at_step = 0;  // testing aid: abort() before this step (0 = never)
   std::size_t leak_per_step = 0;    // testing aid: bytes allocated, touched and kept every step
@@ -80,6 +81,7 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   desc.seed = o.seed;
   desc.throws.mean_interval_s = o.throw_every;
   desc.progress_fd = o.progress_fd;
+  desc.check_memory = !o.no_memory_check;
   SoakMonitor monitor = makeSoakMonitor(desc, step_seconds);
   // Long runs (10 min of play and more) say how far they are every tenth of the way.
   const std::uint64_t report_every = desc.steps >= 36000 ? desc.steps / 10 : 0;
@@ -156,6 +158,7 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
                                     "--progress-fd",
                                     std::to_string(fds[1])};
   for (const std::string& assignment : o.overrides) words.insert(words.end(), {"--set", assignment});
+  if (o.no_memory_check) words.emplace_back("--no-memory-check");
   if (o.abort_at_step > 0) words.insert(words.end(), {"--abort-at-step", std::to_string(o.abort_at_step)});
   if (o.leak_per_step > 0) words.insert(words.end(), {"--leak-per-step", std::to_string(o.leak_per_step)});
   std::vector<char*> argv;
@@ -232,6 +235,8 @@ int soakCommand(const Args& args) {
       ->capture_default_str();
   app.add_option("--set", o.overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--in-process", in_process, "run the scenes in this process (no child per scene)");
+  app.add_flag("--no-memory-check", o.no_memory_check,
+               "print the resident set but do not judge it (sanitizer builds, whose allocators keep freed memory)");
   app.add_option("--progress-fd", o.progress_fd, "(internal) write each step's number to this fd")->group("");
   app.add_option("--abort-at-step", o.abort_at_step, "(testing) abort before step N, to check the crash report")
       ->group("");
