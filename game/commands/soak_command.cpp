@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -168,8 +169,9 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
   std::fflush(stderr);
   const pid_t pid = ::fork();
   if (pid == 0) {
-    // The write end survives exec; the read end closes. A child whose parent is gone dies of
-    // SIGPIPE at its next progress write (no orphaned hour-long run after a ctest timeout).
+    // The write end survives exec; the read end closes. The child dies with its parent (no
+    // orphaned hour-long run, or hung one, after a ctest timeout kills the parent).
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     ::fcntl(fds[1], F_SETFD, 0);
     ::execv(argv[0], argv.data());
     _exit(127);
@@ -205,10 +207,15 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
     return WEXITSTATUS(status) == 0 ? 0 : 1;
   }
   const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
-  std::printf(
-      "soak %-12s FAIL  killed by signal %d (%s) in frame %llu: its simulation step %llu, the meshing or the "
-      "render after it (the child's own message, if any, is above)\n",
-      name.c_str(), signal, strsignal(signal), last_step, last_step);
+  if (last_step == 0) {
+    std::printf("soak %-12s FAIL  killed by signal %d (%s) before the first step (loading or start-up)\n", name.c_str(),
+                signal, strsignal(signal));
+  } else {
+    std::printf(
+        "soak %-12s FAIL  killed by signal %d (%s) in frame %llu: its simulation step %llu, the meshing or "
+        "the render after it (the child's own message, if any, is above)\n",
+        name.c_str(), signal, strsignal(signal), last_step, last_step);
+  }
   return 1;
 }
 
