@@ -108,6 +108,8 @@ SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds) {
   m.desc = desc;
   m.desc.throws.step_seconds = step_seconds;
   m.schedule = makeThrowSchedule(m.desc.throws, desc.seed);
+  m.warmup_steps = std::max(static_cast<std::uint64_t>(desc.warmup_fraction * static_cast<double>(desc.steps)),
+                            static_cast<std::uint64_t>(std::llround(desc.min_warmup_seconds / step_seconds)));
   // Reserved now so the samples' own storage never shows up as growth.
   m.rss_samples.reserve(static_cast<std::size_t>(desc.steps / std::max<std::uint64_t>(desc.memory_every, 1) + 2));
   return m;
@@ -131,6 +133,9 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   s.steps = world.steps;
   if (!world.nonfinite_state.empty())
     fail(m, world.steps, "non-finite state or solver/mesher error: " + world.nonfinite_state);
+  s.has_sph = world.sph_fluid != nullptr;
+  s.has_sprites = world.sprite_particles != nullptr;
+  s.has_crates = world.rigid_bodies != nullptr;
   if (world.sph_fluid) {
     const fluid::ParticleStore& p = world.sph_fluid->world.particles;
     trackCount(p.size(), !m.have_counts, s.sph_min, s.sph_max);
@@ -147,9 +152,8 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   }
   m.have_counts = true;
   checkPenetration(m, world);
-  const auto warmup = static_cast<std::uint64_t>(m.desc.warmup_fraction * static_cast<double>(m.desc.steps));
   const bool go_on = m.failure.empty() && world.steps < m.desc.steps;
-  if (world.steps >= warmup && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
+  if (world.steps >= m.warmup_steps && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
     releaseFreeMemory();
     const std::uint64_t rss = residentBytes();
     if (m.rss_samples.empty()) s.rss_warmup = rss;
@@ -168,19 +172,38 @@ void finishSoak(SoakMonitor& m) {
 
 std::string soakSummary(const SoakMonitor& m) {
   const SoakStats& s = m.stats;
-  const double mb = 1024.0 * 1024.0;
-  char text[512];
-  std::snprintf(
-      text, sizeof(text),
-      "%llu steps, %d throws, sph %zu..%zu, sprites %zu..%zu, max speed %.2f m/s (crates %.2f), RSS %.1f -> %.1f MiB, "
-      "worst penetration/radius: sph %.3f (step %llu), sprites %.3f (step %llu), crates %.3f (step %llu)",
-      static_cast<unsigned long long>(s.steps), s.throws, s.sph_min, s.sph_max, s.sprite_min, s.sprite_max,
-      static_cast<double>(s.max_speed), static_cast<double>(s.max_crate_speed), static_cast<double>(s.rss_warmup) / mb,
-      static_cast<double>(s.rss_end) / mb, static_cast<double>(s.worst_sph),
-      static_cast<unsigned long long>(s.worst_sph_step), static_cast<double>(s.worst_sprite),
-      static_cast<unsigned long long>(s.worst_sprite_step), static_cast<double>(s.worst_crate),
-      static_cast<unsigned long long>(s.worst_crate_step));
-  return text;
+  const double mib = 1024.0 * 1024.0;
+  char part[160];
+  // Only the systems the scene has: "sph 0..0" of a scene without water would read as a failure.
+  auto add = [&](std::string& out, const char* format, auto... values) {
+    std::snprintf(part, sizeof(part), format, values...);
+    out += part;
+  };
+  std::string line, worst;
+  add(line, "%llu steps, %d throws", static_cast<unsigned long long>(s.steps), s.throws);
+  if (s.has_sph) {
+    add(line, ", sph %zu..%zu", s.sph_min, s.sph_max);
+    add(worst, " sph %.3f (step %llu)", static_cast<double>(s.worst_sph),
+        static_cast<unsigned long long>(s.worst_sph_step));
+  }
+  if (s.has_sprites) {
+    add(line, ", sprites %zu..%zu", s.sprite_min, s.sprite_max);
+    add(worst, "%s sprites %.3f (step %llu)", worst.empty() ? "" : ",", static_cast<double>(s.worst_sprite),
+        static_cast<unsigned long long>(s.worst_sprite_step));
+  }
+  if (s.has_sph || s.has_sprites) add(line, ", max particle speed %.2f m/s", static_cast<double>(s.max_speed));
+  if (s.has_crates) {
+    add(line, ", max crate speed %.2f m/s", static_cast<double>(s.max_crate_speed));
+    add(worst, "%s crates %.3f (step %llu)", worst.empty() ? "" : ",", static_cast<double>(s.worst_crate),
+        static_cast<unsigned long long>(s.worst_crate_step));
+  }
+  if (m.rss_samples.size() < 3) {
+    add(line, ", RSS not judged (%zu samples after warm-up)", m.rss_samples.size());
+  } else {
+    add(line, ", RSS %.1f -> %.1f MiB", static_cast<double>(s.rss_warmup) / mib, static_cast<double>(s.rss_end) / mib);
+  }
+  if (!worst.empty()) line += ", worst penetration/radius:" + worst;
+  return line;
 }
 
 }  // namespace game

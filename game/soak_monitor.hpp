@@ -14,8 +14,13 @@ namespace game {
 struct World;
 
 struct SoakDesc {
-  std::uint64_t steps = 3600;       // run length; the monitor asks to stop after this many steps
-  double warmup_fraction = 0.2;     // memory is judged on the samples after this share of the run
+  std::uint64_t steps = 3600;  // run length; the monitor asks to stop after this many steps
+  // Memory is judged on the samples after warm-up: this share of the run, and at least
+  // min_warmup_seconds of game time (twice what the fountain takes to fill its 2,500-particle budget
+  // at 500 particles/s, after which its buffers have their working size). A run too short to leave
+  // 3 samples after it is not judged.
+  double warmup_fraction = 0.2;
+  double min_warmup_seconds = 10.0;
   std::uint64_t memory_every = 30;  // steps between resident-set samples
   ThrowScheduleDesc throws;         // step_seconds is taken from the world
   std::uint32_t seed = 1;
@@ -39,11 +44,12 @@ struct SoakDesc {
 struct SoakStats {
   std::uint64_t steps = 0;
   int throws = 0;
-  std::size_t sph_min = 0, sph_max = 0;        // SPH particle count over the run's frames
-  std::size_t sprite_min = 0, sprite_max = 0;  // sprite particles
-  float max_speed = 0.0f;                      // m/s, fastest SPH or sprite particle seen
-  float max_crate_speed = 0.0f;                // m/s, fastest crate seen
-  std::uint64_t rss_warmup = 0, rss_end = 0;   // resident set at the end of warm-up and at the last frame
+  bool has_sph = false, has_sprites = false, has_crates = false;  // which systems the world has
+  std::size_t sph_min = 0, sph_max = 0;                           // SPH particle count over the run's frames
+  std::size_t sprite_min = 0, sprite_max = 0;                     // sprite particles
+  float max_speed = 0.0f;                                         // m/s, fastest SPH or sprite particle seen
+  float max_crate_speed = 0.0f;                                   // m/s, fastest crate seen
+  std::uint64_t rss_warmup = 0, rss_end = 0;  // resident set at the end of warm-up and at the last frame
   float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
   std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
   MemoryGrowth memory;
@@ -51,6 +57,7 @@ struct SoakStats {
 
 struct SoakMonitor {
   SoakDesc desc;
+  std::uint64_t warmup_steps = 0;  // from desc.warmup_fraction and min_warmup_seconds
   ThrowSchedule schedule;
   SoakStats stats;
   std::vector<std::uint64_t> rss_samples;  // after warm-up; reserved up front
