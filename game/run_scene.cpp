@@ -342,7 +342,10 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           break;
         }
         const int steps = engine::advanceFrame(clock, frame_dt);
-        for (int s = 0; s < steps; ++s) stepWorld(world, &profiler);
+        for (int s = 0; s < steps; ++s) {
+          if (options.before_step) options.before_step(world, world.steps);
+          stepWorld(world, &profiler);
+        }
         steps_done += static_cast<std::uint64_t>(steps);
         // With a fixed frame time the accumulator is always empty: show the newest state.
         const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));
@@ -418,6 +421,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         engine::endFrame(profiler);
         ++report.frames_rendered;
         if (code != 0) break;
+        if (options.after_frame && !options.after_frame(world, FrameInfo{frame, steps})) break;
       }
       report.simulation_steps = steps_done;
       report.nonfinite_state = world.nonfinite_state;

@@ -7,10 +7,19 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace game {
+
+struct World;
+
+// What RunOptions::after_frame is told about the frame just finished.
+struct FrameInfo {
+  int frame = 0;  // index of the frame (0 = first)
+  int steps = 0;  // simulation steps taken during it
+};
 
 struct RunOptions {
   int width = 1280;  // framebuffer size in pixels, clamped to [64, 8192]
@@ -21,6 +30,12 @@ struct RunOptions {
   bool show_ui = true;               // ImGui overlay (toggled at run time with a key)
   bool capture_last_frame = false;   // fill RunReport::last_frame_rgba / blank_frame_rgba
   bool fixed_frame_time = false;     // headless runs feed the loop exactly one step per frame
+  // Hooks for tools that drive or watch a run (soak, replays); empty = not called.
+  // before_step: before each simulation step, with the step's index (world.steps before it).
+  std::function<void(World&, std::uint64_t step)> before_step;
+  // after_frame: once per frame, after its steps, the meshing and the render; false ends the run
+  // after this frame.
+  std::function<bool(const World&, const FrameInfo&)> after_frame;
 };
 
 // Statistics of one profiler phase over the run, in milliseconds.

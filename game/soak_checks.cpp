@@ -1,0 +1,128 @@
+#include "game/soak_checks.hpp"
+
+#include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace game {
+namespace {
+
+std::uint64_t medianOf(std::span<const std::uint64_t> values) {
+  std::vector<std::uint64_t> sorted(values.begin(), values.end());
+  std::sort(sorted.begin(), sorted.end());
+  return sorted[sorted.size() / 2];
+}
+
+std::string mebibytes(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
+  return text;
+}
+
+// Uniform in [0, 1) from the generator's top 24 bits: the same numbers on every standard library
+// (std::uniform_real_distribution's algorithm is implementation-defined).
+float uniform01(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 16777216.0f); }
+
+float uniformIn(std::mt19937& rng, float lo, float hi) { return lo + (hi - lo) * uniform01(rng); }
+
+std::uint64_t stepsUntilNext(ThrowSchedule& s) {
+  const double interval = s.desc.mean_interval_s * (0.5 + static_cast<double>(uniform01(s.rng)));
+  return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(interval / s.desc.step_seconds)));
+}
+
+}  // namespace
+
+std::uint64_t residentBytes() {
+  std::FILE* file = std::fopen("/proc/self/statm", "r");
+  if (file == nullptr) return 0;
+  unsigned long long size = 0, resident = 0;
+  const int read = std::fscanf(file, "%llu %llu", &size, &resident);
+  std::fclose(file);
+  const long page = sysconf(_SC_PAGESIZE);
+  if (read != 2 || page <= 0) return 0;
+  return resident * static_cast<std::uint64_t>(page);
+}
+
+void releaseFreeMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+
+MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const MemoryGrowthDesc& desc) {
+  MemoryGrowth out;
+  if (samples.size() < 3) return out;
+  const std::size_t third = samples.size() / 3;
+  out.first_level = medianOf(samples.first(third));
+  out.last_level = medianOf(samples.last(third));
+  out.final_sample = samples.back();
+  out.bound = std::max(desc.min_growth_bytes,
+                       static_cast<std::uint64_t>(desc.max_growth_fraction * static_cast<double>(out.first_level)));
+  const std::uint64_t limit = out.first_level + out.bound;
+  if (out.last_level > limit) {
+    out.failure = "memory grows after warm-up: resident set " + mebibytes(out.first_level) + " -> " +
+                  mebibytes(out.last_level) + " (medians of the first and last thirds of " +
+                  std::to_string(samples.size()) + " samples; allowed growth " + mebibytes(out.bound) + ")";
+  } else if (out.final_sample > limit) {
+    out.failure = "memory ends high: resident set " + mebibytes(out.final_sample) + " at the end against " +
+                  mebibytes(out.first_level) + " after warm-up (allowed growth " + mebibytes(out.bound) + ")";
+  }
+  return out;
+}
+
+Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                             const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch) {
+  Penetration worst;
+  if (points.empty()) return worst;
+  scratch.local.resize(points.size());
+  scratch.samples.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) scratch.local[i] = fluid::toColliderSpace(pose, points[i]);
+  shape.query(scratch.local, scratch.samples);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const fluid::ColliderSample& s = scratch.samples[i];
+    if (!s.valid) continue;
+    const float depth = offset - s.distance;
+    if (depth > worst.depth) {
+      worst.depth = depth;
+      worst.index = i;
+      worst.position = points[i];
+    }
+  }
+  worst.ratio = radius > 0.0f ? worst.depth / radius : 0.0f;
+  return worst;
+}
+
+ThrowSchedule makeThrowSchedule(const ThrowScheduleDesc& desc, std::uint32_t seed) {
+  ThrowSchedule s;
+  s.desc = desc;
+  s.rng.seed(seed);
+  s.next_step = desc.mean_interval_s > 0.0 && desc.step_seconds > 0.0 ? stepsUntilNext(s) : UINT64_MAX;
+  return s;
+}
+
+std::optional<CrateThrow> throwDue(ThrowSchedule& s, std::uint64_t step) {
+  if (step < s.next_step) return std::nullopt;
+  CrateThrow t;
+  t.step = step;
+  const float two_pi = 2.0f * std::numbers::pi_v<float>;
+  const float stand_angle = two_pi * uniform01(s.rng);
+  const float stand_radius = uniformIn(s.rng, s.desc.stand_radius_min, s.desc.stand_radius_max);
+  t.from = glm::vec3(std::cos(stand_angle) * stand_radius,
+                     uniformIn(s.rng, s.desc.stand_height_min, s.desc.stand_height_max),
+                     std::sin(stand_angle) * stand_radius);
+  // Uniform over the disc's area: radius from the square root.
+  const float target_angle = two_pi * uniform01(s.rng);
+  const float target_radius = s.desc.target_radius * std::sqrt(uniform01(s.rng));
+  t.target = glm::vec3(std::cos(target_angle) * target_radius, uniformIn(s.rng, 0.0f, s.desc.target_height_max),
+                       std::sin(target_angle) * target_radius);
+  s.next_step = step + stepsUntilNext(s);
+  return t;
+}
+
+}  // namespace game

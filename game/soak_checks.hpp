@@ -1,0 +1,117 @@
+#pragma once
+// The checks `fluiddemo soak` applies to a long run (game/commands/soak_command.cpp), as plain
+// functions on plain data so each can be shown to fire on a crafted bad case (tests/game):
+//  - memory that grows after warm-up (resident set sampled from /proc/self/statm),
+//  - a particle (or a crate) inside a collider, measured as penetration depth over its radius,
+//  - the seeded schedule of crate throws (the same seed throws the same crates at the same steps).
+
+#include "fluid/core/collider.hpp"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace game {
+
+// ---- memory ----------------------------------------------------------------------------------
+
+// Resident set size of this process in bytes (/proc/self/statm, field 2 times the page size);
+// 0 where it cannot be read.
+std::uint64_t residentBytes();
+
+// Hands the allocator's free pages back to the system (glibc malloc_trim; nothing elsewhere), so
+// that a following residentBytes() counts live memory: without it a leak first refills the tens
+// of MiB that start-up freed but the heap kept resident, and stays invisible until they are used up.
+void releaseFreeMemory();
+
+// Bound on the growth of the resident set after warm-up (sampled after releaseFreeMemory). A soak
+// fails when it grows by more than max(min_growth_bytes, max_growth_fraction * level), level being
+// the median of the first third of the samples. Why this bound: without a leak the sampled RSS
+// still moves by a few MiB (buffers whose capacity follows their high-water mark, e.g. the
+// fountain's surface mesh and the solver's scratch, and the malloc arenas of the worker threads);
+// 8 MiB sits above that, and 5 % keeps the bound meaningful for bigger scenes whose buffers scale
+// with their size. What it catches: a leak of L bytes per step moves the last third's median by
+// L x 0.53 x steps (after a 20 % warm-up the thirds' medians are 0.53 of the run apart) and the
+// last sample by L x 0.67 x steps, so the 3,600-step ctest run catches about 3.5 KiB/step and up,
+// the 216,000-step nightly run about 60 B/step (8 MiB over 144,000 steps).
+struct MemoryGrowthDesc {
+  std::uint64_t min_growth_bytes = 8ull << 20;  // 8 MiB
+  double max_growth_fraction = 0.05;
+};
+
+struct MemoryGrowth {
+  std::uint64_t first_level = 0;  // median of the first third of the samples
+  std::uint64_t last_level = 0;   // median of the last third
+  std::uint64_t final_sample = 0;
+  std::uint64_t bound = 0;  // allowed growth, bytes
+  std::string failure;      // empty when neither the trend nor the final level exceeds the bound
+};
+
+// `samples` are resident sizes taken at equal intervals after warm-up. Two checks, both against
+// the first third's median: steady growth (the last third's median) and the final level (the
+// last sample, so a late jump that the median would hide still fails). Fewer than 3 samples:
+// nothing to compare, no failure.
+MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const MemoryGrowthDesc& desc = {});
+
+// ---- particles inside colliders ---------------------------------------------------------------
+
+// The deepest point of a set inside one collider.
+struct Penetration {
+  float depth = 0.0f;        // m below the surface (0 when every point is outside)
+  float ratio = 0.0f;        // depth / radius
+  std::size_t index = 0;     // which point
+  glm::vec3 position{0.0f};  // where it is (world space)
+};
+
+// Scratch for worstPenetration (caller-owned, reused every frame).
+struct PenetrationScratch {
+  std::vector<glm::vec3> local;
+  std::vector<fluid::ColliderSample> samples;
+};
+
+// Deepest penetration of the points (world space) into `shape` placed at `pose` (collider space =
+// rotation^-1 (world - translation)). A point counts `inset` metres deep when its signed distance
+// is -inset; `offset` is subtracted from every distance first (for a crate: its half edge, so a
+// crate centre nearer than that to the surface counts as the box reaching into the solid).
+// Invalid samples (no opinion) count as outside. `radius` scales the ratio.
+Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                             const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch);
+
+// ---- crate throws -----------------------------------------------------------------------------
+
+// Where soak throws come from and go: the thrower stands on a ring around the fountain (so throws
+// come from every side and the camera, which the surface is meshed for, sees it from everywhere)
+// and aims at a random point of the basin and the yard around it.
+struct ThrowScheduleDesc {
+  double mean_interval_s = 2.0;  // intervals uniform in [0.5, 1.5] x this; <= 0: never throw
+  double step_seconds = 1.0 / 60.0;
+  float stand_radius_min = 6.0f, stand_radius_max = 10.0f;  // m from the fountain's axis
+  float stand_height_min = 1.5f, stand_height_max = 4.0f;   // eye height, m
+  float target_radius = 4.5f;                               // targets within this disc (basin 3.2 m)
+  float target_height_max = 1.0f;                           // targets at y in [0, this]
+};
+
+struct CrateThrow {
+  std::uint64_t step = 0;  // thrown just before this step (world.steps == step)
+  glm::vec3 from{0.0f};
+  glm::vec3 target{0.0f};
+};
+
+struct ThrowSchedule {
+  ThrowScheduleDesc desc;
+  std::mt19937 rng;
+  std::uint64_t next_step = 0;
+};
+
+ThrowSchedule makeThrowSchedule(const ThrowScheduleDesc& desc, std::uint32_t seed);
+
+// The throw due before `step`, if any (at most one per step); advances the schedule past it.
+// Call with every step in increasing order: the sequence depends only on the seed and desc.
+std::optional<CrateThrow> throwDue(ThrowSchedule& schedule, std::uint64_t step);
+
+}  // namespace game

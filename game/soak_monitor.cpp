@@ -1,0 +1,209 @@
+#include "game/soak_monitor.hpp"
+
+#include "game/world/world.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace game {
+namespace {
+
+void fail(SoakMonitor& m, std::uint64_t step, const std::string& what) {
+  if (m.failure.empty()) m.failure = "step " + std::to_string(step) + ": " + what;
+}
+
+std::string describe(const char* what, const Penetration& p, float tolerance) {
+  char text[256];
+  std::snprintf(text, sizeof(text), "%s %.4f m inside a collider (%.2f radii, tolerance %.2f) at (%.3f, %.3f, %.3f)",
+                what, p.depth, p.ratio, tolerance, p.position.x, p.position.y, p.position.z);
+  return text;
+}
+
+// Moves the camera to the thrower's place and throws along a lob that lands near the target: the
+// crate leaves along the camera's forward axis at throw_speed, so aim above the target by the drop
+// over the flight (flight time from the straight distance, ignoring the arc's extra length).
+void throwCrateAt(World& world, const CrateThrow& t) {
+  const RigidBodies& bodies = *world.rigid_bodies;
+  const glm::vec3 to_target = t.target - t.from;
+  const float flight = glm::length(to_target) / std::max(bodies.params.throw_speed, 0.1f);
+  const glm::vec3 aim = to_target - 0.5f * bodies.params.gravity * flight * flight;
+  const glm::vec3 dir = glm::normalize(aim);
+  world.camera.position = t.from;
+  world.camera.yaw_degrees = glm::degrees(std::atan2(dir.z, dir.x));
+  world.camera.pitch_degrees = std::clamp(glm::degrees(std::asin(std::clamp(dir.y, -1.0f, 1.0f))), -89.0f, 89.0f);
+  playerThrow(world);
+}
+
+void trackCount(std::size_t count, bool first, std::size_t& lo, std::size_t& hi) {
+  lo = first ? count : std::min(lo, count);
+  hi = first ? count : std::max(hi, count);
+}
+
+float maxSpeed(std::span<const glm::vec3> velocities) {
+  float fastest = 0.0f;
+  for (const glm::vec3& v : velocities) fastest = std::max(fastest, glm::dot(v, v));
+  return std::sqrt(fastest);
+}
+
+// SPH particles against every collider the solver knows (the fountain and the coupled crates, at
+// the poses the solver ended the step with); sprites against the fountain; crate centres against
+// the fountain with their half edge as offset.
+void checkPenetration(SoakMonitor& m, const World& world) {
+  const std::uint64_t step = world.steps;
+  SoakStats& s = m.stats;
+  if (world.sph_fluid) {
+    const fluid::SphWorld& sph = world.sph_fluid->world;
+    const float radius = sph.params.particle_radius;
+    for (const fluid::SphCollider& collider : sph.colliders) {
+      const Penetration p =
+          worstPenetration(sph.particles.position, *collider.shape, collider.pose, radius, 0.0f, m.scratch);
+      if (p.ratio > s.worst_sph) {
+        s.worst_sph = p.ratio;
+        s.worst_sph_step = step;
+      }
+      if (p.ratio > m.desc.particle_tolerance) {
+        fail(m, step,
+             describe(("sph particle id " + std::to_string(sph.particles.id[p.index])).c_str(), p,
+                      m.desc.particle_tolerance));
+      }
+    }
+  }
+  if (world.sprite_particles) {
+    const SpriteParticles& sp = *world.sprite_particles;
+    const Penetration p = worstPenetration(std::span(sp.position).first(sp.count), world.fountain,
+                                           fluid::ColliderPose{}, sp.params.size, 0.0f, m.scratch);
+    if (p.ratio > s.worst_sprite) {
+      s.worst_sprite = p.ratio;
+      s.worst_sprite_step = step;
+    }
+    if (p.ratio > m.desc.particle_tolerance)
+      fail(m, step, describe(("sprite particle " + std::to_string(p.index)).c_str(), p, m.desc.particle_tolerance));
+  }
+  if (world.rigid_bodies) {
+    const RigidBodies& bodies = *world.rigid_bodies;
+    m.points.clear();
+    for (const engine::BodyState& state : bodies.current) m.points.push_back(state.position);
+    const float size = bodies.params.crate_size;
+    const Penetration p =
+        worstPenetration(m.points, world.fountain, fluid::ColliderPose{}, size, 0.5f * size, m.scratch);
+    if (p.ratio > s.worst_crate) {
+      s.worst_crate = p.ratio;
+      s.worst_crate_step = step;
+    }
+    if (p.ratio > m.desc.crate_tolerance) {
+      fail(m, step,
+           describe(("crate " + std::to_string(p.index) + " (edge " + std::to_string(size) + " m)").c_str(), p,
+                    m.desc.crate_tolerance));
+    }
+  }
+}
+
+}  // namespace
+
+SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds) {
+  SoakMonitor m;
+  m.desc = desc;
+  m.desc.throws.step_seconds = step_seconds;
+  m.schedule = makeThrowSchedule(m.desc.throws, desc.seed);
+  m.warmup_steps = std::max(static_cast<std::uint64_t>(desc.warmup_fraction * static_cast<double>(desc.steps)),
+                            static_cast<std::uint64_t>(std::llround(desc.min_warmup_seconds / step_seconds)));
+  // Reserved now so the samples' own storage never shows up as growth.
+  m.rss_samples.reserve(static_cast<std::size_t>(desc.steps / std::max<std::uint64_t>(desc.memory_every, 1) + 2));
+  return m;
+}
+
+void soakBeforeStep(SoakMonitor& m, World& world, std::uint64_t step) {
+  if (m.desc.progress_fd >= 0) {
+    // The parent keeps the last number it read: the step a crashed child was in.
+    char line[32];
+    const int length = std::snprintf(line, sizeof(line), "%llu\n", static_cast<unsigned long long>(step + 1));
+    if (::write(m.desc.progress_fd, line, static_cast<std::size_t>(length)) < 0) m.desc.progress_fd = -1;
+  }
+  if (const std::optional<CrateThrow> due = throwDue(m.schedule, step); due && world.rigid_bodies) {
+    throwCrateAt(world, *due);
+    ++m.stats.throws;
+  }
+}
+
+bool soakAfterFrame(SoakMonitor& m, const World& world) {
+  SoakStats& s = m.stats;
+  s.steps = world.steps;
+  if (!world.nonfinite_state.empty())
+    fail(m, world.steps, "non-finite state or solver/mesher error: " + world.nonfinite_state);
+  s.has_sph = world.sph_fluid != nullptr;
+  s.has_sprites = world.sprite_particles != nullptr;
+  s.has_crates = world.rigid_bodies != nullptr;
+  if (world.sph_fluid) {
+    const fluid::ParticleStore& p = world.sph_fluid->world.particles;
+    trackCount(p.size(), !m.have_counts, s.sph_min, s.sph_max);
+    s.max_speed = std::max(s.max_speed, maxSpeed(p.velocity));
+  }
+  if (world.sprite_particles) {
+    const SpriteParticles& sp = *world.sprite_particles;
+    trackCount(sp.count, !m.have_counts, s.sprite_min, s.sprite_max);
+    s.max_speed = std::max(s.max_speed, maxSpeed(std::span(sp.velocity).first(sp.count)));
+  }
+  if (world.rigid_bodies) {
+    for (const engine::BodyState& state : world.rigid_bodies->current)
+      s.max_crate_speed = std::max(s.max_crate_speed, glm::length(state.linear_velocity));
+  }
+  m.have_counts = true;
+  checkPenetration(m, world);
+  const bool go_on = m.failure.empty() && world.steps < m.desc.steps;
+  if (world.steps >= m.warmup_steps && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
+    releaseFreeMemory();
+    const std::uint64_t rss = residentBytes();
+    if (m.rss_samples.empty()) s.rss_warmup = rss;
+    m.rss_samples.push_back(rss);
+    s.rss_end = rss;
+  }
+  return go_on;
+}
+
+void finishSoak(SoakMonitor& m) {
+  m.stats.memory = checkMemoryGrowth(m.rss_samples, m.desc.memory);
+  // A run that already failed stopped early: its samples say nothing about the trend.
+  if (m.desc.check_memory && m.failure.empty() && !m.stats.memory.failure.empty())
+    fail(m, m.stats.steps, m.stats.memory.failure);
+}
+
+std::string soakSummary(const SoakMonitor& m) {
+  const SoakStats& s = m.stats;
+  const double mib = 1024.0 * 1024.0;
+  char part[160];
+  // Only the systems the scene has: "sph 0..0" of a scene without water would read as a failure.
+  auto add = [&](std::string& out, const char* format, auto... values) {
+    std::snprintf(part, sizeof(part), format, values...);
+    out += part;
+  };
+  std::string line, worst;
+  add(line, "%llu steps, %d throws", static_cast<unsigned long long>(s.steps), s.throws);
+  if (s.has_sph) {
+    add(line, ", sph %zu..%zu", s.sph_min, s.sph_max);
+    add(worst, " sph %.3f (step %llu)", static_cast<double>(s.worst_sph),
+        static_cast<unsigned long long>(s.worst_sph_step));
+  }
+  if (s.has_sprites) {
+    add(line, ", sprites %zu..%zu", s.sprite_min, s.sprite_max);
+    add(worst, "%s sprites %.3f (step %llu)", worst.empty() ? "" : ",", static_cast<double>(s.worst_sprite),
+        static_cast<unsigned long long>(s.worst_sprite_step));
+  }
+  if (s.has_sph || s.has_sprites) add(line, ", max particle speed %.2f m/s", static_cast<double>(s.max_speed));
+  if (s.has_crates) {
+    add(line, ", max crate speed %.2f m/s", static_cast<double>(s.max_crate_speed));
+    add(worst, "%s crates %.3f (step %llu)", worst.empty() ? "" : ",", static_cast<double>(s.worst_crate),
+        static_cast<unsigned long long>(s.worst_crate_step));
+  }
+  if (m.rss_samples.size() < 3) {
+    add(line, ", RSS not judged (%zu samples after warm-up)", m.rss_samples.size());
+  } else {
+    add(line, ", RSS %.1f -> %.1f MiB", static_cast<double>(s.rss_warmup) / mib, static_cast<double>(s.rss_end) / mib);
+  }
+  if (!worst.empty()) line += ", worst penetration/radius:" + worst;
+  return line;
+}
+
+}  // namespace game

@@ -1,0 +1,86 @@
+#pragma once
+// What `fluiddemo soak` does to a running World through runScene's hooks (RunOptions::before_step
+// and after_frame): throws crates on a seeded schedule, and after every frame applies the soak
+// checks (game/soak_checks.hpp) and keeps the run's statistics. The first failure stops the run.
+
+#include "game/soak_checks.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace game {
+
+struct World;
+
+struct SoakDesc {
+  std::uint64_t steps = 3600;  // run length; the monitor asks to stop after this many steps
+  // Memory is judged on the samples after warm-up: this share of the run, and at least
+  // min_warmup_seconds of game time (twice what the fountain takes to fill its 2,500-particle budget
+  // at 500 particles/s, after which its buffers have their working size). A run too short to leave
+  // 3 samples after it is not judged.
+  double warmup_fraction = 0.2;
+  double min_warmup_seconds = 10.0;
+  std::uint64_t memory_every = 30;  // steps between resident-set samples
+  ThrowScheduleDesc throws;         // step_seconds is taken from the world
+  std::uint32_t seed = 1;
+  // Tolerated penetration as a fraction of the particle radius (SPH particle_radius, sprite size).
+  // The SPH solver and the sprites end every step with the particle centre on or outside every
+  // collider surface (Kolb et al. 2004 §3.3.2 push-out, fluid/core/collider.hpp); what remains is
+  // float rounding and water squeezed between two colliders (a crate resting on the basin floor),
+  // where no position is outside both. A quarter radius is far above rounding and far below the
+  // depth of a particle that went through a wall.
+  float particle_tolerance = 0.25f;
+  // Crates: the box reaches at least (half edge - centre distance) into the fountain's solid. Resting
+  // contacts stay within Bullet's few-centimetre margin, but a thrown crate (14 m/s) travels 0.12 m,
+  // 0.2 of a 0.6 m edge, per 1/120 s substep before its first contact acts. Half an edge means the
+  // centre reached the surface: the crate sank or went through a wall.
+  float crate_tolerance = 0.5f;
+  MemoryGrowthDesc memory;
+  bool check_memory = true;  // false: the resident set is still sampled and printed, never judged
+  int progress_fd = -1;      // when >= 0: "N\n" is written here before step N (1-based) runs
+};
+
+struct SoakStats {
+  std::uint64_t steps = 0;
+  int throws = 0;
+  bool has_sph = false, has_sprites = false, has_crates = false;  // which systems the world has
+  std::size_t sph_min = 0, sph_max = 0;                           // SPH particle count over the run's frames
+  std::size_t sprite_min = 0, sprite_max = 0;                     // sprite particles
+  float max_speed = 0.0f;                                         // m/s, fastest SPH or sprite particle seen
+  float max_crate_speed = 0.0f;                                   // m/s, fastest crate seen
+  std::uint64_t rss_warmup = 0, rss_end = 0;  // resident set at the end of warm-up and at the last frame
+  float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
+  std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
+  MemoryGrowth memory;
+};
+
+struct SoakMonitor {
+  SoakDesc desc;
+  std::uint64_t warmup_steps = 0;  // from desc.warmup_fraction and min_warmup_seconds
+  ThrowSchedule schedule;
+  SoakStats stats;
+  std::vector<std::uint64_t> rss_samples;  // after warm-up; reserved up front
+  PenetrationScratch scratch;
+  std::vector<glm::vec3> points;  // crate centres
+  bool have_counts = false;
+  std::string failure;  // the first failure, naming the step and what
+};
+
+SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds);
+
+// RunOptions::before_step: reports progress, throws a crate when one is due (the camera moves to
+// the thrower's place and looks along the throw, so the surface is meshed for that view).
+void soakBeforeStep(SoakMonitor& monitor, World& world, std::uint64_t step);
+
+// RunOptions::after_frame: every check on the world as this frame left it. False (stop) on the
+// first failure or once desc.steps steps ran.
+bool soakAfterFrame(SoakMonitor& monitor, const World& world);
+
+// After the run: the memory verdict (sets failure when the resident set grew after warm-up).
+void finishSoak(SoakMonitor& monitor);
+
+// One line: steps, throws, particles min/max, max speed, RSS at warm-up and end, worst penetrations.
+std::string soakSummary(const SoakMonitor& monitor);
+
+}  // namespace game

@@ -1,0 +1,244 @@
+// The soak's checks (game/soak_checks.hpp, game/soak_monitor.hpp) on crafted cases: each check
+// passes a healthy case and fires on a bad one, so none of them is a check that cannot fail.
+#include "game/soak_checks.hpp"
+#include "game/soak_monitor.hpp"
+
+#include "fluid/sph/analytic_colliders.hpp"
+#include "game/paths.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace {
+
+constexpr std::uint64_t kMB = 1ull << 20;
+
+// 96 samples (a 3,600-step run after 20 % warm-up, one sample per 30 steps) around `level` with
+// +-1.5 MiB of alternating noise, plus `slope` bytes per sample.
+std::vector<std::uint64_t> samples(std::uint64_t level, double slope) {
+  std::vector<std::uint64_t> out;
+  for (int i = 0; i < 96; ++i) {
+    const double noise = (i % 2 == 0 ? 1.5 : -1.5) * static_cast<double>(kMB);
+    out.push_back(static_cast<std::uint64_t>(static_cast<double>(level) + noise + slope * i));
+  }
+  return out;
+}
+
+TEST(SoakMemory, FlatNoisyResidentSetPasses) {
+  const game::MemoryGrowth m = game::checkMemoryGrowth(samples(300 * kMB, 0.0));
+  EXPECT_TRUE(m.failure.empty()) << m.failure;
+  EXPECT_EQ(m.bound, static_cast<std::uint64_t>(0.05 * static_cast<double>(m.first_level)));  // 5 % of ~300 MiB > 8 MiB
+}
+
+TEST(SoakMemory, SteadyGrowthFails) {
+  // 0.3 MiB per sample: about 19 MiB between the thirds' medians, above max(8 MiB, 5 % of 100 MiB).
+  const game::MemoryGrowth m = game::checkMemoryGrowth(samples(100 * kMB, 0.3 * kMB));
+  EXPECT_NE(m.failure.find("memory grows after warm-up"), std::string::npos) << m.failure;
+  EXPECT_GT(m.last_level, m.first_level + 8 * kMB);
+}
+
+TEST(SoakMemory, GrowthBelowTheFloorPasses) {
+  // 0.1 MiB per sample: about 6 MiB between the medians, under the 8 MiB floor (5 % of 100 MiB = 5 MiB).
+  const game::MemoryGrowth m = game::checkMemoryGrowth(samples(100 * kMB, 0.1 * kMB));
+  EXPECT_TRUE(m.failure.empty()) << m.failure;
+  EXPECT_EQ(m.bound, 8 * kMB);
+}
+
+TEST(SoakMemory, TheRelativeBoundScalesWithTheLevel) {
+  // 1 GiB process: 5 % = 51 MiB allowed. 40 MiB of growth passes, 80 MiB fails.
+  EXPECT_TRUE(game::checkMemoryGrowth(samples(1024 * kMB, 40.0 * kMB / 64.0)).failure.empty());
+  EXPECT_FALSE(game::checkMemoryGrowth(samples(1024 * kMB, 80.0 * kMB / 64.0)).failure.empty());
+}
+
+TEST(SoakMemory, ALateJumpFailsOnTheFinalLevel) {
+  std::vector<std::uint64_t> s = samples(200 * kMB, 0.0);
+  s.back() += 30 * kMB;  // the median of the last third does not see one sample
+  const game::MemoryGrowth m = game::checkMemoryGrowth(s);
+  EXPECT_NE(m.failure.find("memory ends high"), std::string::npos) << m.failure;
+}
+
+TEST(SoakMemory, TooFewSamplesJudgeNothing) {
+  const std::vector<std::uint64_t> s = {10 * kMB, 500 * kMB};
+  EXPECT_TRUE(game::checkMemoryGrowth(s).failure.empty());
+}
+
+TEST(SoakMemory, ResidentSetIsReadAndSeesAnAllocation) {
+  const std::uint64_t before = game::residentBytes();
+  ASSERT_GT(before, 0u);
+  std::vector<char> block(64 * kMB, 1);  // touched: resident
+  const std::uint64_t after = game::residentBytes();
+  EXPECT_GE(after, before + 60 * kMB);
+  EXPECT_EQ(block[12345], 1);
+}
+
+TEST(SoakPenetration, PointsOutsideTheFountainAreNotInside) {
+  const game::FountainShape shape;
+  game::PenetrationScratch scratch;
+  const std::vector<glm::vec3> outside = {{0.0f, 3.0f, 0.0f}, {5.0f, 0.5f, 0.0f}, {2.0f, 0.5f, 0.0f}};
+  const game::Penetration p = game::worstPenetration(outside, shape, {}, 0.04f, 0.0f, scratch);
+  EXPECT_EQ(p.depth, 0.0f);
+  EXPECT_EQ(p.ratio, 0.0f);
+}
+
+TEST(SoakPenetration, APointInTheBasinWallIsFoundWithItsDepth) {
+  const game::FountainShape shape;
+  const game::FountainGeometry& g = shape.geometry();
+  game::PenetrationScratch scratch;
+  // The middle of the basin wall (0.3 m thick, top at 0.7): 0.15 m from both sides, 0.3 from the top.
+  const float mid = 0.5f * (g.basin_inner_radius + g.basin_outer_radius);
+  const std::vector<glm::vec3> points = {{2.0f, 0.5f, 0.0f}, {0.0f, 0.4f, mid}, {0.0f, 3.0f, 0.0f}};
+  const game::Penetration p = game::worstPenetration(points, shape, {}, 0.04f, 0.0f, scratch);
+  EXPECT_EQ(p.index, 1u);
+  EXPECT_NEAR(p.depth, 0.15f, 1e-4f);
+  EXPECT_NEAR(p.ratio, 0.15f / 0.04f, 1e-2f);
+  EXPECT_EQ(p.position, points[1]);
+}
+
+TEST(SoakPenetration, AMovedColliderIsQueriedAtItsPose) {
+  // A 0.2 m cube turned 45 degrees about y and moved to (1, 1, 1): a point 0.25 m along x from its
+  // centre is outside the unturned cube's face but inside the turned one (corner at 0.283 m).
+  const fluid::BoxShape box(glm::vec3(0.2f));
+  fluid::ColliderPose pose;
+  pose.rotation = glm::angleAxis(glm::radians(45.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+  pose.translation = glm::vec3(1.0f);
+  game::PenetrationScratch scratch;
+  const std::vector<glm::vec3> points = {glm::vec3(1.25f, 1.0f, 1.0f)};
+  EXPECT_GT(game::worstPenetration(points, box, pose, 0.04f, 0.0f, scratch).depth, 0.0f);
+  EXPECT_EQ(
+      game::worstPenetration(points, box, fluid::ColliderPose{.translation = glm::vec3(1.0f)}, 0.04f, 0.0f, scratch)
+          .depth,
+      0.0f);
+}
+
+TEST(SoakPenetration, ACrateCentreNearerThanItsHalfEdgeCountsAsSunk) {
+  const game::FountainShape shape;
+  game::PenetrationScratch scratch;
+  const float size = 0.7f;
+  // Resting on the ground: centre at half the edge, nothing inside.
+  const std::vector<glm::vec3> resting = {{6.0f, 0.35f, 0.0f}};
+  EXPECT_NEAR(game::worstPenetration(resting, shape, {}, size, 0.5f * size, scratch).depth, 0.0f, 1e-6f);
+  // Sunk to y = 0.1: the box reaches 0.25 m below the ground, 0.36 edges (under the tolerance: an
+  // impact's transient); sunk to y = -0.05, 0.57 edges: the centre went through the surface.
+  const std::vector<glm::vec3> impact = {{6.0f, 0.1f, 0.0f}};
+  const game::Penetration p = game::worstPenetration(impact, shape, {}, size, 0.5f * size, scratch);
+  EXPECT_NEAR(p.depth, 0.25f, 1e-5f);
+  EXPECT_LT(p.ratio, game::SoakDesc{}.crate_tolerance);
+  const std::vector<glm::vec3> sunk = {{6.0f, -0.05f, 0.0f}};
+  const game::Penetration q = game::worstPenetration(sunk, shape, {}, size, 0.5f * size, scratch);
+  EXPECT_NEAR(q.depth, 0.4f, 1e-5f);
+  EXPECT_GT(q.ratio, game::SoakDesc{}.crate_tolerance);
+}
+
+std::vector<game::CrateThrow> allThrows(std::uint32_t seed, std::uint64_t steps, double mean_interval = 2.0) {
+  game::ThrowScheduleDesc desc;
+  desc.mean_interval_s = mean_interval;
+  game::ThrowSchedule schedule = game::makeThrowSchedule(desc, seed);
+  std::vector<game::CrateThrow> out;
+  for (std::uint64_t step = 0; step < steps; ++step)
+    if (auto t = game::throwDue(schedule, step)) out.push_back(*t);
+  return out;
+}
+
+TEST(SoakThrows, TheSameSeedThrowsTheSameCratesAtTheSameSteps) {
+  const std::vector<game::CrateThrow> a = allThrows(42, 3600), b = allThrows(42, 3600), c = allThrows(43, 3600);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].step, b[i].step);
+    EXPECT_EQ(a[i].from, b[i].from);
+    EXPECT_EQ(a[i].target, b[i].target);
+  }
+  bool differs = a.size() != c.size();
+  for (std::size_t i = 0; !differs && i < a.size(); ++i) differs = a[i].step != c[i].step || a[i].from != c[i].from;
+  EXPECT_TRUE(differs) << "seeds 42 and 43 gave the same schedule";
+}
+
+TEST(SoakThrows, IntervalsAndPlacesStayInTheirRanges) {
+  const game::ThrowScheduleDesc desc;
+  const std::vector<game::CrateThrow> throws = allThrows(7, 36000);
+  // 10 minutes at a 2 s mean: about 300 throws.
+  EXPECT_GT(throws.size(), 270u);
+  EXPECT_LT(throws.size(), 330u);
+  for (std::size_t i = 0; i < throws.size(); ++i) {
+    const std::uint64_t gap = throws[i].step - (i == 0 ? 0 : throws[i - 1].step);
+    EXPECT_GE(gap, 60u);   // 1 s
+    EXPECT_LE(gap, 180u);  // 3 s
+    const float stand = std::hypot(throws[i].from.x, throws[i].from.z);
+    EXPECT_GE(stand, desc.stand_radius_min - 1e-4f);
+    EXPECT_LE(stand, desc.stand_radius_max + 1e-4f);
+    EXPECT_LE(std::hypot(throws[i].target.x, throws[i].target.z), desc.target_radius + 1e-4f);
+  }
+}
+
+TEST(SoakThrows, ZeroIntervalNeverThrows) { EXPECT_TRUE(allThrows(1, 3600, 0.0).empty()); }
+
+// The monitor on the real fountain world: a healthy world after a few steps passes; a particle,
+// a sprite or a crate moved into the fountain, or a recorded NaN, fails naming the step and what.
+class SoakMonitorOnFountain : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    game::SceneConfig scene;
+    ASSERT_TRUE(game::loadSceneFile(game::scenesDir() / "fountain.json", scene).ok());
+    std::string error;
+    ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+    game::SoakDesc desc;
+    desc.steps = 1000;
+    desc.throws.mean_interval_s = 0.1;  // a throw within the first steps
+    monitor = game::makeSoakMonitor(desc, world.step_seconds);
+    for (int i = 0; i < 40; ++i) {
+      game::soakBeforeStep(monitor, world, world.steps);
+      game::stepWorld(world, nullptr);
+    }
+    ASSERT_GT(world.sph_fluid->world.particles.size(), 0u);
+    ASSERT_GT(world.sprite_particles->count, 0u);
+  }
+  game::World world;
+  game::SoakMonitor monitor;
+};
+
+TEST_F(SoakMonitorOnFountain, AHealthyWorldPasses) {
+  EXPECT_TRUE(game::soakAfterFrame(monitor, world)) << monitor.failure;
+  EXPECT_TRUE(monitor.failure.empty());
+  EXPECT_GT(monitor.stats.throws, 0);
+  EXPECT_GT(monitor.stats.sph_max, 0u);
+  EXPECT_GT(monitor.stats.max_speed, 1.0f);
+}
+
+TEST_F(SoakMonitorOnFountain, AnSphParticleInTheBasinWallFails) {
+  const game::FountainGeometry& g = world.fountain.geometry();
+  world.sph_fluid->world.particles.position[0] = {0.5f * (g.basin_inner_radius + g.basin_outer_radius), 0.4f, 0.0f};
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_NE(monitor.failure.find("step 40: sph particle id"), std::string::npos) << monitor.failure;
+}
+
+TEST_F(SoakMonitorOnFountain, ASpriteUnderTheGroundFails) {
+  world.sprite_particles->position[0] = {5.0f, -0.05f, 0.0f};  // 2.8 sprite radii deep
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_NE(monitor.failure.find("sprite particle 0"), std::string::npos) << monitor.failure;
+}
+
+TEST_F(SoakMonitorOnFountain, ASunkCrateFails) {
+  world.rigid_bodies->current[2].position = {6.0f, -0.1f, 0.0f};  // centre under the ground
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_NE(monitor.failure.find("crate 2"), std::string::npos) << monitor.failure;
+}
+
+TEST_F(SoakMonitorOnFountain, ARecordedNonFiniteStateFails) {
+  world.nonfinite_state = "sph_fluid particle id 3 position at step 40";
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_NE(monitor.failure.find("non-finite state or solver/mesher error: sph_fluid particle id 3"), std::string::npos)
+      << monitor.failure;
+}
+
+TEST_F(SoakMonitorOnFountain, TheRunStopsAfterItsSteps) {
+  monitor.desc.steps = world.steps;
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_TRUE(monitor.failure.empty()) << monitor.failure;
+}
+
+}  // namespace
