@@ -359,13 +359,15 @@ BlockCacheProbe::BlockCacheProbe(const SurfaceInput& input, const SurfaceParams&
   }
   n = su.n[0];
   margin = su.m;
-  const double bs = double(params.blockCubes) * su.s;
   const int bc[3] = {bx, by, bz};
   for (const Particle& p : particles) {
-    const double rc = std::sqrt(p.rc2);
-    const double pc[3] = {p.x, p.y, p.z};
+    const int reach = particleReach(p, su.s);
     bool in = true;
-    for (int a = 0; a < 3; ++a) in = in && floorDiv(pc[a] - rc, bs) <= bc[a] && bc[a] <= floorDiv(pc[a] + rc, bs);
+    for (int a = 0; a < 3; ++a) {
+      int first, last;
+      blockSpan(su, a, p.anchor[a], reach, first, last);
+      in = in && first <= bc[a] && bc[a] <= last;
+    }
     if (in) impl_->blockParticles.push_back(p);
   }
   impl_->worker.resize(su.n);
