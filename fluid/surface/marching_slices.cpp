@@ -348,7 +348,7 @@ BlockCacheProbe::BlockCacheProbe(const SurfaceInput& input, const SurfaceParams&
   su.threshold = params.threshold;
   su.avx2 = detectFillAvx2(params);
   prepareParticles(input, params, SweepFrame{}, particles, su.rcMax);
-  su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));
+  su.m = marginCubes(su.rcMax, su.s);
   // A fixed grid of blockCubes-sized blocks from lattice index 0, so the test can aim at seams.
   assert(params.blockCubes > 0);
   for (int a = 0; a < 3; ++a) {

@@ -83,9 +83,9 @@ TEST(BlockSeams, ParticleJustBelowALatticePlaneWithRcAWholeNumberOfCubes) {
         p.cube = s;
         p.rc = s * float(m);
         p.blockCubes = blockCubes;
-        expectOracleAtOneTwoThreeThreads({xs, ys, zs, {}, {}, {}}, p, 8,
-                                         "x " + std::to_string(x) + ", Rc/S " + std::to_string(m) + ", blockCubes " +
-                                             std::to_string(blockCubes));
+        expectOracleAtOneTwoThreeThreads(
+            {xs, ys, zs, {}, {}, {}}, p, 8,
+            "x " + std::to_string(x) + ", Rc/S " + std::to_string(m) + ", blockCubes " + std::to_string(blockCubes));
       }
     }
   }

@@ -221,7 +221,7 @@ struct Setup {
   double s = 1;
   float threshold = 0.2f;
   double rcMax = 3;
-  int m = 3;                             // margin cubes, ceil(Rc/S) (§3)
+  int m = 3;                             // margin cubes, marginCubes() (§3)
   int b[3] = {32, 32, 32};               // interior cubes per block, per axis
   int n[3] = {38, 38, 38};               // expanded cubes per block, b + 2m
   int nb[3] = {1, 1, 1};                 // blocks per axis
@@ -322,13 +322,23 @@ inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0
   for (int a = 0; a < 3; ++a) g0[a] = su.lattice0[a] + std::int64_t(bc[a]) * su.b[a] - su.m;
 }
 
+// Margin cubes on each side of a block's interior (§3): ceil(Rc/S + 1/2), not the paper's
+// ceil(Rc/S). Seeding (§4) starts from each particle's nearest corner, and the expanded block's
+// outermost corners are held at field 0 (so every surface closes), so that corner must lie strictly
+// inside the expanded block for every particle that reaches the interior: such a particle is less
+// than Rc/S cubes from an interior corner, its nearest corner less than Rc/S + 1/2. With
+// ceil(Rc/S) a particle just over m - 1/2 cubes outside the interior (Rc/S a whole number, or just
+// under one) seeded from a boundary corner, never, and the part of its surface inside the block
+// was missing: a hole at the seam.
+inline int marginCubes(double rcMax, double s) { return std::max(1, int(std::ceil(rcMax / s + 0.5))); }
+
 // Block membership (§3), per axis, in lattice integers. A particle influences corner c only if
 // |c S - p| < Rc_i, so c lies in [anchor - reach, anchor + reach] with reach = ceil(Rc_i / S)
 // (anchor = floor(p / S)). The blocks along axis `a` whose interior corners [b0, b0 + b] meet that
 // range are [first, last] (callers clip it to their grid: outside it there is no corner).
 // Deciding this on the same integers the particle cache uses (rather than on (p -+ Rc_i) / S,
 // rounded separately) makes its invariant hold by construction: with reach <= m, every block
-// particle's anchor lies in the block's expanded region, 0 <= anchor - g0 <= n.
+// particle's anchor lies in the block's expanded region, 0 <= anchor - g0 <= n (reach <= m).
 // The range is exact for float input: p / S and Rc_i / S are either whole numbers or at least
 // ~2^-25 (resp. 2^-48 (Rc_i / S)) away from one, far more than double rounding, so the floor,
 // the ceil and the exact predicate (influences()) agree with real arithmetic at its ends.
@@ -460,7 +470,7 @@ struct ExtractorState {
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
-  bool firstInPlace = false;  // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
+  bool firstInPlace = false;            // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
 };
 
 // Runs fn(slot, i) for i in [0, n) on the arena's workers; slot < max_concurrency identifies the
@@ -648,7 +658,7 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
-  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = ceil(Rc/S) cubes each
+  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = marginCubes() cubes each
   // side, traversed but not emitted, §3) a modest share of the work; a set that fits one such
   // block is cut in two along its longest axis when both halves stay at least 5 m wide, so
   // mid-size sets still have two blocks to run in parallel. Depends on the data, S and Rc only.
@@ -706,14 +716,14 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
   prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
-  su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)
+  su.m = marginCubes(su.rcMax, su.s);
   // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
   // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
   // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
   // cube of the block edge; 128 would make it a strawman).
   planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
-    return {"surface params: blockCubes + 2 ceil(rc / cube) is too large"};
+    return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   {
     // View octant in the sweep frame, for the in-cube order tables (§5).
     const float d[3] = {params.viewDir.x, params.viewDir.y, params.viewDir.z};
