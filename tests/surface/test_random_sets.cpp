@@ -15,10 +15,12 @@ namespace {
 constexpr int kSeeds = 320;  // 8 ctest cases of 40 seeds (every kind 5 times in each)
 constexpr int kChunk = 40;
 
-// Open: holes at block seams where a block's seed corners lie in its margin, whose field sums only
-// the particles reaching the interior, and are outside there though inside in the full field (so
-// the block never reaches the part of the surface in its interior). Pinned below (disabled) until
-// seeding is fixed; the slice skips them by name, nothing else.
+// Open: holes at block seams (6 of seeds 1..4000: 77, 312, 1981, 2363, 2957, 3327). For 312 and
+// 3327 a particle's nearest corner lies in a block's margin, where the block's field sums only the
+// particles that reach its interior: outside there, inside in the full field, so that block never
+// seeds the part of the surface in its interior. The other four have no such corner; their cause
+// is not known yet. Pinned below (disabled) until seeding is fixed; the slice skips exactly those
+// in its range.
 constexpr int kKnownOpen[] = {77, 312};
 
 class RandomSets : public ::testing::TestWithParam<int> {};
@@ -58,10 +60,10 @@ TEST(RandomSets, SeamHolesOfTheOldMarginAreClosed) {
   }
 }
 
-// Known open (see kKnownOpen): a hole at a seam for blockCubes 5 (seed 77) and 10 (seed 312).
-TEST(RandomSets, DISABLED_SeamHolesFromMarginSeedsOpen) {
+// Known open (see kKnownOpen): holes at seams.
+TEST(RandomSets, DISABLED_SeamHolesOpen) {
   RandomSetChecker checker;
-  for (int seed : {77, 312}) {
+  for (int seed : {77, 312, 1981, 2363, 2957, 3327}) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
   }
