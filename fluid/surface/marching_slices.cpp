@@ -348,7 +348,7 @@ BlockCacheProbe::BlockCacheProbe(const SurfaceInput& input, const SurfaceParams&
   su.threshold = params.threshold;
   su.avx2 = detectFillAvx2(params);
   prepareParticles(input, params, SweepFrame{}, particles, su.rcMax);
-  su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));
+  su.m = marginCubes(su.rcMax, su.s);
   // A fixed grid of blockCubes-sized blocks from lattice index 0, so the test can aim at seams.
   assert(params.blockCubes > 0);
   for (int a = 0; a < 3; ++a) {
@@ -359,13 +359,15 @@ BlockCacheProbe::BlockCacheProbe(const SurfaceInput& input, const SurfaceParams&
   }
   n = su.n[0];
   margin = su.m;
-  const double bs = double(params.blockCubes) * su.s;
   const int bc[3] = {bx, by, bz};
   for (const Particle& p : particles) {
-    const double rc = std::sqrt(p.rc2);
-    const double pc[3] = {p.x, p.y, p.z};
+    const int reach = particleReach(p, su.s);
     bool in = true;
-    for (int a = 0; a < 3; ++a) in = in && floorDiv(pc[a] - rc, bs) <= bc[a] && bc[a] <= floorDiv(pc[a] + rc, bs);
+    for (int a = 0; a < 3; ++a) {
+      int first, last;
+      blockSpan(su, a, p.anchor[a], reach, first, last);
+      in = in && first <= bc[a] && bc[a] <= last;
+    }
     if (in) impl_->blockParticles.push_back(p);
   }
   impl_->worker.resize(su.n);

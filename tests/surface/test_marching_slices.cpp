@@ -437,15 +437,19 @@ TEST(ParticleCache, EveryLookupIsExactlyTheBruteForceSet) {
       expect.clear();
       const bool boundary = cx == 0 || cy == 0 || cz == 0 || cx == probe.n || cy == probe.n || cz == probe.n;
       const double px = double(g0[0] + cx) * p.cube, py = double(g0[1] + cy) * p.cube, pz = double(g0[2] + cz) * p.cube;
-      // Brute force over the block's particles: those within Rc of the interior box.
-      const double bs = double(p.blockCubes) * p.cube;
+      // Brute force. At interior corners: every particle (the block lists must miss none). In the
+      // margins: the block's particles, those with an anchor within ceil(Rc_i / S) cubes of an
+      // interior corner on every axis.
+      const int lc[3] = {cx, cy, cz};
+      bool interior = true;
+      for (int a = 0; a < 3; ++a) interior = interior && lc[a] >= probe.margin && lc[a] <= probe.margin + p.blockCubes;
       for (const auto& q : all) {
-        const double rc = std::sqrt(q.rc2);
-        const double qc[3] = {q.x, q.y, q.z};
+        const std::int64_t reach = std::int64_t(std::ceil(std::sqrt(q.rc2) / double(p.cube)));
         bool inBlock = true;
         for (int a = 0; a < 3; ++a)
-          inBlock = inBlock && std::floor((qc[a] - rc) / bs) <= bc[a] && bc[a] <= std::floor((qc[a] + rc) / bs);
-        if (inBlock && !boundary && fluid::detail::influences(q, px, py, pz)) expect.push_back(q.index);
+          inBlock = inBlock && q.anchor[a] - reach <= std::int64_t(bc[a] + 1) * p.blockCubes &&
+                    q.anchor[a] + reach >= std::int64_t(bc[a]) * p.blockCubes;
+        if ((inBlock || interior) && !boundary && fluid::detail::influences(q, px, py, pz)) expect.push_back(q.index);
       }
       ++lookups;
       nonEmpty += !expect.empty();

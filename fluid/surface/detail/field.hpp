@@ -85,6 +85,27 @@ struct SweepFrame {
   bool flipsWinding() const;
 };
 
+// The sweep frame for params' order and view (identity for SurfaceOrder::none).
+inline SweepFrame chooseFrame(const SurfaceParams& p) {
+  SweepFrame f;
+  if (p.order == SurfaceOrder::none) return f;
+  const float d[3] = {p.viewDir.x, p.viewDir.y, p.viewDir.z};
+  int a = 0;
+  for (int i = 1; i < 3; ++i)
+    if (std::fabs(d[i]) > std::fabs(d[a])) a = i;
+  // §5: "rotate the rendering volume" so the sweep runs along the axis nearest the view.
+  // Back-to-front sweeps towards the eye (against the view direction), front-to-back away.
+  const int sweepSign = (d[a] > 0 ? -1 : 1) * (p.order == SurfaceOrder::backToFront ? 1 : -1);
+  const int others[3][2] = {{1, 2}, {2, 0}, {0, 1}};  // cyclic: with signs (1, s, s) a rotation
+  f.axis[0] = others[a][0];
+  f.axis[1] = others[a][1];
+  f.axis[2] = a;
+  f.sign[0] = 1;
+  f.sign[1] = sweepSign;
+  f.sign[2] = sweepSign;
+  return f;
+}
+
 // Sort key of prepareParticles (caller-owned scratch, reused across calls).
 struct ParticleSortKey {
   double z;

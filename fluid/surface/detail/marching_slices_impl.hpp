@@ -221,7 +221,7 @@ struct Setup {
   double s = 1;
   float threshold = 0.2f;
   double rcMax = 3;
-  int m = 3;                             // margin cubes, ceil(Rc/S) (§3)
+  int m = 3;                             // margin cubes, marginCubes() (§3)
   int b[3] = {32, 32, 32};               // interior cubes per block, per axis
   int n[3] = {38, 38, 38};               // expanded cubes per block, b + 2m
   int nb[3] = {1, 1, 1};                 // blocks per axis
@@ -320,6 +320,35 @@ inline bool detectFillAvx2(const SurfaceParams& params) {
 inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0[3]) {
   const int bc[3] = {block.bx, block.by, block.bz};
   for (int a = 0; a < 3; ++a) g0[a] = su.lattice0[a] + std::int64_t(bc[a]) * su.b[a] - su.m;
+}
+
+// Margin cubes on each side of a block's interior (§3): ceil(Rc/S + 1/2), not the paper's
+// ceil(Rc/S). Seeding (§4) starts from each particle's nearest corner, and the expanded block's
+// outermost corners are held at field 0 (so every surface closes), so that corner must lie strictly
+// inside the expanded block for every particle that reaches the interior: such a particle is less
+// than Rc/S cubes from an interior corner, its nearest corner less than Rc/S + 1/2. With
+// ceil(Rc/S) a particle just over m - 1/2 cubes outside the interior (Rc/S a whole number, or just
+// under one) seeded from a boundary corner, never, and the part of its surface inside the block
+// was missing: a hole at the seam.
+inline int marginCubes(double rcMax, double s) { return std::max(1, int(std::ceil(rcMax / s + 0.5))); }
+
+// Block membership (§3), per axis, in lattice integers. A particle influences corner c only if
+// |c S - p| < Rc_i, so c lies in [anchor - reach, anchor + reach] with reach = ceil(Rc_i / S)
+// (anchor = floor(p / S)). The blocks along axis `a` whose interior corners [b0, b0 + b] meet that
+// range are [first, last] (callers clip it to their grid: outside it there is no corner).
+// Deciding this on the same integers the particle cache uses (rather than on (p -+ Rc_i) / S,
+// rounded separately) makes its invariant hold by construction: with reach <= m, every block
+// particle's anchor lies in the block's expanded region, 0 <= anchor - g0 <= n (reach <= m).
+// The range is exact for float input: p / S and Rc_i / S are either whole numbers or at least
+// ~2^-25 (resp. 2^-48 (Rc_i / S)) away from one, far more than double rounding, so the floor,
+// the ceil and the exact predicate (influences()) agree with real arithmetic at its ends.
+inline std::int64_t floorDivInt(std::int64_t v, std::int64_t d) { return v / d - (v % d != 0 && (v < 0) != (d < 0)); }
+inline int particleReach(const Particle& p, double s) { return int(std::ceil(std::sqrt(p.rc2) / s)); }
+inline void blockSpan(const Setup& su, int a, std::int64_t anchor, int reach, int& first, int& last) {
+  const std::int64_t t = anchor - su.lattice0[a], b = su.b[a];
+  // (first + 1) b >= t - reach  and  last b <= t + reach.
+  first = int(floorDivInt(t - reach - 1, b));
+  last = int(floorDivInt(t + reach, b));
 }
 
 // Vertex on the edge from corner A (lattice index gi, value va, gradient ga) along `axis` to B.
@@ -441,28 +470,8 @@ struct ExtractorState {
   int method = 1;  // 1 = marching slices, 2 = approach 2 (baseline, see baselines.hpp)
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
-  bool firstInPlace = false;  // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
+  bool firstInPlace = false;            // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
 };
-
-inline SweepFrame chooseFrame(const SurfaceParams& p) {
-  SweepFrame f;
-  if (p.order == SurfaceOrder::none) return f;
-  const float d[3] = {p.viewDir.x, p.viewDir.y, p.viewDir.z};
-  int a = 0;
-  for (int i = 1; i < 3; ++i)
-    if (std::fabs(d[i]) > std::fabs(d[a])) a = i;
-  // §5: "rotate the rendering volume" so the sweep runs along the axis nearest the view.
-  // Back-to-front sweeps towards the eye (against the view direction), front-to-back away.
-  const int sweepSign = (d[a] > 0 ? -1 : 1) * (p.order == SurfaceOrder::backToFront ? 1 : -1);
-  const int others[3][2] = {{1, 2}, {2, 0}, {0, 1}};  // cyclic: with signs (1, s, s) a rotation
-  f.axis[0] = others[a][0];
-  f.axis[1] = others[a][1];
-  f.axis[2] = a;
-  f.sign[0] = 1;
-  f.sign[1] = sweepSign;
-  f.sign[2] = sweepSign;
-  return f;
-}
 
 // Runs fn(slot, i) for i in [0, n) on the arena's workers; slot < max_concurrency identifies the
 // worker (its scratch). At most n workers take part; one item (a set that fits one block) or one
@@ -649,7 +658,7 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
-  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = ceil(Rc/S) cubes each
+  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = marginCubes() cubes each
   // side, traversed but not emitted, §3) a modest share of the work; a set that fits one such
   // block is cut in two along its longest axis when both halves stay at least 5 m wide, so
   // mid-size sets still have two blocks to run in parallel. Depends on the data, S and Rc only.
@@ -707,14 +716,14 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   }
   prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
-  su.m = std::max(1, int(std::ceil(su.rcMax / su.s)));  // margin of ceil(Rc/S) cubes (§3)
+  su.m = marginCubes(su.rcMax, su.s);
   // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
   // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
   // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
   // cube of the block edge; 128 would make it a strawman).
   planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
-    return {"surface params: blockCubes + 2 ceil(rc / cube) is too large"};
+    return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   {
     // View octant in the sweep frame, for the in-cube order tables (§5).
     const float d[3] = {params.viewDir.x, params.viewDir.y, params.viewDir.z};
@@ -725,20 +734,20 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     su.octant = params.order == SurfaceOrder::none ? 0 : (ld[0] < 0) | ((ld[1] < 0) << 1) | ((ld[2] < 0) << 2);
   }
 
-  // Block lists (§3): each particle goes to every block whose interior, grown by Rc_i, holds it.
-  // Sorting (block, rank) pairs keeps each block's particles in (z, index) order. The pairs are
-  // made in rank order, so a stable counting sort by block gives that order in one pass when the
-  // block grid is not much larger than the pair list (otherwise a comparison sort).
+  // Block lists (§3): each particle goes to every block with an interior corner within its reach
+  // (blockSpan). Sorting (block, rank) pairs keeps each block's particles in (z, index) order. The
+  // pairs are made in rank order, so a stable counting sort by block gives that order in one pass
+  // when the block grid is not much larger than the pair list (otherwise a comparison sort).
   st.pairs.clear();
-  const double inv = 1.0 / su.s;
   for (std::uint32_t r = 0; r < st.particles.size(); ++r) {
     const Particle& p = st.particles[r];
-    const double rc = std::sqrt(p.rc2);
-    const double pc[3] = {p.x, p.y, p.z};
+    const int reach = particleReach(p, su.s);
+    assert(reach <= su.m);  // Rc_i <= rcMax, so ceil(Rc_i / S) <= ceil(rcMax / S)
     int b0[3], b1[3];
     for (int a = 0; a < 3; ++a) {
-      b0[a] = std::clamp(ifloor(((pc[a] - rc) * inv - double(su.lattice0[a])) / su.b[a]), 0, su.nb[a] - 1);
-      b1[a] = std::clamp(ifloor(((pc[a] + rc) * inv - double(su.lattice0[a])) / su.b[a]), 0, su.nb[a] - 1);
+      blockSpan(su, a, p.anchor[a], reach, b0[a], b1[a]);
+      b0[a] = std::max(b0[a], 0);
+      b1[a] = std::min(b1[a], su.nb[a] - 1);
     }
     for (int bz = b0[2]; bz <= b1[2]; ++bz)
       for (int by = b0[1]; by <= b1[1]; ++by)

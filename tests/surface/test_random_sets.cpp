@@ -1,0 +1,70 @@
+// The CI slice of the mesher's randomised property sweep (tests/surface/random_sets.hpp; the
+// full sweep is `bench_surface_seeds --from A --to B`): seeds 1..kSeeds, every property on each.
+#include "random_sets.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iterator>
+#include <string>
+
+using namespace surface_test;
+
+namespace {
+
+constexpr int kSeeds = 320;  // 8 ctest cases of 40 seeds (every kind 5 times in each)
+constexpr int kChunk = 40;
+
+// Open: holes at block seams (6 of seeds 1..4000: 77, 312, 1981, 2363, 2957, 3327). For 312 and
+// 3327 a particle's nearest corner lies in a block's margin, where the block's field sums only the
+// particles that reach its interior: outside there, inside in the full field, so that block never
+// seeds the part of the surface in its interior. The other four have no such corner; their cause
+// is not known yet. Pinned below (disabled) until seeding is fixed; the slice skips exactly those
+// in its range.
+constexpr int kKnownOpen[] = {77, 312};
+
+class RandomSets : public ::testing::TestWithParam<int> {};
+
+}  // namespace
+
+TEST_P(RandomSets, ClosedOrientedThreadInvariantAndEqualToTheDenseOracle) {
+  RandomSetChecker checker;
+  const int first = GetParam();
+  std::size_t triangles = 0;
+  for (int seed = first; seed < first + kChunk; ++seed) {
+    if (std::find(std::begin(kKnownOpen), std::end(kKnownOpen), seed) != std::end(kKnownOpen)) continue;
+    const RandomSet r = drawRandomSet(std::uint64_t(seed));
+    const std::string failure = checkRandomSet(r, checker);
+    EXPECT_TRUE(failure.empty()) << "seed " << seed << " (" << r.what << ", " << r.x.size()
+                                 << " particles): " << failure << "\n  reproduce: bench_surface_seeds --from " << seed
+                                 << " --to " << seed;
+    triangles += checker.ref.indices.size() / 3;
+  }
+  // The sets must produce surfaces (a generator drawing empty meshes would test nothing).
+  EXPECT_GT(triangles, std::size_t(kChunk) * 50);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, RandomSets, ::testing::Range(1, kSeeds + 1, kChunk),
+                         [](const ::testing::TestParamInfo<int>& p) {
+                           return "from" + std::to_string(p.param) + "to" + std::to_string(p.param + kChunk - 1);
+                         });
+
+// Seeds that left holes at block seams with margins of ceil(Rc/S) cubes (Rc/S whole: a particle
+// just over m - 1/2 cubes outside a block's interior seeded from the block's zero boundary, see
+// marginCubes()); closed and equal to the oracle with ceil(Rc/S + 1/2).
+TEST(RandomSets, SeamHolesOfTheOldMarginAreClosed) {
+  RandomSetChecker checker;
+  for (int seed : {31, 117, 125, 143}) {
+    const RandomSet r = drawRandomSet(std::uint64_t(seed));
+    EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
+  }
+}
+
+// Known open (see kKnownOpen): holes at seams.
+TEST(RandomSets, DISABLED_SeamHolesOpen) {
+  RandomSetChecker checker;
+  for (int seed : {77, 312, 1981, 2363, 2957, 3327}) {
+    const RandomSet r = drawRandomSet(std::uint64_t(seed));
+    EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
+  }
+}
