@@ -17,6 +17,8 @@ constexpr Subcommand kSubcommands[] = {
     {"play", "play a scene in a window (headless when no display): play [SCENE] [options]", game::playCommand},
     {"smoke", "run scenes headless and check each frame: smoke [--scene S | --all] [--frames N] [--out DIR]",
      game::smokeCommand},
+    {"replay", "play a replay file, check its hashes, time each frame: replay FILE [--csv OUT] [--png OUT]",
+     game::replayCommand},
     {"mesh", "particles -> triangle mesh by marching slices: mesh --in FILE --out FILE", game::meshCommand},
     {"simulate", "run an SPH scene without a window: simulate --scene NAME --seconds T", game::simulateCommand},
     {"bake-collider", "bake depth-map colliders from a model: bake-collider MODEL --out FILE",
