@@ -23,7 +23,10 @@ struct LineParser {
   std::string error;
 
   bool fail(std::string_view field, const std::string& what) {
-    error = label + ":" + std::to_string(line) + ": field '" + std::string(field) + "': " + what;
+    // The field may come from the file (an unknown record's keyword): printable, no quotes, short.
+    std::string name;
+    for (char c : field.substr(0, 40)) name += (c > 32 && c < 127 && c != '\'') ? c : '?';
+    error = label + ":" + std::to_string(line) + ": field '" + name + "': " + what;
     return false;
   }
 };
@@ -61,7 +64,11 @@ bool parseFloat(LineParser& p, std::string_view field, std::string_view token, d
   if (ec != std::errc() || end != token.data() + token.size())
     return p.fail(field, "expected a number, got " + quoted(token));
   if (!std::isfinite(value)) return p.fail(field, "non-finite value " + quoted(token));
-  if (std::abs(value) > limit) return p.fail(field, "value " + quoted(token) + " outside [-1e6, 1e6]");
+  if (std::abs(value) > limit) {
+    char range[64];
+    std::snprintf(range, sizeof range, " outside [-%g, %g]", limit, limit);
+    return p.fail(field, "value " + quoted(token) + range);
+  }
   // Written with float round-trip precision (formatCameraLine): the nearest float is the value.
   out = static_cast<float>(value);
   return true;
@@ -252,17 +259,20 @@ ReplayStatus parseReplayText(std::string_view text, const std::string& label, Re
       if (!headerComplete(p, out)) return {p.error, 1};
       in_events = true;
     }
+    if (event.kind == ReplayEventKind::checkpoint && event.step == 0)
+      return fail("checkpoint.step", "a checkpoint is the state after STEP steps: STEP must be >= 1");
     if (event.step < last_step)
       return fail(std::string(tokens[0]) + ".step", "step " + std::to_string(event.step) + " goes backwards (line " +
                                                        std::to_string(last_step_line) + " is at step " +
                                                        std::to_string(last_step) + ")");
-    if (event.kind == ReplayEventKind::checkpoint && event.step == 0)
-      return fail("checkpoint.step", "a checkpoint is the state after STEP steps: STEP must be >= 1");
     last_step = event.step;
     last_step_line = p.line;
     out.events.push_back(std::move(event));
   }
-  if (!seen_version) return fail("fluiddemo_replay", "empty file (expected 'fluiddemo_replay 1' first)");
+  if (!seen_version) {
+    p.line = std::max(p.line, 1);
+    return fail("fluiddemo_replay", "empty file: no records (expected 'fluiddemo_replay 1' first)");
+  }
   if (!seen_end) {
     ++p.line;
     return fail("end", "missing 'end STEP' record (file truncated? a recording cut short keeps its events: append "

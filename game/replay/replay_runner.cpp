@@ -15,20 +15,25 @@ std::string where(const ReplayFile& replay, int line, std::string_view field) {
   return replay.label + ":" + std::to_string(line) + ": field '" + std::string(field) + "': ";
 }
 
-// Compares a computed state hash with a checkpoint's; empty when equal, else what differs first.
+// Compares a computed state hash with a checkpoint's; empty when equal, else which subsystems
+// differ (the first one with both values).
 std::string compareCheckpoint(const ReplayEvent& expected, const StateHash& got) {
   for (const NamedHash& part : expected.parts) {
     const bool present = std::any_of(got.parts.begin(), got.parts.end(),
                                      [&](const SubsystemHash& g) { return g.name == part.name; });
     if (!present) return "subsystem '" + part.name + "' is in the checkpoint but not in this scene's world";
   }
+  std::string first, all;
   for (const SubsystemHash& part : got.parts) {
     for (const NamedHash& want : expected.parts) {
-      if (want.name == part.name && want.value != part.value)
-        return "first differing subsystem '" + want.name + "': expected " + hashHex(want.value) + ", got " +
-               hashHex(part.value);
+      if (want.name != part.name || want.value == part.value) continue;
+      if (first.empty())
+        first = "first differing subsystem '" + want.name + "': expected " + hashHex(want.value) + ", got " +
+                hashHex(part.value);
+      all += (all.empty() ? "" : ", ") + want.name;
     }
   }
+  if (!first.empty()) return first + " (differing: " + all + ")";
   if (expected.hash != got.combined)
     return "combined hash differs (expected " + hashHex(expected.hash) + ", got " + hashHex(got.combined) +
            ") while every listed subsystem matches";
