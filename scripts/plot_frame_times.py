@@ -61,8 +61,9 @@ def main():
     ax.stackplot(steps, series, labels=PHASES, linewidth=0)
     ax.plot(steps, [r["frame_ms"] for r in rows], color="black", linewidth=0.6, label="frame total")
     for ms, label in ((1000 / 60, "16.7 ms (60 fps)"), (1000 / 30, "33.3 ms (30 fps)")):
-        ax.axhline(ms, color="gray", linestyle="--", linewidth=0.8)
-        ax.text(steps[0], ms, " " + label, va="bottom", fontsize=8, color="dimgray")
+        ax.axhline(ms, color="black", linestyle="--", linewidth=0.8, zorder=4)
+        ax.text(steps[0], ms, " " + label, va="bottom", fontsize=8, color="black", zorder=5,
+                bbox=dict(facecolor="white", alpha=0.7, linewidth=0, pad=1))
     ax.set_xlabel("simulation step (one per frame)")
     ax.set_ylabel("ms per frame")
     ax.set_xlim(steps[0], steps[-1] if steps[-1] > steps[0] else steps[0] + 1)
