@@ -29,18 +29,18 @@ void applyPlayerAction(World& world, PlayerAction action);
 // Before this frame's simulation steps, after the player's own input moved the camera.
 struct FrameInput {
   World& world;
-  int frame = 0;                     // 0-based frame index
+  int frame = 0;                       // 0-based frame index
   std::vector<PlayerAction>& actions;  // this frame's actions (the mouse's so far); hooks may add/remove
-  std::filesystem::path screenshot;  // if set, this frame (after its steps) is written here as PNG
+  std::filesystem::path screenshot;    // if set, this frame (after its steps) is written here as PNG
 };
 
 // After the frame (its steps, meshing, rendering, UI) has ended in the profiler.
 struct FrameResult {
   const World& world;
   int frame = 0;
-  int steps = 0;                                 // simulation steps taken this frame
+  int steps = 0;                                       // simulation steps taken this frame
   std::array<double, engine::kPhaseCount> phase_ms{};  // this frame's time per profiler phase
-  double frame_ms = 0.0;                         // this frame's wall time, beginFrame..endFrame
+  double frame_ms = 0.0;                               // this frame's wall time, beginFrame..endFrame
 };
 
 // Optional per-frame hooks: scripted input and recording (game/replay), per-frame observers.

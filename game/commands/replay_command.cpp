@@ -8,16 +8,16 @@
 #include "game/replay/replay_runner.hpp"
 #include "game/run_scene.hpp"
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <unistd.h>
 
 namespace game {
 namespace {
@@ -89,7 +89,8 @@ int checkArgs(ReplayArgs& args) {
     return usageError("--update-hashes rewrites the replay file's checkpoints: it needs --force too");
   if (args.update_hashes && args.run.frames > 0)
     return usageError("--update-hashes needs the whole replay: drop --frames");
-  if (args.threads < 0) return usageError("--threads must be >= 0 (0 = all cores), got " + std::to_string(args.threads));
+  if (args.threads < 0)
+    return usageError("--threads must be >= 0 (0 = all cores), got " + std::to_string(args.threads));
   for (const std::string& out : {args.csv, args.png}) {
     if (!out.empty() && std::filesystem::exists(out) && !args.force)
       return usageError(out + " exists (pass --force to replace it)");
@@ -123,7 +124,8 @@ int writeOutputs(const ReplayArgs& args, const ReplayFile& replay, const ReplayR
   }
   int code = 0;
   if (!args.png.empty()) {
-    code = plot(csv, args, std::filesystem::path(replay.label).stem().string() + " (" + result.report.gl_renderer + ")");
+    code =
+        plot(csv, args, std::filesystem::path(replay.label).stem().string() + " (" + result.report.gl_renderer + ")");
     if (args.csv.empty()) std::filesystem::remove(csv);
   }
   return code;
@@ -159,9 +161,10 @@ int updateHashes(const ReplayFile& replay, const ReplayResult& result) {
 }  // namespace
 
 int replayCommand(const Args& args) {
-  CLI::App app{"Play a replay file one fixed step per rendered frame, check its checkpoint hashes and time every "
-               "frame per phase (docs/replay.md).",
-               "replay"};
+  CLI::App app{
+      "Play a replay file one fixed step per rendered frame, check its checkpoint hashes and time every "
+      "frame per phase (docs/replay.md).",
+      "replay"};
   ReplayArgs a;
   a.run.run.width = 1280;
   a.run.run.height = 720;
@@ -171,15 +174,20 @@ int replayCommand(const Args& args) {
       ->check(CLI::Range(0, 100000000));
   app.add_option("--threads", a.threads, "most threads a parallel loop runs on (0 = all cores)");
   app.add_option("--width", a.run.run.width, "framebuffer width")->check(CLI::Range(64, 8192))->capture_default_str();
-  app.add_option("--height", a.run.run.height, "framebuffer height")->check(CLI::Range(64, 8192))->capture_default_str();
+  app.add_option("--height", a.run.run.height, "framebuffer height")
+      ->check(CLI::Range(64, 8192))
+      ->capture_default_str();
   app.add_option("--csv", a.csv, "write one row per frame: phase times, counts, checkpoint hashes");
   app.add_option("--png", a.png, "plot the per-phase frame times (scripts/plot_frame_times.py, matplotlib)");
-  app.add_option("--plot-width", a.plot_width, "plot width in pixels")->check(CLI::Range(200, 8000))->capture_default_str();
+  app.add_option("--plot-width", a.plot_width, "plot width in pixels")
+      ->check(CLI::Range(200, 8000))
+      ->capture_default_str();
   app.add_option("--plot-height", a.plot_height, "plot height in pixels")
       ->check(CLI::Range(150, 8000))
       ->capture_default_str();
   app.add_option("--screenshot-at", a.screenshot_at, "STEP:FILE.png: write the frame after STEP steps (repeatable)");
-  app.add_flag("--update-hashes", a.update_hashes, "rewrite the file's checkpoint hashes and scene_hash (needs --force)");
+  app.add_flag("--update-hashes", a.update_hashes,
+               "rewrite the file's checkpoint hashes and scene_hash (needs --force)");
   app.add_flag("--force", a.force, "replace existing --csv/--png/--screenshot-at files; allow --update-hashes");
   app.add_flag("--allow-scene-change", a.run.allow_scene_change, "replay even if the scene file's hash changed");
   app.add_option("--compare", a.compare, "A.csv B.csv: per-phase p50/p95 ratios B/A")->expected(2);

@@ -124,8 +124,9 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
     bool ok = parseCell(cells[c], row.frame) && parseCell(cells[++c], row.step);
     for (int p = 0; ok && p <= engine::kPhaseCount; ++p)
       ok = parseCell(cells[++c], p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
-    if (ok) ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.sprites) &&
-                 parseCell(cells[++c], row.triangles);
+    if (ok)
+      ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.sprites) &&
+           parseCell(cells[++c], row.triangles);
     if (ok && !cells[++c].empty()) ok = row.has_hash = parseCell(cells[c], row.state_hash, 16);
     if (!ok) {
       error = where(c) + "bad value '" + std::string(cells[c].substr(0, 40)) + "'";

@@ -27,10 +27,10 @@ struct ReplayRecorder {
   std::uint64_t checkpoint_every = 60;  // steps
   bool has_pose = false;
   CameraPose last_pose;
-  std::uint64_t last_step = 0;              // world.steps at the last after-frame
-  std::uint64_t last_checkpoint_step = 0;   // 0 = none written yet
-  bool stopped = false;                     // a restart or a write error ended the recording
-  std::string message;                      // why it stopped
+  std::uint64_t last_step = 0;             // world.steps at the last after-frame
+  std::uint64_t last_checkpoint_step = 0;  // 0 = none written yet
+  bool stopped = false;                    // a restart or a write error ended the recording
+  std::string message;                     // why it stopped
   StateHashScratch scratch;
   StateHash pending;  // the hash at last_step (written as the final checkpoint)
   bool has_pending = false;

@@ -83,11 +83,10 @@ bool parseHash(LineParser& p, std::string_view field, std::string_view token, st
   return true;
 }
 
-bool expectCount(LineParser& p, std::string_view field, const std::vector<std::string_view>& tokens,
-                 std::size_t count, std::string_view usage) {
+bool expectCount(LineParser& p, std::string_view field, const std::vector<std::string_view>& tokens, std::size_t count,
+                 std::string_view usage) {
   if (tokens.size() == count) return true;
-  return p.fail(field, "expected '" + std::string(usage) + "', got " + std::to_string(tokens.size() - 1) +
-                           " value(s)");
+  return p.fail(field, "expected '" + std::string(usage) + "', got " + std::to_string(tokens.size() - 1) + " value(s)");
 }
 
 bool parseCheckpoint(LineParser& p, const std::vector<std::string_view>& tokens, ReplayEvent& event) {
@@ -226,7 +225,8 @@ ReplayStatus parseReplayText(std::string_view text, const std::string& label, Re
     if (seen_end) return fail(tokens[0], "record after 'end' (end must be the last record)");
     if (!seen_version) {
       if (tokens[0] != "fluiddemo_replay")
-        return fail("fluiddemo_replay", "the first record must be 'fluiddemo_replay VERSION', got " + quoted(tokens[0]));
+        return fail("fluiddemo_replay",
+                    "the first record must be 'fluiddemo_replay VERSION', got " + quoted(tokens[0]));
       if (tokens.size() != 2 || tokens[1] != std::to_string(kReplayFormatVersion))
         return fail("fluiddemo_replay", "unknown format version " + quoted(tokens.size() > 1 ? tokens[1] : "") +
                                             " (this build reads version " + std::to_string(kReplayFormatVersion) + ")");
@@ -263,8 +263,8 @@ ReplayStatus parseReplayText(std::string_view text, const std::string& label, Re
       return fail("checkpoint.step", "a checkpoint is the state after STEP steps: STEP must be >= 1");
     if (event.step < last_step)
       return fail(std::string(tokens[0]) + ".step", "step " + std::to_string(event.step) + " goes backwards (line " +
-                                                       std::to_string(last_step_line) + " is at step " +
-                                                       std::to_string(last_step) + ")");
+                                                        std::to_string(last_step_line) + " is at step " +
+                                                        std::to_string(last_step) + ")");
     last_step = event.step;
     last_step_line = p.line;
     out.events.push_back(std::move(event));
@@ -275,8 +275,9 @@ ReplayStatus parseReplayText(std::string_view text, const std::string& label, Re
   }
   if (!seen_end) {
     ++p.line;
-    return fail("end", "missing 'end STEP' record (file truncated? a recording cut short keeps its events: append "
-                       "'end STEP' to replay it)");
+    return fail("end",
+                "missing 'end STEP' record (file truncated? a recording cut short keeps its events: append "
+                "'end STEP' to replay it)");
   }
   return {};
 }
@@ -343,8 +344,8 @@ bool cameraPoseAt(const ReplayFile& replay, std::uint64_t step, CameraPose& out)
     out = {only->position, only->yaw_degrees, only->pitch_degrees};
     return true;
   }
-  const float t = static_cast<float>(static_cast<double>(step - before->step) /
-                                     static_cast<double>(after->step - before->step));
+  const float t =
+      static_cast<float>(static_cast<double>(step - before->step) / static_cast<double>(after->step - before->step));
   out.position = before->position + (after->position - before->position) * t;
   out.yaw_degrees = before->yaw_degrees + (after->yaw_degrees - before->yaw_degrees) * t;
   out.pitch_degrees = before->pitch_degrees + (after->pitch_degrees - before->pitch_degrees) * t;

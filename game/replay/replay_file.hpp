@@ -54,8 +54,8 @@ struct ReplayEvent {
   // checkpoint: has_hash is false for a placeholder `checkpoint STEP` still to be filled in by
   // `fluiddemo replay FILE --update-hashes --force`.
   bool has_hash = false;
-  std::uint64_t hash = 0;         // the combined state hash
-  std::vector<NamedHash> parts;   // per-subsystem hashes, as written
+  std::uint64_t hash = 0;        // the combined state hash
+  std::vector<NamedHash> parts;  // per-subsystem hashes, as written
 };
 
 struct ReplayFile {

@@ -19,8 +19,8 @@ std::string where(const ReplayFile& replay, int line, std::string_view field) {
 // differ (the first one with both values).
 std::string compareCheckpoint(const ReplayEvent& expected, const StateHash& got) {
   for (const NamedHash& part : expected.parts) {
-    const bool present = std::any_of(got.parts.begin(), got.parts.end(),
-                                     [&](const SubsystemHash& g) { return g.name == part.name; });
+    const bool present =
+        std::any_of(got.parts.begin(), got.parts.end(), [&](const SubsystemHash& g) { return g.name == part.name; });
     if (!present) return "subsystem '" + part.name + "' is in the checkpoint but not in this scene's world";
   }
   std::string first, all;
@@ -71,7 +71,8 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
     FrameRow row;
     row.frame = frame;
     for (int p = 0; p < engine::kPhaseCount; ++p) row.phase_ms[p] = profiler.current_ms[p];
-    row.frame_ms = profiler.frame_history[(profiler.head - 1 + engine::Profiler::kHistory) % engine::Profiler::kHistory];
+    row.frame_ms =
+        profiler.frame_history[(profiler.head - 1 + engine::Profiler::kHistory) % engine::Profiler::kHistory];
     const bool keep_going = checkReplayStep(player, world, row, result);
     result.rows.push_back(row);
     ++result.report.frames_rendered;
@@ -151,12 +152,13 @@ ReplayStatus prepareReplayScene(const ReplayFile& replay, const std::filesystem:
   if (!readTextFile(path, bytes, error)) return {where(replay, scene_line, "scene") + error, 1};
   scene_hash = fnv1a64(bytes);
   if (scene_hash != replay.scene_hash) {
-    const std::string message = where(replay, replay.scene_hash_line, "scene_hash") +
-                                "scene file " + path.string() + " has hash " + hashHex(scene_hash) +
-                                ", the replay was made with " + hashHex(replay.scene_hash);
+    const std::string message = where(replay, replay.scene_hash_line, "scene_hash") + "scene file " + path.string() +
+                                " has hash " + hashHex(scene_hash) + ", the replay was made with " +
+                                hashHex(replay.scene_hash);
     if (!allow_scene_change)
-      return {message + " (the scene changed: pass --allow-scene-change to replay anyway, or --update-hashes --force "
-                        "to re-baseline)",
+      return {message +
+                  " (the scene changed: pass --allow-scene-change to replay anyway, or --update-hashes --force "
+                  "to re-baseline)",
               1};
     warning = message;
   }
@@ -170,13 +172,12 @@ ReplayStatus prepareReplayScene(const ReplayFile& replay, const std::filesystem:
     if (SceneStatus status = applyOverride(out, assignment); !status.ok()) return {status.error, 1};
   }
   if (out.scene.number("step_hz") != replay.step_hz)
-    return {where(replay, replay.step_hz_line, "step_hz") + "the replay steps at " +
-                std::to_string(replay.step_hz) + " Hz, the scene at " + std::to_string(out.scene.number("step_hz")) +
-                " Hz",
+    return {where(replay, replay.step_hz_line, "step_hz") + "the replay steps at " + std::to_string(replay.step_hz) +
+                " Hz, the scene at " + std::to_string(out.scene.number("step_hz")) + " Hz",
             1};
   if (out.scene.integer("seed") != replay.seed)
-    return {where(replay, replay.seed_line, "seed") + "the replay has seed " +
-                std::to_string(replay.seed) + ", the scene " + std::to_string(out.scene.integer("seed")),
+    return {where(replay, replay.seed_line, "seed") + "the replay has seed " + std::to_string(replay.seed) +
+                ", the scene " + std::to_string(out.scene.integer("seed")),
             1};
   return {};
 }
@@ -198,8 +199,8 @@ int runReplay(const ReplayFile& replay, const ReplayRunOptions& options, ReplayR
       return 1;
     }
   }
-  const auto frames = static_cast<int>(options.frames > 0 ? std::min<std::uint64_t>(options.frames, replay.end_step)
-                                                          : replay.end_step);
+  const auto frames =
+      static_cast<int>(options.frames > 0 ? std::min<std::uint64_t>(options.frames, replay.end_step) : replay.end_step);
   result.rows.reserve(static_cast<std::size_t>(frames));
   ReplayPlayer player;
   player.replay = &replay;

@@ -26,8 +26,8 @@ ReplayStatus prepareReplayScene(const ReplayFile& replay, const std::filesystem:
                                 SceneConfig& out, std::uint64_t& scene_hash, std::string& warning);
 
 struct ReplayRunOptions {
-  RunOptions run;   // size, headless, show_ui; frames/fixed_frame_time/hooks are set by runReplay
-  int frames = 0;   // replay frames to run, <= end step; 0 = the whole replay
+  RunOptions run;  // size, headless, show_ui; frames/fixed_frame_time/hooks are set by runReplay
+  int frames = 0;  // replay frames to run, <= end step; 0 = the whole replay
   // false: the same steps, inputs and checkpoints with no window, GL, meshing or rendering (the
   // state hash never depends on them); the rows then time the simulation phases only.
   bool render = true;

@@ -61,7 +61,8 @@ std::uint64_t hashSph(const SphFluid& fluid, StateHashScratch& scratch) {
   // particles in the same states", whatever the storage order.
   scratch.order.resize(p.size());
   std::iota(scratch.order.begin(), scratch.order.end(), 0u);
-  std::sort(scratch.order.begin(), scratch.order.end(), [&p](std::uint32_t a, std::uint32_t b) { return p.id[a] < p.id[b]; });
+  std::sort(scratch.order.begin(), scratch.order.end(),
+            [&p](std::uint32_t a, std::uint32_t b) { return p.id[a] < p.id[b]; });
   Fnv1a64 h;
   h.add(static_cast<std::uint64_t>(p.size()));
   for (std::uint32_t i : scratch.order) {

@@ -41,8 +41,8 @@ struct SubsystemHash {
 };
 
 struct StateHash {
-  std::uint64_t combined = 0;          // over the step count and every subsystem hash, in order
-  std::vector<SubsystemHash> parts;    // present subsystems only, fixed order
+  std::uint64_t combined = 0;        // over the step count and every subsystem hash, in order
+  std::vector<SubsystemHash> parts;  // present subsystems only, fixed order
 };
 
 // Caller-owned scratch so hashing every checkpoint allocates nothing after the first.

@@ -31,7 +31,9 @@ std::string validText() {
   return "fluiddemo_replay 1\n"
          "# comment\n"
          "scene crate_yard\n"
-         "scene_hash " + sceneHash("crate_yard") + "\n"
+         "scene_hash " +
+         sceneHash("crate_yard") +
+         "\n"
          "set rigid_bodies.throw_speed=12\n"
          "step_hz 60\n"
          "seed 3\n"
@@ -139,8 +141,8 @@ TEST(ReplayFile, TruncatedFilesAreNamed) {
 TEST(ReplayFile, UnknownVersionRecordAndActionAreNamed) {
   EXPECT_TRUE(failsWith(replaceLine(validText(), "fluiddemo_replay 1", "fluiddemo_replay 2"),
                         "1: field 'fluiddemo_replay'", "unknown format version '2'"));
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "jump 20"), "12: field 'jump'",
-                        "unknown record"));
+  EXPECT_TRUE(
+      failsWith(replaceLine(validText(), "action 20 throw_crate", "jump 20"), "12: field 'jump'", "unknown record"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "action 20 throw_explosive"),
                         "12: field 'action.name'", "unknown action 'throw_explosive'"));
 }
@@ -149,8 +151,8 @@ TEST(ReplayFile, StepsGoingBackwardsAreNamed) {
   EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "action 5 throw_crate"),
                         "12: field 'action.step'", "goes backwards (line 11 is at step 20)"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "end 40", "end 35"), "15: field 'end.step'", "before the event"));
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "checkpoint 40", "checkpoint 0"), "14: field 'checkpoint.step'",
-                        ">= 1"));
+  EXPECT_TRUE(
+      failsWith(replaceLine(validText(), "checkpoint 40", "checkpoint 0"), "14: field 'checkpoint.step'", ">= 1"));
 }
 
 TEST(ReplayFile, NonFiniteAndMalformedNumbersAreNamed) {
@@ -158,15 +160,15 @@ TEST(ReplayFile, NonFiniteAndMalformedNumbersAreNamed) {
                         "non-finite value 'nan'"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "camera 20 10 3 0", "camera 20 10 inf 0"), "11: field 'camera.y'",
                         "non-finite"));
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "camera 20 10 3 0", "camera 20 10 3 1e400"), "11: field 'camera.z'",
-                        "1e400"));
+  EXPECT_TRUE(
+      failsWith(replaceLine(validText(), "camera 20 10 3 0", "camera 20 10 3 1e400"), "11: field 'camera.z'", "1e400"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "-180 -10", "-180 -100"), "11: field 'camera.pitch'", "outside"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "camera 20 10 3 0 -180 -10", "camera 20 10 3 0 -180"),
                         "11: field 'camera'", "expected 'camera STEP X Y Z YAW PITCH'"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "action 10", "action -10"), "10: field 'action.step'",
                         "expected a step number"));
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "0123456789abcdef", "0123456789abcdeg"),
-                        "13: field 'checkpoint.hash'", "16 hex digits"));
+  EXPECT_TRUE(failsWith(replaceLine(validText(), "0123456789abcdef", "0123456789abcdeg"), "13: field 'checkpoint.hash'",
+                        "16 hex digits"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "rigid_bodies=fedcba9876543210", "rigid_bodies=12"),
                         "13: field 'checkpoint.rigid_bodies'", "16 hex digits"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "step_hz 60", "step_hz 0"), "6: field 'step_hz'", "outside"));
@@ -174,7 +176,8 @@ TEST(ReplayFile, NonFiniteAndMalformedNumbersAreNamed) {
 }
 
 TEST(ReplayFile, HeaderRecordsAreCheckedForPlaceAndRepetition) {
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "seed 4"), "12: field 'seed'", "given twice"));
+  EXPECT_TRUE(
+      failsWith(replaceLine(validText(), "action 20 throw_crate", "seed 4"), "12: field 'seed'", "given twice"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "set a.b=1"), "12: field 'set'",
                         "after the first event"));
   EXPECT_TRUE(failsWith(validText() + "camera 50 0 0 0 0 0\n", "16: field 'camera'", "after 'end'"));
@@ -229,7 +232,8 @@ TEST(ReplayFile, FuzzedMutationsNeverCrashAndEveryFailureIsNamed) {
     if (st.ok()) {
       ++successes;
       // Whatever parsed is consistent: events in step order, end at or after the last one.
-      for (std::size_t i = 1; i < replay.events.size(); ++i) ASSERT_LE(replay.events[i - 1].step, replay.events[i].step);
+      for (std::size_t i = 1; i < replay.events.size(); ++i)
+        ASSERT_LE(replay.events[i - 1].step, replay.events[i].step);
       if (!replay.events.empty()) {
         ASSERT_LE(replay.events.back().step, replay.end_step);
       }

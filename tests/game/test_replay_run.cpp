@@ -10,15 +10,14 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include <filesystem>
 #include <unistd.h>
+#include <filesystem>
 
 namespace {
 
 game::ReplayFile load(const std::string& name) {
   game::ReplayFile replay;
-  const game::ReplayStatus st =
-      game::loadReplayFile(game::contentDir() / "replays" / (name + ".replay"), replay);
+  const game::ReplayStatus st = game::loadReplayFile(game::contentDir() / "replays" / (name + ".replay"), replay);
   EXPECT_TRUE(st.ok()) << st.error;
   return replay;
 }
