@@ -19,6 +19,8 @@ constexpr Subcommand kSubcommands[] = {
      game::smokeCommand},
     {"soak", "long headless runs with crate throws, checked every frame: soak [--scene S | --all] [--seconds T]",
      game::soakCommand},
+    {"replay", "play a replay file, check its hashes, time each frame: replay FILE [--csv OUT] [--png OUT]",
+     game::replayCommand},
     {"mesh", "particles -> triangle mesh by marching slices: mesh --in FILE --out FILE", game::meshCommand},
     {"simulate", "run an SPH scene without a window: simulate --scene NAME --seconds T", game::simulateCommand},
     {"bake-collider", "bake depth-map colliders from a model: bake-collider MODEL --out FILE",

@@ -259,6 +259,57 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, 
 
 }  // namespace
 
+bool displayAvailable() {
+  const char* driver = std::getenv("SDL_VIDEODRIVER");
+  if (driver != nullptr && (std::string_view(driver) == "offscreen" || std::string_view(driver) == "dummy"))
+    return false;
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  return (x11 != nullptr && *x11 != '\0') || (wayland != nullptr && *wayland != '\0');
+}
+
+void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions& options, const RunReport& report) {
+  std::fprintf(out, "fluiddemo: scene '%s', %d frames, %llu simulation steps, %dx%d %s\n", scene.name.c_str(),
+               report.frames_rendered, static_cast<unsigned long long>(report.simulation_steps), options.width,
+               options.height, options.headless ? "headless" : "window");
+  std::fprintf(out, "renderer: %s\n", report.gl_renderer.c_str());
+  std::string systems;
+  for (const std::string& system : report.systems_constructed) systems += (systems.empty() ? "" : ", ") + system;
+  std::fprintf(out, "systems running: %s\n", systems.empty() ? "(none)" : systems.c_str());
+  std::fprintf(out, "%-10s %10s %10s %10s\n", "phase", "mean ms", "max ms", "samples");
+  for (const PhaseTiming& phase : report.phases) {
+    std::fprintf(out, "%-10s %10.3f %10.3f %10llu\n", phase.phase.c_str(), phase.mean_ms, phase.max_ms,
+                 static_cast<unsigned long long>(phase.samples));
+  }
+  std::fprintf(out, "%-10s %10.3f\n", "frame", report.mean_frame_ms);
+}
+
+std::string_view playerActionName(PlayerAction action) {
+  switch (action) {
+    case PlayerAction::throw_crate:
+      return "throw_crate";
+  }
+  return "?";
+}
+
+bool parsePlayerAction(std::string_view name, PlayerAction& out) {
+  for (PlayerAction action : {PlayerAction::throw_crate}) {
+    if (name == playerActionName(action)) {
+      out = action;
+      return true;
+    }
+  }
+  return false;
+}
+
+void applyPlayerAction(World& world, PlayerAction action) {
+  switch (action) {
+    case PlayerAction::throw_crate:
+      playerThrow(world);
+      break;
+  }
+}
+
 int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& report, std::string& error) {
   report = RunReport{};
   const std::filesystem::path content_dir = contentDir();
@@ -306,6 +357,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       std::vector<engine::DrawItem> items;
       std::vector<glm::vec4> particle_scratch;
       std::vector<std::uint8_t> pixels;
+      std::vector<PlayerAction> actions;
+      std::filesystem::path hook_screenshot;
       auto last_time = std::chrono::steady_clock::now();
       std::uint64_t steps_done = 0;
 
@@ -328,7 +381,12 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           camera_input.look_dx = input.mouse_dx;
           camera_input.look_dy = input.mouse_dy;
           engine::updateCamera(world.camera, camera_input, static_cast<float>(frame_dt));
-          if (input.left_click) playerThrow(world);
+          actions.clear();
+          if (input.left_click) actions.push_back(PlayerAction::throw_crate);
+          FrameInput frame_input{world, frame, actions, {}};
+          if (options.hooks.before_steps) options.hooks.before_steps(frame_input);
+          for (PlayerAction action : actions) applyPlayerAction(world, action);
+          hook_screenshot = std::move(frame_input.screenshot);
           if (input.resized && !options.headless) {
             std::string resize_error;
             if (!engine::resizeRenderer(renderer, platform.width, platform.height, resize_error)) {
@@ -342,10 +400,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           break;
         }
         const int steps = engine::advanceFrame(clock, frame_dt);
-        for (int s = 0; s < steps; ++s) {
-          if (options.before_step) options.before_step(world, world.steps);
-          stepWorld(world, &profiler);
-        }
+        for (int s = 0; s < steps; ++s) stepWorld(world, &profiler);
         steps_done += static_cast<std::uint64_t>(steps);
         // With a fixed frame time the accumulator is always empty: show the newest state.
         const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));
@@ -366,8 +421,16 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           if (world.sprite_particles) batch.radius = world.sprite_particles->params.size;
           engine::renderScene(renderer, view, lighting, items, std::span(&batch, 1), true);
           drawWater(water_pass, renderer, world, view);
-          if (input.screenshot || (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
+          if (input.screenshot || !hook_screenshot.empty() ||
+              (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
             engine::readSceneRgba(renderer, pixels);
+          }
+          if (!hook_screenshot.empty()) {
+            std::string write_error;
+            if (!engine::writePngBottomUp(hook_screenshot, renderer.width, renderer.height, pixels, write_error)) {
+              error = write_error;
+              code = 1;
+            }
           }
           if (input.screenshot) {
             const std::filesystem::path path = engine::nextFreeScreenshotPath(".", "fluiddemo");
@@ -401,6 +464,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
             engine::beginOverlayFrame(overlay);
             engine::drawProfilerWindow(profiler, world.systems, platform.gl_renderer);
             const auto [changed, restart] = drawScenePanel(world);
+            if (options.hooks.draw_overlay) options.hooks.draw_overlay();
             engine::endOverlayFrame(overlay);
             engine::checkGl(renderer.errors, "overlay");
             if (changed) applyLiveParams(world);
@@ -421,7 +485,16 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         engine::endFrame(profiler);
         ++report.frames_rendered;
         if (code != 0) break;
-        if (options.after_frame && !options.after_frame(world, FrameInfo{frame, steps})) break;
+        if (options.hooks.after_frame) {
+          FrameResult result{world, frame, steps, {}, 0.0};
+          for (int p = 0; p < engine::kPhaseCount; ++p) result.phase_ms[p] = profiler.current_ms[p];
+          const int last = (profiler.head - 1 + engine::Profiler::kHistory) % engine::Profiler::kHistory;
+          result.frame_ms = profiler.frame_history[last];
+          if (!options.hooks.after_frame(result)) {
+            report.stopped_by_hook = true;
+            break;
+          }
+        }
       }
       report.simulation_steps = steps_done;
       report.nonfinite_state = world.nonfinite_state;

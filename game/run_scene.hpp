@@ -3,22 +3,52 @@
 // runScene() builds the world a SceneConfig asks for (only the effects it lists), runs the
 // engine loop with a window or headless, and reports what happened.
 
+#include "engine/profile/profiler.hpp"
 #include "game/scene/scene_config.hpp"
 
+#include <array>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace game {
 
 struct World;
 
-// What RunOptions::after_frame is told about the frame just finished.
-struct FrameInfo {
-  int frame = 0;  // index of the frame (0 = first)
-  int steps = 0;  // simulation steps taken during it
+// What a player can do to the simulation besides moving the camera. Replay files name them
+// (playerActionName); later effects add theirs here (throw_explosive, blob triggers).
+enum class PlayerAction : std::uint8_t { throw_crate };
+std::string_view playerActionName(PlayerAction action);
+bool parsePlayerAction(std::string_view name, PlayerAction& out);  // false for an unknown name
+void applyPlayerAction(World& world, PlayerAction action);
+
+// Before this frame's simulation steps, after the player's own input moved the camera.
+struct FrameInput {
+  World& world;
+  int frame = 0;                       // 0-based frame index
+  std::vector<PlayerAction>& actions;  // this frame's actions (the mouse's so far); hooks may add/remove
+  std::filesystem::path screenshot;    // if set, this frame (after its steps) is written here as PNG
+};
+
+// After the frame (its steps, meshing, rendering, UI) has ended in the profiler.
+struct FrameResult {
+  const World& world;
+  int frame = 0;
+  int steps = 0;                                       // simulation steps taken this frame
+  std::array<double, engine::kPhaseCount> phase_ms{};  // this frame's time per profiler phase
+  double frame_ms = 0.0;                               // this frame's wall time, beginFrame..endFrame
+};
+
+// Optional per-frame hooks: scripted input and recording (game/replay), per-frame observers.
+// Every member may be empty.
+struct FrameHooks {
+  std::function<void(FrameInput&)> before_steps;
+  std::function<bool(const FrameResult&)> after_frame;  // return false to end the run after this frame
+  std::function<void()> draw_overlay;                   // inside the F1 overlay (ImGui calls), when visible
 };
 
 struct RunOptions {
@@ -30,12 +60,7 @@ struct RunOptions {
   bool show_ui = true;               // ImGui overlay (toggled at run time with a key)
   bool capture_last_frame = false;   // fill RunReport::last_frame_rgba / blank_frame_rgba
   bool fixed_frame_time = false;     // headless runs feed the loop exactly one step per frame
-  // Hooks for tools that drive or watch a run (soak, replays); empty = not called.
-  // before_step: before each simulation step, with the step's index (world.steps before it).
-  std::function<void(World&, std::uint64_t step)> before_step;
-  // after_frame: once per frame, after its steps, the meshing and the render; false ends the run
-  // after this frame.
-  std::function<bool(const World&, const FrameInfo&)> after_frame;
+  FrameHooks hooks;
 };
 
 // Statistics of one profiler phase over the run, in milliseconds.
@@ -60,7 +85,15 @@ struct RunReport {
   int frame_height = 0;
   std::vector<std::uint8_t> last_frame_rgba;
   std::vector<std::uint8_t> blank_frame_rgba;  // the same camera and passes with nothing drawn but the clear
+  bool stopped_by_hook = false;                // FrameHooks::after_frame ended the run
 };
+
+// True when a window can be opened (DISPLAY or WAYLAND_DISPLAY set, SDL_VIDEODRIVER not offscreen/dummy).
+bool displayAvailable();
+
+// The run summary `play` and `replay` print: scene, frames, steps, size, renderer, systems, and
+// mean/max per profiler phase.
+void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions& options, const RunReport& report);
 
 // Returns 0 on success. On failure returns non-zero and sets `error` to a complete message
 // (e.g. a shader file:line, a missing asset path); never throws or crashes on bad content.

@@ -1,5 +1,5 @@
 #pragma once
-// What `fluiddemo soak` does to a running World through runScene's hooks (RunOptions::before_step
+// What `fluiddemo soak` does to a running World through runScene's hooks (FrameHooks::before_steps
 // and after_frame): throws crates on a seeded schedule, and after every frame applies the soak
 // checks (game/soak_checks.hpp) and keeps the run's statistics. The first failure stops the run.
 
@@ -69,11 +69,11 @@ struct SoakMonitor {
 
 SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds);
 
-// RunOptions::before_step: reports progress, throws a crate when one is due (the camera moves to
+// FrameHooks::before_steps: reports progress, throws a crate when one is due (the camera moves to
 // the thrower's place and looks along the throw, so the surface is meshed for that view).
 void soakBeforeStep(SoakMonitor& monitor, World& world, std::uint64_t step);
 
-// RunOptions::after_frame: every check on the world as this frame left it. False (stop) on the
+// FrameHooks::after_frame: every check on the world as this frame left it. False (stop) on the
 // first failure or once desc.steps steps ran.
 bool soakAfterFrame(SoakMonitor& monitor, const World& world);
 

@@ -9,6 +9,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopengl-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0 libgles-dev mesa-utils
   xvfb xauth
+  python3-matplotlib
 )
 
 missing=()

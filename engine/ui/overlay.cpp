@@ -141,4 +141,17 @@ void endOverlayFrame(Overlay& overlay) {
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
 
+void drawProgressWindow(const char* title, float fraction, const char* detail) {
+  ImGui::SetNextWindowPos(ImVec2(10, ImGui::GetIO().DisplaySize.y - 80.0f), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(420, 0), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin(title)) {
+    ImGui::End();
+    return;
+  }
+  const float clamped = fraction >= 0.0f && fraction <= 1.0f ? fraction : (fraction > 1.0f ? 1.0f : 0.0f);
+  ImGui::ProgressBar(clamped, ImVec2(-1.0f, 0.0f));
+  ImGui::TextUnformatted(detail);
+  ImGui::End();
+}
+
 }  // namespace engine

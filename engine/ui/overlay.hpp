@@ -30,6 +30,9 @@ void beginOverlayFrame(Overlay& overlay);
 // Frame-time breakdown per phase (this frame, mean, max), a stacked plot of the history, and
 // the running systems.
 void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> systems, const std::string& gl_renderer);
+// A small window with a progress bar (fraction in [0, 1], clamped) and one line of detail, e.g. a
+// replay's step and checkpoints.
+void drawProgressWindow(const char* title, float fraction, const char* detail);
 // Renders into the currently bound framebuffer (the window's).
 void endOverlayFrame(Overlay& overlay);
 

@@ -1,6 +1,7 @@
 // `fluiddemo play` and `fluiddemo smoke`: command-line front ends of runScene().
 #include "game/commands.hpp"
 #include "game/paths.hpp"
+#include "game/replay/recorder.hpp"
 #include "game/run_scene.hpp"
 #include "game/smoke_checks.hpp"
 
@@ -13,15 +14,6 @@
 
 namespace game {
 namespace {
-
-bool displayAvailable() {
-  const char* driver = std::getenv("SDL_VIDEODRIVER");
-  if (driver != nullptr && (std::string_view(driver) == "offscreen" || std::string_view(driver) == "dummy"))
-    return false;
-  const char* x11 = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  return (x11 != nullptr && *x11 != '\0') || (wayland != nullptr && *wayland != '\0');
-}
 
 // Parses args with CLI11. Returns -1 to go on, otherwise the exit code (0 for --help, 2 for usage errors).
 int parseArgs(CLI::App& app, const Args& args) {
@@ -63,22 +55,6 @@ SceneChoice loadScene(const std::string& name_or_path, const std::vector<std::st
   return choice;
 }
 
-void printTimingSummary(const SceneConfig& scene, const RunOptions& options, const RunReport& report) {
-  std::printf("fluiddemo: scene '%s', %d frames, %llu simulation steps, %dx%d %s\n", scene.name.c_str(),
-              report.frames_rendered, static_cast<unsigned long long>(report.simulation_steps), options.width,
-              options.height, options.headless ? "headless" : "window");
-  std::printf("renderer: %s\n", report.gl_renderer.c_str());
-  std::string systems;
-  for (const std::string& system : report.systems_constructed) systems += (systems.empty() ? "" : ", ") + system;
-  std::printf("systems running: %s\n", systems.empty() ? "(none)" : systems.c_str());
-  std::printf("%-10s %10s %10s %10s\n", "phase", "mean ms", "max ms", "samples");
-  for (const PhaseTiming& phase : report.phases) {
-    std::printf("%-10s %10.3f %10.3f %10llu\n", phase.phase.c_str(), phase.mean_ms, phase.max_ms,
-                static_cast<unsigned long long>(phase.samples));
-  }
-  std::printf("%-10s %10.3f\n", "frame", report.mean_frame_ms);
-}
-
 constexpr int kDefaultHeadlessFrames = 240;
 
 }  // namespace
@@ -99,6 +75,10 @@ int playCommand(const Args& args) {
   app.add_option("--screenshot", screenshot, "write the last frame to this PNG");
   app.add_option("--set", overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--no-ui", no_ui, "start with the overlay hidden");
+  std::string record;
+  bool force = false;
+  app.add_option("--record", record, "record every input as a replay file (docs/replay.md), flushed as it goes");
+  app.add_flag("--force", force, "replace an existing --record file");
   if (int code = parseArgs(app, args); code >= 0) return code;
 
   SceneChoice choice = loadScene(scene_name, overrides);
@@ -116,12 +96,26 @@ int playCommand(const Args& args) {
 
   RunReport report;
   std::string error;
+  ReplayRecorder recorder;
+  if (!record.empty()) {
+    if (!startRecording(record, force, scene_name, choice.config, overrides, recorder, error)) {
+      std::fprintf(stderr, "fluiddemo play: --record %s\n", error.c_str());
+      return 2;
+    }
+    attachRecorder(recorder, options.hooks);
+  }
   const int code = runScene(choice.config, options, report, error);
+  if (!record.empty()) {
+    std::string record_error;
+    if (!finishRecording(recorder, record_error)) std::fprintf(stderr, "fluiddemo play: %s\n", record_error.c_str());
+    if (!recorder.message.empty()) std::fprintf(stderr, "fluiddemo play: --record: %s\n", recorder.message.c_str());
+    std::printf("recorded: %s (%llu steps)\n", record.c_str(), static_cast<unsigned long long>(recorder.last_step));
+  }
   if (code != 0) {
     std::fprintf(stderr, "fluiddemo play: %s\n", error.c_str());
     return code;
   }
-  printTimingSummary(choice.config, options, report);
+  printRunSummary(stdout, choice.config, options, report);
   if (!report.nonfinite_state.empty()) {
     std::fprintf(stderr, "fluiddemo play: non-finite simulation state: %s\n", report.nonfinite_state.c_str());
     return 1;

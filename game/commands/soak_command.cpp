@@ -95,8 +95,10 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   options.fixed_frame_time = true;  // one fixed step per frame, whatever the machine's speed
   options.frames = static_cast<int>(std::min<std::uint64_t>(desc.steps, 2000000000ull));
   std::vector<std::vector<char>> leaked;  // --leak-per-step: kept until the run ends
-  options.before_step = [&](World& world, std::uint64_t step) {
-    soakBeforeStep(monitor, world, step);
+  // One fixed step per frame (fixed_frame_time), so the frame's hook runs before that step.
+  options.hooks.before_steps = [&](FrameInput& input) {
+    const std::uint64_t step = input.world.steps;
+    soakBeforeStep(monitor, input.world, step);
     if (step + 1 == o.abort_at_step) std::abort();  // what a failed assertion does (tests the report)
     if (o.leak_per_step > 0) {
       // Every page written through a volatile pointer: resident, and not optimised away.
@@ -104,7 +106,8 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
       for (std::size_t i = 0; i < o.leak_per_step; i += 512) bytes[i] = 1;
     }
   };
-  options.after_frame = [&](const World& world, const FrameInfo&) {
+  options.hooks.after_frame = [&](const FrameResult& frame) {
+    const World& world = frame.world;
     const bool go_on = soakAfterFrame(monitor, world);
     if (report_every > 0 && world.steps % report_every == 0) {
       std::printf("soak %-12s ...   %s\n", name.c_str(), soakSummary(monitor).c_str());

@@ -1,0 +1,247 @@
+// `fluiddemo replay FILE`: plays a replay file (game/replay) one fixed step per rendered frame,
+// checks its checkpoints, prints per-phase percentiles and writes the per-frame CSV and its plot.
+// `fluiddemo replay --compare A.csv B.csv`: per-phase p50/p95 ratios B/A of two such CSVs.
+#include "game/commands.hpp"
+#include "game/paths.hpp"
+#include "game/replay/frame_times.hpp"
+#include "game/replay/replay_file.hpp"
+#include "game/replay/replay_runner.hpp"
+#include "game/run_scene.hpp"
+
+#include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
+
+#include <unistd.h>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+
+namespace game {
+namespace {
+
+struct ReplayArgs {
+  std::string file;
+  ReplayRunOptions run;
+  int threads = 0;
+  std::string csv, png;
+  int plot_width = 1200, plot_height = 600;
+  std::vector<std::string> screenshot_at;
+  std::vector<std::string> compare;
+  bool update_hashes = false, force = false, no_ui = false;
+};
+
+int usageError(const std::string& message) {
+  std::fprintf(stderr, "fluiddemo replay: %s\n", message.c_str());
+  return 2;
+}
+
+// The Python with matplotlib: FLUIDDEMO_PYTHON, else Debian's /usr/bin/python3 (where
+// python3-matplotlib installs), else python3 from PATH.
+std::string pythonCommand() {
+  if (const char* python = std::getenv("FLUIDDEMO_PYTHON"); python != nullptr && *python != '\0') return python;
+  if (std::filesystem::exists("/usr/bin/python3")) return "/usr/bin/python3";
+  return "python3";
+}
+
+std::string shellQuote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+int plot(const std::filesystem::path& csv, const ReplayArgs& args, const std::string& title) {
+  const std::string command = shellQuote(pythonCommand()) + " " +
+                              shellQuote((projectRoot() / "scripts" / "plot_frame_times.py").string()) + " " +
+                              shellQuote(csv.string()) + " " + shellQuote(args.png) + " --width " +
+                              std::to_string(args.plot_width) + " --height " + std::to_string(args.plot_height) +
+                              " --title " + shellQuote(title) + (args.force ? " --force" : "");
+  const int status = std::system(command.c_str());
+  if (status != 0) {
+    std::fprintf(stderr, "fluiddemo replay: plotting failed (%s)\n", command.c_str());
+    return 1;
+  }
+  std::printf("plot: %s\n", args.png.c_str());
+  return 0;
+}
+
+int compareCommand(const ReplayArgs& args) {
+  std::vector<FrameRow> a, b;
+  std::string error;
+  if (!readFrameCsv(args.compare[0], a, error) || !readFrameCsv(args.compare[1], b, error)) {
+    std::fprintf(stderr, "fluiddemo replay --compare: %s\n", error.c_str());
+    return 1;
+  }
+  printComparison(stdout, args.compare[0], a, args.compare[1], b);
+  return 0;
+}
+
+// Checks the flags against each other and the output files against --force. -1 = go on.
+int checkArgs(ReplayArgs& args) {
+  if (!args.compare.empty()) {
+    if (!args.file.empty()) return usageError("--compare takes two CSV files and no replay FILE");
+    return -1;
+  }
+  if (args.file.empty()) return usageError("a replay FILE is required (or --compare A.csv B.csv)");
+  if (args.update_hashes && !args.force)
+    return usageError("--update-hashes rewrites the replay file's checkpoints: it needs --force too");
+  if (args.update_hashes && args.run.frames > 0)
+    return usageError("--update-hashes needs the whole replay: drop --frames");
+  if (args.threads < 0)
+    return usageError("--threads must be >= 0 (0 = all cores), got " + std::to_string(args.threads));
+  for (const std::string& out : {args.csv, args.png}) {
+    if (!out.empty() && std::filesystem::exists(out) && !args.force)
+      return usageError(out + " exists (pass --force to replace it)");
+  }
+  for (const std::string& spec : args.screenshot_at) {
+    const std::size_t colon = spec.find(':');
+    std::uint64_t step = 0;
+    const char* end = spec.data() + (colon == std::string::npos ? spec.size() : colon);
+    const auto parsed = std::from_chars(spec.data(), end, step);
+    if (colon == std::string::npos || colon + 1 == spec.size() || parsed.ec != std::errc() || parsed.ptr != end ||
+        step == 0)
+      return usageError("--screenshot-at expects STEP:FILE.png with STEP >= 1, got '" + spec + "'");
+    const std::string path = spec.substr(colon + 1);
+    if (std::filesystem::exists(path) && !args.force) return usageError(path + " exists (pass --force to replace it)");
+    args.run.screenshots.emplace_back(step, path);
+  }
+  return -1;
+}
+
+int writeOutputs(const ReplayArgs& args, const ReplayFile& replay, const ReplayResult& result) {
+  std::string error;
+  std::filesystem::path csv = args.csv;
+  if (csv.empty() && !args.png.empty())
+    csv = std::filesystem::temp_directory_path() / ("fluiddemo_replay_" + std::to_string(::getpid()) + ".csv");
+  if (!csv.empty()) {
+    if (!writeFrameCsv(csv, result.rows, error)) {
+      std::fprintf(stderr, "fluiddemo replay: %s\n", error.c_str());
+      return 1;
+    }
+    if (!args.csv.empty()) std::printf("csv: %s (%zu rows)\n", args.csv.c_str(), result.rows.size());
+  }
+  int code = 0;
+  if (!args.png.empty()) {
+    code =
+        plot(csv, args, std::filesystem::path(replay.label).stem().string() + " (" + result.report.gl_renderer + ")");
+    if (args.csv.empty()) std::filesystem::remove(csv);
+  }
+  return code;
+}
+
+int updateHashes(const ReplayFile& replay, const ReplayResult& result) {
+  std::string text, rewritten, error;
+  if (!readTextFile(replay.label, text, error) || !rewriteHashes(text, replay, result, rewritten, error)) {
+    std::fprintf(stderr, "fluiddemo replay --update-hashes: %s\n", error.c_str());
+    return 1;
+  }
+  // Write next to it, then rename over it: an interrupted update leaves the old file whole.
+  const std::filesystem::path target = replay.label;
+  const std::filesystem::path temporary = target.string() + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << rewritten;
+    if (!out.flush()) {
+      std::fprintf(stderr, "fluiddemo replay --update-hashes: cannot write %s\n", temporary.c_str());
+      return 1;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, target, ec);
+  if (ec) {
+    std::fprintf(stderr, "fluiddemo replay --update-hashes: %s: %s\n", target.c_str(), ec.message().c_str());
+    return 1;
+  }
+  std::printf("updated %zu checkpoints and the scene hash in %s\n", result.checkpoints.size(), target.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int replayCommand(const Args& args) {
+  CLI::App app{
+      "Play a replay file one fixed step per rendered frame, check its checkpoint hashes and time every "
+      "frame per phase (docs/replay.md).",
+      "replay"};
+  ReplayArgs a;
+  a.run.run.width = 1280;
+  a.run.run.height = 720;
+  app.add_option("file", a.file, "replay file (content/replays/*.replay)");
+  app.add_flag("--headless", a.run.run.headless, "no window: render offscreen (automatic without a display)");
+  app.add_option("--frames", a.run.frames, "run only the first N steps (0 = the whole replay)")
+      ->check(CLI::Range(0, 100000000));
+  app.add_option("--threads", a.threads, "most threads a parallel loop runs on (0 = all cores)");
+  app.add_option("--width", a.run.run.width, "framebuffer width")->check(CLI::Range(64, 8192))->capture_default_str();
+  app.add_option("--height", a.run.run.height, "framebuffer height")
+      ->check(CLI::Range(64, 8192))
+      ->capture_default_str();
+  app.add_option("--csv", a.csv, "write one row per frame: phase times, counts, checkpoint hashes");
+  app.add_option("--png", a.png, "plot the per-phase frame times (scripts/plot_frame_times.py, matplotlib)");
+  app.add_option("--plot-width", a.plot_width, "plot width in pixels")
+      ->check(CLI::Range(200, 8000))
+      ->capture_default_str();
+  app.add_option("--plot-height", a.plot_height, "plot height in pixels")
+      ->check(CLI::Range(150, 8000))
+      ->capture_default_str();
+  app.add_option("--screenshot-at", a.screenshot_at, "STEP:FILE.png: write the frame after STEP steps (repeatable)");
+  app.add_flag("--update-hashes", a.update_hashes,
+               "rewrite the file's checkpoint hashes and scene_hash (needs --force)");
+  app.add_flag("--force", a.force, "replace existing --csv/--png/--screenshot-at files; allow --update-hashes");
+  app.add_flag("--allow-scene-change", a.run.allow_scene_change, "replay even if the scene file's hash changed");
+  app.add_option("--compare", a.compare, "A.csv B.csv: per-phase p50/p95 ratios B/A")->expected(2);
+  app.add_flag("--no-ui", a.no_ui, "start with the overlay hidden");
+  bool no_render = false;
+  app.add_flag("--no-render", no_render,
+               "simulation only: the same steps, inputs and checkpoints without GL, meshing or rendering");
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return usageError(std::string(e.what()) + "\n\n" + app.help());
+  }
+  if (const int code = checkArgs(a); code >= 0) return code;
+  if (!a.compare.empty()) return compareCommand(a);
+
+  ReplayFile replay;
+  if (ReplayStatus st = loadReplayFile(a.file, replay); !st.ok()) {
+    std::fprintf(stderr, "fluiddemo replay: %s\n", st.error.c_str());
+    return st.exit_code;
+  }
+  if (!displayAvailable()) a.run.run.headless = true;
+  a.run.run.show_ui = !a.no_ui;
+  a.run.update_hashes = a.update_hashes;
+  a.run.render = !no_render;
+  if (no_render && !a.run.screenshots.empty()) return usageError("--screenshot-at needs rendering: drop --no-render");
+  std::optional<tbb::global_control> limit;
+  if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(a.threads));
+
+  ReplayResult result;
+  std::string error;
+  const int code = runReplay(replay, a.run, result, error);
+  if (!result.warning.empty()) std::fprintf(stderr, "fluiddemo replay: warning: %s\n", result.warning.c_str());
+  if (result.report.frames_rendered > 0) {
+    printRunSummary(stdout, result.scene, a.run.run, result.report);
+    printPercentileTable(stdout, result.rows);
+    const std::size_t ok = static_cast<std::size_t>(
+        std::count_if(result.checkpoints.begin(), result.checkpoints.end(), [](const auto& c) { return c.matched; }));
+    std::printf("checkpoints: %zu %s of %zu in the file (%zu steps of %llu run)\n", ok,
+                a.update_hashes ? "hashed" : "matched", result.checkpoints_in_file, result.rows.size(),
+                static_cast<unsigned long long>(replay.end_step));
+  }
+  if (code != 0) {
+    std::fprintf(stderr, "fluiddemo replay: %s\n", error.c_str());
+    // The timing of what ran is still worth keeping.
+    if (!result.rows.empty()) (void)writeOutputs(a, replay, result);
+    return code;
+  }
+  if (const int out = writeOutputs(a, replay, result); out != 0) return out;
+  if (a.update_hashes) return updateHashes(replay, result);
+  return 0;
+}
+
+}  // namespace game

@@ -1,0 +1,280 @@
+// runReplay(): a replay file driving runScene() through its frame hooks (replay_runner.hpp).
+#include "game/replay/replay_runner.hpp"
+
+#include "engine/ui/overlay.hpp"
+#include "game/paths.hpp"
+#include "game/world/world.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace game {
+namespace {
+
+std::string where(const ReplayFile& replay, int line, std::string_view field) {
+  return replay.label + ":" + std::to_string(line) + ": field '" + std::string(field) + "': ";
+}
+
+// Compares a computed state hash with a checkpoint's; empty when equal, else which subsystems
+// differ (the first one with both values).
+std::string compareCheckpoint(const ReplayEvent& expected, const StateHash& got) {
+  for (const NamedHash& part : expected.parts) {
+    const bool present =
+        std::any_of(got.parts.begin(), got.parts.end(), [&](const SubsystemHash& g) { return g.name == part.name; });
+    if (!present) return "subsystem '" + part.name + "' is in the checkpoint but not in this scene's world";
+  }
+  std::string first, all;
+  for (const SubsystemHash& part : got.parts) {
+    for (const NamedHash& want : expected.parts) {
+      if (want.name != part.name || want.value == part.value) continue;
+      if (first.empty())
+        first = "first differing subsystem '" + want.name + "': expected " + hashHex(want.value) + ", got " +
+                hashHex(part.value);
+      all += (all.empty() ? "" : ", ") + want.name;
+    }
+  }
+  if (!first.empty()) return first + " (differing: " + all + ")";
+  if (expected.hash != got.combined)
+    return "combined hash differs (expected " + hashHex(expected.hash) + ", got " + hashHex(got.combined) +
+           ") while every listed subsystem matches";
+  return {};
+}
+
+int finish(ReplayResult& result, std::string& error) {
+  if (!result.mismatch.empty()) {
+    error = result.mismatch;
+    return 1;
+  }
+  if (!result.report.nonfinite_state.empty()) {
+    error = "non-finite simulation state: " + result.report.nonfinite_state;
+    return 1;
+  }
+  return 0;
+}
+
+// The replay without GL: build the world, then per frame inputs, one step, checkpoints. The rows
+// carry the simulation phases (physics, fluid) from a profiler of their own.
+int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::string& error) {
+  World world;
+  if (!buildWorld(result.scene, contentDir(), world, error)) return 1;
+  result.report.systems_constructed = world.systems;
+  result.report.gl_renderer = "none (simulation only)";
+  engine::Profiler profiler;
+  for (int frame = 0; frame < frames; ++frame) {
+    engine::beginFrame(profiler);
+    {
+      engine::ScopedPhase phase(profiler, engine::Phase::input);
+      applyReplayInputs(player, world);
+    }
+    stepWorld(world, &profiler);
+    engine::endFrame(profiler);
+    FrameRow row;
+    row.frame = frame;
+    for (int p = 0; p < engine::kPhaseCount; ++p) row.phase_ms[p] = profiler.current_ms[p];
+    row.frame_ms =
+        profiler.frame_history[(profiler.head - 1 + engine::Profiler::kHistory) % engine::Profiler::kHistory];
+    const bool keep_going = checkReplayStep(player, world, row, result);
+    result.rows.push_back(row);
+    ++result.report.frames_rendered;
+    ++result.report.simulation_steps;
+    if (!keep_going) break;
+  }
+  result.report.nonfinite_state = world.nonfinite_state;
+  result.report.mean_frame_ms = engine::frameMeanMs(profiler);
+  for (int p = 0; p < engine::kPhaseCount; ++p) {
+    const auto phase = static_cast<engine::Phase>(p);
+    result.report.phases.push_back({std::string(engine::phaseName(phase)), engine::phaseMeanMs(profiler, phase),
+                                    profiler.stats[p].max_ms, profiler.stats[p].frames});
+  }
+  return finish(result, error);
+}
+
+}  // namespace
+
+void applyReplayInputs(ReplayPlayer& player, World& world) {
+  const ReplayFile& replay = *player.replay;
+  const std::uint64_t step = world.steps;
+  const auto setPose = [&world](const CameraPose& p) {
+    world.camera.position = p.position;
+    world.camera.yaw_degrees = p.yaw_degrees;
+    world.camera.pitch_degrees = p.pitch_degrees;
+  };
+  CameraPose pose;
+  if (cameraPoseAt(replay, step, pose)) setPose(pose);
+  std::size_t& cursor = player.input_cursor;
+  while (cursor < replay.events.size() && replay.events[cursor].step < step) ++cursor;
+  // This step's events in file order: a throw uses the pose of the keyframes above it.
+  for (; cursor < replay.events.size() && replay.events[cursor].step == step; ++cursor) {
+    const ReplayEvent& e = replay.events[cursor];
+    if (e.kind == ReplayEventKind::camera) setPose({e.position, e.yaw_degrees, e.pitch_degrees});
+    if (e.kind == ReplayEventKind::action) applyPlayerAction(world, e.action);
+  }
+}
+
+bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, ReplayResult& result) {
+  const ReplayFile& replay = *player.replay;
+  row.step = world.steps;
+  if (world.sph_fluid) row.particles = world.sph_fluid->world.particles.size();
+  if (world.sprite_particles) row.sprites = world.sprite_particles->count;
+  if (world.fluid_surface) row.triangles = world.fluid_surface->mesh.indices.size() / 3;
+  std::size_t& cursor = player.checkpoint_cursor;
+  for (; cursor < replay.events.size() && replay.events[cursor].step <= world.steps; ++cursor) {
+    const ReplayEvent& e = replay.events[cursor];
+    if (e.kind != ReplayEventKind::checkpoint || e.step != world.steps) continue;
+    if (!row.has_hash) hashWorldState(world, player.scratch, player.hash);
+    row.has_hash = true;
+    row.state_hash = player.hash.combined;
+    CheckpointOutcome outcome{cursor, e.step, player.hash.combined, {}, false};
+    for (const SubsystemHash& part : player.hash.parts) outcome.parts.push_back({std::string(part.name), part.value});
+    const std::string difference = player.update_hashes ? std::string() : compareCheckpoint(e, player.hash);
+    outcome.matched = difference.empty();
+    result.checkpoints.push_back(std::move(outcome));
+    if (!difference.empty()) {
+      result.mismatch = replay.label + ":" + std::to_string(e.line) + ": checkpoint at step " + std::to_string(e.step) +
+                        " failed: " + difference;
+      ++cursor;
+      return false;
+    }
+    ++player.matched;
+  }
+  return true;
+}
+
+ReplayStatus prepareReplayScene(const ReplayFile& replay, const std::filesystem::path& scenes_dir,
+                                bool allow_scene_change, const std::vector<std::string>& extra_overrides,
+                                SceneConfig& out, std::uint64_t& scene_hash, std::string& warning) {
+  warning.clear();
+  const int scene_line = replay.scene_line;
+  std::filesystem::path path;
+  if (SceneStatus status = resolveScene(replay.scene, scenes_dir, path); !status.ok())
+    return {where(replay, scene_line, "scene") + status.error, 1};
+  std::string bytes, error;
+  if (!readTextFile(path, bytes, error)) return {where(replay, scene_line, "scene") + error, 1};
+  scene_hash = fnv1a64(bytes);
+  if (scene_hash != replay.scene_hash) {
+    const std::string message = where(replay, replay.scene_hash_line, "scene_hash") + "scene file " + path.string() +
+                                " has hash " + hashHex(scene_hash) + ", the replay was made with " +
+                                hashHex(replay.scene_hash);
+    if (!allow_scene_change)
+      return {message +
+                  " (the scene changed: pass --allow-scene-change to replay anyway, or --update-hashes --force "
+                  "to re-baseline)",
+              1};
+    warning = message;
+  }
+  if (SceneStatus status = loadSceneFile(path, out); !status.ok())
+    return {where(replay, scene_line, "scene") + status.error, 1};
+  for (std::size_t i = 0; i < replay.sets.size(); ++i) {
+    if (SceneStatus status = applyOverride(out, replay.sets[i]); !status.ok())
+      return {where(replay, replay.set_lines[i], "set") + status.error, 1};
+  }
+  for (const std::string& assignment : extra_overrides) {
+    if (SceneStatus status = applyOverride(out, assignment); !status.ok()) return {status.error, 1};
+  }
+  if (out.scene.number("step_hz") != replay.step_hz)
+    return {where(replay, replay.step_hz_line, "step_hz") + "the replay steps at " + std::to_string(replay.step_hz) +
+                " Hz, the scene at " + std::to_string(out.scene.number("step_hz")) + " Hz",
+            1};
+  if (out.scene.integer("seed") != replay.seed)
+    return {where(replay, replay.seed_line, "seed") + "the replay has seed " + std::to_string(replay.seed) +
+                ", the scene " + std::to_string(out.scene.integer("seed")),
+            1};
+  return {};
+}
+
+int runReplay(const ReplayFile& replay, const ReplayRunOptions& options, ReplayResult& result, std::string& error) {
+  result = ReplayResult{};
+  if (ReplayStatus st = prepareReplayScene(replay, scenesDir(), options.allow_scene_change || options.update_hashes,
+                                           options.extra_overrides, result.scene, result.scene_hash, result.warning);
+      !st.ok()) {
+    error = st.error;
+    return st.exit_code;
+  }
+  for (const ReplayEvent& e : replay.events) {
+    if (e.kind != ReplayEventKind::checkpoint) continue;
+    ++result.checkpoints_in_file;
+    if (!e.has_hash && !options.update_hashes) {
+      error = where(replay, e.line, "checkpoint.hash") +
+              "missing (fill it in with `fluiddemo replay FILE --update-hashes --force`)";
+      return 1;
+    }
+  }
+  const auto frames =
+      static_cast<int>(options.frames > 0 ? std::min<std::uint64_t>(options.frames, replay.end_step) : replay.end_step);
+  result.rows.reserve(static_cast<std::size_t>(frames));
+  ReplayPlayer player;
+  player.replay = &replay;
+  player.update_hashes = options.update_hashes;
+  if (!options.render) return simulateReplay(player, frames, result, error);
+
+  RunOptions run = options.run;
+  run.frames = frames;
+  run.fixed_frame_time = true;  // exactly one simulation step per rendered frame
+  run.hooks.before_steps = [&](FrameInput& input) {
+    input.actions.clear();  // the script plays; the mouse does not
+    applyReplayInputs(player, input.world);
+    for (const auto& [shot_step, path] : options.screenshots)
+      if (shot_step == input.world.steps + 1) input.screenshot = path;
+  };
+  run.hooks.after_frame = [&](const FrameResult& frame) {
+    FrameRow row;
+    row.frame = frame.frame;
+    row.phase_ms = frame.phase_ms;
+    row.frame_ms = frame.frame_ms;
+    const bool keep_going = checkReplayStep(player, frame.world, row, result);
+    result.rows.push_back(row);
+    return keep_going;
+  };
+  run.hooks.draw_overlay = [&]() {
+    const std::uint64_t step = result.rows.empty() ? 0 : result.rows.back().step;
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "%s  step %llu / %llu  checkpoints %zu ok of %zu", replay.label.c_str(),
+                  static_cast<unsigned long long>(step), static_cast<unsigned long long>(replay.end_step),
+                  player.matched, result.checkpoints_in_file);
+    engine::drawProgressWindow("Replay", static_cast<float>(static_cast<double>(step) / replay.end_step), detail);
+  };
+  if (const int code = runScene(result.scene, run, result.report, error); code != 0) return code;
+  return finish(result, error);
+}
+
+bool rewriteHashes(std::string_view text, const ReplayFile& replay, const ReplayResult& result, std::string& out,
+                   std::string& error) {
+  std::vector<std::string> replacement;  // by line, empty = keep
+  const auto set = [&replacement](int line, std::string content) {
+    if (replacement.size() <= static_cast<std::size_t>(line)) replacement.resize(static_cast<std::size_t>(line) + 1);
+    replacement[static_cast<std::size_t>(line)] = std::move(content);
+  };
+  std::size_t done = 0;
+  for (const CheckpointOutcome& c : result.checkpoints) {
+    set(replay.events[c.event].line, formatCheckpointLine(c.step, c.combined, c.parts));
+    ++done;
+  }
+  if (done != result.checkpoints_in_file) {
+    error = "only " + std::to_string(done) + " of " + std::to_string(result.checkpoints_in_file) +
+            " checkpoints were reached: --update-hashes needs the whole replay (drop --frames)";
+    return false;
+  }
+  if (replay.scene_hash_line > 0) set(replay.scene_hash_line, "scene_hash " + hashHex(result.scene_hash));
+  out.clear();
+  std::size_t pos = 0;
+  int line = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    ++line;
+    std::string_view content = text.substr(pos, end - pos);
+    if (static_cast<std::size_t>(line) < replacement.size() && !replacement[static_cast<std::size_t>(line)].empty()) {
+      // Keep a trailing comment of the line.
+      const std::size_t comment = content.find('#');
+      out += replacement[static_cast<std::size_t>(line)];
+      if (comment != std::string_view::npos) out += "  " + std::string(content.substr(comment));
+    } else {
+      out += content;
+    }
+    if (end < text.size()) out += '\n';
+    pos = end + 1;
+  }
+  return true;
+}
+
+}  // namespace game

@@ -1,0 +1,87 @@
+#pragma once
+// Runs a parsed replay through runScene(): one fixed simulation step per rendered frame, the
+// file's camera keyframes and actions applied before each step, the state hashed and checked
+// at every checkpoint, and one timing row kept per frame.
+
+#include "game/replay/frame_times.hpp"
+#include "game/replay/replay_file.hpp"
+#include "game/replay/state_hash.hpp"
+#include "game/run_scene.hpp"
+#include "game/scene/scene_config.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace game {
+
+// Resolves the replay's scene (scenes_dir for a bare name), checks its content hash against the
+// header (a mismatch is an error unless allow_scene_change, then `warning` says so), applies the
+// header's `set` records and then `extra_overrides`, and checks step_hz and seed against the result.
+// Errors name the replay file, line and field; exit_code 1.
+ReplayStatus prepareReplayScene(const ReplayFile& replay, const std::filesystem::path& scenes_dir,
+                                bool allow_scene_change, const std::vector<std::string>& extra_overrides,
+                                SceneConfig& out, std::uint64_t& scene_hash, std::string& warning);
+
+struct ReplayRunOptions {
+  RunOptions run;  // size, headless, show_ui; frames/fixed_frame_time/hooks are set by runReplay
+  int frames = 0;  // replay frames to run, <= end step; 0 = the whole replay
+  // false: the same steps, inputs and checkpoints with no window, GL, meshing or rendering (the
+  // state hash never depends on them); the rows then time the simulation phases only.
+  bool render = true;
+  bool allow_scene_change = false;
+  bool update_hashes = false;  // record the hashes at checkpoints instead of checking them
+  // Applied after the header's set records. Test-only: a perturbed constant must fail the gate.
+  std::vector<std::string> extra_overrides;
+  std::vector<std::pair<std::uint64_t, std::filesystem::path>> screenshots;  // (step, PNG)
+};
+
+struct CheckpointOutcome {
+  std::size_t event = 0;  // index into ReplayFile::events
+  std::uint64_t step = 0;
+  std::uint64_t combined = 0;
+  std::vector<NamedHash> parts;  // as computed
+  bool matched = false;
+};
+
+struct ReplayResult {
+  SceneConfig scene;
+  std::uint64_t scene_hash = 0;  // of the scene file as it is now
+  std::string warning;           // e.g. the scene changed (allow_scene_change)
+  RunReport report;
+  std::vector<FrameRow> rows;
+  std::vector<CheckpointOutcome> checkpoints;  // every checkpoint reached, in order
+  std::size_t checkpoints_in_file = 0;
+  std::string mismatch;  // the first failed checkpoint: step, line, first differing subsystem
+};
+
+// Applies a replay to a World step by step (shared by the rendered and the simulation-only runs).
+struct ReplayPlayer {
+  const ReplayFile* replay = nullptr;
+  bool update_hashes = false;
+  std::size_t input_cursor = 0;       // first event not yet applied
+  std::size_t checkpoint_cursor = 0;  // first event not yet checked
+  std::size_t matched = 0;
+  StateHashScratch scratch;
+  StateHash hash;
+};
+
+// Before the step world.steps -> world.steps + 1: the camera pose of that step, then the step's
+// events in file order (camera keyframes, actions).
+void applyReplayInputs(ReplayPlayer& player, World& world);
+// After a step: the row's counts, and the checkpoints at world.steps hashed and compared into
+// `result` (its mismatch set on the first failure). Returns false on a mismatch.
+bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, ReplayResult& result);
+
+// Returns 0 when every checkpoint reached matched (or update_hashes), 1 otherwise with `error`
+// set (a mismatch, a scene error, a GL failure, a non-finite state).
+int runReplay(const ReplayFile& replay, const ReplayRunOptions& options, ReplayResult& result, std::string& error);
+
+// The replay text with every checkpoint line of `outcomes` and the scene_hash line rewritten
+// (everything else byte for byte as it was). False + message when a checkpoint was not reached.
+bool rewriteHashes(std::string_view text, const ReplayFile& replay, const ReplayResult& result, std::string& out,
+                   std::string& error);
+
+}  // namespace game
