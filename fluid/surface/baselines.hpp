@@ -7,7 +7,7 @@
 //              splatting each particle (in (z, index) order) into two rolling slices, then
 //              marching cubes over every cube. The oracle of the tests; also "the dense route".
 //   blocked    approach 2: surface-following marching cubes per block (same margins and zero
-//              boundary as marching slices; auto blocks of up to max(64, 12 m) cubes,
+//              boundary as marching slices; auto blocks of up to max(64, 12 ceil(Rc/S)) cubes,
 //              since its full 3D corner cache per block grows with the cube of the block edge)
 //              and a point-insert / 3x3x3-lookup particle grid with cells of size Rc.
 //   hashed     approach 3: global surface-following marching cubes, corners in a hash map and

@@ -50,8 +50,8 @@ struct SurfaceParams {
   float rc = 3.0f;         // cutoff radius Rc, world units, > 0
   float threshold = 0.2f;  // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
   float cube = 1.0f;       // cube edge S, world units, > 0
-  // Largest interior cubes per block edge, else [4, 1024]; 0 = auto: max(128, 12 m),
-  // so the margins of m = ceil(Rc/S + 1/2) cubes stay a modest share of each block, and a set fitting one
+  // Largest interior cubes per block edge, else [4, 1024]; 0 = auto: max(128, 12 ceil(Rc/S)),
+  // so the margins (about ceil(Rc/S) cubes) stay a modest share of each block, and a set fitting one
   // block is halved along its longest axis when the halves stay >= 5 margins wide. The
   // particles' lattice extent is cut into equal blocks no larger than this. Never depends on
   // `threads`, so the output does not either.

@@ -181,8 +181,7 @@ int main(int argc, char** argv) {
      << " hardware threads); timings are medians of " << reps
      << " repetitions with the approaches interleaved, and in the Figure 7 and thread-scaling tables each timed extraction "
         "directly follows an untimed one of the same method (steady state, as when a game meshes every frame). Rc = 3, T = 0.2, blockCubes = 0 (auto: blocks of up to max(128, "
-        "12 m) cubes for approach 1 and max(64, 12 m) for approach 2 (margins of m = ceil(Rc/S + 1/2) cubes), whose "
-        "full 3D corner array "
+        "12 ceil(Rc/S)) cubes for approach 1 and max(64, 12 ceil(Rc/S)) for approach 2, whose full 3D corner array "
         "grows with the cube of the block edge; a set fitting one block is halved along its longest axis when the "
         "halves stay at least 5 margins wide) unless stated. The machine is shared, so absolute times are noisy; "
         "ratios within a table are the "

@@ -658,12 +658,14 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
     lo[2] = std::min(lo[2], p.z), hi[2] = std::max(hi[2], p.z);
   }
-  // Auto: blocks of up to max(autoCubes, 12 m) cubes keep the margins (m = marginCubes() cubes each
-  // side, traversed but not emitted, §3) a modest share of the work; a set that fits one such
-  // block is cut in two along its longest axis when both halves stay at least 5 m wide, so
-  // mid-size sets still have two blocks to run in parallel. Depends on the data, S and Rc only.
+  // Auto: blocks of up to max(autoCubes, 12 r) cubes, r = ceil(Rc/S), keep the margins (about r
+  // cubes each side, traversed but not emitted, §3) a modest share of the work; a set that fits
+  // one such block is cut in two along its longest axis when both halves stay at least 5 r wide,
+  // so mid-size sets still have two blocks to run in parallel. Depends on the data, S and Rc only.
+  // (r, not the margin marginCubes(): the plan does not depend on the seeding's extra half cube.)
   const bool autoSize = params.blockCubes <= 0;
-  const int maxBlock = autoSize ? std::max(autoCubes, 12 * su.m) : params.blockCubes;
+  const int r = std::max(1, int(std::ceil(su.rcMax / su.s)));
+  const int maxBlock = autoSize ? std::max(autoCubes, 12 * r) : params.blockCubes;
   std::int64_t extent[3];
   for (int a = 0; a < 3; ++a) {
     const std::int64_t c0 = floorDiv(lo[a] - su.rcMax, su.s) - 1;
@@ -674,7 +676,7 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
   }
   if (autoSize && su.nb[0] * su.nb[1] * su.nb[2] == 1) {
     const int a = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
-    if ((extent[a] + 1) / 2 >= 5 * su.m) su.nb[a] = 2;
+    if ((extent[a] + 1) / 2 >= 5 * r) su.nb[a] = 2;
   }
   for (int a = 0; a < 3; ++a) {
     su.b[a] = int((extent[a] + su.nb[a] - 1) / su.nb[a]);
