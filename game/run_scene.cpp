@@ -138,6 +138,11 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
   }
+  if (world.failures.count > 0) {
+    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "run-time failures: %llu (frames go on)",
+                       static_cast<unsigned long long>(world.failures.count));
+    ImGui::TextWrapped("last: %s", world.failures.last.c_str());
+  }
   ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
   ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);
   auto edit_section = [&](SectionConfig& section) {
@@ -282,6 +287,11 @@ void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions&
                  static_cast<unsigned long long>(phase.samples));
   }
   std::fprintf(out, "%-10s %10.3f\n", "frame", report.mean_frame_ms);
+  if (report.runtime_failures > 0) {
+    std::fprintf(out, "run-time failures: %llu (the frames went on); first: %s; last: %s\n",
+                 static_cast<unsigned long long>(report.runtime_failures), report.first_failure.c_str(),
+                 report.last_failure.c_str());
+  }
 }
 
 std::string_view playerActionName(PlayerAction action) {
@@ -498,6 +508,9 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       }
       report.simulation_steps = steps_done;
       report.nonfinite_state = world.nonfinite_state;
+      report.runtime_failures = world.failures.count;
+      report.first_failure = world.failures.first;
+      report.last_failure = world.failures.last;
       report.mean_frame_ms = engine::frameMeanMs(profiler);
       for (int p = 0; p < engine::kPhaseCount; ++p) {
         const auto phase = static_cast<engine::Phase>(p);

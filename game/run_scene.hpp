@@ -80,6 +80,9 @@ struct RunReport {
   std::string gl_renderer;      // GL_RENDERER string of the context used
   int gl_errors = 0;            // GL errors seen by the engine's checks
   std::string nonfinite_state;  // empty, or which system/value went NaN/inf at which step
+  // Systems that refused content at run time while the frames went on (World::failures).
+  std::uint64_t runtime_failures = 0;
+  std::string first_failure, last_failure;
   // Filled when RunOptions::capture_last_frame: RGBA8, bottom row first, width*height*4 bytes.
   int frame_width = 0;
   int frame_height = 0;

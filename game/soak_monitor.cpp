@@ -131,8 +131,8 @@ void soakBeforeStep(SoakMonitor& m, World& world, std::uint64_t step) {
 bool soakAfterFrame(SoakMonitor& m, const World& world) {
   SoakStats& s = m.stats;
   s.steps = world.steps;
-  if (!world.nonfinite_state.empty())
-    fail(m, world.steps, "non-finite state or solver/mesher error: " + world.nonfinite_state);
+  if (!world.nonfinite_state.empty()) fail(m, world.steps, "non-finite state: " + world.nonfinite_state);
+  if (world.failures.count > 0) fail(m, world.steps, "run-time failure: " + world.failures.first);
   s.has_sph = world.sph_fluid != nullptr;
   s.has_sprites = world.sprite_particles != nullptr;
   s.has_crates = world.rigid_bodies != nullptr;

@@ -181,6 +181,8 @@ int smokeCommand(const Args& args) {
         failure = std::to_string(report.gl_errors) + " GL errors";
       } else if (!report.nonfinite_state.empty()) {
         failure = "non-finite simulation state: " + report.nonfinite_state;
+      } else if (report.runtime_failures > 0) {
+        failure = std::to_string(report.runtime_failures) + " run-time failures, first: " + report.first_failure;
       } else if (report.frames_rendered != frames) {
         failure = "rendered " + std::to_string(report.frames_rendered) + " of " + std::to_string(frames) + " frames";
       } else {

@@ -49,6 +49,12 @@ int finish(ReplayResult& result, std::string& error) {
     error = "non-finite simulation state: " + result.report.nonfinite_state;
     return 1;
   }
+  // A replay is a check: a system that refused content fails it, though the frames went on.
+  if (result.report.runtime_failures > 0) {
+    error = std::to_string(result.report.runtime_failures) +
+            " run-time failures, first: " + result.report.first_failure;
+    return 1;
+  }
   return 0;
 }
 
@@ -80,6 +86,9 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
     if (!keep_going) break;
   }
   result.report.nonfinite_state = world.nonfinite_state;
+  result.report.runtime_failures = world.failures.count;
+  result.report.first_failure = world.failures.first;
+  result.report.last_failure = world.failures.last;
   result.report.mean_frame_ms = engine::frameMeanMs(profiler);
   for (int p = 0; p < engine::kPhaseCount; ++p) {
     const auto phase = static_cast<engine::Phase>(p);

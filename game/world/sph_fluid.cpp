@@ -124,7 +124,6 @@ bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::
 }
 
 std::string findNonFiniteSph(const SphFluid& f) {
-  if (!f.error.empty()) return "sph_fluid: " + f.error;
   const fluid::ParticleStore& p = f.world.particles;
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!fluid::isFinite(p.position[i])) return "sph_fluid particle id " + std::to_string(p.id[i]) + " position";

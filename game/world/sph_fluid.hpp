@@ -59,7 +59,8 @@ bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainG
 // fluid.error when the solver refuses a step.
 bool stepSphFluid(SphFluid& fluid, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step = {});
 
-// Empty when every position/velocity/density is finite; otherwise names the first bad value.
+// Empty when every position/velocity/density is finite; otherwise names the first bad value
+// (a solver error is not a value: the world records it as a run-time failure).
 std::string findNonFiniteSph(const SphFluid& fluid);
 
 }  // namespace game

@@ -130,6 +130,12 @@ void applyLiveParams(World& world) {
   }
 }
 
+void recordFailure(World& world, const std::string& what) {
+  const std::string text = what + " at step " + std::to_string(world.steps);
+  if (world.failures.count++ == 0) world.failures.first = text;
+  world.failures.last = text;
+}
+
 void stepWorld(World& world, engine::Profiler* profiler) {
   if (world.rigid_bodies) {
     std::optional<engine::ScopedPhase> scope;
@@ -150,7 +156,9 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (world.body_coupling)
       collidersFromBodies(*world.body_coupling, *world.rigid_bodies->physics, world.rigid_bodies->crates,
                           world.sph_fluid->world);
-    stepSphFluid(*world.sph_fluid, world.step_seconds);
+    const bool was_running = world.sph_fluid->error.empty();
+    if (!stepSphFluid(*world.sph_fluid, world.step_seconds) && was_running)
+      recordFailure(world, "sph_fluid: " + world.sph_fluid->error + " (the fluid stops stepping)");
     if (world.body_coupling)
       coupling_error = forcesToBodies(*world.body_coupling, world.sph_fluid->world, *world.rigid_bodies->physics);
   }
@@ -170,10 +178,8 @@ void meshWorld(World& world, engine::Profiler* profiler) {
   std::optional<engine::ScopedPhase> scope;
   if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::meshing);
   if (!meshFluidSurface(*world.fluid_surface, *world.sph_fluid, world.camera.position,
-                        engine::cameraForward(world.camera)) &&
-      world.nonfinite_state.empty()) {
-    world.nonfinite_state = world.fluid_surface->error + " at step " + std::to_string(world.steps);
-  }
+                        engine::cameraForward(world.camera)))
+    recordFailure(world, world.fluid_surface->error);
 }
 
 void playerThrow(World& world) {

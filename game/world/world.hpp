@@ -21,6 +21,17 @@
 
 namespace game {
 
+// A system that fails on content at run time (the mesher or the SPH solver returning an error)
+// does not end the game: the failure is counted and kept here, the overlay and the run summary show
+// it, and the frame goes on (the surface is empty for that frame and retried the next; a fluid
+// whose solver refused a step stops stepping). Broken invariants stay asserts; NaN/inf in the
+// state goes to World::nonfinite_state.
+struct RuntimeFailures {
+  std::uint64_t count = 0;
+  std::string first;  // "<system>: <error> at step N"
+  std::string last;
+};
+
 struct World {
   SceneConfig scene;                                  // live copy; the overlay edits it
   std::vector<std::string> systems;                   // effect names constructed, schema order
@@ -36,6 +47,7 @@ struct World {
   int substeps = 1;
   std::uint64_t steps = 0;
   std::string nonfinite_state;  // first NaN/inf seen (empty while everything is finite)
+  RuntimeFailures failures;     // systems that refused content this run (the frame went on)
 };
 
 // Gravity of the scene's particles: the rigid bodies' gravity when that effect is listed, else
@@ -54,13 +66,17 @@ void applyLiveParams(World& world);
 
 // One fixed simulation step of every constructed system, timed into `profiler` (physics for
 // rigid bodies, fluid for particles and the crate <-> water coupling; may be null). Checks every value for NaN/inf
-// after the step and records the first one in world.nonfinite_state.
+// after the step and records the first one in world.nonfinite_state; a solver error is recorded in
+// world.failures.
 void stepWorld(World& world, engine::Profiler* profiler);
 
 // Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the
 // profiler's meshing phase (may be null). Call once per rendered frame, after stepping.
-// A failed extraction leaves an empty mesh and records the error in world.nonfinite_state.
+// A failed extraction leaves an empty mesh and records the error in world.failures.
 void meshWorld(World& world, engine::Profiler* profiler);
+
+// Counts a run-time failure of a system ("<system>: <error>") at the current step.
+void recordFailure(World& world, const std::string& what);
 
 // Throws a crate from the camera along its view (no-op without rigid_bodies).
 void playerThrow(World& world);

@@ -231,7 +231,30 @@ TEST_F(SoakMonitorOnFountain, ASunkCrateFails) {
 TEST_F(SoakMonitorOnFountain, ARecordedNonFiniteStateFails) {
   world.nonfinite_state = "sph_fluid particle id 3 position at step 40";
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
-  EXPECT_NE(monitor.failure.find("non-finite state or solver/mesher error: sph_fluid particle id 3"), std::string::npos)
+  EXPECT_NE(monitor.failure.find("non-finite state: sph_fluid particle id 3"), std::string::npos)
+      << monitor.failure;
+}
+
+// A system that refuses content at run time does not end the game: the world counts the failure
+// (not as a NaN), the next frame meshes again, and the soak reports it.
+TEST_F(SoakMonitorOnFountain, AMesherFailureIsCountedTheGameGoesOnAndTheSoakFails) {
+  ASSERT_NE(world.fluid_surface, nullptr);
+  const float threshold = world.fluid_surface->params.threshold;
+  world.fluid_surface->params.threshold = -1.0f;  // refused by fluid::validateSurface
+  game::meshWorld(world, nullptr);
+  EXPECT_EQ(world.failures.count, 1u);
+  EXPECT_NE(world.failures.first.find("fluid_surface: surface params: threshold"), std::string::npos)
+      << world.failures.first;
+  EXPECT_NE(world.failures.first.find("at step 40"), std::string::npos) << world.failures.first;
+  EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
+  EXPECT_TRUE(world.fluid_surface->mesh.indices.empty());
+  world.fluid_surface->params.threshold = threshold;
+  game::stepWorld(world, nullptr);
+  game::meshWorld(world, nullptr);
+  EXPECT_EQ(world.failures.count, 1u);
+  EXPECT_GT(world.fluid_surface->mesh.indices.size(), 0u);  // meshed again the next frame
+  EXPECT_FALSE(game::soakAfterFrame(monitor, world));
+  EXPECT_NE(monitor.failure.find("run-time failure: fluid_surface: surface params"), std::string::npos)
       << monitor.failure;
 }
 
