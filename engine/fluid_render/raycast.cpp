@@ -169,6 +169,7 @@ void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& 
     glBindImageTexture(2, r.thickness, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     glDispatchCompute(static_cast<GLuint>((w + 7) / 8), static_cast<GLuint>((h + 7) / 8), 1);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    glUseProgram(0);  // Mesa 22.3 kept the program made current right after a compute one alive after its deletion
     for (GLuint i = 0; i < 3; ++i) glBindImageTexture(i, 0, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32UI);
   }
   glBindVertexArray(r.empty_vao);
