@@ -5,6 +5,8 @@
 #include "engine/assets/assets.hpp"
 #include "engine/camera/camera.hpp"
 #include "engine/fluid_render/fluid_render.hpp"
+#include "engine/fluid_render/raycast.hpp"
+#include "engine/fluid_render/screen_space.hpp"
 #include "engine/gl/gl.hpp"
 #include "engine/loop/fixed_step.hpp"
 #include "engine/platform/platform.hpp"
@@ -137,6 +139,11 @@ std::pair<bool, bool> drawScenePanel(World& world) {
                 surface.blocks);
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
+    if (world.fluid_surface->params.method == SurfaceMethodChoice::raycast) {
+      ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu",
+                  static_cast<unsigned long long>(world.fluid_surface->raycast_records),
+                  static_cast<unsigned long long>(world.fluid_surface->raycast_dropped));
+    }
   }
   if (world.failures.count > 0) {
     ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "run-time failures: %llu (frames go on)",
@@ -176,7 +183,18 @@ std::pair<bool, bool> drawScenePanel(World& world) {
                                      static_cast<float>(param.max), "%.2f", ImGuiSliderFlags_AlwaysClamp);
           break;
         case ParamType::text:
-          ImGui::Text("%s: %s", label.c_str(), value.text.c_str());
+          if (param.choices.empty()) {
+            ImGui::Text("%s: %s", label.c_str(), value.text.c_str());
+          } else if (ImGui::BeginCombo(label.c_str(), value.text.c_str())) {
+            for (std::string_view choice : param.choices) {
+              const std::string item(choice);
+              if (ImGui::Selectable(item.c_str(), value.text == item)) {
+                edited = value.text != item;
+                value.text = item;
+              }
+            }
+            ImGui::EndCombo();
+          }
           break;
       }
       if (ImGui::IsItemHovered()) ImGui::SetTooltip("%.*s", static_cast<int>(param.doc.size()), param.doc.data());
@@ -195,47 +213,105 @@ std::pair<bool, bool> drawScenePanel(World& world) {
 }
 
 // The water renderer exists only while the world has a fluid_surface (created on first need,
-// recreated when the framebuffer size changes). A renderer whose shaders failed stays
-// `ready == false`: the game runs on without the water, and the error is printed once.
+// recreated when the framebuffer size or fluid_surface.method changes; only the chosen method's
+// renderer holds GL objects). A renderer whose shaders failed stays `ready == false`: the game
+// runs on without the water, and the error is printed once.
 struct WaterPass {
-  engine::FluidRenderer renderer;
+  engine::FluidRenderer renderer;            // method mesh
+  engine::ScreenSpaceRenderer screen_space;  // method screen_space
+  engine::RaycastRenderer raycast;           // method raycast
+  engine::FluidMethod method = engine::FluidMethod::mesh;
   bool created = false;
+  int width = 0, height = 0;
 };
 
 void releaseWaterPass(WaterPass& pass) {
-  if (pass.created) engine::destroyFluidRenderer(pass.renderer);
+  if (pass.created) {
+    engine::destroyFluidRenderer(pass.renderer);
+    engine::destroyScreenSpaceRenderer(pass.screen_space);
+    engine::destroyRaycastRenderer(pass.raycast);
+  }
   pass.created = false;
 }
 
-void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, const engine::FrameView& view) {
-  if (!world.fluid_surface) {
+engine::FluidMethod methodOf(const FluidSurfaceParams& p) {
+  switch (p.method) {
+    case SurfaceMethodChoice::screen_space:
+      return engine::FluidMethod::screen_space;
+    case SurfaceMethodChoice::raycast:
+      return engine::FluidMethod::raycast;
+    case SurfaceMethodChoice::mesh:
+      break;
+  }
+  return engine::FluidMethod::mesh;
+}
+
+void createWaterPass(WaterPass& pass, engine::FluidMethod method, int width, int height) {
+  engine::FluidRenderDesc desc;
+  desc.width = width;
+  desc.height = height;
+  desc.shader_dir = shaderDirectory();
+  bool ready = false;
+  std::string error;
+  if (method == engine::FluidMethod::screen_space) {
+    engine::createScreenSpaceRenderer(desc, pass.screen_space);
+    ready = pass.screen_space.ready;
+    error = pass.screen_space.error;
+  } else if (method == engine::FluidMethod::raycast) {
+    engine::RaycastDesc rc;
+    rc.base = desc;
+    engine::createRaycastRenderer(rc, pass.raycast);
+    ready = pass.raycast.ready;
+    error = pass.raycast.error;
+  } else {
+    engine::createFluidRenderer(desc, pass.renderer);
+    ready = pass.renderer.ready;
+    error = pass.renderer.error;
+  }
+  pass.method = method;
+  pass.width = width;
+  pass.height = height;
+  pass.created = true;
+  if (!ready)
+    std::fprintf(stderr, "fluiddemo: fluid_surface %s renderer unavailable: %s\n", engine::fluidMethodName(method),
+                 error.c_str());
+}
+
+void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const engine::FrameView& view) {
+  if (!world.fluid_surface || !world.sph_fluid) {
     releaseWaterPass(pass);
     return;
   }
-  if (pass.created && (pass.renderer.desc.width != renderer.width || pass.renderer.desc.height != renderer.height))
+  const FluidSurfaceParams& p = world.fluid_surface->params;
+  const engine::FluidMethod method = methodOf(p);
+  if (pass.created && (pass.width != renderer.width || pass.height != renderer.height || pass.method != method))
     releaseWaterPass(pass);
-  if (!pass.created) {
-    engine::FluidRenderDesc desc;
-    desc.width = renderer.width;
-    desc.height = renderer.height;
-    desc.shader_dir = shaderDirectory();
-    engine::createFluidRenderer(desc, pass.renderer);
-    pass.created = true;
-    if (!pass.renderer.ready)
-      std::fprintf(stderr, "fluiddemo: fluid_surface renderer unavailable: %s\n", pass.renderer.error.c_str());
-  }
-  if (!pass.renderer.ready) return;
-  const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+  if (!pass.created) createWaterPass(pass, method, renderer.width, renderer.height);
+  GLuint scene_fbo = 0;
   std::string upload_error;
-  if (!engine::uploadFluidMesh(pass.renderer, mesh.positions, mesh.normals, mesh.indices, upload_error)) {
-    std::fprintf(stderr, "fluiddemo: fluid mesh upload: %s\n", upload_error.c_str());
+  bool uploaded = true;
+  const std::vector<glm::vec3>& particles = world.sph_fluid->world.particles.position;
+  if (method == engine::FluidMethod::screen_space && pass.screen_space.ready) {
+    scene_fbo = pass.screen_space.scene.fbo;
+    uploaded = engine::uploadScreenSpaceParticles(pass.screen_space, particles, upload_error);
+  } else if (method == engine::FluidMethod::raycast && pass.raycast.ready) {
+    scene_fbo = pass.raycast.scene.fbo;
+    uploaded = engine::uploadRaycastParticles(pass.raycast, particles, upload_error);
+  } else if (method == engine::FluidMethod::mesh && pass.renderer.ready) {
+    scene_fbo = pass.renderer.scene_fbo;
+    const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+    uploaded = engine::uploadFluidMesh(pass.renderer, mesh.positions, mesh.normals, mesh.indices, upload_error);
+  }
+  if (scene_fbo == 0) return;  // the chosen renderer is unavailable
+  if (!uploaded) {
+    std::fprintf(stderr, "fluiddemo: fluid upload: %s\n", upload_error.c_str());
     return;
   }
   // The opaque scene (colour + depth) is the water's background: copy it into the fluid
   // renderer's scene targets (same size, DEPTH24 both), then draw the water back into the
   // scene FBO so screenshots and the window blit see it.
   glBindFramebuffer(GL_READ_FRAMEBUFFER, renderer.scene_fbo.id());
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, pass.renderer.scene_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, scene_fbo);
   glBlitFramebuffer(0, 0, renderer.width, renderer.height, 0, 0, renderer.width, renderer.height,
                     GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -245,7 +321,6 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, 
   camera.eye = view.eye;
   camera.near_plane = world.camera.near_plane;
   camera.far_plane = world.camera.far_plane;
-  const FluidSurfaceParams& p = world.fluid_surface->params;
   engine::WaterParams water;
   water.refraction = p.refraction;
   water.opacity = p.opacity;
@@ -255,9 +330,25 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, const World& world, 
   water.sky_zenith = lighting.sky_zenith;
   water.sky_horizon = lighting.sky_horizon;
   water.light_direction = lighting.sun_direction;
+  // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
+  const float rc = p.smoothing * fluid::sphSpacing(world.sph_fluid->world.params);
   // Keep the scene's alpha at 1: the PNG output would otherwise turn see-through under water.
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
-  engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
+  if (method == engine::FluidMethod::screen_space) {
+    engine::ScreenSpaceParams ss;
+    ss.radius = 0.975f * rc / 3.0f;  // a lone particle's iso-surface radius
+    ss.filter_radius = 0.5f * rc;
+    engine::drawScreenSpaceFluid(pass.screen_space, renderer.scene_fbo.id(), camera, water, ss);
+  } else if (method == engine::FluidMethod::raycast) {
+    engine::RaycastParams rp;
+    rp.rc = rc;
+    rp.threshold = p.threshold;
+    engine::drawRaycastFluid(pass.raycast, renderer.scene_fbo.id(), camera, water, rp);
+    world.fluid_surface->raycast_records = pass.raycast.used;
+    world.fluid_surface->raycast_dropped = pass.raycast.dropped;
+  } else {
+    engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
+  }
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   engine::checkGl(renderer.errors, "fluid surface");
 }

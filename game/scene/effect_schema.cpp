@@ -15,6 +15,7 @@ ParamValue word(const char* value) { return {ParamType::text, 0.0, false, {}, va
 
 constexpr std::string_view kSolverChoices[] = {"dfsph", "wcsph"};
 constexpr std::string_view kOrderChoices[] = {"sorted", "unsorted", "exact"};
+constexpr std::string_view kSurfaceMethodChoices[] = {"mesh", "screen_space", "raycast"};
 
 const std::array kSceneParams = {
     ParamSpec{"step_hz", ParamType::number, 30.0, 240.0, num(60.0), "fixed simulation steps per second"},
@@ -77,6 +78,10 @@ const std::array kSphFluidParams = {
 };
 
 const std::array kFluidSurfaceParams = {
+    ParamSpec{"method", ParamType::text, 0.0, 0.0, word("mesh"),
+              "how the water is drawn: mesh (marching slices, CPU), screen_space (splat depth, bilateral smoothing; "
+              "Janisz 3.1) or raycast (metaball fragment lists; Szecsi & Illes 2012); live",
+              kSurfaceMethodChoices},
     ParamSpec{"order", ParamType::text, 0.0, 0.0, word("sorted"),
               "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)", kOrderChoices},
     ParamSpec{"smoothing", ParamType::number, 1.0, 4.0, num(2.0), "field cutoff Rc in particle spacings"},

@@ -15,6 +15,17 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
     error = "fluid_surface.order: unknown order '" + order + "' (expected sorted, unsorted or exact)";
     return false;
   }
+  const std::string& method = section.text("method");
+  if (method == "mesh") {
+    p.method = SurfaceMethodChoice::mesh;
+  } else if (method == "screen_space") {
+    p.method = SurfaceMethodChoice::screen_space;
+  } else if (method == "raycast") {
+    p.method = SurfaceMethodChoice::raycast;
+  } else {
+    error = "fluid_surface.method: unknown method '" + method + "' (expected mesh, screen_space or raycast)";
+    return false;
+  }
   p.smoothing = static_cast<float>(section.number("smoothing"));
   p.cube = static_cast<float>(section.number("cube"));
   p.threshold = static_cast<float>(section.number("threshold"));
@@ -26,6 +37,11 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
 }
 
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
+  if (s.params.method != SurfaceMethodChoice::mesh) {  // the particle renderers need no mesh
+    s.mesh.clear();
+    s.error.clear();
+    return true;
+  }
   const fluid::ParticleStore& particles = fluid.world.particles;
   const std::size_t n = particles.size();
   s.xs.resize(n);

@@ -11,14 +11,18 @@
 
 #include <glm/glm.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace game {
 
 enum class SurfaceOrderChoice { sorted, unsorted, exact };
+// Which renderer draws the water (engine::FluidMethod): only `mesh` runs the CPU mesher.
+enum class SurfaceMethodChoice { mesh, screen_space, raycast };
 
 struct FluidSurfaceParams {
+  SurfaceMethodChoice method = SurfaceMethodChoice::mesh;
   SurfaceOrderChoice order = SurfaceOrderChoice::sorted;
   float smoothing = 2.0f;    // Rc in particle spacings
   float cube = 0.5f;         // lattice cube edge S in particle spacings
@@ -28,7 +32,8 @@ struct FluidSurfaceParams {
   glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
 };
 
-// Reads the "fluid_surface" section. False + error naming the field for an unknown `order`.
+// Reads the "fluid_surface" section. False + error naming the field for an unknown `order` or
+// `method`.
 bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error);
 
 struct FluidSurface {
@@ -38,9 +43,13 @@ struct FluidSurface {
   std::vector<float> xs, ys, zs;  // SoA copy of the particle positions, reused every frame
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
+  // Method raycast, last frame (written by the renderer): fragment-list records asked for and
+  // records dropped because the pool was full (engine::RaycastRenderer::used / dropped).
+  std::uint64_t raycast_records = 0, raycast_dropped = 0;
 };
 
-// Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`.
+// Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With
+// method screen_space or raycast the mesh is left empty (those renderers draw the particles).
 // Returns false with surface.error set when extraction refuses the input.
 bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir);
 

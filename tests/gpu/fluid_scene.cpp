@@ -77,9 +77,7 @@ bool extractMesh(FluidScene& s, fluid::SurfaceOrder order, bool exact_slabs, std
   return st.ok();
 }
 
-std::vector<unsigned char> renderFrame(FluidScene& s, engine::FluidRenderer& r, GLuint target_fbo,
-                                       const engine::WaterParams& params, bool with_mesh) {
-  engine::beginOpaquePass(r, glm::vec4(0.1f, 0.1f, 0.12f, 1.0f));
+void drawBackdrop(const FluidScene& s) {
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glUseProgram(s.backdrop_program);
@@ -89,6 +87,12 @@ std::vector<unsigned char> renderFrame(FluidScene& s, engine::FluidRenderer& r, 
   glDrawArrays(GL_TRIANGLES, 0, 12);
   glBindVertexArray(0);
   glDisable(GL_DEPTH_TEST);
+}
+
+std::vector<unsigned char> renderFrame(FluidScene& s, engine::FluidRenderer& r, GLuint target_fbo,
+                                       const engine::WaterParams& params, bool with_mesh) {
+  engine::beginOpaquePass(r, glm::vec4(0.1f, 0.1f, 0.12f, 1.0f));
+  drawBackdrop(s);
   std::string error;
   if (with_mesh) {
     engine::uploadFluidMesh(r, s.mesh.positions, s.mesh.normals, s.mesh.indices, error);

@@ -29,6 +29,8 @@ bool createFluidScene(FluidScene& scene, int width, int height, glm::vec3 eye, s
 void destroyFluidScene(FluidScene& scene);
 // Extracts the mesh with the given order (none / backToFront / exact slabs) for the camera.
 bool extractMesh(FluidScene& scene, fluid::SurfaceOrder order, bool exact_slabs, std::string& error);
+// Draws the striped backdrop into the currently bound framebuffer (depth test on, left off after).
+void drawBackdrop(const FluidScene& scene);
 // Opaque pass + fluid into `target_fbo`; returns RGBA8 pixels (bottom row first).
 std::vector<unsigned char> renderFrame(FluidScene& scene, engine::FluidRenderer& renderer, GLuint target_fbo,
                                        const engine::WaterParams& params, bool with_mesh);

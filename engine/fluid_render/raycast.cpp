@@ -1,0 +1,208 @@
+#include "engine/fluid_render/raycast.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace engine {
+
+void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
+  destroyRaycastRenderer(out);
+  out = RaycastRenderer{};
+  out.desc = desc;
+  const int w = desc.base.width, h = desc.base.height;
+  if (w < 1 || h < 1 || w > 8192 || h > 8192) {
+    out.error = "raycast fluid: size " + std::to_string(w) + "x" + std::to_string(h) + " out of range 1..8192";
+    return;
+  }
+  if (!(desc.pool_per_pixel > 0.0f && desc.pool_per_pixel <= 64.0f)) {
+    out.error = "raycast fluid: pool_per_pixel " + std::to_string(desc.pool_per_pixel) + " out of range (0, 64]";
+    return;
+  }
+  const std::filesystem::path dir = desc.base.shader_dir / "fluid";
+  std::string error;
+  out.gather_program = buildProgramWithStorage(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "particle_billboard.vert"}},
+                                    {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "rc_gather.frag"}}},
+      false, error);
+  out.error += error;
+  out.cast_program = buildProgramWithStorage(
+      std::vector<ShaderStageFiles>{{GL_COMPUTE_SHADER, {dir / "ray.glsl", dir / "rc_cast.comp"}}}, true, error);
+  out.error += error;
+  out.shade_program =
+      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}},
+                                                 {GL_FRAGMENT_SHADER,
+                                                  {dir / "shading.glsl", dir / "depth.glsl", dir / "ray.glsl",
+                                                   dir / "water_shade.glsl", dir / "rc_shade.frag"}}},
+                   "", error);
+  out.error += error;
+  out.blit_program = buildProgram(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}}, {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}},
+      "", error);
+  out.error += error;
+  if (!out.error.empty()) {
+    out.error = "raycast fluid disabled, shader build failed:\n" + out.error;
+    return;
+  }
+  const bool scene_ok = createSceneTargets(w, h, out.scene);
+  out.heads = createTexture2D(GL_R32UI, w, h, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+  out.hits = createTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, nullptr);
+  out.thickness = createTexture2D(GL_R32F, w, h, GL_RED, GL_FLOAT, nullptr);
+  const double records = std::round(static_cast<double>(desc.pool_per_pixel) * w * h);
+  out.pool_records = static_cast<std::uint32_t>(std::max(1.0, records));
+  glGenBuffers(1, &out.nodes);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.nodes);
+  glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(out.pool_records) * 16, nullptr, GL_DYNAMIC_COPY);
+  glGenBuffers(1, &out.counters);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.counters);
+  glBufferData(GL_SHADER_STORAGE_BUFFER, 8, nullptr, GL_DYNAMIC_READ);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  glGenBuffers(1, &out.particles.buffer);
+  glGenVertexArrays(1, &out.vao);
+  glBindVertexArray(out.vao);
+  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+  glVertexAttribDivisor(0, 1);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glGenVertexArrays(1, &out.empty_vao);
+  if (!scene_ok || glGetError() != GL_NO_ERROR) {
+    out.error = "raycast fluid disabled: fragment-list storage not supported (needs GL 4.3 SSBOs and images)";
+    return;
+  }
+  out.ready = true;
+}
+
+GlObjectNames glNames(const RaycastRenderer& r) {
+  GlObjectNames n;
+  if (r.scene.fbo != 0) listNames(r.scene, n);
+  for (GLuint t : {r.heads, r.hits, r.thickness})
+    if (t != 0) n.textures.push_back(t);
+  for (GLuint b : {r.nodes, r.counters, r.particles.buffer})
+    if (b != 0) n.buffers.push_back(b);
+  for (GLuint v : {r.vao, r.empty_vao})
+    if (v != 0) n.vertex_arrays.push_back(v);
+  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program})
+    if (p != 0) n.programs.push_back(p);
+  return n;
+}
+
+void destroyRaycastRenderer(RaycastRenderer& r) {
+  destroySceneTargets(r.scene);
+  for (GLuint* t : {&r.heads, &r.hits, &r.thickness})
+    if (*t != 0) glDeleteTextures(1, t);
+  for (GLuint* b : {&r.nodes, &r.counters, &r.particles.buffer})
+    if (*b != 0) glDeleteBuffers(1, b);
+  for (GLuint* v : {&r.vao, &r.empty_vao})
+    if (*v != 0) glDeleteVertexArrays(1, v);
+  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program})
+    if (p != 0) glDeleteProgram(p);
+  const RaycastDesc desc = r.desc;
+  r = RaycastRenderer{};
+  r.desc = desc;
+}
+
+void beginRaycastOpaquePass(RaycastRenderer& r, glm::vec4 clear_colour) {
+  if (!r.ready) return;
+  glBindFramebuffer(GL_FRAMEBUFFER, r.scene.fbo);
+  glViewport(0, 0, r.desc.base.width, r.desc.base.height);
+  glClearColor(clear_colour.r, clear_colour.g, clear_colour.b, clear_colour.a);
+  glClearDepth(1.0);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+}
+
+bool uploadRaycastParticles(RaycastRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
+  return uploadParticles(r.particles, positions, error);
+}
+
+void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,
+                      const RaycastParams& params) {
+  if (!r.ready) return;
+  const int w = r.desc.base.width, h = r.desc.base.height;
+  const float rc = std::max(params.rc, 1e-5f);
+  const float threshold = std::clamp(params.threshold, 1e-4f, 0.2499f);
+  glViewport(0, 0, w, h);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glActiveTexture(GL_TEXTURE0);
+  r.used = r.dropped = 0;
+  // Scene colour into the target first (the gather below writes no colour).
+  glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+  glUseProgram(r.blit_program);
+  glBindTexture(GL_TEXTURE_2D, r.scene.colour);
+  setUniform(r.blit_program, "u_colour", 0);
+  glBindVertexArray(r.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (r.particles.count > 0) {
+    // Gathering (§5): empty lists, zero counters, then every support sphere prepends records.
+    const GLuint empty_list = 0xffffffffu, zero[2] = {0, 0};
+    glClearTexImage(r.heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.counters);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(zero), zero);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    glBindImageTexture(0, r.heads, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, r.nodes);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, r.counters);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r.particles.buffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // side effects only
+    glUseProgram(r.gather_program);
+    setParticleCamera(r.gather_program, camera, w, h);
+    setUniform(r.gather_program, "u_radius", rc);
+    glUniform1ui(glGetUniformLocation(r.gather_program, "u_pool"), r.pool_records);
+    glBindTexture(GL_TEXTURE_2D, r.scene.depth);
+    setUniform(r.gather_program, "u_scene_depth", 0);
+    glBindVertexArray(r.vao);
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    // The cast (§6) per pixel into the hit and thickness images.
+    glUseProgram(r.cast_program);
+    setParticleCamera(r.cast_program, camera, w, h);
+    setUniform(r.cast_program, "u_rc", rc);
+    setUniform(r.cast_program, "u_threshold", threshold);
+    setUniform(r.cast_program, "u_scene_depth", 0);
+    glBindImageTexture(0, r.heads, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32UI);
+    glBindImageTexture(1, r.hits, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(2, r.thickness, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glDispatchCompute(static_cast<GLuint>((w + 7) / 8), static_cast<GLuint>((h + 7) / 8), 1);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    glUseProgram(0);  // Mesa 22.3 kept the program made current right after a compute one alive after its deletion
+    for (GLuint i = 0; i < 3; ++i) glBindImageTexture(i, 0, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32UI);
+  }
+  glBindVertexArray(r.empty_vao);
+  if (r.particles.count > 0) {
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    const GLuint p = r.shade_program;
+    glUseProgram(p);
+    setParticleCamera(p, camera, w, h);
+    setWaterShading(p, water);
+    const GLuint textures[] = {r.scene.colour, r.scene.depth, r.hits, r.thickness};
+    const char* names[] = {"u_scene_colour", "u_scene_depth", "u_hits", "u_thickness"};
+    for (int i = 0; i < 4; ++i) {
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(i));
+      glBindTexture(GL_TEXTURE_2D, textures[i]);
+      setUniform(p, names[i], i);
+    }
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDisable(GL_BLEND);
+    glActiveTexture(GL_TEXTURE0);
+    for (GLuint i = 0; i < 3; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+    if (params.read_counters) {
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      GLuint counts[2] = {0, 0};
+      glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.counters);
+      glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+      glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+      r.used = counts[0];
+      r.dropped = counts[1];
+    }
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);  // a deleted program stays alive while current
+}
+
+}  // namespace engine

@@ -1,0 +1,54 @@
+#pragma once
+// Metaball ray casting with per-pixel fragment lists (Szécsi & Illés 2012): each particle's
+// support sphere (radius Rc) appends a record to its pixel's linked list (one SSBO pool, an
+// atomic counter, an r32ui head image; GL 4.3+ features, which llvmpipe's 4.5 core has); a
+// compute pass sorts each list, sweeps the exact piecewise-quartic sum of the mesh's field
+// (fluid/surface: f = (u − 1/2)^2, u = r^2/(2 Rc^2), surface at T) along the ray, takes the
+// first crossing as the surface and a full-screen pass shades it with the mesh's water look (water_shade.glsl).
+//
+// The pool is bounded: records past it are dropped and counted (RaycastRenderer::dropped), the
+// overflow the paper trades against memory (§6). Frame as in screen_space.hpp.
+
+#include "engine/fluid_render/particle_pass.hpp"
+
+namespace engine {
+
+struct RaycastDesc {
+  FluidRenderDesc base;
+  // Pool records (16 bytes each) per viewport pixel; 0 < pool_per_pixel <= 64. The pool is
+  // max(1, round(pool_per_pixel * width * height)) records.
+  float pool_per_pixel = 8.0f;
+};
+
+struct RaycastParams {
+  float rc = 0.16f;           // cutoff radius Rc, metres (the mesh's SurfaceParams::rc)
+  float threshold = 0.2f;     // iso level T (the mesh's SurfaceParams::threshold), in (0, 0.25)
+  bool read_counters = true;  // read back used/dropped after the frame (waits for the GPU)
+};
+
+struct RaycastRenderer {
+  bool ready = false;
+  std::string error;
+  RaycastDesc desc;
+  SceneTargets scene;
+  GLuint heads = 0;                // r32ui, one list head per pixel
+  GLuint nodes = 0, counters = 0;  // SSBO pool (uvec4 records), SSBO {used, dropped}
+  std::uint32_t pool_records = 0;
+  GLuint hits = 0, thickness = 0;  // cast output: RGBA32F (outward normal, hit distance), R32F
+  GLuint vao = 0, empty_vao = 0;
+  ParticleBuffer particles;
+  GLuint gather_program = 0, cast_program = 0, shade_program = 0, blit_program = 0;
+  // Last frame (when RaycastParams::read_counters): records asked for and records dropped.
+  std::uint64_t used = 0, dropped = 0;
+};
+
+void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out);
+void destroyRaycastRenderer(RaycastRenderer& renderer);
+GlObjectNames glNames(const RaycastRenderer& renderer);
+
+void beginRaycastOpaquePass(RaycastRenderer& renderer, glm::vec4 clear_colour);
+bool uploadRaycastParticles(RaycastRenderer& renderer, std::span<const glm::vec3> positions, std::string& error);
+void drawRaycastFluid(RaycastRenderer& renderer, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,
+                      const RaycastParams& params);
+
+}  // namespace engine

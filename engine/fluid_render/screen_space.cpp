@@ -1,0 +1,217 @@
+#include "engine/fluid_render/screen_space.hpp"
+
+#include <algorithm>
+
+namespace engine {
+
+namespace {
+
+constexpr float kEmptyDepth = 1e30f;  // "no water" in the depth targets (shaders test >= 1e20)
+
+GLuint colourTargetFbo(GLuint texture, GLuint depth) {
+  GLuint fbo = 0;
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
+  if (depth != 0) glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth, 0);
+  return fbo;
+}
+
+void drawParticles(const ScreenSpaceRenderer& r) {
+  glBindVertexArray(r.vao);
+  glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
+  glBindVertexArray(0);
+}
+
+}  // namespace
+
+void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer& out) {
+  destroyScreenSpaceRenderer(out);
+  out = ScreenSpaceRenderer{};
+  out.desc = desc;
+  if (desc.width < 1 || desc.height < 1 || desc.width > 8192 || desc.height > 8192) {
+    out.error = "screen-space fluid: size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
+                " out of range 1..8192";
+    return;
+  }
+  const std::filesystem::path dir = desc.shader_dir / "fluid";
+  const std::filesystem::path billboard = dir / "particle_billboard.vert", blit = dir / "blit.vert";
+  std::string error;
+  auto build = [&](std::vector<ShaderStageFiles> stages) {
+    const GLuint p = buildProgram(stages, "", error);
+    out.error += error;
+    return p;
+  };
+  out.depth_program =
+      build({{GL_VERTEX_SHADER, {billboard}}, {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "ss_depth.frag"}}});
+  out.thickness_program =
+      build({{GL_VERTEX_SHADER, {billboard}}, {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "ss_thickness.frag"}}});
+  out.smooth_program = build({{GL_VERTEX_SHADER, {blit}}, {GL_FRAGMENT_SHADER, {dir / "ss_smooth.frag"}}});
+  out.composite_program = build({{GL_VERTEX_SHADER, {blit}},
+                                 {GL_FRAGMENT_SHADER,
+                                  {dir / "shading.glsl", dir / "depth.glsl", dir / "ray.glsl", dir / "water_shade.glsl",
+                                   dir / "ss_composite.frag"}}});
+  out.blit_program = build({{GL_VERTEX_SHADER, {blit}}, {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}});
+  if (!out.error.empty()) {
+    out.error = "screen-space fluid disabled, shader build failed:\n" + out.error;
+    return;
+  }
+  const int w = desc.width, h = desc.height;
+  const bool scene_ok = createSceneTargets(w, h, out.scene);
+  out.depth_buffer = createTexture2D(GL_DEPTH_COMPONENT24, w, h, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+  for (int i = 0; i < 2; ++i) {
+    out.smooth_depth[i] = createTexture2D(GL_R32F, w, h, GL_RED, GL_FLOAT, nullptr);
+    out.smooth_fbo[i] = colourTargetFbo(out.smooth_depth[i], 0);
+  }
+  out.depth_fbo = colourTargetFbo(out.smooth_depth[0], out.depth_buffer);
+  const bool depth_ok = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  out.thickness = createTexture2D(GL_R32F, w, h, GL_RED, GL_FLOAT, nullptr);
+  out.thickness_fbo = colourTargetFbo(out.thickness, 0);
+  const bool thickness_ok = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glGenBuffers(1, &out.particles.buffer);
+  glGenVertexArrays(1, &out.vao);
+  glBindVertexArray(out.vao);
+  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+  glVertexAttribDivisor(0, 1);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glGenVertexArrays(1, &out.empty_vao);
+  if (!scene_ok || !depth_ok || !thickness_ok || glGetError() != GL_NO_ERROR) {
+    out.error = "screen-space fluid disabled: float render targets not supported";
+    return;
+  }
+  out.ready = true;
+}
+
+GlObjectNames glNames(const ScreenSpaceRenderer& r) {
+  GlObjectNames n;
+  if (r.scene.fbo != 0) listNames(r.scene, n);
+  for (GLuint t : {r.depth_buffer, r.smooth_depth[0], r.smooth_depth[1], r.thickness})
+    if (t != 0) n.textures.push_back(t);
+  for (GLuint f : {r.depth_fbo, r.smooth_fbo[0], r.smooth_fbo[1], r.thickness_fbo})
+    if (f != 0) n.framebuffers.push_back(f);
+  if (r.particles.buffer != 0) n.buffers.push_back(r.particles.buffer);
+  for (GLuint v : {r.vao, r.empty_vao})
+    if (v != 0) n.vertex_arrays.push_back(v);
+  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program})
+    if (p != 0) n.programs.push_back(p);
+  return n;
+}
+
+void destroyScreenSpaceRenderer(ScreenSpaceRenderer& r) {
+  destroySceneTargets(r.scene);
+  for (GLuint* t : {&r.depth_buffer, &r.smooth_depth[0], &r.smooth_depth[1], &r.thickness})
+    if (*t != 0) glDeleteTextures(1, t);
+  for (GLuint* f : {&r.depth_fbo, &r.smooth_fbo[0], &r.smooth_fbo[1], &r.thickness_fbo})
+    if (*f != 0) glDeleteFramebuffers(1, f);
+  if (r.particles.buffer != 0) glDeleteBuffers(1, &r.particles.buffer);
+  for (GLuint* v : {&r.vao, &r.empty_vao})
+    if (*v != 0) glDeleteVertexArrays(1, v);
+  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program})
+    if (p != 0) glDeleteProgram(p);
+  const FluidRenderDesc desc = r.desc;
+  r = ScreenSpaceRenderer{};
+  r.desc = desc;
+}
+
+void beginScreenSpaceOpaquePass(ScreenSpaceRenderer& r, glm::vec4 clear_colour) {
+  if (!r.ready) return;
+  glBindFramebuffer(GL_FRAMEBUFFER, r.scene.fbo);
+  glViewport(0, 0, r.desc.width, r.desc.height);
+  glClearColor(clear_colour.r, clear_colour.g, clear_colour.b, clear_colour.a);
+  glClearDepth(1.0);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+}
+
+bool uploadScreenSpaceParticles(ScreenSpaceRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
+  return uploadParticles(r.particles, positions, error);
+}
+
+void drawScreenSpaceFluid(ScreenSpaceRenderer& r, GLuint target_fbo, const FluidCamera& camera,
+                          const WaterParams& water, const ScreenSpaceParams& params) {
+  if (!r.ready) return;
+  const int w = r.desc.width, h = r.desc.height;
+  const float radius = std::max(params.radius, 1e-5f);
+  glViewport(0, 0, w, h);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glActiveTexture(GL_TEXTURE0);
+  if (r.particles.count > 0) {
+    // Pass 1: nearest sphere, linear depth into smooth_depth[0] with our own z-buffer.
+    glBindFramebuffer(GL_FRAMEBUFFER, r.depth_fbo);
+    const GLfloat empty[4] = {kEmptyDepth, 0, 0, 0};
+    glClearBufferfv(GL_COLOR, 0, empty);
+    glClearDepth(1.0);
+    glDepthMask(GL_TRUE);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glUseProgram(r.depth_program);
+    setParticleCamera(r.depth_program, camera, w, h);
+    setUniform(r.depth_program, "u_radius", radius);
+    glBindTexture(GL_TEXTURE_2D, r.scene.depth);
+    setUniform(r.depth_program, "u_scene_depth", 0);
+    drawParticles(r);
+    glDisable(GL_DEPTH_TEST);
+    // Pass 2: thickness, additive.
+    glBindFramebuffer(GL_FRAMEBUFFER, r.thickness_fbo);
+    const GLfloat zero[4] = {0, 0, 0, 0};
+    glClearBufferfv(GL_COLOR, 0, zero);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    glUseProgram(r.thickness_program);
+    setParticleCamera(r.thickness_program, camera, w, h);
+    setUniform(r.thickness_program, "u_radius", radius);
+    setUniform(r.thickness_program, "u_scene_depth", 0);
+    drawParticles(r);
+    glDisable(GL_BLEND);
+    // Pass 3: bilateral smoothing, horizontal then vertical per iteration (ends in [0]).
+    glUseProgram(r.smooth_program);
+    setUniform(r.smooth_program, "u_world_radius", std::max(params.filter_radius, 0.0f));
+    setUniform(r.smooth_program, "u_focal_px", camera.projection[1][1] * static_cast<float>(h) * 0.5f);
+    setUniform(r.smooth_program, "u_depth_falloff", std::max(params.depth_falloff, 1e-4f));
+    setUniform(r.smooth_program, "u_depth", 0);
+    glBindVertexArray(r.empty_vao);
+    const int iterations = std::clamp(params.smoothing_iterations, 0, 32);
+    for (int i = 0; i < 2 * iterations; ++i) {
+      const int from = i % 2, to = 1 - from;
+      glBindFramebuffer(GL_FRAMEBUFFER, r.smooth_fbo[to]);
+      glBindTexture(GL_TEXTURE_2D, r.smooth_depth[from]);
+      setUniform(r.smooth_program, "u_direction", from == 0 ? glm::vec2(1, 0) : glm::vec2(0, 1));
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  }
+  // Scene colour into the target, then the water over it.
+  glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+  glUseProgram(r.blit_program);
+  glBindTexture(GL_TEXTURE_2D, r.scene.colour);
+  setUniform(r.blit_program, "u_colour", 0);
+  glBindVertexArray(r.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (r.particles.count > 0) {
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    const GLuint p = r.composite_program;
+    glUseProgram(p);
+    setParticleCamera(p, camera, w, h);
+    setWaterShading(p, water);
+    const GLuint textures[] = {r.scene.colour, r.scene.depth, r.smooth_depth[0], r.thickness};
+    const char* names[] = {"u_scene_colour", "u_scene_depth", "u_fluid_depth", "u_thickness"};
+    for (int i = 0; i < 4; ++i) {
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(i));
+      glBindTexture(GL_TEXTURE_2D, textures[i]);
+      setUniform(p, names[i], i);
+    }
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDisable(GL_BLEND);
+    glActiveTexture(GL_TEXTURE0);
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);  // a deleted program stays alive while current
+}
+
+}  // namespace engine

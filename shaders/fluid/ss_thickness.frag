@@ -1,0 +1,18 @@
+// Screen-space fluid, pass 2 (Janisz §3.1.3): water thickness per pixel as the sum of the
+// particle spheres' chords along the ray, clipped at the opaque scene (additive blending, no
+// depth test), for the Beer–Lambert absorption of the composite pass.
+uniform sampler2D u_scene_depth;
+uniform vec3 u_eye;
+uniform float u_radius;
+flat in vec3 v_centre;
+layout(location = 0) out float out_thickness;
+
+void main() {
+  vec3 dir = pixelRay(gl_FragCoord.xy);
+  float t0, t1;
+  if (!raySphere(u_eye, dir, v_centre, u_radius, t0, t1)) discard;
+  float scene = rayDistance(gl_FragCoord.xy, texelFetch(u_scene_depth, ivec2(gl_FragCoord.xy), 0).r, u_eye);
+  float chord = min(t1, scene) - max(t0, 0.0);
+  if (chord <= 0.0) discard;
+  out_thickness = chord;
+}
