@@ -51,3 +51,31 @@ expect_match("${ERR}" "short.fdm: ")
 file(WRITE ${WORK}/nan.xyz "0 0 0\nnan 0 0\n")
 run(1 ${EXE} query-collider ${WORK}/box.fdm --points ${WORK}/nan.xyz)
 expect_match("${ERR}" "nan.xyz:2")
+# Models a depth-map collider cannot represent are refused with the file and the place:
+# a vertex beyond the coordinate limit (it used to bake and answer 2.5e24), an open mesh
+# (points inside read as outside) unless --allow-open, which bakes it with a warning.
+run(1 ${EXE} bake-collider ${DATA}/far_vertex.obj --out ${WORK}/far.fdm)
+expect_match("${ERR}" "far_vertex.obj: mesh 0 vertex [0-9]+ at \\(1e\\+30, 0.5, 0.5\\) is beyond the collider coordinate limit")
+run(1 ${EXE} bake-collider ${DATA}/open_box.obj --out ${WORK}/open.fdm)
+expect_match("${ERR}" "open_box.obj: the mesh is open: 4 boundary edges .*--allow-open")
+if(EXISTS ${WORK}/far.fdm OR EXISTS ${WORK}/open.fdm)
+  message(FATAL_ERROR "a refused bake wrote its output")
+endif()
+run(0 ${EXE} bake-collider ${DATA}/open_box.obj --out ${WORK}/open.fdm --res 16 --allow-open)
+expect_match("${ERR}" "warning: .*open_box.obj: the mesh is open")
+# Progress: silent when stderr is not a terminal (here it is a pipe) ...
+run(0 ${EXE} bake-collider ${DATA}/box.obj --out ${WORK}/quiet.fdm --res 16 --maps axes,cube)
+if(ERR MATCHES "map 1 of")
+  message(FATAL_ERROR "progress printed to a pipe:\n${ERR}")
+endif()
+# ... and one line per map on a terminal (script gives the command a pseudo-terminal).
+find_program(SCRIPT script)
+if(SCRIPT)
+  run(0 ${SCRIPT} -qec "${EXE} bake-collider ${DATA}/box.obj --out ${WORK}/tty.fdm --res 16 --maps axes,cube" /dev/null)
+  expect_match("${OUT}" "\rbake-collider: map 1 of 4 \\(front-back16 16x16\\).*\rbake-collider: map 4 of 4 \\(cube8 16x16x6\\)")
+endif()
+# The shipped statue is closed (scripts/generate_content.py): a point inside its pedestal is inside.
+run(0 ${EXE} bake-collider ${SOURCE}/content/models/statue.obj --out ${WORK}/statue.fdm --res 64)
+file(WRITE ${WORK}/pedestal.xyz "0 0.3 0\n0.3 0.25 0.1\n")
+run(0 ${EXE} query-collider ${WORK}/statue.fdm --points ${WORK}/pedestal.xyz)
+expect_match("${OUT}" "^-0\\.[0-9]+ [^\n]+\n-0\\.[0-9]+ [^\n]+\n$")
