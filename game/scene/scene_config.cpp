@@ -76,8 +76,8 @@ struct ErrorPosition : nlohmann::json_sax<Json> {
   bool end_object() override { return true; }
   bool start_array(std::size_t) override { return true; }
   bool end_array() override { return true; }
-  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception&) override {
-    byte = position;
+  bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception&) override {
+    byte = position >= token.size() ? position - token.size() : 0;  // the start of the offending token
     return false;
   }
 };
