@@ -239,10 +239,12 @@ IoStatus readPlyHeader(std::istream& in, const std::string& name, std::size_t& l
       words >> format;
     } else if (keyword == "element") {
       PlyElement element;
-      long long count = -1;
-      words >> element.name >> count;
-      if (!words || count < 0) return fail("bad element line '" + shown(line_text) + "'");
-      element.count = static_cast<std::size_t>(count);
+      std::string count_text;
+      words >> element.name >> count_text;
+      const auto [end, error] =
+          std::from_chars(count_text.data(), count_text.data() + count_text.size(), element.count);
+      if (!words || error != std::errc() || end != count_text.data() + count_text.size())
+        return fail("bad element line '" + shown(line_text) + "' (expected: element NAME COUNT)");
       element.header_line = line;
       header.elements.push_back(element);
     } else if (keyword == "property") {
@@ -357,7 +359,7 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     const std::uint64_t here = position(in);
     const std::uint64_t left = end > here ? end - here : 0;
     const std::uint64_t item_bytes = header.ascii ? 1 : plyMinItemBytes(element);
-    if (element.count > 0 && item_bytes == 0) continue;  // binary items without properties hold no bytes
+    if (item_bytes == 0) continue;  // binary items without properties hold no bytes
     if (element.count > left / item_bytes) {
       return {where(name, element.header_line) + "element " + shown(element.name) + " claims " +
               std::to_string(element.count) + " items but only " + std::to_string(left) + " bytes follow the header"};

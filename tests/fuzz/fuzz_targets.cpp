@@ -128,7 +128,8 @@ std::string checkSceneJson(std::span<const std::uint8_t> input) {
   if (e.rfind(label + ": ", 0) != 0) return rejection(e, "rejection does not start with the file");
   const std::size_t place_end = e.find(": ", label.size() + 2);
   const bool json_error = e.compare(label.size() + 2, 12, "invalid JSON") == 0;
-  if (json_error ? e.find("line ") == std::string::npos : place_end == std::string::npos)
+  const bool top_level = e.compare(label.size() + 2, 13, "the top level") == 0;
+  if (json_error ? e.find("line ") == std::string::npos : place_end == std::string::npos && !top_level)
     return rejection(e, "rejection names no line or key");
   if (e.size() > kMaxMessage) return rejection(e, "rejection message too long");
   return {};

@@ -61,6 +61,20 @@ TEST(FuzzRegressions, PlyCountsAreCheckedAgainstTheFileBeforeLoopingOrAllocating
             "m.ply:3: element vertex claims 4000000000 items but only 3 bytes follow the header");
 }
 
+TEST(FuzzRegressions, PlyEmptyElementWithoutPropertiesAndNonIntegerCounts) {
+  // libFuzzer (UBSan): "element vert 0" without properties divided by its 0 item bytes; the
+  // count "0.0" was read as 0 and the ".0" ignored.
+  fluid::ParticlePositions particles;
+  const std::string vertex = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
+  std::string ply = plyHeader("binary_little_endian", "element vert 0\n" + vertex);
+  const float xyz[3] = {1.5f, -2.0f, 3.0f};
+  ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  ASSERT_TRUE(fluid::parseParticleText(ply, "ply", "z.ply", particles).ok());
+  EXPECT_EQ(particles.at(0), glm::vec3(1.5f, -2.0f, 3.0f));
+  EXPECT_EQ(fluid::parseParticleText(plyHeader("ascii", "element vert 0.0\n"), "ply", "f.ply", particles).error,
+            "f.ply:3: bad element line 'element vert 0.0' (expected: element NAME COUNT)");
+}
+
 TEST(FuzzRegressions, ParticleMessagesQuoteAtMostAShortToken) {
   fluid::ParticlePositions particles;
   const std::string token(5000, 'q');
