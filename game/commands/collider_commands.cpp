@@ -17,12 +17,18 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cfloat>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace game {
@@ -103,6 +109,108 @@ bool convertScene(const aiScene* scene, const Assimp::Importer& importer, const 
   return true;
 }
 
+// ---- OBJ pre-check --------------------------------------------------------------------
+// assimp 5.2.5's OBJ importer crashes on some malformed files (libFuzzer found a write through
+// a wild pointer for "normals\nmtllib m\n"), and its messages name no line. So an OBJ file is
+// read once here first: only the statements of the OBJ format that describe polygonal
+// geometry and its grouping are accepted, with numbers where numbers belong and every face,
+// line and point index naming an element defined before it (1-based, or negative = relative).
+// What passes is plain enough for assimp; what fails gets "FILE:LINE: ...".
+
+std::string_view nextToken(std::string_view& rest) {
+  std::size_t i = 0;
+  while (i < rest.size() && (rest[i] == ' ' || rest[i] == '\t' || rest[i] == '\r')) ++i;
+  std::size_t j = i;
+  while (j < rest.size() && rest[j] != ' ' && rest[j] != '\t' && rest[j] != '\r') ++j;
+  const std::string_view token = rest.substr(i, j - i);
+  rest.remove_prefix(j);
+  return token;
+}
+
+std::string shownToken(std::string_view token) {
+  std::string out;
+  for (char c : token.substr(0, 40)) out += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+  return token.size() > 40 ? out + "..." : out;
+}
+
+// One "v/vt/vn" reference of an f, l or p statement against the counts so far.
+std::string checkObjReference(std::string_view ref, const std::size_t (&counts)[3]) {
+  static constexpr const char* kKinds[3] = {"vertex", "texture coordinate", "normal"};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t slash = ref.find('/');
+    const std::string_view part = ref.substr(0, slash);
+    ref = slash == std::string_view::npos ? std::string_view{} : ref.substr(slash + 1);
+    if (part.empty() && (k > 0 || slash != std::string_view::npos)) {
+      if (k == 0) return "a reference without a vertex index";
+      if (slash == std::string_view::npos) break;
+      continue;
+    }
+    long long index = 0;
+    const auto [end, errc] = std::from_chars(part.data(), part.data() + part.size(), index);
+    if (errc != std::errc() || end != part.data() + part.size()) return "'" + shownToken(part) + "' is not an index";
+    const long long count = static_cast<long long>(counts[k]);
+    if (index == 0 || index > count || index < -count) {
+      return std::string(kKinds[k]) + " index " + std::to_string(index) + " names no " + kKinds[k] + " (" +
+             std::to_string(count) + " defined so far)";
+    }
+    if (slash == std::string_view::npos) break;
+  }
+  if (!ref.empty()) return "a reference with more than three parts";
+  return {};
+}
+
+std::string checkObjText(std::string_view text, const std::string& label) {
+  static constexpr std::string_view kGrouping[] = {"o",        "g",        "s",          "mg",       "usemtl",
+                                                   "mtllib",   "maplib",   "usemap",     "lod",      "bevel",
+                                                   "c_interp", "d_interp", "shadow_obj", "trace_obj"};
+  std::size_t counts[3] = {0, 0, 0};  // v, vt, vn defined so far
+  std::size_t line = 0, faces = 0;
+  for (std::size_t at = 0; at <= text.size();) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    std::string_view rest = text.substr(at, end - at);
+    at = end + 1;
+    ++line;
+    const std::string where = label + ":" + std::to_string(line) + ": ";
+    const std::string_view keyword = nextToken(rest);
+    if (keyword.empty() || keyword.front() == '#') continue;
+    if (keyword == "v" || keyword == "vn" || keyword == "vt" || keyword == "vp") {
+      std::size_t numbers = 0;
+      for (std::string_view token = nextToken(rest); !token.empty(); token = nextToken(rest), ++numbers) {
+        double value = 0.0;
+        const auto [end_num, errc] = std::from_chars(token.data(), token.data() + token.size(), value);
+        if (errc != std::errc() || end_num != token.data() + token.size())
+          return where + "'" + shownToken(token) + "' is not a number";
+      }
+      const bool position = keyword == "v" || keyword == "vn";
+      if (position ? numbers < 3 || numbers > 7 : numbers < 1 || numbers > 3)
+        return where + std::string(keyword) + " with " + std::to_string(numbers) + " numbers";
+      if (keyword == "v") ++counts[0];
+      if (keyword == "vt") ++counts[1];
+      if (keyword == "vn") ++counts[2];
+    } else if (keyword == "f" || keyword == "l" || keyword == "p") {
+      std::size_t refs = 0;
+      for (std::string_view token = nextToken(rest); !token.empty(); token = nextToken(rest), ++refs) {
+        if (std::string problem = checkObjReference(token, counts); !problem.empty())
+          return where + std::string(keyword) + " item " + std::to_string(refs + 1) + ": " + problem;
+      }
+      const std::size_t least = keyword == "f" ? 3 : keyword == "l" ? 2 : 1;
+      if (keyword == "f") ++faces;
+      if (refs < least) return where + std::string(keyword) + " with " + std::to_string(refs) + " items";
+    } else if (std::find(std::begin(kGrouping), std::end(kGrouping), keyword) == std::end(kGrouping)) {
+      return where + "unknown or unsupported OBJ statement '" + shownToken(keyword) +
+             "' (polygonal geometry only: v, vt, vn, f, l, p, o, g, s, usemtl, mtllib)";
+    }
+  }
+  if (faces == 0)
+    return label + ":" + std::to_string(line) + ": end of file and no face (f) statement: nothing to bake";
+  return {};
+}
+
+bool isObj(std::string extension) {
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".obj" || extension == "obj";
+}
+
 }  // namespace
 
 bool loadColliderModel(const std::string& path, ColliderModel& out, std::string& error) {
@@ -110,6 +218,11 @@ bool loadColliderModel(const std::string& path, ColliderModel& out, std::string&
   if (!std::filesystem::is_regular_file(path, ec)) {
     error = path + ": no such file";
     return false;
+  }
+  if (isObj(std::filesystem::path(path).extension().string())) {
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (error = checkObjText(text, path); !error.empty()) return false;
   }
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly(false));  // the importer owns it
@@ -119,6 +232,10 @@ bool loadColliderModel(const std::string& path, ColliderModel& out, std::string&
 
 bool loadColliderModelFromMemory(std::span<const std::uint8_t> bytes, const std::string& extension,
                                  const std::string& label, ColliderModel& out, std::string& error) {
+  if (isObj(extension)) {
+    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (error = checkObjText(text, label); !error.empty()) return false;
+  }
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly(true));
   const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());

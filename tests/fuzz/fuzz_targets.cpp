@@ -220,7 +220,11 @@ std::string checkModelObj(std::span<const std::uint8_t> input) {
   game::ColliderModel model;
   std::string error;
   if (!game::loadColliderModelFromMemory(input, "obj", label, model, error)) {
-    if (error.rfind(label + ": ", 0) != 0) return rejection(error, "rejection does not name the file");
+    // "FILE:LINE: ..." (the OBJ pre-check), "FILE: mesh M vertex V ..." or "FILE: cannot load
+    // model: <assimp's words>" (assimp names no place; the pre-check leaves it little to reject).
+    std::size_t at = label.size() + 1;
+    const bool line = error.rfind(label + ":", 0) == 0 && digits(error, at) && error.compare(at, 2, ": ") == 0;
+    if (!line && error.rfind(label + ": ", 0) != 0) return rejection(error, "rejection does not name the file");
     if (error.size() > 4 * kMaxMessage) return rejection(error, "rejection message too long");
     return {};
   }

@@ -22,7 +22,7 @@ done
 wait
 status=0
 for t in "${targets[@]}"; do
-  read -r user sys < "$build/fuzz_logs/$t.time"
+  read -r user sys < <(tail -1 "$build/fuzz_logs/$t.time")
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/fuzz_logs/$t.log" | grep -o '[0-9]*$')
   if grep -q "ERROR: libFuzzer\|SUMMARY: \(Address\|Undefined\)\|fuzz $t:" "$build/fuzz_logs/$t.log"; then
     echo "$t: FAILED (see $build/fuzz_logs/$t.log)"; status=1

@@ -5,6 +5,7 @@
 
 #include "fluid/collide/collide.hpp"
 #include "fluid/io/particle_io.hpp"
+#include "game/commands/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
 
 #include <gtest/gtest.h>
@@ -153,6 +154,34 @@ TEST(FuzzRegressions, SceneMessagesStayShort) {
   EXPECT_TRUE(contains(status.error, "u.json: invalid JSON: parse error at line 1, column")) << status.error;
   const std::string long_key = "{\"effects\": {}, \"" + std::string(10000, 'k') + "\": 1}";
   EXPECT_LT(game::parseSceneText(long_key, "k.json", scene).error.size(), 200u);
+}
+
+std::string loadObj(const std::string& text, game::ColliderModel& model) {
+  std::string error;
+  game::loadColliderModelFromMemory(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()), "obj",
+                                    "m.obj", model, error);
+  return error;
+}
+
+TEST(FuzzRegressions, ObjFilesAreCheckedBeforeAssimpSeesThem) {
+  game::ColliderModel model;
+  // libFuzzer (ASan): assimp 5.2.5's OBJ importer wrote through a wild pointer on this input.
+  EXPECT_EQ(
+      loadObj("normals\nmtllib m\n", model),
+      "m.obj:1: unknown or unsupported OBJ statement 'normals' (polygonal geometry only: v, vt, vn, f, l, p, o, g, "
+      "s, usemtl, mtllib)");
+  // Indices name elements defined before them; messages give the line.
+  EXPECT_EQ(loadObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", model),
+            "m.obj:4: f item 3: vertex index 4 names no vertex (3 defined so far)");
+  EXPECT_EQ(loadObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2 3\n", model),
+            "m.obj:4: f item 1: normal index 1 names no normal (0 defined so far)");
+  EXPECT_EQ(loadObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 2 3\n", model),
+            "m.obj:4: f item 1: vertex index -4 names no vertex (3 defined so far)");
+  EXPECT_EQ(loadObj("v 0 0 zero\n", model), "m.obj:1: 'zero' is not a number");
+  EXPECT_EQ(loadObj("v 0 0 0\n", model), "m.obj:2: end of file and no face (f) statement: nothing to bake");
+  // A valid file still loads, relative indices and all.
+  EXPECT_EQ(loadObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\n", model), "");
+  EXPECT_EQ(model.indices.size(), 3u);
 }
 
 TEST(FuzzRegressions, EveryTargetAcceptsItsOwnSeedsShape) {
