@@ -59,18 +59,21 @@ std::string formatValue(double value) {
   return buffer;
 }
 
-// Checks and stores one particle; returns an error message or "".
-// `location` is the message prefix, e.g. "file.xyz:12: ".
-std::string storeParticle(const double (&xyz)[3], const std::string& location, ParticlePositions& out) {
-  static constexpr const char* kAxis[3] = {"x", "y", "z"};
-  for (int axis = 0; axis < 3; ++axis) {
-    const double value = xyz[axis];
-    if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max()) {
-      return location + "coordinate " + kAxis[axis] + " is not a finite float (" + formatValue(value) + ")";
-    }
-  }
+bool finiteFloat(double value) { return std::isfinite(value) && std::abs(value) <= std::numeric_limits<float>::max(); }
+
+// Stores one particle when all three coordinates are finite floats; false otherwise.
+bool storeParticle(const double (&xyz)[3], ParticlePositions& out) {
+  if (!finiteFloat(xyz[0]) || !finiteFloat(xyz[1]) || !finiteFloat(xyz[2])) return false;
   out.push_back({static_cast<float>(xyz[0]), static_cast<float>(xyz[1]), static_cast<float>(xyz[2])});
-  return {};
+  return true;
+}
+
+// The message for a particle storeParticle refused; `location` is e.g. "file.xyz:12: ".
+std::string badParticle(const double (&xyz)[3], const std::string& location) {
+  static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  int axis = 0;
+  while (axis < 2 && finiteFloat(xyz[axis])) ++axis;
+  return location + "coordinate " + kAxis[axis] + " is not a finite float (" + formatValue(xyz[axis]) + ")";
 }
 
 std::vector<std::string_view> split(std::string_view line, bool comma) {
@@ -135,9 +138,9 @@ IoStatus parseLines(std::istream& in, bool comma, const std::string& name, Parti
         return {where(name, line) + "'" + shown(fields[column]) + "' is not a number"};
       }
     }
-    if (std::string error = storeParticle(xyz, where(name, line), out); !error.empty()) {
+    if (!storeParticle(xyz, out)) {
       out.clear();
-      return {error};
+      return {badParticle(xyz, where(name, line))};
     }
   }
   return {};
@@ -307,30 +310,35 @@ IoStatus readPlyAsciiItem(std::istream& in, const std::string& name, const PlyEl
   return {};
 }
 
-// One binary item into `values`; lists are skipped. `offset` is the item's first byte.
+// One binary item into `values`; lists are skipped. `offset` is the item's first byte on entry
+// and the next item's on return (kept here, not asked of the stream: tellg per item is slow).
 IoStatus readPlyBinaryItem(std::istream& in, const std::string& name, const PlyElement& element, std::size_t item,
-                           std::uint64_t offset, std::uint64_t end, bool big_endian, std::vector<double>& values) {
-  const std::string location =
-      name + ": byte " + std::to_string(offset) + " (" + shown(element.name) + " " + std::to_string(item) + "): ";
+                           std::uint64_t& offset, std::uint64_t end, bool big_endian, std::vector<double>& values) {
+  const std::uint64_t start = offset;
+  auto location = [&] {
+    return name + ": byte " + std::to_string(start) + " (" + shown(element.name) + " " + std::to_string(item) + "): ";
+  };
   for (std::size_t i = 0; i < element.properties.size(); ++i) {
     const PlyProperty& property = element.properties[i];
     unsigned char bytes[8];
     const std::string& type = property.count_type.empty() ? property.type : property.count_type;
-    if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(plyTypeSize(type)))) {
-      return {location + "binary data ends inside " + shown(element.name) + " " + std::to_string(item) + " of " +
+    const std::size_t size = plyTypeSize(type);
+    if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(size))) {
+      return {location() + "binary data ends inside " + shown(element.name) + " " + std::to_string(item) + " of " +
               std::to_string(element.count)};
     }
+    offset += size;
     if (property.count_type.empty()) {
       values[i] = readPlyValue(type, bytes, big_endian);
       continue;
     }
     const double count = readPlyValue(type, bytes, big_endian);
     const std::uint64_t item_size = plyTypeSize(property.type);
-    const std::uint64_t here = position(in);
-    if (!validListCount(count, (end > here ? end - here : 0) / item_size))
-      return {location + "list " + shown(property.name) + " of " + formatValue(count) +
+    if (!validListCount(count, (end > offset ? end - offset : 0) / item_size))
+      return {location() + "list " + shown(property.name) + " of " + formatValue(count) +
               " items does not fit in the rest of the file"};
     in.ignore(static_cast<std::streamsize>(count) * static_cast<std::streamsize>(item_size));
+    offset += static_cast<std::uint64_t>(count) * item_size;
   }
   return {};
 }
@@ -356,8 +364,8 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     }
     // Counts are checked against the bytes that follow before anything is allocated: an ASCII
     // item is at least one line ("\n"), a binary one its scalars and list counts.
-    const std::uint64_t here = position(in);
-    const std::uint64_t left = end > here ? end - here : 0;
+    std::uint64_t offset = position(in);  // binary: advanced by readPlyBinaryItem
+    const std::uint64_t left = end > offset ? end - offset : 0;
     const std::uint64_t item_bytes = header.ascii ? 1 : plyMinItemBytes(element);
     if (item_bytes == 0) continue;  // binary items without properties hold no bytes
     if (element.count > left / item_bytes) {
@@ -372,22 +380,19 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     }
     values.assign(element.properties.size(), 0.0);
     for (std::size_t item = 0; item < element.count; ++item) {
-      IoStatus status;
-      std::string location;
-      if (header.ascii) {
-        status = readPlyAsciiItem(in, name, element, item, line, values);
-        location = where(name, line);
-      } else {
-        const std::uint64_t at = position(in);
-        status = readPlyBinaryItem(in, name, element, item, at, end, header.big_endian, values);
-        location = name + ": byte " + std::to_string(at) + " (vertex " + std::to_string(item) + "): ";
-      }
+      const std::uint64_t item_start = offset;
+      const IoStatus status = header.ascii
+                                  ? readPlyAsciiItem(in, name, element, item, line, values)
+                                  : readPlyBinaryItem(in, name, element, item, offset, end, header.big_endian, values);
       if (!status.ok()) return status;
-      if (is_vertex) {
-        const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])],
-                               values[static_cast<std::size_t>(column_of[1])],
-                               values[static_cast<std::size_t>(column_of[2])]};
-        if (std::string error = storeParticle(xyz, location, out); !error.empty()) return {error};
+      if (!is_vertex) continue;
+      const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])],
+                             values[static_cast<std::size_t>(column_of[1])],
+                             values[static_cast<std::size_t>(column_of[2])]};
+      if (!storeParticle(xyz, out)) {
+        return {badParticle(xyz, header.ascii ? where(name, line)
+                                              : name + ": byte " + std::to_string(item_start) + " (vertex " +
+                                                    std::to_string(item) + "): ")};
       }
     }
   }
