@@ -24,6 +24,7 @@ BASIN_INNER_RADIUS = 2.9
 BASIN_WALL_TOP = 0.7
 BASIN_FLOOR = 0.2
 GROUND_HALF_SIZE = 40.0
+GROUND_DEPTH = 1.0  # the ground model is a slab under y = 0 (only its top is ever seen)
 
 
 # ----------------------------------------------------------------------------- OBJ writing
@@ -112,6 +113,7 @@ def basin():
         [(ro, top - 0.06), (ro - 0.03, top), (ri + 0.03, top), (ri, top - 0.06)],  # rounded rim
         [(ri, top - 0.06), (ri, floor)],
         [(ri, floor), (0.0, floor)],
+        [(0.0, 0.0), (ro, 0.0)],  # underside: the solid is closed (bake-collider needs it)
     ]
     return lathe(profile, 64)
 
@@ -129,6 +131,7 @@ def statue():
         [(0.92, 1.55), (0.2, 1.55)],
         [(0.2, 1.55), (0.15, 1.75), (0.12, 1.98), (0.17, 2.03), (0.17, 2.1)],
         [(0.17, 2.1), (0.09, 2.16), (0.07, 2.36), (0.1, 2.4), (0.04, 2.45), (0.0, 2.45)],
+        [(0.0, BASIN_FLOOR), (0.6, BASIN_FLOOR)],  # underside, last so the strips above keep their uv
     ]
     return lathe(profile, 48)
 
@@ -148,6 +151,32 @@ def ground():
         for i in range(cells):
             mesh.triangle(idx[(i, j)], idx[(i + 1, j)], idx[(i + 1, j + 1)])
             mesh.triangle(idx[(i, j)], idx[(i + 1, j + 1)], idx[(i, j + 1)])
+    # A slab GROUND_DEPTH thick, so the model is a closed solid: the same grid underneath, facing
+    # down, and four walls on the grid's border vertices (no T-junctions).
+    low = {}
+    for j in range(cells + 1):
+        for i in range(cells + 1):
+            x = -h + 2.0 * h * i / cells
+            z = -h + 2.0 * h * j / cells
+            low[(i, j)] = mesh.vertex([x, -GROUND_DEPTH, z], [repeats * i / cells, repeats * j / cells],
+                                      [0.0, -1.0, 0.0])
+    for j in range(cells):
+        for i in range(cells):
+            mesh.triangle(low[(i, j)], low[(i + 1, j)], low[(i + 1, j + 1)])
+            mesh.triangle(low[(i, j)], low[(i + 1, j + 1)], low[(i, j + 1)])
+    border = ([(i, 0) for i in range(cells)] + [(cells, j) for j in range(cells)] +
+              [(i, cells) for i in range(cells, 0, -1)] + [(0, j) for j in range(cells, 0, -1)])
+    for k, a in enumerate(border):
+        b = border[(k + 1) % len(border)]
+        pa, pb = mesh.v[idx[a] - 1], mesh.v[idx[b] - 1]
+        n = normalize([pb[2] - pa[2], 0.0, -(pb[0] - pa[0])])  # outward: the border runs counter-clockwise seen from below
+        u0, u1 = repeats * k / cells, repeats * (k + 1) / cells
+        ta = mesh.vertex(pa, [u0, 0.0], n)
+        tb = mesh.vertex(pb, [u1, 0.0], n)
+        ba = mesh.vertex([pa[0], -GROUND_DEPTH, pa[2]], [u0, GROUND_DEPTH / 2.5], n)
+        bb = mesh.vertex([pb[0], -GROUND_DEPTH, pb[2]], [u1, GROUND_DEPTH / 2.5], n)
+        mesh.triangle(ta, tb, bb)
+        mesh.triangle(ta, bb, ba)
     return mesh
 
 
@@ -308,7 +337,7 @@ def main():
     os.makedirs(TEXTURES, exist_ok=True)
     basin().write(os.path.join(MODELS, "basin.obj"), "fountain basin: ring wall and floor")
     statue().write(os.path.join(MODELS, "statue.obj"), "fountain statue: column, dish and spire")
-    ground().write(os.path.join(MODELS, "ground.obj"), "courtyard ground, 80 m square")
+    ground().write(os.path.join(MODELS, "ground.obj"), "courtyard ground, 80 m square slab, 1 m deep")
     crate().write(os.path.join(MODELS, "crate.obj"), "unit crate centred on the origin")
     for name, make in (("paving.png", paving_texture), ("stone.png", stone_texture), ("crate.png", crate_texture)):
         write_png(os.path.join(TEXTURES, name), 256, 256, make())

@@ -5,17 +5,22 @@
 // point of the triangle), cube texels by the ray through the texel centre; double precision, triangles in index order,
 // strict compare: the result is deterministic and independent of the thread count.
 #include "fluid/collide/collide.hpp"
+#include "fluid/collide/mesh_checks.hpp"
 #include "fluid/core/parallel.hpp"
 
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cfloat>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
 #include <thread>
+#include <unordered_map>
 
 namespace fluid {
 
@@ -288,6 +293,67 @@ bool finite(glm::vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && st
 
 }  // namespace
 
+std::int64_t firstBadVertex(std::span<const glm::vec3> positions, float limit) {
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const glm::vec3 p = positions[k];
+    if (!finite(p) || std::fabs(p.x) > limit || std::fabs(p.y) > limit || std::fabs(p.z) > limit) {
+      return static_cast<std::int64_t>(k);
+    }
+  }
+  return -1;
+}
+
+ClosedMeshReport checkClosed(const MeshView& mesh) {
+  ClosedMeshReport report;
+  // Weld: one id per distinct position (+0.0f added so -0 and +0 share their bits).
+  auto bits = [](float v) { return std::bit_cast<std::uint32_t>(v + 0.0f); };
+  struct KeyHash {
+    std::size_t operator()(const std::array<std::uint32_t, 3>& k) const {
+      return (std::size_t{k[0]} * 0x9E3779B97F4A7C15ull) ^ (std::size_t{k[1]} * 0xC2B2AE3D27D4EB4Full) ^ k[2];
+    }
+  };
+  std::unordered_map<std::array<std::uint32_t, 3>, std::uint32_t, KeyHash> ids;
+  std::vector<std::uint32_t> weld(mesh.positions.size());
+  for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
+    const glm::vec3 p = mesh.positions[k];
+    weld[k] = ids.try_emplace({bits(p.x), bits(p.y), bits(p.z)}, static_cast<std::uint32_t>(ids.size())).first->second;
+  }
+  report.welded_vertices = ids.size();
+  // Undirected edge -> use count and the first triangle's endpoints (for the message).
+  struct EdgeUse {
+    std::uint32_t count = 0;
+    std::size_t first = 0;  // order of first use, so the reported edge does not depend on hashing
+    glm::vec3 from{0.0f}, to{0.0f};
+  };
+  std::unordered_map<std::uint64_t, EdgeUse> edges;
+  std::size_t order = 0;
+  for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const std::uint32_t v[3] = {weld[mesh.indices[t]], weld[mesh.indices[t + 1]], weld[mesh.indices[t + 2]]};
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;  // collapsed by the weld
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t a = v[e], b = v[(e + 1) % 3];
+      const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+      EdgeUse& use = edges[key];
+      if (use.count++ == 0) {
+        use.first = order++;
+        use.from = mesh.positions[mesh.indices[t + static_cast<std::size_t>(e)]];
+        use.to = mesh.positions[mesh.indices[t + static_cast<std::size_t>((e + 1) % 3)]];
+      }
+    }
+  }
+  std::size_t first = SIZE_MAX;
+  for (const auto& [key, use] : edges) {
+    if (use.count % 2 == 0) continue;
+    ++report.boundary_edges;
+    if (use.first < first) {
+      first = use.first;
+      report.edge_from = use.from;
+      report.edge_to = use.to;
+    }
+  }
+  return report;
+}
+
 Bounds meshBounds(const MeshView& mesh) {
   Bounds b{glm::vec3(FLT_MAX), glm::vec3(-FLT_MAX)};
   for (std::uint32_t index : mesh.indices) {
@@ -406,8 +472,16 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
                      " out of range (" + std::to_string(mesh.positions.size()) + " vertices)";
       return status;
     }
-    if (!finite(mesh.positions[mesh.indices[k]])) {
+    const glm::vec3 p = mesh.positions[mesh.indices[k]];
+    if (!finite(p)) {
       status.error = "vertex " + std::to_string(mesh.indices[k]) + " has a non-finite coordinate";
+      return status;
+    }
+    if (firstBadVertex(std::span(&p, 1)) >= 0) {
+      char text[160];
+      std::snprintf(text, sizeof text, "vertex %u at (%g, %g, %g) is beyond the collider coordinate limit +-%g",
+                    mesh.indices[k], p.x, p.y, p.z, static_cast<double>(kMaxColliderCoordinate));
+      status.error = text;
       return status;
     }
   }

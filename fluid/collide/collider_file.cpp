@@ -14,6 +14,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -53,6 +54,43 @@ struct Reader {
   }
 };
 
+// Every texel must decode to something a query can use: finite float32 values, normal indices
+// inside the R_n x R_n table, finite binary16 depths. Returns the first bad texel or -1.
+std::int64_t firstBadTexel(const DepthMap& m, std::uint32_t rn) {
+  const std::size_t size = texelBytes(m.format);
+  const std::size_t count = m.texels.size() / size;
+  auto index_ok = [rn](std::uint32_t i, std::uint32_t j) { return i < rn && j < rn; };
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint8_t* t = m.texels.data() + k * size;
+    bool ok = true;
+    switch (m.format) {
+      case DepthMapFormat::float32: {
+        float v[4];
+        std::memcpy(v, t, 16);
+        ok = std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) && std::isfinite(v[3]);
+        break;
+      }
+      case DepthMapFormat::fixed8:
+      case DepthMapFormat::cube8: {
+        const bool background = t[2] == 0xFF && t[3] == 0xFF;
+        ok = background || index_ok(t[0], t[1]);
+        break;
+      }
+      case DepthMapFormat::front_back16:
+        for (int l = 0; l < 2 && ok; ++l) {
+          std::uint16_t index, depth;
+          std::memcpy(&index, t + 2 * l, 2);
+          std::memcpy(&depth, t + 4 + 2 * l, 2);
+          const bool background = depth == kHalfBackground;
+          ok = background || (index_ok(index & 0xFFu, index >> 8) && ((depth >> 10) & 0x1Fu) != 0x1Fu);
+        }
+        break;
+    }
+    if (!ok) return static_cast<std::int64_t>(k);
+  }
+  return -1;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider) {
@@ -81,69 +119,105 @@ std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider) {
 }
 
 FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out) {
+  // Every message names the file and the byte offset of the field it is about.
   FileStatus st;
+  Reader in{bytes};
+  std::size_t field_at = 0;
   auto fail = [&](const std::string& what) {
-    st.error = name + ": " + what;
+    st.error = name + ": byte " + std::to_string(field_at) + ": " + what;
     return st;
   };
-  Reader in{bytes};
-  char magic[8];
   if (bytes.size() < 8) return fail("too short to be a collider file (" + std::to_string(bytes.size()) + " bytes)");
-  std::memcpy(magic, bytes.data(), 8);
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0) return fail("not a collider file (bad magic; expected \"FLDMAPS\")");
   in.at = 8;
-  if (std::memcmp(magic, kMagic, 8) != 0) return fail("not a collider file (bad magic; expected \"FLDMAPS\")");
   std::uint32_t version = 0, rn = 0, count = 0, reserved = 0;
+  field_at = in.at;
   if (!in.get(version)) return fail("truncated header (version)");
   if (version != kColliderFileVersion) {
     return fail("unsupported version " + std::to_string(version) + " (this build reads version " +
                 std::to_string(kColliderFileVersion) + "; re-bake the collider)");
   }
-  if (!in.get(rn) || !in.get(count) || !in.get(reserved)) return fail("truncated header");
+  field_at = in.at;
+  if (!in.get(rn)) return fail("truncated header (normal_resolution)");
   if (rn < 2 || rn > 256) return fail("normal_resolution " + std::to_string(rn) + " out of range 2..256");
+  field_at = in.at;
+  if (!in.get(count)) return fail("truncated header (map count)");
   if (count < 1 || count > 1024) return fail("map count " + std::to_string(count) + " out of range 1..1024");
+  field_at = in.at;
+  if (!in.get(reserved)) return fail("truncated header (reserved)");
   if (reserved != 0) return fail("reserved header field is " + std::to_string(reserved) + ", expected 0");
-  if (bytes.size() < 8 + 8) return fail("truncated");
+  if (bytes.size() < in.at + 8) return fail("truncated (no checksum)");
   const std::uint64_t expected = fnv1a(bytes.subspan(0, bytes.size() - 8));
   std::uint64_t stored;
   std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
   std::vector<DepthMap> maps;
+  std::vector<std::size_t> texel_at;  // file offset of each map's texels
   for (std::uint32_t k = 0; k < count; ++k) {
     const std::string where = "map " + std::to_string(k) + ": ";
     DepthMap m;
     std::uint32_t format, compare, encloses;
+    field_at = in.at;
     if (!in.get(format) || !in.get(compare) || !in.get(m.resolution) || !in.get(encloses))
       return fail(where + "truncated map header");
     if (format < 1 || format > 4) return fail(where + "unknown format " + std::to_string(format));
+    field_at += 4;
     if (compare > 1) return fail(where + "bad compare " + std::to_string(compare));
-    if (encloses > 1) return fail(where + "bad encloses flag " + std::to_string(encloses));
+    field_at += 4;
     if (m.resolution < 4 || m.resolution > 4096)
       return fail(where + "resolution " + std::to_string(m.resolution) + " out of range 4..4096");
+    field_at += 4;
+    if (encloses > 1) return fail(where + "bad encloses flag " + std::to_string(encloses));
     m.format = static_cast<DepthMapFormat>(format);
     m.compare = static_cast<DepthCompare>(compare);
     m.encloses_collider = encloses == 1;
     float values[20];
     for (float& v : values) {
+      field_at = in.at;
       if (!in.get(v)) return fail(where + "truncated transform");
       if (!std::isfinite(v)) return fail(where + "non-finite transform/scale value");
+      // Bounds a bake never comes near (collider coordinates <= 1e5, maps >= 1e-6 wide), so
+      // eq. (1) stays finite for every query point a collider can meet.
+      const bool scale = &v - values >= 16;
+      if (scale ? !(v > 0.0f && v <= 1e7f) : std::fabs(v) > 1e12f) {
+        char text[96];
+        std::snprintf(
+            text, sizeof text,
+            scale ? "scale %d is %g, expected in (0, 1e7]" : "transform entry %d is %g, expected within +-1e12",
+            static_cast<int>(&v - values), static_cast<double>(v));
+        return fail(where + text);
+      }
     }
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) m.collider_to_map[c][r] = values[c * 4 + r];
     m.z_scale = values[16];
     m.cube_scale = {values[17], values[18], values[19]};
+    field_at = in.at;
     std::uint64_t size;
     if (!in.get(size)) return fail(where + "truncated texel size");
     const std::uint64_t want = static_cast<std::uint64_t>(m.resolution) * m.resolution *
                                (m.format == DepthMapFormat::cube8 ? 6u : 1u) * texelBytes(m.format);
     if (size != want)
       return fail(where + "texel byte count " + std::to_string(size) + ", expected " + std::to_string(want));
+    field_at = in.at;
     if (bytes.size() - in.at < size + 8) return fail(where + "truncated texel data");
     m.texels.assign(bytes.begin() + static_cast<std::ptrdiff_t>(in.at),
                     bytes.begin() + static_cast<std::ptrdiff_t>(in.at + size));
+    texel_at.push_back(in.at);
     in.at += size;
     maps.push_back(std::move(m));
   }
+  field_at = in.at;
   if (bytes.size() - in.at != 8) return fail(std::to_string(bytes.size() - in.at - 8) + " unexpected trailing bytes");
   if (stored != expected) return fail("checksum mismatch (file corrupted)");
+  // After the checksum: a texel that does not decode means a bad writer, not a damaged file.
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    if (const std::int64_t bad = firstBadTexel(maps[k], rn); bad >= 0) {
+      field_at = texel_at[k] + static_cast<std::size_t>(bad) * texelBytes(maps[k].format);
+      return fail("map " + std::to_string(k) + ": texel " + std::to_string(bad) +
+                  " does not decode (a non-finite value, or a normal index outside the " + std::to_string(rn) + "x" +
+                  std::to_string(rn) + " table)");
+    }
+  }
   out = DepthMapCollider(std::move(maps), static_cast<int>(rn));
   return st;
 }

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -38,18 +39,41 @@ bool parseNumber(std::string_view token, double& value) {
 
 std::string where(const std::string& name, std::size_t line) { return name + ":" + std::to_string(line) + ": "; }
 
-// Checks and stores one particle; returns an error message or "".
-// `location` is the message prefix, e.g. "file.xyz:12: ".
-std::string storeParticle(const double (&xyz)[3], const std::string& location, ParticlePositions& out) {
-  static constexpr const char* kAxis[3] = {"x", "y", "z"};
-  for (int axis = 0; axis < 3; ++axis) {
-    const double value = xyz[axis];
-    if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max()) {
-      return location + "coordinate " + kAxis[axis] + " is not a finite float (" + std::to_string(value) + ")";
-    }
+// File text quoted in a message: at most 40 bytes, control bytes as '?', so a garbage token
+// cannot flood the terminal.
+std::string shown(std::string_view text) {
+  constexpr std::size_t kMax = 40;
+  std::string out;
+  for (std::size_t i = 0; i < std::min(text.size(), kMax); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    out += c < 0x20 || c == 0x7f ? '?' : static_cast<char>(c);
   }
+  if (text.size() > kMax) out += "...";
+  return out;
+}
+
+// Short form of a value for messages (%g: 1e+300, not 301 digits).
+std::string formatValue(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
+
+bool finiteFloat(double value) { return std::isfinite(value) && std::abs(value) <= std::numeric_limits<float>::max(); }
+
+// Stores one particle when all three coordinates are finite floats; false otherwise.
+bool storeParticle(const double (&xyz)[3], ParticlePositions& out) {
+  if (!finiteFloat(xyz[0]) || !finiteFloat(xyz[1]) || !finiteFloat(xyz[2])) return false;
   out.push_back({static_cast<float>(xyz[0]), static_cast<float>(xyz[1]), static_cast<float>(xyz[2])});
-  return {};
+  return true;
+}
+
+// The message for a particle storeParticle refused; `location` is e.g. "file.xyz:12: ".
+std::string badParticle(const double (&xyz)[3], const std::string& location) {
+  static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  int axis = 0;
+  while (axis < 2 && finiteFloat(xyz[axis])) ++axis;
+  return location + "coordinate " + kAxis[axis] + " is not a finite float (" + formatValue(xyz[axis]) + ")";
 }
 
 std::vector<std::string_view> split(std::string_view line, bool comma) {
@@ -111,12 +135,12 @@ IoStatus parseLines(std::istream& in, bool comma, const std::string& name, Parti
       }
       if (!parseNumber(fields[column], xyz[axis])) {
         out.clear();
-        return {where(name, line) + "'" + std::string(fields[column]) + "' is not a number"};
+        return {where(name, line) + "'" + shown(fields[column]) + "' is not a number"};
       }
     }
-    if (std::string error = storeParticle(xyz, where(name, line), out); !error.empty()) {
+    if (!storeParticle(xyz, out)) {
       out.clear();
-      return {error};
+      return {badParticle(xyz, where(name, line))};
     }
   }
   return {};
@@ -133,7 +157,13 @@ struct PlyProperty {
 struct PlyElement {
   std::string name;
   std::size_t count = 0;
+  std::size_t header_line = 0;  // where it was declared, for messages
   std::vector<PlyProperty> properties;
+};
+
+struct PlyHeader {
+  bool ascii = false, big_endian = false;
+  std::vector<PlyElement> elements;
 };
 
 std::size_t plyTypeSize(const std::string& type) {
@@ -143,6 +173,15 @@ std::size_t plyTypeSize(const std::string& type) {
     return 4;
   if (type == "double" || type == "float64") return 8;
   return 0;
+}
+
+// Bytes one item of `element` takes at least in a binary file (lists counted as empty).
+std::size_t plyMinItemBytes(const PlyElement& element) {
+  std::size_t bytes = 0;
+  for (const PlyProperty& property : element.properties) {
+    bytes += plyTypeSize(property.count_type.empty() ? property.type : property.count_type);
+  }
+  return bytes;
 }
 
 template <typename T>
@@ -166,18 +205,33 @@ double readPlyValue(const std::string& type, const unsigned char* bytes, bool bi
   return readScalar<double>(bytes, big_endian);
 }
 
-IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& out) {
+// A list length must be a whole number no larger than the data that could hold it.
+bool validListCount(double count, std::uint64_t limit) {
+  return std::isfinite(count) && count >= 0.0 && count == std::floor(count) && count <= static_cast<double>(limit);
+}
+
+std::uint64_t position(std::istream& in) { return static_cast<std::uint64_t>(std::max<std::streamoff>(in.tellg(), 0)); }
+
+// Offset of the end of `in` (the limit of every count in the file); leaves the position as it was.
+std::uint64_t endOffset(std::istream& in) {
+  const std::istream::pos_type here = in.tellg();
+  if (here < 0) return 0;
+  in.seekg(0, std::ios::end);
+  const std::uint64_t end = position(in);
+  in.seekg(here);
+  return end;
+}
+
+// Reads the header through end_header; `line` counts the lines read.
+IoStatus readPlyHeader(std::istream& in, const std::string& name, std::size_t& line, PlyHeader& header) {
   std::string line_text;
-  std::size_t line = 0;
-  auto fail = [&](const std::string& message) {
-    out.clear();
-    return IoStatus{where(name, line) + message};
-  };
-  if (!std::getline(in, line_text) || trim(line_text) != "ply")
+  auto fail = [&](const std::string& message) { return IoStatus{where(name, line) + message}; };
+  if (!std::getline(in, line_text) || trim(line_text) != "ply") {
+    line = 1;
     return fail("not a PLY file (first line must be 'ply')");
+  }
   ++line;
   std::string format;
-  std::vector<PlyElement> elements;
   bool header_done = false;
   while (std::getline(in, line_text)) {
     ++line;
@@ -188,38 +242,114 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
       words >> format;
     } else if (keyword == "element") {
       PlyElement element;
-      long long count = -1;
-      words >> element.name >> count;
-      if (!words || count < 0) return fail("bad element line '" + line_text + "'");
-      element.count = static_cast<std::size_t>(count);
-      elements.push_back(element);
+      std::string count_text;
+      words >> element.name >> count_text;
+      const auto [end, error] =
+          std::from_chars(count_text.data(), count_text.data() + count_text.size(), element.count);
+      if (!words || error != std::errc() || end != count_text.data() + count_text.size())
+        return fail("bad element line '" + shown(line_text) + "' (expected: element NAME COUNT)");
+      element.header_line = line;
+      header.elements.push_back(element);
     } else if (keyword == "property") {
-      if (elements.empty()) return fail("property before any element");
+      if (header.elements.empty()) return fail("property before any element");
       PlyProperty property;
       std::string type;
       words >> type;
       if (type == "list") {
         words >> property.count_type >> property.type >> property.name;
-        if (plyTypeSize(property.count_type) == 0) return fail("unknown list count type '" + property.count_type + "'");
+        if (plyTypeSize(property.count_type) == 0)
+          return fail("unknown list count type '" + shown(property.count_type) + "'");
       } else {
         property.type = type;
         words >> property.name;
       }
-      if (!words || plyTypeSize(property.type) == 0) return fail("bad property line '" + line_text + "'");
-      elements.back().properties.push_back(property);
+      if (!words || plyTypeSize(property.type) == 0) return fail("bad property line '" + shown(line_text) + "'");
+      header.elements.back().properties.push_back(property);
     } else if (keyword == "end_header") {
       header_done = true;
       break;
     } else if (keyword != "comment" && keyword != "obj_info" && !keyword.empty()) {
-      return fail("unknown header keyword '" + keyword + "'");
+      return fail("unknown header keyword '" + shown(keyword) + "'");
     }
   }
   if (!header_done) return fail("header has no end_header");
-  const bool ascii = format == "ascii";
-  const bool big_endian = format == "binary_big_endian";
-  if (!ascii && !big_endian && format != "binary_little_endian") return fail("unknown PLY format '" + format + "'");
+  header.ascii = format == "ascii";
+  header.big_endian = format == "binary_big_endian";
+  if (!header.ascii && !header.big_endian && format != "binary_little_endian")
+    return fail("unknown PLY format '" + shown(format) + "'");
+  return {};
+}
 
-  for (const PlyElement& element : elements) {
+// One ASCII item (one line) into `values`; lists are skipped.
+IoStatus readPlyAsciiItem(std::istream& in, const std::string& name, const PlyElement& element, std::size_t item,
+                          std::size_t& line, std::vector<double>& values) {
+  std::string line_text;
+  if (!std::getline(in, line_text)) {
+    return {where(name, line) + "file ends after " + std::to_string(item) + " of " + std::to_string(element.count) +
+            " " + shown(element.name) + " lines"};
+  }
+  ++line;
+  std::istringstream words{line_text};
+  std::string token;
+  for (std::size_t i = 0; i < element.properties.size(); ++i) {
+    const PlyProperty& property = element.properties[i];
+    if (!property.count_type.empty()) {
+      double count = 0;
+      if (!(words >> token) || !parseNumber(token, count) || !validListCount(count, line_text.size()))
+        return {where(name, line) + "bad list count '" + shown(token) + "' of property " + shown(property.name)};
+      for (double k = 0; k < count; ++k) {
+        if (!(words >> token))
+          return {where(name, line) + "list " + shown(property.name) + " has fewer than " + formatValue(count) +
+                  " items"};
+      }
+      continue;
+    }
+    if (!(words >> token)) return {where(name, line) + "missing value of property " + shown(property.name)};
+    if (!parseNumber(token, values[i])) return {where(name, line) + "'" + shown(token) + "' is not a number"};
+  }
+  return {};
+}
+
+// One binary item into `values`; lists are skipped. `offset` is the item's first byte on entry
+// and the next item's on return (kept here, not asked of the stream: tellg per item is slow).
+IoStatus readPlyBinaryItem(std::istream& in, const std::string& name, const PlyElement& element, std::size_t item,
+                           std::uint64_t& offset, std::uint64_t end, bool big_endian, std::vector<double>& values) {
+  const std::uint64_t start = offset;
+  auto location = [&] {
+    return name + ": byte " + std::to_string(start) + " (" + shown(element.name) + " " + std::to_string(item) + "): ";
+  };
+  for (std::size_t i = 0; i < element.properties.size(); ++i) {
+    const PlyProperty& property = element.properties[i];
+    unsigned char bytes[8];
+    const std::string& type = property.count_type.empty() ? property.type : property.count_type;
+    const std::size_t size = plyTypeSize(type);
+    if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(size))) {
+      return {location() + "binary data ends inside " + shown(element.name) + " " + std::to_string(item) + " of " +
+              std::to_string(element.count)};
+    }
+    offset += size;
+    if (property.count_type.empty()) {
+      values[i] = readPlyValue(type, bytes, big_endian);
+      continue;
+    }
+    const double count = readPlyValue(type, bytes, big_endian);
+    const std::uint64_t item_size = plyTypeSize(property.type);
+    if (!validListCount(count, (end > offset ? end - offset : 0) / item_size))
+      return {location() + "list " + shown(property.name) + " of " + formatValue(count) +
+              " items does not fit in the rest of the file"};
+    in.ignore(static_cast<std::streamsize>(count) * static_cast<std::streamsize>(item_size));
+    offset += static_cast<std::uint64_t>(count) * item_size;
+  }
+  return {};
+}
+
+IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& out) {
+  std::size_t line = 0;
+  PlyHeader header;
+  if (IoStatus status = readPlyHeader(in, name, line, header); !status.ok()) return status;
+  const std::uint64_t end = endOffset(in);
+  std::vector<double> values;
+  for (const PlyElement& element : header.elements) {
     const bool is_vertex = element.name == "vertex";
     int column_of[3] = {-1, -1, -1};
     for (std::size_t i = 0; i < element.properties.size(); ++i) {
@@ -230,61 +360,39 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
       if (property.name == "z") column_of[2] = static_cast<int>(i);
     }
     if (is_vertex && (column_of[0] < 0 || column_of[1] < 0 || column_of[2] < 0)) {
-      return fail("vertex element lacks scalar properties x, y, z");
+      return {where(name, element.header_line) + "vertex element lacks scalar properties x, y, z"};
+    }
+    // Counts are checked against the bytes that follow before anything is allocated: an ASCII
+    // item is at least one line ("\n"), a binary one its scalars and list counts.
+    std::uint64_t offset = position(in);  // binary: advanced by readPlyBinaryItem
+    const std::uint64_t left = end > offset ? end - offset : 0;
+    const std::uint64_t item_bytes = header.ascii ? 1 : plyMinItemBytes(element);
+    if (item_bytes == 0) continue;  // binary items without properties hold no bytes
+    if (element.count > left / item_bytes) {
+      return {where(name, element.header_line) + "element " + shown(element.name) + " claims " +
+              std::to_string(element.count) + " items but only " + std::to_string(left) + " bytes follow the header"};
     }
     if (is_vertex) {
-      out.x.reserve(std::min<std::size_t>(element.count, 1u << 24));
+      const std::size_t expected = header.ascii ? element.count / 6 : element.count;  // "0 0 0\n" is 6 bytes
+      out.x.reserve(out.size() + expected);
+      out.y.reserve(out.size() + expected);
+      out.z.reserve(out.size() + expected);
     }
+    values.assign(element.properties.size(), 0.0);
     for (std::size_t item = 0; item < element.count; ++item) {
-      std::vector<double> values(element.properties.size(), 0.0);
-      if (ascii) {
-        if (!std::getline(in, line_text))
-          return fail("file ends after " + std::to_string(item) + " of " + std::to_string(element.count) + " " +
-                      element.name + " lines");
-        ++line;
-        std::istringstream words{line_text};
-        for (std::size_t i = 0; i < element.properties.size(); ++i) {
-          const PlyProperty& property = element.properties[i];
-          std::string token;
-          if (!property.count_type.empty()) {
-            double count = 0;
-            if (!(words >> token) || !parseNumber(token, count) || count < 0) return fail("bad list count");
-            for (long long k = 0; k < static_cast<long long>(count); ++k) words >> token;
-            continue;
-          }
-          if (!(words >> token) || !parseNumber(token, values[i])) return fail("'" + token + "' is not a number");
-        }
-      } else {
-        for (std::size_t i = 0; i < element.properties.size(); ++i) {
-          const PlyProperty& property = element.properties[i];
-          unsigned char bytes[8];
-          if (!property.count_type.empty()) {
-            const std::size_t count_size = plyTypeSize(property.count_type);
-            if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(count_size)))
-              return fail("file ends inside " + element.name + " " + std::to_string(item));
-            const double count = readPlyValue(property.count_type, bytes, big_endian);
-            if (count < 0) return fail("negative list count");
-            in.ignore(static_cast<std::streamsize>(count) * static_cast<std::streamsize>(plyTypeSize(property.type)));
-            continue;
-          }
-          const std::size_t size = plyTypeSize(property.type);
-          if (!in.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(size))) {
-            out.clear();
-            return {name + ": binary data ends inside " + element.name + " " + std::to_string(item) + " of " +
-                    std::to_string(element.count)};
-          }
-          values[i] = readPlyValue(property.type, bytes, big_endian);
-        }
-      }
-      if (is_vertex) {
-        const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])],
-                               values[static_cast<std::size_t>(column_of[1])],
-                               values[static_cast<std::size_t>(column_of[2])]};
-        const std::string location = ascii ? where(name, line) : name + ": vertex " + std::to_string(item) + ": ";
-        if (std::string error = storeParticle(xyz, location, out); !error.empty()) {
-          out.clear();
-          return {error};
-        }
+      const std::uint64_t item_start = offset;
+      const IoStatus status = header.ascii
+                                  ? readPlyAsciiItem(in, name, element, item, line, values)
+                                  : readPlyBinaryItem(in, name, element, item, offset, end, header.big_endian, values);
+      if (!status.ok()) return status;
+      if (!is_vertex) continue;
+      const double xyz[3] = {values[static_cast<std::size_t>(column_of[0])],
+                             values[static_cast<std::size_t>(column_of[1])],
+                             values[static_cast<std::size_t>(column_of[2])]};
+      if (!storeParticle(xyz, out)) {
+        return {badParticle(xyz, header.ascii ? where(name, line)
+                                              : name + ": byte " + std::to_string(item_start) + " (vertex " +
+                                                    std::to_string(item) + "): ")};
       }
     }
   }
@@ -307,10 +415,18 @@ IoStatus parseParticleText(const std::string& text, const std::string& format, c
                            ParticlePositions& out) {
   out.clear();
   std::istringstream in{text};
-  if (format == "xyz") return parseLines(in, false, name, out);
-  if (format == "csv") return parseLines(in, true, name, out);
-  if (format == "ply") return readPly(in, name, out);
-  return {name + ": unknown particle format '" + format + "' (xyz, csv or ply)"};
+  IoStatus status;
+  if (format == "xyz") {
+    status = parseLines(in, false, name, out);
+  } else if (format == "csv") {
+    status = parseLines(in, true, name, out);
+  } else if (format == "ply") {
+    status = readPly(in, name, out);
+  } else {
+    status = {name + ": unknown particle format '" + format + "' (xyz, csv or ply)"};
+  }
+  if (!status.ok()) out.clear();
+  return status;
 }
 
 IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& out) {
@@ -324,8 +440,9 @@ IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& 
   if (std::filesystem::is_directory(path, error)) return {name + ": is a directory, not a particle file"};
   std::ifstream in(path, std::ios::binary);
   if (!in) return {name + ": cannot open for reading"};
-  if (extension == ".ply") return readPly(in, name, out);
-  return parseLines(in, extension == ".csv", name, out);
+  IoStatus status = extension == ".ply" ? readPly(in, name, out) : parseLines(in, extension == ".csv", name, out);
+  if (!status.ok()) out.clear();
+  return status;
 }
 
 IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePositions& particles,

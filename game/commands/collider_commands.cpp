@@ -4,65 +4,280 @@
 #include "game/commands.hpp"
 
 #include "fluid/collide/collide.hpp"
+#include "fluid/collide/mesh_checks.hpp"
 #include "fluid/io/particle_io.hpp"
+#include "game/commands/cli_parse.hpp"
+#include "game/commands/collider_model.hpp"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <CLI/CLI.hpp>
 #include <assimp/Importer.hpp>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
 #include <cfloat>
+#include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace game {
 
 namespace {
 
-struct LoadedMesh {
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
+// Opens regular files only: a model that names /dev/zero or a FIFO as its material file must
+// not hang the bake. With `none` set nothing is opened at all (models read from memory).
+class RegularFilesOnly : public Assimp::DefaultIOSystem {
+ public:
+  explicit RegularFilesOnly(bool none) : none_(none) {}
+  bool Exists(const char* file) const override { return allowed(file) && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return allowed(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+
+ private:
+  bool allowed(const char* file) const {
+    std::error_code ec;
+    return !none_ && file != nullptr && std::filesystem::is_regular_file(file, ec);
+  }
+  bool none_;
 };
 
-// All triangles of all meshes, node transforms applied (aiProcess_PreTransformVertices).
-bool loadModel(const std::string& path, LoadedMesh& out, std::string& error) {
-  if (!std::filesystem::is_regular_file(path)) {
-    error = path + ": no such file";
-    return false;
-  }
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                                     aiProcess_PreTransformVertices | aiProcess_SortByPType);
+constexpr unsigned kImportFlags =
+    aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices | aiProcess_SortByPType;
+
+std::string formatVec(const aiVector3D& p) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%g, %g, %g)", static_cast<double>(p.x), static_cast<double>(p.y),
+                static_cast<double>(p.z));
+  return text;
+}
+
+// All triangles of all meshes (node transforms applied by aiProcess_PreTransformVertices).
+bool convertScene(const aiScene* scene, const Assimp::Importer& importer, const std::string& label, ColliderModel& out,
+                  std::string& error) {
+  out = {};
   if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
-    error = path + ": cannot load model: " + importer.GetErrorString();
+    error = label + ": cannot load model: " + importer.GetErrorString();
     return false;
   }
+  const float limit = fluid::kMaxColliderCoordinate;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];
     const auto base = static_cast<std::uint32_t>(out.positions.size());
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
       const aiVector3D& p = mesh->mVertices[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-        error = path + ": mesh " + std::to_string(m) + " vertex " + std::to_string(v) + " has a non-finite coordinate";
+      const glm::vec3 q{p.x, p.y, p.z};
+      if (fluid::firstBadVertex(std::span(&q, 1), limit) >= 0) {
+        char bound[32];
+        std::snprintf(bound, sizeof bound, "%g", static_cast<double>(limit));
+        error = label + ": mesh " + std::to_string(m) + " vertex " + std::to_string(v) + " at " + formatVec(p) +
+                (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)
+                     ? std::string(" is beyond the collider coordinate limit +-") + bound
+                     : std::string(" has a non-finite coordinate"));
         return false;
       }
-      out.positions.push_back({p.x, p.y, p.z});
+      out.positions.push_back(q);
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines after triangulation
-      for (int k = 0; k < 3; ++k) out.indices.push_back(base + face.mIndices[k]);
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= mesh->mNumVertices) {
+          error = label + ": mesh " + std::to_string(m) + " face " + std::to_string(f) + " names vertex " +
+                  std::to_string(face.mIndices[k]) + " of " + std::to_string(mesh->mNumVertices);
+          return false;
+        }
+        out.indices.push_back(base + face.mIndices[k]);
+      }
     }
   }
   if (out.indices.empty()) {
-    error = path + ": the model has no triangles";
+    error = label + ": the model has no triangles";
     return false;
   }
   return true;
 }
+
+// ---- OBJ pre-check --------------------------------------------------------------------
+// assimp 5.2.5's OBJ importer crashes on some malformed files (libFuzzer found a write through
+// a wild pointer for "normals\nmtllib m\n"), and its messages name no line. So an OBJ file is
+// read once here first: only the statements of the OBJ format that describe polygonal
+// geometry and its grouping are accepted, with numbers where numbers belong and every face,
+// line and point index naming an element defined before it (1-based, or negative = relative).
+// What passes is plain enough for assimp; what fails gets "FILE:LINE: ...".
+
+std::string_view nextToken(std::string_view& rest) {
+  std::size_t i = 0;
+  while (i < rest.size() && (rest[i] == ' ' || rest[i] == '\t' || rest[i] == '\r')) ++i;
+  std::size_t j = i;
+  while (j < rest.size() && rest[j] != ' ' && rest[j] != '\t' && rest[j] != '\r') ++j;
+  const std::string_view token = rest.substr(i, j - i);
+  rest.remove_prefix(j);
+  return token;
+}
+
+std::string shownToken(std::string_view token) {
+  std::string out;
+  for (char c : token.substr(0, 40)) out += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+  return token.size() > 40 ? out + "..." : out;
+}
+
+// One "v/vt/vn" reference of an f, l or p statement against the counts so far.
+std::string checkObjReference(std::string_view ref, const std::size_t (&counts)[3]) {
+  static constexpr const char* kKinds[3] = {"vertex", "texture coordinate", "normal"};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t slash = ref.find('/');
+    const std::string_view part = ref.substr(0, slash);
+    ref = slash == std::string_view::npos ? std::string_view{} : ref.substr(slash + 1);
+    if (part.empty() && (k > 0 || slash != std::string_view::npos)) {
+      if (k == 0) return "a reference without a vertex index";
+      if (slash == std::string_view::npos) break;
+      continue;
+    }
+    long long index = 0;
+    const auto [end, errc] = std::from_chars(part.data(), part.data() + part.size(), index);
+    if (errc != std::errc() || end != part.data() + part.size()) return "'" + shownToken(part) + "' is not an index";
+    const long long count = static_cast<long long>(counts[k]);
+    if (index == 0 || index > count || index < -count) {
+      return std::string(kKinds[k]) + " index " + std::to_string(index) + " names no " + kKinds[k] + " (" +
+             std::to_string(count) + " defined so far)";
+    }
+    if (slash == std::string_view::npos) break;
+  }
+  if (!ref.empty()) return "a reference with more than three parts";
+  return {};
+}
+
+std::string checkObjText(std::string_view text, const std::string& label) {
+  static constexpr std::string_view kGrouping[] = {"o",        "g",        "s",          "mg",       "usemtl",
+                                                   "mtllib",   "maplib",   "usemap",     "lod",      "bevel",
+                                                   "c_interp", "d_interp", "shadow_obj", "trace_obj"};
+  std::size_t counts[3] = {0, 0, 0};  // v, vt, vn defined so far
+  std::size_t line = 0, faces = 0;
+  for (std::size_t at = 0; at <= text.size();) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    std::string_view rest = text.substr(at, end - at);
+    at = end + 1;
+    ++line;
+    const std::string where = label + ":" + std::to_string(line) + ": ";
+    const std::string_view keyword = nextToken(rest);
+    if (keyword.empty() || keyword.front() == '#') continue;
+    if (keyword == "v" || keyword == "vn" || keyword == "vt" || keyword == "vp") {
+      std::size_t numbers = 0;
+      for (std::string_view token = nextToken(rest); !token.empty(); token = nextToken(rest), ++numbers) {
+        double value = 0.0;
+        const auto [end_num, errc] = std::from_chars(token.data(), token.data() + token.size(), value);
+        if (errc != std::errc() || end_num != token.data() + token.size())
+          return where + "'" + shownToken(token) + "' is not a number";
+      }
+      const bool position = keyword == "v" || keyword == "vn";
+      if (position ? numbers < 3 || numbers > 7 : numbers < 1 || numbers > 3)
+        return where + std::string(keyword) + " with " + std::to_string(numbers) + " numbers";
+      if (keyword == "v") ++counts[0];
+      if (keyword == "vt") ++counts[1];
+      if (keyword == "vn") ++counts[2];
+    } else if (keyword == "f" || keyword == "l" || keyword == "p") {
+      std::size_t refs = 0;
+      for (std::string_view token = nextToken(rest); !token.empty(); token = nextToken(rest), ++refs) {
+        if (std::string problem = checkObjReference(token, counts); !problem.empty())
+          return where + std::string(keyword) + " item " + std::to_string(refs + 1) + ": " + problem;
+      }
+      const std::size_t least = keyword == "f" ? 3 : keyword == "l" ? 2 : 1;
+      if (keyword == "f") ++faces;
+      if (refs < least) return where + std::string(keyword) + " with " + std::to_string(refs) + " items";
+    } else if (std::find(std::begin(kGrouping), std::end(kGrouping), keyword) == std::end(kGrouping)) {
+      return where + "unknown or unsupported OBJ statement '" + shownToken(keyword) +
+             "' (polygonal geometry only: v, vt, vn, f, l, p, o, g, s, usemtl, mtllib)";
+    }
+  }
+  if (faces == 0)
+    return label + ":" + std::to_string(line) + ": end of file and no face (f) statement: nothing to bake";
+  return {};
+}
+
+bool isObj(std::string extension) {
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".obj" || extension == "obj";
+}
+
+}  // namespace
+
+bool loadColliderModel(const std::string& path, ColliderModel& out, std::string& error) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    error = path + ": no such file";
+    return false;
+  }
+  if (isObj(std::filesystem::path(path).extension().string())) {
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (error = checkObjText(text, path); !error.empty()) return false;
+  }
+  Assimp::Importer importer;
+  importer.SetIOHandler(new RegularFilesOnly(false));  // the importer owns it
+  const aiScene* scene = importer.ReadFile(path, kImportFlags);
+  return convertScene(scene, importer, path, out, error);
+}
+
+bool loadColliderModelFromMemory(std::span<const std::uint8_t> bytes, const std::string& extension,
+                                 const std::string& label, ColliderModel& out, std::string& error) {
+  if (isObj(extension)) {
+    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (error = checkObjText(text, label); !error.empty()) return false;
+  }
+  Assimp::Importer importer;
+  importer.SetIOHandler(new RegularFilesOnly(true));
+  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());
+  return convertScene(scene, importer, label, out, error);
+}
+
+std::string openMeshMessage(const ColliderModel& model, const std::string& label) {
+  const fluid::ClosedMeshReport report = fluid::checkClosed({model.positions, model.indices});
+  if (report.closed()) return {};
+  char edge[160];
+  std::snprintf(edge, sizeof edge, "(%g, %g, %g)-(%g, %g, %g)", static_cast<double>(report.edge_from.x),
+                static_cast<double>(report.edge_from.y), static_cast<double>(report.edge_from.z),
+                static_cast<double>(report.edge_to.x), static_cast<double>(report.edge_to.y),
+                static_cast<double>(report.edge_to.z));
+  return label + ": the mesh is open: " + std::to_string(report.boundary_edges) +
+         " boundary edges (edges of one triangle, after welding coincident vertices), the first " + edge +
+         "; depth maps of an open mesh call points inside it outside";
+}
+
+namespace {
+
+// "\r"-updated progress on stderr when it is a terminal; silent when piped or redirected.
+class BakeProgress {
+ public:
+  explicit BakeProgress(std::size_t maps) : maps_(maps), shown_(isatty(STDERR_FILENO) != 0) {}
+  void map(std::size_t k, const fluid::MapSpec& spec) {
+    if (!shown_) return;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    std::fprintf(stderr, "\rbake-collider: map %zu of %zu (%s %dx%d%s), %.1f s ", k + 1, maps_,
+                 fluid::formatName(spec.format), spec.resolution, spec.resolution,
+                 spec.kind == fluid::MapKind::cube ? "x6" : "", seconds);
+    std::fflush(stderr);
+  }
+  ~BakeProgress() {
+    if (shown_) std::fprintf(stderr, "\r\033[K");  // clear the line before the summary
+  }
+
+ private:
+  std::size_t maps_;
+  bool shown_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
 
 }  // namespace
 
@@ -71,8 +286,8 @@ int bakeColliderCommand(const Args& args) {
                "fluiddemo bake-collider"};
   std::string model, out_path, maps = "axes", format_name = "front-back16";
   int resolution = 256, normal_resolution = 256, threads = 0;
-  bool force = false;
-  app.add_option("MODEL", model, "model file (OBJ, glTF, PLY, ...)")->required();
+  bool force = false, allow_open = false;
+  app.add_option("MODEL", model, "model file (OBJ, glTF, PLY, ...): a closed surface")->required();
   app.add_option("--out", out_path, "collider file to write")->required();
   app.add_option("--maps", maps,
                  "comma-separated maps: axes | x | y | z (front-back pairs along an axis), cube (GREATER cube at the "
@@ -84,12 +299,9 @@ int bakeColliderCommand(const Args& args) {
   app.add_option("--normal-res", normal_resolution, "L1 normal index resolution (2..256)")->capture_default_str();
   app.add_option("--threads", threads, "baking threads (0 = all)")->capture_default_str();
   app.add_flag("--force", force, "replace --out if it exists");
-  try {
-    std::vector<std::string> reversed(args.rbegin(), args.rend());
-    app.parse(reversed);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  app.add_flag("--allow-open", allow_open,
+               "bake a mesh with holes anyway (warning only); points inside it may then read as outside");
+  if (const int code = parseCommandLine(app, "bake-collider", args); code >= 0) return code;
   fluid::DepthMapFormat format;
   if (!fluid::parseFormat(format_name, format) || format == fluid::DepthMapFormat::cube8) {
     std::fprintf(stderr, "bake-collider: --format '%s' unknown (expected float, fixed8 or front-back16)\n",
@@ -104,11 +316,19 @@ int bakeColliderCommand(const Args& args) {
     std::fprintf(stderr, "bake-collider: %s already exists (use --force to replace it)\n", out_path.c_str());
     return 1;
   }
-  LoadedMesh mesh;
+  ColliderModel mesh;
   std::string error;
-  if (!loadModel(model, mesh, error)) {
+  if (!loadColliderModel(model, mesh, error)) {
     std::fprintf(stderr, "bake-collider: %s\n", error.c_str());
     return 1;
+  }
+  if (const std::string open = openMeshMessage(mesh, model); !open.empty()) {
+    if (!allow_open) {
+      std::fprintf(stderr, "bake-collider: %s (close the model, or pass --allow-open to bake it anyway)\n",
+                   open.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "bake-collider: warning: %s (baking it anyway: --allow-open)\n", open.c_str());
   }
   const fluid::MeshView view{mesh.positions, mesh.indices};
   std::vector<fluid::MapSpec> specs;
@@ -116,12 +336,24 @@ int bakeColliderCommand(const Args& args) {
     std::fprintf(stderr, "bake-collider: %s\n", error.c_str());
     return 2;
   }
-  fluid::DepthMapCollider collider;
-  const fluid::BakeStatus status = fluid::bakeDepthMaps(view, specs, {normal_resolution, threads}, collider);
+  // One map at a time so a terminal sees how far the bake is; each map is baked exactly as in
+  // one call (the maps do not depend on each other).
+  std::vector<fluid::DepthMap> baked;
+  fluid::BakeStatus status;
+  {
+    BakeProgress progress(specs.size());
+    for (std::size_t k = 0; k < specs.size() && status.ok(); ++k) {
+      progress.map(k, specs[k]);
+      fluid::DepthMapCollider one;
+      status = fluid::bakeDepthMaps(view, std::span(&specs[k], 1), {normal_resolution, threads}, one);
+      if (status.ok()) baked.push_back(one.maps().front());
+    }
+  }
   if (!status.ok()) {
     std::fprintf(stderr, "bake-collider: %s: %s\n", model.c_str(), status.error.c_str());
     return 1;
   }
+  const fluid::DepthMapCollider collider(std::move(baked), normal_resolution);
   const fluid::FileStatus saved =
       fluid::saveCollider(out_path, collider, force ? fluid::Overwrite::replace : fluid::Overwrite::refuse);
   if (!saved.ok()) {
@@ -144,12 +376,7 @@ int queryColliderCommand(const Args& args) {
   app.add_option("FILE", collider_path, "collider file from bake-collider")->required();
   app.add_option("--points", points_path, "points (.xyz, .csv or .ply), collider space")->required();
   app.add_option("--threads", threads, "query threads (0 = all)")->capture_default_str();
-  try {
-    std::vector<std::string> reversed(args.rbegin(), args.rend());
-    app.parse(reversed);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = parseCommandLine(app, "query-collider", args); code >= 0) return code;
   fluid::DepthMapCollider collider;
   const fluid::FileStatus loaded = fluid::loadCollider(collider_path, collider);
   if (!loaded.ok()) {

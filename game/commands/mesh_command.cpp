@@ -3,6 +3,7 @@
 //                  [--block N] [--stats] [--force]
 // Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -11,14 +12,51 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <unordered_map>
 
 namespace game {
+namespace {
+
+// An upper bound of the particles' field (Rosenberg & Birdwell 2008 §2): each particle adds
+// f(r) = (r/(sqrt2 Rc))^4 - (r/(sqrt2 Rc))^2 + 1/4, at most 1/4 (at r = 0) and 0 from r = Rc
+// on, so at any point the field is at most 1/4 x the particles within Rc of it. A ball of
+// radius Rc lies inside the 3x3x3 cells of edge Rc around the cell holding its centre, so
+// 1/4 x the largest such 27-cell count bounds the field everywhere.
+double fieldUpperBound(const fluid::ParticlePositions& particles, double rc) {
+  auto cell = [rc](float v) {
+    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / rc), -1e15, 1e15));
+  };
+  struct CellHash {
+    std::size_t operator()(const std::array<std::int64_t, 3>& c) const {
+      return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+    }
+  };
+  std::unordered_map<std::array<std::int64_t, 3>, std::size_t, CellHash> counts;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    ++counts[{cell(particles.x[i]), cell(particles.y[i]), cell(particles.z[i])}];
+  }
+  std::size_t most = 0;
+  for (const auto& [c, count] : counts) {
+    std::size_t around = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto found = counts.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (found != counts.end()) around += found->second;
+        }
+    most = std::max(most, around);
+  }
+  return 0.25 * static_cast<double>(most);
+}
+
+}  // namespace
 
 int meshCommand(const Args& args) {
   CLI::App app{"Turn a particle file into a closed triangle mesh (marching slices, Rosenberg & Birdwell 2008)",
@@ -30,13 +68,13 @@ int meshCommand(const Args& args) {
   app.add_option("--out", out, "mesh file to write: .obj or .ply (with normals)")->required();
   app.add_option("--rc", params.rc, "cutoff radius Rc of each particle's field (world units)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   app.add_option("--threshold", params.threshold, "iso value T (0.2 gives radius 0.975 for Rc = 3)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   app.add_option("--cube", params.cube, "cube edge S of the lattice (world units)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   app.add_option("--threads", params.threads, "worker threads, 0 = all hardware threads")
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
@@ -45,12 +83,7 @@ int meshCommand(const Args& args) {
       ->check(CLI::Range(0, 1024));
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists");
-  try {
-    std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them reversed
-    app.parse(reversed);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
   {
     std::string ext = std::filesystem::path(out).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -70,6 +103,18 @@ int meshCommand(const Args& args) {
   if (!read.ok()) {
     std::fprintf(stderr, "fluiddemo mesh: %s\n", read.error.c_str());
     return 1;
+  }
+  // A threshold the field can never exceed is a usage error, not an empty mesh. (Any T < 1/4 is
+  // reached at a lone particle's centre, so only larger ones need the count.)
+  if (!particles.empty() && params.threshold >= 0.25f && params.rc > 0.0f) {
+    const double bound = fieldUpperBound(particles, params.rc);
+    if (params.threshold >= bound) {
+      std::fprintf(stderr,
+                   "fluiddemo mesh: --threshold %g is at or above the largest value the field of %s can reach "
+                   "(%g: at most 0.25 per particle within Rc of a point), so the mesh would be empty\n",
+                   static_cast<double>(params.threshold), in.c_str(), bound);
+      return 2;
+    }
   }
   // Keep float vertices precise for data far from the origin: mesh around the particles' centre
   // (a lattice point, so the lattice and the triangles do not change), add it back on writing.
@@ -103,6 +148,10 @@ int meshCommand(const Args& args) {
   if (!written.ok()) {
     std::fprintf(stderr, "fluiddemo mesh: %s\n", written.error.c_str());
     return 1;
+  }
+  if (mesh.indices.empty()) {
+    std::fprintf(stderr, "fluiddemo mesh: warning: %s: the mesh is empty (the field exceeds --threshold %g nowhere)\n",
+                 in.c_str(), static_cast<double>(params.threshold));
   }
   if (stats) {
     const fluid::SurfaceStats& s = mesh.stats;

@@ -1,5 +1,6 @@
 // `fluiddemo play` and `fluiddemo smoke`: command-line front ends of runScene().
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 #include "game/replay/recorder.hpp"
 #include "game/run_scene.hpp"
@@ -14,21 +15,6 @@
 
 namespace game {
 namespace {
-
-// Parses args with CLI11. Returns -1 to go on, otherwise the exit code (0 for --help, 2 for usage errors).
-int parseArgs(CLI::App& app, const Args& args) {
-  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
-  try {
-    app.parse(reversed);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "fluiddemo %s: %s\n\n%s", app.get_name().c_str(), error.what(), app.help().c_str());
-    return 2;
-  }
-  return -1;
-}
 
 struct SceneChoice {
   SceneConfig config;
@@ -66,20 +52,25 @@ int playCommand(const Args& args) {
   RunOptions options;
   bool no_ui = false;
   std::string screenshot;
+  bool force = false;
   app.add_option("scene", scene_name, "scene name in content/scenes or path to a scene .json")->capture_default_str();
   app.add_flag("--headless", options.headless, "no window: render offscreen (automatic without a display)");
   app.add_option("--frames", options.frames, "render N frames then exit (0 = until closed; headless default 240)")
       ->check(CLI::Range(0, 10000000));
   app.add_option("--width", options.width, "framebuffer width")->check(CLI::Range(64, 8192))->capture_default_str();
   app.add_option("--height", options.height, "framebuffer height")->check(CLI::Range(64, 8192))->capture_default_str();
-  app.add_option("--screenshot", screenshot, "write the last frame to this PNG");
+  app.add_option("--screenshot", screenshot, "write the last frame to this PNG (an existing file needs --force)");
+  app.add_flag("--force", force, "replace the --screenshot or --record file if it exists");
   app.add_option("--set", overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--no-ui", no_ui, "start with the overlay hidden");
   std::string record;
-  bool force = false;
   app.add_option("--record", record, "record every input as a replay file (docs/replay.md), flushed as it goes");
-  app.add_flag("--force", force, "replace an existing --record file");
-  if (int code = parseArgs(app, args); code >= 0) return code;
+  if (int code = parseCommandLine(app, "play", args); code >= 0) return code;
+  std::error_code exists_error;
+  if (!screenshot.empty() && !force && std::filesystem::exists(screenshot, exists_error)) {
+    std::fprintf(stderr, "fluiddemo play: %s already exists (use --force to replace it)\n", screenshot.c_str());
+    return 1;
+  }
 
   SceneChoice choice = loadScene(scene_name, overrides);
   if (!choice.error.empty()) {
@@ -138,7 +129,7 @@ int smokeCommand(const Args& args) {
   app.add_option("--width", width, "framebuffer width")->check(CLI::Range(64, 4096))->capture_default_str();
   app.add_option("--height", height, "framebuffer height")->check(CLI::Range(64, 4096))->capture_default_str();
   app.add_option("--out", out_dir, "write each scene's last frame to DIR/<scene>.png (replacing it)");
-  if (int code = parseArgs(app, args); code >= 0) return code;
+  if (int code = parseCommandLine(app, "smoke", args); code >= 0) return code;
 
   std::vector<std::string> scenes;
   if (all || scene_name.empty()) {

@@ -2,6 +2,7 @@
 // checks its checkpoints, prints per-phase percentiles and writes the per-frame CSV and its plot.
 // `fluiddemo replay --compare A.csv B.csv`: per-phase p50/p95 ratios B/A of two such CSVs.
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 #include "game/replay/frame_times.hpp"
 #include "game/replay/replay_file.hpp"
@@ -195,15 +196,7 @@ int replayCommand(const Args& args) {
   bool no_render = false;
   app.add_flag("--no-render", no_render,
                "simulation only: the same steps, inputs and checkpoints without GL, meshing or rendering");
-  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
-  try {
-    app.parse(reversed);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    return usageError(std::string(e.what()) + "\n\n" + app.help());
-  }
+  if (const int code = parseCommandLine(app, "replay", args); code >= 0) return code;
   if (const int code = checkArgs(a); code >= 0) return code;
   if (!a.compare.empty()) return compareCommand(a);
 

@@ -1,6 +1,7 @@
 // `fluiddemo simulate`: runs an SPH scene from fluid/sph without a window, writes particle
 // frames (DIR/frame_00000.xyz at time i/F) and a CSV of per-step statistics (DIR/stats.csv).
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 
 #include "fluid/io/particle_io.hpp"
 #include "fluid/sph/sph_scenes.hpp"
@@ -63,12 +64,7 @@ int simulateCommand(const Args& args) {
                  "(fluid/core/parallel.hpp)");
   app.footer(keyHelp());
 
-  std::vector<std::string> argv_rev(args.rbegin(), args.rend());
-  try {
-    app.parse(argv_rev);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = parseCommandLine(app, "simulate", args); code >= 0) return code;
   if (!(seconds > 0.0) || !std::isfinite(seconds) || seconds > 1e6) {
     std::fprintf(stderr, "fluiddemo simulate: --seconds must be in (0, 1e6], got %g\n", seconds);
     return 2;

@@ -8,6 +8,7 @@
 // died in (the child writes each step's number to a pipe before running it) and goes on with the
 // other scenes. --in-process runs the scenes in this process instead (for a debugger).
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 #include "game/run_scene.hpp"
 #include "game/soak_monitor.hpp"
@@ -42,20 +43,6 @@ struct SoakOptions {
   std::uint64_t abort_at_step = 0;  // testing aid: abort() before this step (0 = never)
   std::size_t leak_per_step = 0;    // testing aid: bytes allocated, touched and kept every step
 };
-
-int parseSoakArgs(CLI::App& app, const Args& args) {
-  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
-  try {
-    app.parse(reversed);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "fluiddemo soak: %s\n", error.what());
-    return 2;
-  }
-  return -1;
-}
 
 // The scene with the --set overrides applied; false + error naming the file/key.
 bool loadSoakScene(const std::string& name, const std::vector<std::string>& overrides, SceneConfig& out,
@@ -253,7 +240,7 @@ int soakCommand(const Args& args) {
   app.add_option("--leak-per-step", o.leak_per_step,
                  "(testing) keep N more bytes every step, to check the memory check")
       ->group("");
-  if (int code = parseSoakArgs(app, args); code >= 0) return code;
+  if (int code = parseCommandLine(app, "soak", args); code >= 0) return code;
 
   std::vector<std::string> scenes = scene_names;
   if (all || scenes.empty()) {

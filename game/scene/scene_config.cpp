@@ -37,6 +37,78 @@ void appendListItem(std::string& list, std::string_view item) {
   list += item;
 }
 
+// A JSON value as quoted in a message: scalars as JSON text (invalid UTF-8 replaced, at most
+// 60 bytes), arrays and objects by their size only, so a message stays one readable line.
+std::string describe(const Json& value) {
+  if (value.is_array()) {
+    if (value.size() <= 3 && std::all_of(value.begin(), value.end(), [](const Json& v) { return v.is_primitive(); })) {
+      return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+    }
+    return "an array of " + std::to_string(value.size()) + " items";
+  }
+  if (value.is_object()) return "an object with " + std::to_string(value.size()) + " keys";
+  std::string text = value.dump(-1, ' ', false, Json::error_handler_t::replace);
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+// A key from the file as quoted in a message: control bytes as '?', at most 60 bytes.
+std::string keyText(std::string_view key) {
+  std::string out;
+  for (char c : key.substr(0, 60)) out += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+  if (key.size() > 60) out += "...";
+  return out;
+}
+
+// Records where a SAX parse stops, for the errors nlohmann reports without a position
+// (out_of_range 406: a number too large for a double).
+struct ErrorPosition : nlohmann::json_sax<Json> {
+  std::size_t byte = 0;
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return true; }
+  bool key(string_t&) override { return true; }
+  bool end_object() override { return true; }
+  bool start_array(std::size_t) override { return true; }
+  bool end_array() override { return true; }
+  bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception&) override {
+    byte = position >= token.size() ? position - token.size() : 0;  // the start of the offending token
+    return false;
+  }
+};
+
+std::string lineAndColumn(const std::string& text, std::size_t byte) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < std::min(byte, text.size()); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+// nlohmann's message without its "[json.exception.parse_error.101] " tag, and with the token it
+// quotes after "last read:" cut to 40 bytes (an unclosed string would quote the rest of the file).
+std::string jsonErrorText(std::string_view what) {
+  if (what.starts_with("[json.exception.")) {
+    const std::size_t tag_end = what.find("] ");
+    if (tag_end != std::string_view::npos) what.remove_prefix(tag_end + 2);
+  }
+  const std::size_t last = what.find("; last read: '");
+  if (last == std::string_view::npos) return keyText(what.substr(0, 300));
+  const std::string_view token = what.substr(last + 14);
+  return std::string(what.substr(0, last + 14)) + keyText(token.substr(0, std::min<std::size_t>(token.size(), 40))) +
+         (token.size() > 41 ? "...'" : "");
+}
+
 std::string formatNumber(double value) {
   std::ostringstream out;
   out << value;
@@ -71,7 +143,7 @@ std::string checkNumber(const ParamSpec& spec, double value, const std::string& 
 // Converts one JSON value to the spec's type, with range checks.
 std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::string& where, ParamValue& out) {
   out = spec.default_value;
-  const std::string got = " (got " + value.dump() + ")";
+  const std::string got = " (got " + describe(value) + ")";
   switch (spec.type) {
     case ParamType::number:
     case ParamType::integer:
@@ -89,7 +161,7 @@ std::string paramFromJson(const ParamSpec& spec, const Json& value, const std::s
           std::find(spec.choices.begin(), spec.choices.end(), out.text) == spec.choices.end()) {
         std::string expected;
         for (std::string_view choice : spec.choices) appendListItem(expected, choice);
-        return where + "value \"" + out.text + "\" is not one of: " + expected;
+        return where + "value \"" + keyText(out.text) + "\" is not one of: " + expected;
       }
       return {};
     case ParamType::vec3: {
@@ -138,10 +210,10 @@ const ParamSpec* findParam(const SectionSpec& spec, std::string_view key) {
 std::string sectionFromJson(const SectionSpec& spec, const Json& object, const std::string& file,
                             const std::string& path, SectionConfig& out) {
   out = defaultSection(spec);
-  if (!object.is_object()) return at(file, path) + "expected an object (got " + object.dump() + ")";
+  if (!object.is_object()) return at(file, path) + "expected an object (got " + describe(object) + ")";
   for (const auto& [key, value] : object.items()) {
     const ParamSpec* param = findParam(spec, key);
-    const std::string key_path = path + "." + key;
+    const std::string key_path = path + "." + keyText(key);
     if (param == nullptr) return at(file, key_path) + "unknown key (known: " + knownKeys(spec) + ")";
     if (std::string error = paramFromJson(*param, value, at(file, key_path), out.params[key]); !error.empty()) {
       return error;
@@ -217,9 +289,15 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
     root = Json::parse(json_text);
   } catch (const Json::parse_error& error) {
     // nlohmann reports "line L, column C"; keep its wording after the file name.
-    return {file_label + ": invalid JSON: " + error.what()};
+    return {file_label + ": invalid JSON: " + jsonErrorText(error.what())};
+  } catch (const Json::exception& error) {
+    // E.g. a number beyond double range: no position in the message, so find it.
+    ErrorPosition position;
+    Json::sax_parse(json_text, &position);
+    return {file_label + ": invalid JSON at " + lineAndColumn(json_text, position.byte) + ": " +
+            jsonErrorText(error.what())};
   }
-  if (!root.is_object()) return {file_label + ": the top level must be an object (got " + root.dump() + ")"};
+  if (!root.is_object()) return {file_label + ": the top level must be an object (got " + describe(root) + ")"};
 
   const SectionSpec* scene_spec = findSection("scene");
   const SectionSpec* camera_spec = findSection("camera");
@@ -230,7 +308,7 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
   bool has_effects = false;
   for (const auto& [key, value] : root.items()) {
     if (key == "description") {
-      if (!value.is_string()) return {at(file_label, key) + "expected a string (got " + value.dump() + ")"};
+      if (!value.is_string()) return {at(file_label, key) + "expected a string (got " + describe(value) + ")"};
       scene.description = value.get<std::string>();
     } else if (key == "scene" || key == "camera") {
       const SectionSpec& spec = key == "scene" ? *scene_spec : *camera_spec;
@@ -238,7 +316,8 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
       if (std::string error = sectionFromJson(spec, value, file_label, key, section); !error.empty()) return {error};
     } else if (key == "effects") {
       has_effects = true;
-      if (!value.is_object()) return {at(file_label, key) + "expected an object of effects (got " + value.dump() + ")"};
+      if (!value.is_object())
+        return {at(file_label, key) + "expected an object of effects (got " + describe(value) + ")"};
       // Effects are kept in schema order so construction order does not depend on the file.
       for (const SectionSpec& spec : sceneSchema()) {
         if (!spec.is_effect || !value.contains(spec.name)) continue;
@@ -253,12 +332,12 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
       for (const auto& [effect_name, effect_value] : value.items()) {
         const SectionSpec* spec = findSection(effect_name);
         if (spec == nullptr || !spec->is_effect) {
-          return {at(file_label, "effects." + effect_name) + "unknown effect (known: " + knownEffects() + ")"};
+          return {at(file_label, "effects." + keyText(effect_name)) + "unknown effect (known: " + knownEffects() + ")"};
         }
         (void)effect_value;
       }
     } else {
-      return {at(file_label, key) + "unknown top-level key (known: description, scene, camera, effects)"};
+      return {at(file_label, keyText(key)) + "unknown top-level key (known: description, scene, camera, effects)"};
     }
   }
   if (!has_effects) return {at(file_label, "effects") + "missing (a scene must list its effects)"};
@@ -295,19 +374,19 @@ SceneStatus applyOverride(SceneConfig& scene, std::string_view assignment) {
 
   const SectionSpec* spec = findSection(section_name);
   if (spec == nullptr) {
-    return {label + ": unknown section '" + std::string(section_name) +
+    return {label + ": unknown section '" + keyText(section_name) +
             "' (scene, camera, or an effect: " + knownEffects() + ")"};
   }
   SectionConfig* section = findConfigSection(scene, section_name);
   if (section == nullptr) {
-    return {label + ": effect '" + std::string(section_name) + "' is not used by scene '" + scene.name + "'"};
+    return {label + ": effect '" + keyText(section_name) + "' is not used by scene '" + scene.name + "'"};
   }
   const ParamSpec* param = findParam(*spec, key);
   if (param == nullptr) {
-    return {label + ": unknown key '" + std::string(key) + "' (known: " + knownKeys(*spec) + ")"};
+    return {label + ": unknown key '" + keyText(key) + "' (known: " + knownKeys(*spec) + ")"};
   }
   const Json value = overrideValueToJson(*param, value_text);
-  if (value.is_discarded()) return {label + ": cannot parse value '" + std::string(value_text) + "'"};
+  if (value.is_discarded()) return {label + ": cannot parse value '" + keyText(value_text) + "'"};
   ParamValue parsed;
   if (std::string error = paramFromJson(*param, value, label + ": ", parsed); !error.empty()) return {error};
   section->params[std::string(key)] = parsed;

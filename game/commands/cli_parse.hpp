@@ -1,0 +1,47 @@
+#pragma once
+// Command-line parsing shared by every subcommand: one place decides what a usage error prints
+// (the message and a one-line hint, never the whole help) and how numbers are range-checked.
+
+#include "game/commands.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace game {
+
+// Parses `args` into `app`. Returns -1 to go on, otherwise the exit code: 0 after printing the
+// help (--help), 2 after a usage error, printed to stderr as
+//   fluiddemo COMMAND: MESSAGE
+//   run 'fluiddemo COMMAND --help' for the options
+inline int parseCommandLine(CLI::App& app, const std::string& command, const Args& args) {
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& error) {
+    std::fprintf(stderr, "fluiddemo %s: %s\nrun 'fluiddemo %s --help' for the options\n", command.c_str(), error.what(),
+                 command.c_str());
+    return 2;
+  }
+  return -1;
+}
+
+// A finite number > 0. (CLI::PositiveNumber words its range with DBL_MAX written out in full.)
+inline CLI::Validator positiveNumber() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!(std::isfinite(value) && value > 0.0)) return "must be a positive number, got " + text;
+        return {};
+      },
+      "POSITIVE");
+}
+
+}  // namespace game
