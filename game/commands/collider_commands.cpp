@@ -211,6 +211,28 @@ bool isObj(std::string extension) {
   return extension == ".obj" || extension == "obj";
 }
 
+// The OBJ text assimp gets: `mtllib` statements blanked. A collider needs no materials, and
+// assimp's MTL parser is where libFuzzer found it crashing (on a memory read it even falls back
+// to parsing the OBJ bytes themselves as the material file). Line numbers stay as they were.
+std::string withoutMaterialLibraries(std::string text) {
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t start = text.find_first_not_of(" \t", at);
+    if (start != std::string::npos && text.compare(start, 6, "mtllib") == 0) text[start] = '#';
+    const std::size_t end = text.find('\n', at);
+    at = end == std::string::npos ? text.size() : end + 1;
+  }
+  return text;
+}
+
+bool loadObj(std::string text, const std::string& label, ColliderModel& out, std::string& error) {
+  if (error = checkObjText(text, label); !error.empty()) return false;
+  text = withoutMaterialLibraries(std::move(text));
+  Assimp::Importer importer;
+  importer.SetIOHandler(new RegularFilesOnly(true));  // the importer owns it; an OBJ needs no other file
+  const aiScene* scene = importer.ReadFileFromMemory(text.data(), text.size(), kImportFlags, "obj");
+  return convertScene(scene, importer, label, out, error);
+}
+
 }  // namespace
 
 bool loadColliderModel(const std::string& path, ColliderModel& out, std::string& error) {
@@ -221,8 +243,8 @@ bool loadColliderModel(const std::string& path, ColliderModel& out, std::string&
   }
   if (isObj(std::filesystem::path(path).extension().string())) {
     std::ifstream in(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (error = checkObjText(text, path); !error.empty()) return false;
+    return loadObj(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), path, out,
+                   error);
   }
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly(false));  // the importer owns it
@@ -232,10 +254,7 @@ bool loadColliderModel(const std::string& path, ColliderModel& out, std::string&
 
 bool loadColliderModelFromMemory(std::span<const std::uint8_t> bytes, const std::string& extension,
                                  const std::string& label, ColliderModel& out, std::string& error) {
-  if (isObj(extension)) {
-    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (error = checkObjText(text, label); !error.empty()) return false;
-  }
+  if (isObj(extension)) return loadObj(std::string(bytes.begin(), bytes.end()), label, out, error);
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly(true));
   const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());
