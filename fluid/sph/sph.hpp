@@ -236,10 +236,6 @@ struct SphWorld {
   std::uint64_t step_count = 0;
   std::uint32_t next_id = 0;
   float last_dt = 0.0f;
-  // s: how far advanceSph's last step ended past the time it was asked to reach (< one step; it
-  // may also be a rounding-sized negative, then the world is that much behind). The next
-  // advanceSph call takes it off its duration. stepSph resets it to 0.
-  double lead = 0.0;
   SphScratch scratch;
 };
 
@@ -263,23 +259,17 @@ SphStatus validateSphParams(const SphParams& params);
 // and the world is left untouched), sinks, emitters, neighbour grid + re-sort, solver, collisions.
 SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats = nullptr);
 
-// Advances the world by `duration` seconds of the caller's clock in the solver's own adaptive
-// steps (stepSph with no request). A step is never cut to land on the caller's time: the last one
-// may end past it (by less than one step), and that lead (world.lead) is taken off the next call,
-// so the steps the world takes, and with them its state at any step, do not depend on how the
-// caller splits time into calls (frame rate). The state at the caller's time itself is
-// sphPositionsAt(world, world.time - world.lead). A call shorter than the lead takes no step.
-// Collider force/torque become the time average over the call's steps (unchanged when it took
-// none). `per_step` (optional) is called with the stats of every step; max_steps bounds the work
-// (error if exceeded).
+// One step of an even split of `remaining` seconds (> 0): with t the step stepSph would take
+// (CFL, force, viscosity bounds, max_time_step), the step is remaining / ceil(remaining / t), so
+// steps that land on a caller's time are equal and none is a sliver (see the solver).
+SphStatus stepSphWithin(SphWorld& world, double remaining, SphStepStats* stats = nullptr);
+
+// Steps until `duration` seconds have passed, with stepSphWithin (the remaining time is spread
+// evenly over the last steps; none is cut to land exactly). Collider force/torque become the time
+// average over the substeps. `per_step` (optional) is called with the stats of every step;
+// max_steps bounds the work (error if exceeded).
 template <typename F>
 SphStatus advanceSph(SphWorld& world, double duration, F&& per_step, std::size_t max_steps = 1000000);
-
-// Particle positions at time t in storage order: linear between the start and the end of the last
-// step, the path the advection x += dt v takes (collision projections aside), so advanceSph's
-// state can be shown at the caller's time although its last step ended past it. t is clamped to
-// [world.time - world.last_dt, world.time]; before the first step `out` is the current positions.
-void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out);
 
 // Total kinetic energy (J) and the potential energy m g.h relative to height 0 along -gravity (J).
 double sphKineticEnergy(const SphWorld& world);
@@ -288,6 +278,27 @@ double sphPotentialEnergy(const SphWorld& world);
 void sphDensityError(const SphWorld& world, float& mean, float& max);
 // Volume estimate sum_i m / max(rho_i, rho_0): shrinks when the fluid is compressed (m^3).
 double sphCompressedVolume(const SphWorld& world);
+
+// Steps with the solver's own step (stepSph with no request) until world.time >= until; the last
+// step may end past it (none is cut). The steps, and the state after each, do not depend on the
+// times asked for, so a caller that samples at its own rate (fluiddemo simulate --fps) gets the
+// same physics at every rate; sphPositionsAt gives the positions at the asked time. Unlike
+// advanceSph the world runs ahead of the caller's clock, so it is for callers that only read it.
+template <typename F>
+SphStatus advanceSphUntil(SphWorld& world, double until, F&& per_step, std::size_t max_steps = 1000000) {
+  for (std::size_t steps = 0; world.time < until - 1e-7; ++steps) {
+    if (steps >= max_steps) return {"advanceSphUntil: more than max_steps steps needed"};
+    SphStepStats stats;
+    if (SphStatus status = stepSph(world, 0.0f, &stats); !status.ok()) return status;
+    per_step(stats);
+  }
+  return {};
+}
+
+// Particle positions at time t in storage order: linear between the start and the end of the last
+// step, the path the advection x += dt v takes (collision projections aside). t is clamped to
+// [world.time - world.last_dt, world.time]; before the first step `out` is the current positions.
+void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out);
 
 // --- implementation of the template ---
 SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, const SphStepStats&), void* ctx,

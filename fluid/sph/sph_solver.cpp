@@ -967,7 +967,23 @@ void advanceEmitterClocks(SphWorld& world, float dt) {
 
 // --- the step ------------------------------------------------------------------------------------
 
+namespace {
+SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* stats_out);
+}
+
 SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
+  return stepImpl(world, max_dt, 0.0, stats_out);
+}
+
+SphStatus stepSphWithin(SphWorld& world, double remaining, SphStepStats* stats_out) {
+  if (!(remaining > 0.0) || !std::isfinite(remaining)) return {"stepSphWithin: remaining time must be finite and > 0"};
+  return stepImpl(world, static_cast<float>(std::min<double>(remaining, world.params.max_time_step)), remaining,
+                  stats_out);
+}
+
+namespace {
+
+SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* stats_out) {
   const auto t_start = Clock::now();
   SphStepStats stats;
   const SphParams& P = world.params;
@@ -1426,7 +1442,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
         n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(w.accel[i])); },
         [](float a, float b) { return std::max(a, b); });
   };
-  auto chooseDt = [&](float vmax, float amax, bool wcsph_bounds) {
+  auto chooseDt = [&](float vmax, float amax, bool wcsph_bounds, bool spread = true) {
     stats.max_acceleration = amax;
     float t = max_dt;
     const float v = std::max(vmax, collider_speed);
@@ -1447,6 +1463,17 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
       if (amax > 0.0f) t = std::min(t, 0.25f * std::sqrt(h_bt / amax));
     }
     t = std::max(t, std::min(P.min_time_step, max_dt));  // the caller's bound wins over min_time_step
+    // stepSphWithin: the time left to the caller's target is split into equal steps no longer
+    // than t, and this step is one of them, so the last step of a frame is never a sliver (a cut
+    // step could be 1e-7 s long). DFSPH's constant-density solve removes the whole predicted
+    // compression within one step (Bender & Koschier 2015 §4.2, eq. 8-12: kappa ~ (rho* - rho_0)
+    // / dt^2, a velocity change ~ (rho* - rho_0) / dt), so in a sliver the 0.05 % compression the
+    // tolerance leaves standing becomes metres per second, and the sliver's stiffness then
+    // warm-started the next full step (2017 §4.3). With equal steps each step is at least half
+    // of t (the next bound may differ, then the rest is split again).
+    // (The 1e-5 slack: max_dt is the float of span, which may round below it.)
+    if (spread && span > static_cast<double>(t))
+      t = static_cast<float>(span / std::ceil(span / static_cast<double>(t) * (1.0 - 1e-5)));
     return t;
   };
 
@@ -1501,7 +1528,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
     // speed instead of being fired apart in one.
     // The cap uses the velocity-independent step bound, so it cannot grow as the CFL shrinks dt.
     // Applied to one particle in the pass that follows each solve.
-    const float nominal_dt = chooseDt(0.0f, 0.0f, false);
+    const float nominal_dt = chooseDt(0.0f, 0.0f, false, false);
     const float cap = 0.5f * d / nominal_dt;
     auto capChange = [&](std::size_t i) {
       const glm::vec3 dv = V[i] - w.vec_a[i];
@@ -1778,7 +1805,6 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   advanceEmitterClocks(world, dt);
   world.time += dt;
   world.last_dt = dt;
-  world.lead = 0.0;  // a step of its own: the caller's clock is the world's (advanceSph sets it after)
   ++world.step_count;
 
   stats.dt = dt;
@@ -1802,5 +1828,7 @@ SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats_out) {
   if (stats_out) *stats_out = stats;
   return {};
 }
+
+}  // namespace
 
 }  // namespace fluid

@@ -215,17 +215,7 @@ double sphCompressedVolume(const SphWorld& world) {
 SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, const SphStepStats&), void* ctx,
                          std::size_t max_steps) {
   if (!(duration >= 0.0) || !std::isfinite(duration)) return {"advanceSph: duration must be finite and >= 0"};
-  // The caller's time is reached by the solver's own steps, the last of which may end past it;
-  // the excess is carried to the next call instead of cutting that step to the remainder. A cut
-  // step can be any length down to rounding size (1e-7 s at 30 frames per second), and DFSPH's
-  // constant-density solve removes the whole predicted compression within one step (Bender &
-  // Koschier 2015 §4.2, eq. 8-12: kappa ~ (rho* - rho_0) / dt^2, a velocity change ~ (rho* -
-  // rho_0) / dt), so the 0.05 % compression the tolerance leaves standing becomes a velocity
-  // change of d * 0.0005 / dt: metres per second for such a sliver step. The stiffness the
-  // sliver found then warm-starts the next full step (2017 §4.3) and its dt is the next
-  // divergence solve's. With steps chosen by the solver alone (CFL, force and viscosity bounds,
-  // max_time_step), the step sequence and the state do not depend on how the caller splits time.
-  double remaining = duration - world.lead;
+  const double target = world.time + duration;
   const std::size_t nc = world.colliders.size();
   auto& force = world.scratch.reduce_force;
   auto& torque = world.scratch.reduce_torque;
@@ -233,20 +223,14 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
   torque.assign(nc, glm::vec3(0.0f));
   double elapsed = 0.0;
   std::size_t steps = 0;
-  // Tolerance: float steps accumulated in double never hit the caller's time exactly; a world
-  // behind by less than this takes no extra step.
-  while (remaining > 1e-7) {
-    if (steps++ >= max_steps) {
-      world.lead = -remaining;
-      return {"advanceSph: more than max_steps steps needed"};
-    }
+  // Tolerance: float time steps cannot hit a double target exactly.
+  while (target - world.time > 1e-7) {
+    if (steps++ >= max_steps) return {"advanceSph: more than max_steps steps needed"};
     SphStepStats stats;
-    SphStatus status = stepSph(world, 0.0f, &stats);
-    if (!status.ok()) {
-      world.lead = -remaining;
-      return status;
-    }
-    remaining -= stats.dt;
+    // The remaining time is spread over equal steps (stepSphWithin): a step cut to land on the
+    // target could be a sliver, which DFSPH turns into a velocity kick (sph_solver.cpp, chooseDt).
+    SphStatus status = stepSphWithin(world, target - world.time, &stats);
+    if (!status.ok()) return status;
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
       force[c] += world.colliders[c].force * stats.dt;
       torque[c] += world.colliders[c].torque * stats.dt;
@@ -254,7 +238,6 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     elapsed += stats.dt;
     if (cb) cb(ctx, stats);
   }
-  world.lead = -remaining;
   if (elapsed > 0.0) {
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
       world.colliders[c].force = force[c] / static_cast<float>(elapsed);
@@ -268,20 +251,17 @@ void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out
   const auto& x = world.particles.position;
   const auto& x0 = world.scratch.old_position;  // the last step's start positions, in today's order
   out.resize(x.size());
-  if (!(world.last_dt > 0.0f) || x0.size() != x.size()) {
-    std::copy(x.begin(), x.end(), out.begin());
-    return;
-  }
   const double start = world.time - world.last_dt;
-  const double f = std::clamp((t - start) / world.last_dt, 0.0, 1.0);
-  if (f >= 1.0) {  // exactly the end state (x0 + 1 (x - x0) may round)
+  const double f = world.last_dt > 0.0f ? std::clamp((t - start) / world.last_dt, 0.0, 1.0) : 1.0;
+  if (f >= 1.0 || x0.size() != x.size()) {  // exactly the end state (x0 + 1 (x - x0) may round)
     std::copy(x.begin(), x.end(), out.begin());
     return;
   }
   const float s = static_cast<float>(f);
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
-  });
+  par::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
+                    });
 }
 
 }  // namespace fluid

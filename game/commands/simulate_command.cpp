@@ -138,9 +138,10 @@ int simulateCommand(const Args& args) {
 
   // Frames list the particles by id ("x y z id", ascending id): the solver re-sorts its store by
   // grid cell every step, so storage order would not let a particle be followed from frame to frame.
-  // advanceSph's last step may end past the frame time (it is never cut short): a frame shows the
-  // state at its own time, interpolated within that step (fluid::sphPositionsAt).
   fluid::ParticlePositions frame;
+  // The world takes the solver's own steps whatever --fps is (fluid::advanceSphUntil: no step is
+  // cut to land on a frame time, so the output rate does not change the physics); a frame shows
+  // the state at its own time, interpolated within the step that passed it (sphPositionsAt).
   std::vector<glm::vec3> at_time;
   std::vector<std::uint32_t> order, ids;
   auto writeFrame = [&](long index, double time) -> bool {
@@ -206,16 +207,12 @@ int simulateCommand(const Args& args) {
                  final_line ? "\n" : "");
     std::fflush(stderr);
   };
-  // The time the loop has asked the world to reach (the world may be up to one step past it).
-  double clock = 0.0;
   auto advanceTo = [&](double t) -> bool {
-    if (!(t > clock)) return true;
     first_step_of_frame = true;
-    const fluid::SphStatus st = fluid::advanceSph(world, t - clock, [&](const fluid::SphStepStats& s) {
+    const fluid::SphStatus st = fluid::advanceSphUntil(world, t, [&](const fluid::SphStepStats& s) {
       onStep(s);
       report(false);
     });
-    clock = t;
     if (!st.ok()) std::fprintf(stderr, "%sfluiddemo simulate: %s\n", progress ? "\n" : "", st.error.c_str());
     return st.ok();
   };

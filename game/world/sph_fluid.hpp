@@ -4,8 +4,7 @@
 // dish and the basin, colliding with the analytic FountainShape (ground ∪ basin ∪ statue)
 // through fluid::SignedDistanceShape; four drains at the basin wall remove it again, so the
 // particle budget (max_particles, fixed at construction) is recycled. Stepped once per game
-// fixed step (the SPH solver sub-steps adaptively inside it, CFL-limited, carrying any overshoot
-// of its last sub-step to the next game step).
+// fixed step (the SPH solver sub-steps adaptively inside it, CFL-limited).
 
 #include "fluid/sph/sph.hpp"
 #include "game/scene/scene_config.hpp"
@@ -55,10 +54,8 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
 bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
                   std::string& error);
 
-// Advances the fluid by `dt` seconds of game time in adaptive SPH sub-steps (each <= params.max_time_step,
-// none cut short to land on the game step: fluid::advanceSph), so the fluid may run up to one
-// sub-step ahead of the game clock (world.lead) and the frame rate does not change its physics.
-// Calls `on_step` (when given) with each sub-step's statistics. Returns false and sets
+// Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step),
+// calling `on_step` (when given) with each sub-step's statistics. Returns false and sets
 // fluid.error when the solver refuses a step.
 bool stepSphFluid(SphFluid& fluid, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step = {});
 
