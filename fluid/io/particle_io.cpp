@@ -463,6 +463,27 @@ IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePosit
   return {};
 }
 
+IoStatus writeParticleXyzWithIds(const std::filesystem::path& path, const ParticlePositions& particles,
+                                 const std::vector<std::uint32_t>& ids, OverwritePolicy overwrite) {
+  if (ids.size() != particles.size())
+    return {path.string() + ": " + std::to_string(ids.size()) + " ids for " + std::to_string(particles.size()) +
+            " particles"};
+  std::ofstream file;
+  if (IoStatus status = openForWrite(path, overwrite, file, false); !status.ok()) return status;
+  std::string text;
+  text.reserve(particles.size() * 48);
+  char buffer[160];
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const int length = std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %u\n", static_cast<double>(particles.x[i]),
+                                     static_cast<double>(particles.y[i]), static_cast<double>(particles.z[i]),
+                                     static_cast<unsigned>(ids[i]));
+    text.append(buffer, static_cast<std::size_t>(length));
+  }
+  file << text;
+  if (!file) return {path.string() + ": write failed"};
+  return {};
+}
+
 IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePositions& particles,
                           OverwritePolicy overwrite) {
   std::ofstream file;

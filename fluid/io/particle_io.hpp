@@ -15,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -59,6 +60,13 @@ enum class OverwritePolicy { refuse, replace };
 // existing file unless told to, so nothing a user made is lost silently.
 IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePositions& particles,
                           OverwritePolicy overwrite = OverwritePolicy::refuse);
+
+// Like writeParticleXyz with a fourth column, the particle's id: "x y z id" per line (ids.size() must
+// equal particles.size(), else an error naming the file). Readers of .xyz skip columns after z, so
+// the file reads back as positions.
+IoStatus writeParticleXyzWithIds(const std::filesystem::path& path, const ParticlePositions& particles,
+                                 const std::vector<std::uint32_t>& ids,
+                                 OverwritePolicy overwrite = OverwritePolicy::refuse);
 
 // Writes a binary little-endian PLY with float x, y, z.
 IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePositions& particles,

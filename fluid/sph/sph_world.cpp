@@ -227,8 +227,9 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
   while (target - world.time > 1e-7) {
     if (steps++ >= max_steps) return {"advanceSph: more than max_steps steps needed"};
     SphStepStats stats;
-    const float request = static_cast<float>(target - world.time);
-    SphStatus status = stepSph(world, request, &stats);
+    // The remaining time is spread over equal steps (stepSphWithin): a step cut to land on the
+    // target could be a sliver, which DFSPH turns into a velocity kick (sph_solver.cpp, chooseDt).
+    SphStatus status = stepSphWithin(world, target - world.time, &stats);
     if (!status.ok()) return status;
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
       force[c] += world.colliders[c].force * stats.dt;
@@ -244,6 +245,23 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     }
   }
   return {};
+}
+
+void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out) {
+  const auto& x = world.particles.position;
+  const auto& x0 = world.scratch.old_position;  // the last step's start positions, in today's order
+  out.resize(x.size());
+  const double start = world.time - world.last_dt;
+  const double f = world.last_dt > 0.0f ? std::clamp((t - start) / world.last_dt, 0.0, 1.0) : 1.0;
+  if (f >= 1.0 || x0.size() != x.size()) {  // exactly the end state (x0 + 1 (x - x0) may round)
+    std::copy(x.begin(), x.end(), out.begin());
+    return;
+  }
+  const float s = static_cast<float>(f);
+  par::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
+                    });
 }
 
 }  // namespace fluid

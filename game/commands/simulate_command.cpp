@@ -1,5 +1,6 @@
 // `fluiddemo simulate`: runs an SPH scene from fluid/sph without a window, writes particle
-// frames (DIR/frame_00000.xyz at time i/F) and a CSV of per-step statistics (DIR/stats.csv).
+// frames (DIR/frame_00000.xyz at time i/F, "x y z id" by ascending id) and a CSV of per-step
+// statistics (DIR/stats.csv); a progress line on stderr when that is a terminal.
 #include "game/commands.hpp"
 #include "game/commands/cli_parse.hpp"
 
@@ -9,6 +10,9 @@
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -42,7 +46,8 @@ std::string keyHelp() {
 int simulateCommand(const Args& args) {
   CLI::App app{
       "Run an SPH scene without a window: frames DIR/frame_00000.xyz (time i/F, one particle per line "
-      "as x y z) and per-step statistics DIR/stats.csv.",
+      "as x y z id, by ascending id) and per-step statistics DIR/stats.csv. On a terminal, a progress line "
+      "goes to stderr.",
       "fluiddemo simulate"};
   std::string scene_name;
   double seconds = 0.0;
@@ -127,14 +132,30 @@ int simulateCommand(const Args& args) {
            "kinetic_energy_J,ms_per_step,neighbor_ms,particles,collisions,surge_front_m\n";
   }
 
+  // Frames list the particles by id ("x y z id", ascending id): the solver re-sorts its store by
+  // grid cell every step, so storage order would not let a particle be followed from frame to frame.
   fluid::ParticlePositions frame;
-  auto writeFrame = [&](long index) -> bool {
+  // The world takes the solver's own steps whatever --fps is (fluid::advanceSphUntil: no step is
+  // cut to land on a frame time, so the output rate does not change the physics); a frame shows
+  // the state at its own time, interpolated within the step that passed it (sphPositionsAt).
+  std::vector<glm::vec3> at_time;
+  std::vector<std::uint32_t> order, ids;
+  auto writeFrame = [&](long index, double time) -> bool {
     if (out_dir.empty()) return true;
+    fluid::sphPositionsAt(world, time, at_time);
+    const auto& id = world.particles.id;
+    order.resize(id.size());
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return id[a] < id[b]; });
     frame.clear();
-    for (const glm::vec3& p : world.particles.position) frame.push_back(p);
+    ids.clear();
+    for (const std::uint32_t i : order) {
+      frame.push_back(at_time[i]);
+      ids.push_back(id[i]);
+    }
     char name[64];
     std::snprintf(name, sizeof name, "frame_%05ld.xyz", index);
-    const fluid::IoStatus st = fluid::writeParticleXyz(dir / name, frame, policy);
+    const fluid::IoStatus st = fluid::writeParticleXyzWithIds(dir / name, frame, ids, policy);
     if (!st.ok())
       std::fprintf(stderr, "fluiddemo simulate: %s%s\n", st.error.c_str(), force ? "" : " (pass --force to replace)");
     return st.ok();
@@ -169,20 +190,35 @@ int simulateCommand(const Args& args) {
     }
   };
 
+  // A progress line on a terminal (stderr), at most four times a second; nothing when piped.
+  const bool progress = isatty(fileno(stderr)) != 0;
   const auto t0 = std::chrono::steady_clock::now();
+  auto last_report = t0;
+  auto report = [&](bool final_line) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!progress || (!final_line && now - last_report < std::chrono::milliseconds(250))) return;
+    last_report = now;
+    std::fprintf(stderr, "\rsimulate: %.3f of %.3f s simulated, %llu steps, %.1f s wall%s", world.time, seconds,
+                 static_cast<unsigned long long>(steps), std::chrono::duration<double>(now - t0).count(),
+                 final_line ? "\n" : "");
+    std::fflush(stderr);
+  };
+  auto advanceTo = [&](double t) -> bool {
+    first_step_of_frame = true;
+    const fluid::SphStatus st = fluid::advanceSphUntil(world, t, [&](const fluid::SphStepStats& s) {
+      onStep(s);
+      report(false);
+    });
+    if (!st.ok()) std::fprintf(stderr, "%sfluiddemo simulate: %s\n", progress ? "\n" : "", st.error.c_str());
+    return st.ok();
+  };
   const long last_frame = static_cast<long>(std::floor(seconds * fps + 1e-9));
   for (long i = 0; i <= last_frame; ++i) {
-    if (!writeFrame(i)) return 1;
-    const double next = (i == last_frame) ? seconds : static_cast<double>(i + 1) / fps;
-    const double span = std::min(next, seconds) - world.time;
-    if (span <= 1e-9) continue;
-    first_step_of_frame = true;
-    const fluid::SphStatus st = fluid::advanceSph(world, span, onStep);
-    if (!st.ok()) {
-      std::fprintf(stderr, "fluiddemo simulate: %s\n", st.error.c_str());
-      return 1;
-    }
+    const double time = std::min(static_cast<double>(i) / fps, seconds);
+    if (!advanceTo(time) || !writeFrame(i, time)) return 1;
   }
+  if (!advanceTo(seconds)) return 1;
+  report(true);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("scene %s, solver %s, %zu particles, %.3f s simulated in %llu steps\n", scene_name.c_str(),
               fluid::sphSolverName(solver), world.particles.size(), world.time, static_cast<unsigned long long>(steps));
