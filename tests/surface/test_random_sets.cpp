@@ -71,10 +71,14 @@ TEST(RandomSets, SeamHolesOfMarginDescentsAreClosed) {
   }
 }
 
-// Known open (see kKnownOpen): holes at seams, a margin seed corner outside in the block's field.
+// Known open (see kKnownOpen): holes at seams, all of them seeding misses (each closes when a debug
+// build seeds every crossing cube of each block's interior). 312, 2363, 4168, 6392: a margin seed
+// corner outside in the block's field (a descent from the nearest interior corner closes them, but
+// also seeds ghost components in one block only, see BlockMesher::seed); 4395, 5888, 6560 (seeds
+// 4001..8000): not closed by that either, cause not pinned down.
 TEST(RandomSets, DISABLED_SeamHolesOpen) {
   RandomSetChecker checker;
-  for (int seed : {312, 2363}) {
+  for (int seed : {312, 2363, 4168, 4395, 5888, 6392, 6560}) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
   }
