@@ -15,13 +15,12 @@ namespace {
 constexpr int kSeeds = 320;  // 8 ctest cases of 40 seeds (every kind 5 times in each)
 constexpr int kChunk = 40;
 
-// Open: holes at block seams (6 of seeds 1..4000: 77, 312, 1981, 2363, 2957, 3327). For 312 and
-// 3327 a particle's nearest corner lies in a block's margin, where the block's field sums only the
-// particles that reach its interior: outside there, inside in the full field, so that block never
-// seeds the part of the surface in its interior. The other four have no such corner; their cause
-// is not known yet. Pinned below (disabled) until seeding is fixed; the slice skips exactly those
-// in its range.
-constexpr int kKnownOpen[] = {77, 312};
+// Open: holes at block seams where a particle's nearest corner lies in a block's margin and reads
+// outside there, because the block's field sums only the particles that reach its interior, while
+// the full field is inside; that block then never seeds the part of the surface in its interior
+// (312: 0.3316 in the full field > T = 0.2396). Of seeds 1..4000, 312 and 2363 (see
+// RandomSets.DISABLED_SeamHolesOpen). The slice skips exactly those in its range.
+constexpr int kKnownOpen[] = {312};
 
 class RandomSets : public ::testing::TestWithParam<int> {};
 
@@ -60,10 +59,26 @@ TEST(RandomSets, SeamHolesOfTheOldMarginAreClosed) {
   }
 }
 
-// Known open (see kKnownOpen): holes at seams.
+// Seeds that left holes at block seams because a descent (§4) from a margin corner stopped after
+// Rc + S, still inside, on "a particle below seeds it" while that particle was not among the
+// block's particles (it does not reach the block's interior); closed since margin steps do not
+// count (BlockMesher::seed).
+TEST(RandomSets, SeamHolesOfMarginDescentsAreClosed) {
+  RandomSetChecker checker;
+  for (int seed : {77, 1981, 2957, 3327}) {
+    const RandomSet r = drawRandomSet(std::uint64_t(seed));
+    EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
+  }
+}
+
+// Known open (see kKnownOpen): holes at seams, all of them seeding misses (each closes when a debug
+// build seeds every crossing cube of each block's interior). 312, 2363, 4168, 6392: a margin seed
+// corner outside in the block's field (a descent from the nearest interior corner closes them, but
+// also seeds ghost components in one block only, see BlockMesher::seed); 4395, 5888, 6560 (seeds
+// 4001..8000): not closed by that either, cause not pinned down.
 TEST(RandomSets, DISABLED_SeamHolesOpen) {
   RandomSetChecker checker;
-  for (int seed : {77, 312, 1981, 2363, 2957, 3327}) {
+  for (int seed : {312, 2363, 4168, 4395, 5888, 6392, 6560}) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     EXPECT_EQ(checkRandomSet(r, checker), "") << "seed " << seed << " (" << r.what << ")";
   }

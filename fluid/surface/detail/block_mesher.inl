@@ -661,6 +661,18 @@ class BlockMesher {
   // at or below T; push the cube whose vertical edge holds the crossing into that slab's todo.
   // Stop after Rc_i. A per-column memo of the inside corners already walked lets a later
   // particle stop as soon as its descent reaches one (same connected inside run: same seed).
+  //
+  // Only the interior's corners have the complete field: a margin corner sums just the block's
+  // particles, those that reach the interior (§3). A descent that starts in the margin and stops
+  // after Rc_i + S, still inside, on §4's "a particle below seeds it" can leave the part of its
+  // surface that lies in this block's interior unseeded, since that particle need not reach the
+  // interior and so need not be among the block's particles (a hole at the seam: the interior is
+  // emitted by this block alone). So a descent from a margin corner counts only its steps through
+  // interior corners. Everything it walks is inside in the block's field, hence in the full field
+  // (a sum over a subset of the same non-negative terms), so the crossing it finds is on the
+  // surface of a component holding a particle's nearest corner, one §4 seeds anyway; it never
+  // starts a component that §4 leaves out (a descent from some other corner could, and would
+  // then leave half of that component, a hole, where it crosses into a block that does not).
   void seed(std::span<const Particle> particles) {
     for (std::uint32_t c : w_.chainTouched) {
       w_.chainLo[c] = 0;
@@ -668,53 +680,61 @@ class BlockMesher {
     }
     w_.chainTouched.clear();
     const double inv = 1.0 / su_.s;
-    const float t = su_.threshold;
     for (const Particle& p : particles) {
       const int x = iround(p.x * inv - double(g0_[0]));
       const int y = iround(p.y * inv - double(g0_[1]));
       const int z0 = iround(p.z * inv - double(g0_[2]));
       if (x < 1 || x > nx_ - 1 || y < 1 || y > ny_ - 1 || z0 < 1 || z0 > nz_ - 1) continue;
-      const std::size_t k = col(x, y);
-      if (z0 >= w_.chainLo[k] && z0 <= w_.chainHi[k]) continue;
-      // The field is a sum of non-negative terms, so the particle's own term above T already
-      // proves its nearest corner inside (no lookup needed); otherwise evaluate.
-      const float ox = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
-      const float oy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
-      const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
-      const bool ownInside =
-          influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) && contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
-      if (!ownInside && !insideAt(x, y, z0)) continue;  // nearest corner outside: no seed here
-      const int steps = iceil(std::sqrt(p.rc2) * inv) + 1;
-      int z = z0;
-      bool joined = false;
-      for (int i = 0; i < steps && z > 0; ++i) {
-        const int below = z - 1;
-        if (below >= w_.chainLo[k] && below <= w_.chainHi[k]) {
-          joined = true;
-          break;
-        }
-        // As at the start: the particle's own term above T proves the corner inside.
-        const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
-        const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
-                              contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
-        if (!ownBelow && !insideAt(x, y, below)) {
-          pushTodo(below, x, y);
-          joined = true;
-          break;
-        }
-        z = below;
+      seedWalk(p, x, y, z0);
+    }
+  }
+
+  // One §4 descent from corner (x, y, z0) of the expanded block (1 <= x, y, z0 <= n - 1): pushes the
+  // cube below the first outside corner, or stops after Rc_i + S (interior steps, see seed()).
+  void seedWalk(const Particle& p, int x, int y, int z0) {
+    const float t = su_.threshold;
+    const std::size_t k = col(x, y);
+    if (z0 >= w_.chainLo[k] && z0 <= w_.chainHi[k]) return;
+    // The field is a sum of non-negative terms, so the particle's own term above T already
+    // proves the start corner inside (no lookup needed); otherwise evaluate.
+    const float ox = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
+    const float oy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
+    const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
+    const bool ownInside =
+        influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) && contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
+    if (!ownInside && !insideAt(x, y, z0)) return;  // start corner outside: no seed here
+    const int steps = iceil(std::sqrt(p.rc2) * (1.0 / su_.s)) + 1;
+    const bool fromMargin = !interiorCorner(x, y, z0);
+    int z = z0;
+    bool joined = false;
+    for (int i = 0; i < steps && z > 0;) {
+      const int below = z - 1;
+      if (below >= w_.chainLo[k] && below <= w_.chainHi[k]) {
+        joined = true;
+        break;
       }
-      if (!joined) continue;  // went Rc down without leaving: a particle below seeds it (§4)
-      // Keep one walked run [z, z0] per column: merge when it touches the old one, else replace
-      // (a gap between two runs is not known to be inside).
-      if (w_.chainHi[k] < w_.chainLo[k]) w_.chainTouched.push_back(std::uint32_t(k));
-      if (w_.chainHi[k] >= w_.chainLo[k] && z <= w_.chainHi[k] + 1 && z0 >= w_.chainLo[k] - 1) {
-        w_.chainLo[k] = std::int16_t(std::min<int>(w_.chainLo[k], z));
-        w_.chainHi[k] = std::int16_t(std::max<int>(w_.chainHi[k], z0));
-      } else {
-        w_.chainLo[k] = std::int16_t(z);
-        w_.chainHi[k] = std::int16_t(z0);
+      // As at the start: the particle's own term above T proves the corner inside.
+      const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
+      const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
+                            contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
+      if (!ownBelow && !insideAt(x, y, below)) {
+        pushTodo(below, x, y);
+        joined = true;
+        break;
       }
+      z = below;
+      if (!fromMargin || interiorCorner(x, y, z)) ++i;  // margin steps do not count (see seed())
+    }
+    if (!joined) return;  // went Rc down without leaving: a particle below seeds it (§4)
+    // Keep one walked run [z, z0] per column: merge when it touches the old one, else replace
+    // (a gap between two runs is not known to be inside).
+    if (w_.chainHi[k] < w_.chainLo[k]) w_.chainTouched.push_back(std::uint32_t(k));
+    if (w_.chainHi[k] >= w_.chainLo[k] && z <= w_.chainHi[k] + 1 && z0 >= w_.chainLo[k] - 1) {
+      w_.chainLo[k] = std::int16_t(std::min<int>(w_.chainLo[k], z));
+      w_.chainHi[k] = std::int16_t(std::max<int>(w_.chainHi[k], z0));
+    } else {
+      w_.chainLo[k] = std::int16_t(z);
+      w_.chainHi[k] = std::int16_t(z0);
     }
   }
 
