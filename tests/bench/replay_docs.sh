@@ -10,9 +10,8 @@ EXE=build/dev/game/fluiddemo
 WIDTH=${1:-640}
 HEIGHT=${2:-360}
 OUT=docs/replay.md
-# Rendered frames per replay (0 = all). The fountain tour stops at its first checkpoint while the
-# fluid surface aborts on the filled fountain (block_mesher.inl:226); set it to 0 with that fix.
-FRAMES_fountain_tour=150
+# Rendered frames per replay (0 = all).
+FRAMES_fountain_tour=0
 FRAMES_crate_yard_tour=0
 PYTHON=/usr/bin/python3
 [ -x "$PYTHON" ] || PYTHON=python3
