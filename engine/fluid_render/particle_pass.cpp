@@ -66,6 +66,18 @@ void listNames(const SceneTargets& t, GlObjectNames& out) {
   out.framebuffers.push_back(t.fbo);
 }
 
+void createParticleBuffer(ParticleBuffer& buffer, GLuint& vao) {
+  glGenBuffers(1, &buffer.buffer);
+  glGenVertexArrays(1, &vao);
+  glBindVertexArray(vao);
+  glBindBuffer(GL_ARRAY_BUFFER, buffer.buffer);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+  glVertexAttribDivisor(0, 1);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
 bool uploadParticles(ParticleBuffer& b, std::span<const glm::vec3> positions, std::string& error) {
   error.clear();
   b.count = 0;

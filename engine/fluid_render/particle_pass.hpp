@@ -55,6 +55,8 @@ struct ParticleBuffer {
   std::size_t capacity_bytes = 0;
   std::uint32_t count = 0;
 };
+// Creates the buffer and `vao`, which feeds it to attribute 0 as one vec4 per instance.
+void createParticleBuffer(ParticleBuffer& buffer, GLuint& vao);
 // False + error naming the particle (nothing uploaded, count 0) when a position is not finite.
 bool uploadParticles(ParticleBuffer& buffer, std::span<const glm::vec3> positions, std::string& error);
 

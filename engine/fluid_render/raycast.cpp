@@ -56,15 +56,7 @@ void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.counters);
   glBufferData(GL_SHADER_STORAGE_BUFFER, 8, nullptr, GL_DYNAMIC_READ);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-  glGenBuffers(1, &out.particles.buffer);
-  glGenVertexArrays(1, &out.vao);
-  glBindVertexArray(out.vao);
-  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
-  glVertexAttribDivisor(0, 1);
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  createParticleBuffer(out.particles, out.vao);
   glGenVertexArrays(1, &out.empty_vao);
   if (!scene_ok || glGetError() != GL_NO_ERROR) {
     out.error = "raycast fluid disabled: fragment-list storage not supported (needs GL 4.3 SSBOs and images)";

@@ -69,15 +69,7 @@ void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer&
   out.thickness_fbo = colourTargetFbo(out.thickness, 0);
   const bool thickness_ok = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glGenBuffers(1, &out.particles.buffer);
-  glGenVertexArrays(1, &out.vao);
-  glBindVertexArray(out.vao);
-  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
-  glVertexAttribDivisor(0, 1);
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  createParticleBuffer(out.particles, out.vao);
   glGenVertexArrays(1, &out.empty_vao);
   if (!scene_ok || !depth_ok || !thickness_ok || glGetError() != GL_NO_ERROR) {
     out.error = "screen-space fluid disabled: float render targets not supported";
