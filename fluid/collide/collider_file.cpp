@@ -12,6 +12,7 @@
 //   u64      FNV-1a 64 of every byte before it
 #include "fluid/collide/collide.hpp"
 
+#include "fluid/core/fnv1a.hpp"
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -27,14 +28,7 @@ namespace {
 
 constexpr char kMagic[8] = {'F', 'L', 'D', 'M', 'A', 'P', 'S', '\0'};
 
-std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (std::uint8_t b : bytes) {
-    h ^= b;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
+std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) { return fluid::fnv1a64(bytes.data(), bytes.size()); }
 
 template <class T>
 void put(std::vector<std::uint8_t>& out, const T& value) {

@@ -1,6 +1,8 @@
 // Replay file parser and line writers (format: replay_file.hpp, docs/replay.md).
 #include "game/replay/replay_file.hpp"
 
+#include "fluid/core/fnv1a.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -305,9 +307,7 @@ ReplayStatus loadReplayFile(const std::filesystem::path& path, ReplayFile& out) 
 }
 
 std::uint64_t fnv1a64(std::string_view bytes) {
-  std::uint64_t hash = 14695981039346656037ull;
-  for (char c : bytes) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-  return hash;
+  return fluid::fnv1a64(bytes.data(), bytes.size());
 }
 
 std::string hashHex(std::uint64_t value) {

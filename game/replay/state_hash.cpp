@@ -100,11 +100,6 @@ std::uint64_t hashRng(const std::mt19937& rng) {
 
 }  // namespace
 
-void Fnv1a64::bytes(const void* data, std::size_t count) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t k = 0; k < count; ++k) value = (value ^ p[k]) * 1099511628211ull;
-}
-
 void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& out) {
   out.parts.clear();
   if (world.rigid_bodies) out.parts.push_back({"rigid_bodies", hashRigidBodies(*world.rigid_bodies)});

@@ -16,6 +16,8 @@
 // mesh (derived from the particles and the camera every frame), the camera (an input, not state),
 // and Bullet's internal caches (contact manifolds, sleep timers), which act on the state hashed.
 
+#include "fluid/core/fnv1a.hpp"
+
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -25,15 +27,7 @@ namespace game {
 
 struct World;
 
-// Incremental FNV-1a 64.
-struct Fnv1a64 {
-  std::uint64_t value = 14695981039346656037ull;
-  void bytes(const void* data, std::size_t count);
-  template <typename T>
-  void add(const T& plain) {
-    bytes(&plain, sizeof(T));
-  }
-};
+using Fnv1a64 = fluid::Fnv1a64;  // fluid/core/fnv1a.hpp
 
 struct SubsystemHash {
   std::string_view name;  // "rigid_bodies", "sprite_particles", "sph_fluid", "rng"

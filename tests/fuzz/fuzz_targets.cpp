@@ -7,6 +7,7 @@
 #include "game/commands/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
 
+#include "fluid/core/fnv1a.hpp"
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -167,14 +168,7 @@ std::string checkSceneSet(std::span<const std::uint8_t> input) {
 
 // ---- collider files (fluid/collide) -----------------------------------------------------
 
-std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (std::uint8_t b : bytes) {
-    h ^= b;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
+std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) { return fluid::fnv1a64(bytes.data(), bytes.size()); }
 
 std::string checkCollider(std::span<const std::uint8_t> input) {
   // Rewrite the trailing FNV-1a checksum so mutations reach the fields behind it (a wrong
