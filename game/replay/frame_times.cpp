@@ -92,7 +92,8 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
   const std::string label = path.string();
   std::size_t pos = 0;
   int line_number = 0;
-  const std::vector<std::string_view> expected = splitCommas(frameCsvHeader());
+  const std::string header_line = frameCsvHeader();
+  const std::vector<std::string_view> expected = splitCommas(header_line);
   std::vector<std::string> header(expected.begin(), expected.end());
   while (pos < text.size()) {
     std::size_t newline = text.find('\n', pos);
@@ -102,8 +103,8 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line_number == 1) {
-      if (line != frameCsvHeader()) {
-        error = label + ":1: header is not '" + frameCsvHeader() + "' (not a fluiddemo replay CSV?)";
+      if (line != header_line) {
+        error = label + ":1: header is not '" + header_line + "' (not a fluiddemo replay CSV?)";
         return false;
       }
       continue;
