@@ -41,7 +41,7 @@ renderer=$(sed -n 's/^renderer: //p' "$tmp/640x360.mesh.txt")
   cat tests/bench/render_docs_head.md
   echo
   echo "Command: \`tests/bench/render_docs.sh $build $frames $replay_frames\`; GL: $renderer; the first"
-  echo "$replay_frames steps of the tour (of 1200; the fountain is full at step 300, crates thrown at 120 and 300),"
+  echo "$replay_frames steps of the tour (of 1200; the jet fills the fountain until step 300, crates are thrown on the way),"
   echo "one step per frame, every frame rendered; PSNR and IoU on the frames after steps $(echo "$steps" | sed 's/ / \/ /g')."
   echo
   "$PYTHON" tests/bench/render_replay_table.py "$tmp" "$sizes" "$steps"
