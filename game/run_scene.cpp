@@ -140,9 +140,10 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
     if (world.fluid_surface->params.method == SurfaceMethodChoice::raycast) {
-      ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu",
+      ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
                   static_cast<unsigned long long>(world.fluid_surface->raycast_records),
-                  static_cast<unsigned long long>(world.fluid_surface->raycast_dropped));
+                  static_cast<unsigned long long>(world.fluid_surface->raycast_dropped),
+                  static_cast<double>(world.fluid_surface->raycast_pool) * 16.0 / (1024.0 * 1024.0));
     }
   }
   if (world.failures.count > 0) {
@@ -283,6 +284,7 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
     return;
   }
   const FluidSurfaceParams& p = world.fluid_surface->params;
+  if (!p.visible) return;  // the renderer's objects stay for when the water shows again
   const engine::FluidMethod method = methodOf(p);
   if (pass.created && (pass.width != renderer.width || pass.height != renderer.height || pass.method != method))
     releaseWaterPass(pass);
@@ -346,6 +348,8 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
     engine::drawRaycastFluid(pass.raycast, renderer.scene_fbo.id(), camera, water, rp);
     world.fluid_surface->raycast_records = pass.raycast.used;
     world.fluid_surface->raycast_dropped = pass.raycast.dropped;
+    world.fluid_surface->raycast_pool = pass.raycast.pool_records;
+    world.fluid_surface->raycast_pool_bound = pass.raycast.max_pool_records;
   } else {
     engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
   }

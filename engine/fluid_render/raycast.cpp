@@ -4,6 +4,52 @@
 #include <cmath>
 
 namespace engine {
+namespace {
+
+// max(1, round(per_pixel * w * h)) records, capped at 2^28 (4 GiB of records): the counters are
+// 32-bit and a buffer that size is beyond any target here.
+std::uint32_t poolRecords(float per_pixel, int w, int h) {
+  const double records = std::round(static_cast<double>(per_pixel) * w * h);
+  return static_cast<std::uint32_t>(std::clamp(records, 1.0, 268435456.0));
+}
+
+std::uint64_t readUsedRecords(GLuint counters) {
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  GLuint counts[2] = {0, 0};
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, counters);
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  return counts[0];
+}
+
+// Gathering (§5): empty lists, zero counters, then every support sphere prepends records. The
+// target's colour is masked: the pass writes only the lists.
+void gather(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, float rc) {
+  const GLuint empty_list = 0xffffffffu, zero[2] = {0, 0};
+  glClearTexImage(r.heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.counters);
+  glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(zero), zero);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  glBindImageTexture(0, r.heads, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, r.nodes);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, r.counters);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r.particles.buffer);
+  glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // side effects only
+  glUseProgram(r.gather_program);
+  setParticleCamera(r.gather_program, camera, r.desc.base.width, r.desc.base.height);
+  setUniform(r.gather_program, "u_radius", rc);
+  glUniform1ui(glGetUniformLocation(r.gather_program, "u_pool"), r.pool_records);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, r.scene.depth);
+  setUniform(r.gather_program, "u_scene_depth", 0);
+  glBindVertexArray(r.vao);
+  glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+}
+
+}  // namespace
 
 void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   destroyRaycastRenderer(out);
@@ -16,6 +62,11 @@ void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   }
   if (!(desc.pool_per_pixel > 0.0f && desc.pool_per_pixel <= 64.0f)) {
     out.error = "raycast fluid: pool_per_pixel " + std::to_string(desc.pool_per_pixel) + " out of range (0, 64]";
+    return;
+  }
+  if (!(desc.max_pool_per_pixel >= 0.0f && desc.max_pool_per_pixel <= 64.0f)) {
+    out.error =
+        "raycast fluid: max_pool_per_pixel " + std::to_string(desc.max_pool_per_pixel) + " out of range [0, 64]";
     return;
   }
   const std::filesystem::path dir = desc.base.shader_dir / "fluid";
@@ -47,8 +98,8 @@ void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   out.heads = createTexture2D(GL_R32UI, w, h, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
   out.hits = createTexture2D(GL_RGBA32F, w, h, GL_RGBA, GL_FLOAT, nullptr);
   out.thickness = createTexture2D(GL_R32F, w, h, GL_RED, GL_FLOAT, nullptr);
-  const double records = std::round(static_cast<double>(desc.pool_per_pixel) * w * h);
-  out.pool_records = static_cast<std::uint32_t>(std::max(1.0, records));
+  out.pool_records = poolRecords(desc.pool_per_pixel, w, h);
+  out.max_pool_records = std::max(out.pool_records, poolRecords(desc.max_pool_per_pixel, w, h));
   glGenBuffers(1, &out.nodes);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.nodes);
   glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(out.pool_records) * 16, nullptr, GL_DYNAMIC_COPY);
@@ -128,28 +179,22 @@ void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& 
   glBindVertexArray(r.empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   if (r.particles.count > 0) {
-    // Gathering (§5): empty lists, zero counters, then every support sphere prepends records.
-    const GLuint empty_list = 0xffffffffu, zero[2] = {0, 0};
-    glClearTexImage(r.heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.counters);
-    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(zero), zero);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-    glBindImageTexture(0, r.heads, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, r.nodes);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, r.counters);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r.particles.buffer);
-    glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
-    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // side effects only
-    glUseProgram(r.gather_program);
-    setParticleCamera(r.gather_program, camera, w, h);
-    setUniform(r.gather_program, "u_radius", rc);
-    glUniform1ui(glGetUniformLocation(r.gather_program, "u_pool"), r.pool_records);
-    glBindTexture(GL_TEXTURE_2D, r.scene.depth);
-    setUniform(r.gather_program, "u_scene_depth", 0);
-    glBindVertexArray(r.vao);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
-    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    gather(r, target_fbo, camera, rc);
+    if (params.grow_pool && r.pool_records < r.max_pool_records) {
+      // The paper sizes its storage ahead (§6); here the frame's own demand does: an overflowed
+      // pool is enlarged with 25 % headroom (a growing fountain then reallocates rarely) and the
+      // gather repeated, so the picture has no holes unless the demand passes the bound.
+      const std::uint64_t used = readUsedRecords(r.counters);
+      if (used > r.pool_records) {
+        const double wanted = std::ceil(1.25 * static_cast<double>(used));
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.nodes);
+        r.pool_records = static_cast<std::uint32_t>(std::min<double>(wanted, r.max_pool_records));
+        glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(r.pool_records) * 16, nullptr, GL_DYNAMIC_COPY);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        ++r.pool_growths;
+        gather(r, target_fbo, camera, rc);
+      }
+    }
     // The cast (§6) per pixel into the hit and thickness images.
     glUseProgram(r.cast_program);
     setParticleCamera(r.cast_program, camera, w, h);

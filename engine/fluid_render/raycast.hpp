@@ -7,7 +7,10 @@
 // first crossing as the surface and a full-screen pass shades it with the mesh's water look (water_shade.glsl).
 //
 // The pool is bounded: records past it are dropped and counted (RaycastRenderer::dropped), the
-// overflow the paper trades against memory (§6). Frame as in screen_space.hpp.
+// overflow the paper trades against memory (§6). By default it sizes itself: a frame whose gather
+// asks for more records than the pool holds enlarges the pool (to 1.25x the demand, at most
+// max_pool_per_pixel) and gathers again, so only demand above the bound is dropped. Frame as in
+// screen_space.hpp.
 
 #include "engine/fluid_render/particle_pass.hpp"
 
@@ -15,15 +18,22 @@ namespace engine {
 
 struct RaycastDesc {
   FluidRenderDesc base;
-  // Pool records (16 bytes each) per viewport pixel; 0 < pool_per_pixel <= 64. The pool is
-  // max(1, round(pool_per_pixel * width * height)) records.
-  float pool_per_pixel = 8.0f;
+  // Pool records (16 bytes each) per viewport pixel at creation; 0 < pool_per_pixel <= 64. The
+  // pool is max(1, round(pool_per_pixel * width * height)) records.
+  float pool_per_pixel = 2.0f;
+  // Most records per pixel the pool may grow to (RaycastParams::grow_pool); values below
+  // pool_per_pixel mean pool_per_pixel (a fixed pool). 32 per pixel is 112.5 MiB at 640x360 and
+  // 450 MiB at 1280x720; the game's fountain asks for far less (docs/render.md).
+  float max_pool_per_pixel = 32.0f;
 };
 
 struct RaycastParams {
   float rc = 0.16f;           // cutoff radius Rc, metres (the mesh's SurfaceParams::rc)
   float threshold = 0.2f;     // iso level T (the mesh's SurfaceParams::threshold), in (0, 0.25)
   bool read_counters = true;  // read back used/dropped after the frame (waits for the GPU)
+  // Enlarge a pool the gather overflowed and gather again in the same frame (reads the counter
+  // back between the passes, a GPU wait); false = a fixed pool whose overflow is only counted.
+  bool grow_pool = true;
 };
 
 struct RaycastRenderer {
@@ -33,12 +43,15 @@ struct RaycastRenderer {
   SceneTargets scene;
   GLuint heads = 0;                // r32ui, one list head per pixel
   GLuint nodes = 0, counters = 0;  // SSBO pool (uvec4 records), SSBO {used, dropped}
-  std::uint32_t pool_records = 0;
+  std::uint32_t pool_records = 0;  // current pool size
+  std::uint32_t max_pool_records = 0;
+  std::uint64_t pool_growths = 0;  // times the pool was enlarged since creation
   GLuint hits = 0, thickness = 0;  // cast output: RGBA32F (outward normal, hit distance), R32F
   GLuint vao = 0, empty_vao = 0;
   ParticleBuffer particles;
   GLuint gather_program = 0, cast_program = 0, shade_program = 0, blit_program = 0;
-  // Last frame (when RaycastParams::read_counters): records asked for and records dropped.
+  // Last frame (when RaycastParams::read_counters): records asked for and records dropped (by the
+  // final gather, after any growth).
   std::uint64_t used = 0, dropped = 0;
 };
 

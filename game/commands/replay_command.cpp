@@ -31,6 +31,7 @@ struct ReplayArgs {
   int plot_width = 1200, plot_height = 600;
   std::vector<std::string> screenshot_at;
   std::vector<std::string> compare;
+  std::vector<std::string> sets;  // render-only --set overrides
   bool update_hashes = false, force = false, no_ui = false;
 };
 
@@ -95,6 +96,11 @@ int checkArgs(ReplayArgs& args) {
   for (const std::string& out : {args.csv, args.png}) {
     if (!out.empty() && std::filesystem::exists(out) && !args.force)
       return usageError(out + " exists (pass --force to replace it)");
+  }
+  for (const std::string& assignment : args.sets) {
+    std::string error;
+    if (!renderOnlyOverride(assignment, error)) return usageError(error);
+    args.run.extra_overrides.push_back(assignment);
   }
   for (const std::string& spec : args.screenshot_at) {
     const std::size_t colon = spec.find(':');
@@ -192,6 +198,9 @@ int replayCommand(const Args& args) {
   app.add_flag("--force", a.force, "replace existing --csv/--png/--screenshot-at files; allow --update-hashes");
   app.add_flag("--allow-scene-change", a.run.allow_scene_change, "replay even if the scene file's hash changed");
   app.add_option("--compare", a.compare, "A.csv B.csv: per-phase p50/p95 ratios B/A")->expected(2);
+  app.add_option("--set", a.sets,
+                 "a render-only override, section.key=value (repeatable; fluid_surface.* only, so the checkpoints "
+                 "still hold), e.g. fluid_surface.method=raycast");
   app.add_flag("--no-ui", a.no_ui, "start with the overlay hidden");
   bool no_render = false;
   app.add_flag("--no-render", no_render,
@@ -225,6 +234,14 @@ int replayCommand(const Args& args) {
     std::printf("checkpoints: %zu %s of %zu in the file (%zu steps of %llu run)\n", ok,
                 a.update_hashes ? "hashed" : "matched", result.checkpoints_in_file, result.rows.size(),
                 static_cast<unsigned long long>(replay.end_step));
+    if (const RaycastTally& t = result.raycast; t.frames > 0)
+      std::printf(
+          "raycast: %zu frames, most records in a frame %llu, dropped %llu in %zu frames, largest pool %llu "
+          "records (%.1f MiB; bound %.1f MiB)\n",
+          t.frames, static_cast<unsigned long long>(t.records_max), static_cast<unsigned long long>(t.dropped_total),
+          t.frames_dropping, static_cast<unsigned long long>(t.pool_records_max),
+          static_cast<double>(t.pool_records_max) * 16.0 / (1024.0 * 1024.0),
+          static_cast<double>(t.pool_bound) * 16.0 / (1024.0 * 1024.0));
   }
   if (code != 0) {
     std::fprintf(stderr, "fluiddemo replay: %s\n", error.c_str());

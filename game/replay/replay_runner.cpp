@@ -126,6 +126,17 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
   if (world.sph_fluid) row.particles = world.sph_fluid->world.particles.size();
   if (world.sprite_particles) row.sprites = world.sprite_particles->count;
   if (world.fluid_surface) row.triangles = world.fluid_surface->mesh.indices.size() / 3;
+  if (world.fluid_surface && world.fluid_surface->params.method == SurfaceMethodChoice::raycast &&
+      world.fluid_surface->raycast_pool > 0) {
+    const FluidSurface& s = *world.fluid_surface;
+    RaycastTally& t = result.raycast;
+    ++t.frames;
+    t.records_max = std::max(t.records_max, s.raycast_records);
+    t.dropped_total += s.raycast_dropped;
+    t.frames_dropping += s.raycast_dropped > 0;
+    t.pool_records_max = std::max(t.pool_records_max, s.raycast_pool);
+    t.pool_bound = std::max(t.pool_bound, s.raycast_pool_bound);
+  }
   std::size_t& cursor = player.checkpoint_cursor;
   for (; cursor < replay.events.size() && replay.events[cursor].step <= world.steps; ++cursor) {
     const ReplayEvent& e = replay.events[cursor];
@@ -284,6 +295,21 @@ bool rewriteHashes(std::string_view text, const ReplayFile& replay, const Replay
     pos = end + 1;
   }
   return true;
+}
+
+bool renderOnlyOverride(std::string_view assignment, std::string& error) {
+  const std::string_view path = assignment.substr(0, assignment.find('='));
+  const std::size_t dot = path.find('.');
+  const std::string_view section = dot == std::string_view::npos ? path : path.substr(0, dot);
+  constexpr std::string_view kRenderOnly = "fluid_surface";
+  if (section == kRenderOnly) return true;
+  std::string keys;
+  if (const SectionSpec* spec = findSection(kRenderOnly))
+    for (const ParamSpec& param : spec->params) keys += (keys.empty() ? "" : ", ") + std::string(param.key);
+  error = "--set " + std::string(assignment) + ": '" + std::string(path) +
+          "' is not render-only (it could change the simulation the checkpoints hash); a replay accepts --set for " +
+          std::string(kRenderOnly) + ".* keys only (" + keys + ")";
+  return false;
 }
 
 }  // namespace game

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -33,7 +34,8 @@ struct ReplayRunOptions {
   bool render = true;
   bool allow_scene_change = false;
   bool update_hashes = false;  // record the hashes at checkpoints instead of checking them
-  // Applied after the header's set records. Test-only: a perturbed constant must fail the gate.
+  // Applied after the header's set records: `fluiddemo replay --set` passes render-only keys
+  // (renderOnlyOverride); tests pass a perturbed constant, which must fail the gate.
   std::vector<std::string> extra_overrides;
   std::vector<std::pair<std::uint64_t, std::filesystem::path>> screenshots;  // (step, PNG)
 };
@@ -46,6 +48,17 @@ struct CheckpointOutcome {
   bool matched = false;
 };
 
+// fluid_surface.method = raycast, over the frames rendered: the fragment-list demand and what the
+// pool dropped (engine::RaycastRenderer), so a run shows whether its pool held every record.
+struct RaycastTally {
+  std::size_t frames = 0;              // frames drawn by the ray caster
+  std::uint64_t records_max = 0;       // most records one frame asked for
+  std::uint64_t dropped_total = 0;     // records dropped, all frames
+  std::size_t frames_dropping = 0;     // frames that dropped any
+  std::uint64_t pool_records_max = 0;  // largest pool (16 bytes a record)
+  std::uint64_t pool_bound = 0;        // the most records the pool may grow to
+};
+
 struct ReplayResult {
   SceneConfig scene;
   std::uint64_t scene_hash = 0;  // of the scene file as it is now
@@ -55,7 +68,14 @@ struct ReplayResult {
   std::vector<CheckpointOutcome> checkpoints;  // every checkpoint reached, in order
   std::size_t checkpoints_in_file = 0;
   std::string mismatch;  // the first failed checkpoint: step, line, first differing subsystem
+  RaycastTally raycast;
 };
+
+// `fluiddemo replay --set`: true when `assignment` (section.key=value) names a key that changes
+// only how frames are drawn, never the simulation state the checkpoints hash (docs/replay.md,
+// "State hash": the fluid surface mesh and GPU state are left out), so the checkpoints still gate.
+// Today that is every fluid_surface key. False + an error naming the key otherwise.
+bool renderOnlyOverride(std::string_view assignment, std::string& error);
 
 // Applies a replay to a World step by step (shared by the rendered and the simulation-only runs).
 struct ReplayPlayer {

@@ -90,6 +90,8 @@ const std::array kFluidSurfaceParams = {
     ParamSpec{"refraction", ParamType::number, 0.0, 1.0, num(0.08), "screen offset per metre of water; 0 = off"},
     ParamSpec{"opacity", ParamType::number, 0.0, 1.0, num(0.85), "blend alpha of one water layer"},
     ParamSpec{"absorption", ParamType::vec3, 0.0, 50.0, vec(1.6f, 0.45f, 0.25f), "Beer-Lambert sigma per metre, RGB"},
+    ParamSpec{"visible", ParamType::boolean, 0.0, 0.0, flag(true),
+              "false: the water is not drawn (the same frame without it; docs/render.md's water masks); live"},
 };
 
 const std::array kSections = {

@@ -32,6 +32,7 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
   p.refraction = static_cast<float>(section.number("refraction"));
   p.opacity = static_cast<float>(section.number("opacity"));
   p.absorption = section.vec3("absorption");
+  p.visible = section.boolean("visible");
   out = p;
   return true;
 }

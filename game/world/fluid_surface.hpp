@@ -30,6 +30,7 @@ struct FluidSurfaceParams {
   float refraction = 0.08f;  // engine::WaterParams::refraction; 0 = off
   float opacity = 0.85f;
   glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
+  bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
 };
 
 // Reads the "fluid_surface" section. False + error naming the field for an unknown `order` or
@@ -44,8 +45,9 @@ struct FluidSurface {
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
   // Method raycast, last frame (written by the renderer): fragment-list records asked for and
-  // records dropped because the pool was full (engine::RaycastRenderer::used / dropped).
-  std::uint64_t raycast_records = 0, raycast_dropped = 0;
+  // records dropped because the pool was full (engine::RaycastRenderer::used / dropped), and the
+  // pool's size in records after the frame (it grows with the demand up to raycast_pool_bound).
+  std::uint64_t raycast_records = 0, raycast_dropped = 0, raycast_pool = 0, raycast_pool_bound = 0;
 };
 
 // Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With

@@ -227,15 +227,18 @@ TEST_F(FluidMethodsTest, LoneParticleRaycastHasTheAnalyticRadius) {
   EXPECT_NEAR(static_cast<double>(countOf(mask)), M_PI * r_px * r_px, 2.0 * M_PI * r_px);
 }
 
-// A pool far too small for the blob: records are dropped and counted, and the picture (in a
-// float target) holds no NaN or infinity; a pool large enough drops nothing.
+// A fixed pool far too small for the blob: records are dropped and counted, and the picture (in
+// a float target) holds no NaN or infinity; a pool large enough drops nothing.
 TEST_F(FluidMethodsTest, FragmentPoolOverflowIsCountedAndHarmless) {
   const std::vector<glm::vec3> particles = positionsOf(scene_);
   Target target(kW, kH, GL_RGBA32F);
   RaycastDesc tiny = raycastDesc();
   tiny.pool_per_pixel = 0.05f;
+  RaycastParams fixed = raycastParams();
+  fixed.grow_pool = false;
   RaycastRenderer r;
-  renderRaycast(target.fbo, particles, tiny, raycastParams(), &r);
+  renderRaycast(target.fbo, particles, tiny, fixed, &r);
+  EXPECT_EQ(r.pool_growths, 0u);
   EXPECT_GT(r.used, r.pool_records);
   EXPECT_EQ(r.dropped, r.used - r.pool_records);
   std::vector<float> px(static_cast<std::size_t>(kW) * kH * 4);
@@ -251,10 +254,58 @@ TEST_F(FluidMethodsTest, FragmentPoolOverflowIsCountedAndHarmless) {
   RaycastDesc ample = raycastDesc();
   ample.pool_per_pixel = 32.0f;  // this blob needs ~11 records per pixel on average (the pool's size)
   RaycastRenderer full;
-  renderRaycast(target.fbo, particles, ample, raycastParams(), &full);
+  renderRaycast(target.fbo, particles, ample, fixed, &full);
   EXPECT_GT(full.used, 0u);
   EXPECT_EQ(full.dropped, 0u);
   destroyRaycastRenderer(full);
+}
+
+// The default pool sizes itself: started far too small, the first frame's gather overflows, the
+// pool grows to 1.25x the demand and the gather runs again, so nothing is dropped and the picture
+// is the one an ample fixed pool gives; the next frame needs no growth.
+TEST_F(FluidMethodsTest, PoolGrowsToTheDemandAndDropsNothing) {
+  const std::vector<glm::vec3> particles = positionsOf(scene_);
+  Target target(kW, kH, GL_RGBA8);
+  RaycastDesc ample = raycastDesc();
+  ample.pool_per_pixel = 32.0f;
+  RaycastParams fixed = raycastParams();
+  fixed.grow_pool = false;
+  const std::vector<unsigned char> reference = renderRaycast(target.fbo, particles, ample, fixed);
+  RaycastDesc small = raycastDesc();
+  small.pool_per_pixel = 0.05f;  // ~1/200 of this blob's demand
+  RaycastRenderer r;
+  const std::vector<unsigned char> grown = renderRaycast(target.fbo, particles, small, raycastParams(), &r);
+  std::printf("[ metric ] pool grown from %.0f to %u records for %llu asked (%llu growths)\n",
+              std::round(0.05 * kW * kH), r.pool_records, static_cast<unsigned long long>(r.used),
+              static_cast<unsigned long long>(r.pool_growths));
+  EXPECT_EQ(r.pool_growths, 1u);
+  EXPECT_EQ(r.dropped, 0u);
+  EXPECT_GT(r.used, static_cast<std::uint64_t>(0.05 * kW * kH));
+  EXPECT_EQ(r.pool_records, static_cast<std::uint32_t>(std::ceil(1.25 * static_cast<double>(r.used))));
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < grown.size(); ++i) differing += std::abs(int(grown[i]) - int(reference[i])) > 1;
+  EXPECT_EQ(differing, 0u);
+  drawRaycastFluid(r, target.fbo, scene_.camera, water_, raycastParams());
+  EXPECT_EQ(r.pool_growths, 1u);
+  EXPECT_EQ(r.dropped, 0u);
+  destroyRaycastRenderer(r);
+}
+
+// Growth stops at max_pool_per_pixel: the demand above it is dropped and counted as before.
+TEST_F(FluidMethodsTest, PoolStopsAtItsBoundAndCountsTheRest) {
+  const std::vector<glm::vec3> particles = positionsOf(scene_);
+  Target target(kW, kH, GL_RGBA8);
+  RaycastDesc bounded = raycastDesc();
+  bounded.pool_per_pixel = 0.05f;
+  bounded.max_pool_per_pixel = 0.5f;  // this blob asks for ~11 records per pixel on average
+  RaycastRenderer r;
+  renderRaycast(target.fbo, particles, bounded, raycastParams(), &r);
+  EXPECT_EQ(r.pool_growths, 1u);
+  EXPECT_EQ(r.pool_records, r.max_pool_records);
+  EXPECT_EQ(r.max_pool_records, static_cast<std::uint32_t>(std::round(0.5 * kW * kH)));
+  EXPECT_GT(r.used, r.pool_records);
+  EXPECT_EQ(r.dropped, r.used - r.pool_records);
+  destroyRaycastRenderer(r);
 }
 
 // Creating and destroying each method in turn (as the game's live switch does) leaves no GL
@@ -314,4 +365,9 @@ TEST_F(FluidMethodsTest, NonFiniteParticlesAreRefused) {
   createRaycastRenderer(bad, rc);
   EXPECT_FALSE(rc.ready);
   EXPECT_NE(rc.error.find("pool_per_pixel"), std::string::npos) << rc.error;
+  bad = raycastDesc();
+  bad.max_pool_per_pixel = std::nanf("");
+  createRaycastRenderer(bad, rc);
+  EXPECT_FALSE(rc.ready);
+  EXPECT_NE(rc.error.find("max_pool_per_pixel"), std::string::npos) << rc.error;
 }
