@@ -135,7 +135,19 @@ bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& conten
     ColliderModel mesh;
     if (!loadColliderModel(path.string(), mesh, error)) return false;
     const fluid::MeshView view{mesh.positions, mesh.indices};
-    const std::vector<fluid::MapSpec> specs = fluid::defaultMapSpecs(fluid::meshBounds(view), kColliderResolution);
+    const fluid::Bounds bounds = fluid::meshBounds(view);
+    // The ground is an 80 m slab seen only from above: its y pair decides alone (the x and z
+    // pairs would only add lookups to every particle's collision). The basin and the statue get
+    // all three axis pairs.
+    std::vector<fluid::MapSpec> specs;
+    if (std::string(model) == "ground.obj") {
+      if (!fluid::parseMapSpec("y", bounds, kColliderResolution, fluid::DepthMapFormat::front_back16, specs, error)) {
+        error = path.string() + ": " + error;
+        return false;
+      }
+    } else {
+      specs = fluid::defaultMapSpecs(bounds, kColliderResolution);
+    }
     fluid::DepthMapCollider collider;
     fluid::BakeDesc desc;
     desc.normal_resolution = 128;
@@ -184,8 +196,9 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
   std::vector<engine::GpuColliderDesc> descs(s.colliders.size());
   for (std::size_t c = 0; c < s.colliders.size(); ++c)
     engine::describeCollider(s.colliders[c], fluid::ColliderPose{}, views[c], normals[c], descs[c]);
-  if (!engine::setColliders(s.gpu, descs, error)) {
-    s.gpu_error = error;
+  // The collider variant of the update shader is compiled here, not in the first step's frame.
+  if (!engine::setColliders(s.gpu, descs, error) || !engine::prepareStep(s.gpu, stepParams(s.params))) {
+    s.gpu_error = error.empty() ? s.gpu.error : error;
     detachSpriteGpu(s);
     s.attached = true;  // attached but off: stepping stays a no-op, the overlay shows why
     return false;

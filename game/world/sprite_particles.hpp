@@ -95,8 +95,8 @@ void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params,
                          std::uint64_t seed);
 
 // Bakes ground.obj, basin.obj and statue.obj of `content_dir`/models into depth-map colliders
-// (three front-back16 pairs along x, y, z each: fluid::defaultMapSpecs, Kolb §5.2). No GL. Done
-// once; false + error naming the model on failure.
+// (basin, statue: three front-back16 pairs along x, y, z, fluid::defaultMapSpecs, Kolb §5.2; the ground slab: its y
+// pair). No GL. Done once; false + error naming the model on failure.
 bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error);
 
 // Needs the GL context current. Bakes the colliders if not done yet, creates the GPU system for
