@@ -73,8 +73,7 @@ glm::mat4 bodyMatrix(const engine::BodyState& a, const engine::BodyState& b, flo
 }
 
 // Draw list for the current state, interpolated by `alpha` between the last two steps.
-void buildDrawList(const World& world, const SceneAssets& assets, float alpha, std::vector<engine::DrawItem>& items,
-                   std::vector<glm::vec4>& particles) {
+void buildDrawList(const World& world, const SceneAssets& assets, float alpha, std::vector<engine::DrawItem>& items) {
   items.clear();
   engine::DrawItem ground;
   ground.mesh = &assets.ground;
@@ -102,15 +101,27 @@ void buildDrawList(const World& world, const SceneAssets& assets, float alpha, s
       items.push_back(crate);
     }
   }
-  particles.clear();
-  if (world.sprite_particles) {
-    const SpriteParticles& s = *world.sprite_particles;
-    const float lifetime = std::max(s.params.lifetime, 1e-3f);
-    for (std::size_t i = 0; i < s.count; ++i) {
-      const glm::vec3 p = glm::mix(s.previous[i], s.position[i], alpha);
-      particles.emplace_back(p, std::clamp(s.age[i] / lifetime, 0.0f, 1.0f));
-    }
+}
+
+// The GPU sprites' live state: the CPU index allocator (Kolb §3.3.1) knows every live sprite
+// without a read-back.
+void drawSpriteStatus(const SpriteParticles& s) {
+  if (!s.gpu_error.empty()) {
+    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "sprites off: %s", s.gpu_error.c_str());
+    return;
   }
+  if (!s.attached) {
+    ImGui::Text("sprites: no GL context (not simulated)");
+    return;
+  }
+  const engine::IndexAllocator& a = s.gpu.allocator;
+  ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
+              s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
+  ImGui::Text("  born: mist %llu, spray %llu (%u this step), dropped (budget full) %llu",
+              static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
+              s.spray_last_step, static_cast<unsigned long long>(s.dropped));
+  ImGui::Text("  sort pass %u of %u, colliders baked in %.0f ms", s.gpu.sort_step,
+              engine::sortPassCount(s.gpu.capacity), s.bake_ms);
 }
 
 // Overlay window with the scene's tunable parameters; edits world.scene in place.
@@ -125,8 +136,7 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     return {false, false};
   }
   ImGui::Text("scene '%s', step %llu", world.scene.name.c_str(), static_cast<unsigned long long>(world.steps));
-  if (world.sprite_particles)
-    ImGui::Text("particles: %zu / %zu", world.sprite_particles->count, world.sprite_particles->capacity);
+  if (world.sprite_particles) drawSpriteStatus(*world.sprite_particles);
   if (world.rigid_bodies) {
     ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*world.rigid_bodies->physics),
                 world.rigid_bodies->thrown);
@@ -420,6 +430,11 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
   const std::filesystem::path content_dir = contentDir();
   World world;
   if (!buildWorld(scene, content_dir, world, error)) return 1;
+  // The sprites' GL objects are freed while the context is still current, on every way out.
+  struct GpuEffects {
+    World& world;
+    ~GpuEffects() { detachWorldGpu(world); }
+  };
   report.systems_constructed = world.systems;
 
   engine::PlatformDesc platform_desc;
@@ -450,6 +465,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         !loadSceneAssets(content_dir, assets, error) || !engine::createOverlay(platform, overlay, error)) {
       code = 1;
     } else {
+      attachWorldGpu(world, shaderDirectory(), content_dir);
+      const GpuEffects gpu_effects{world};
       overlay.visible = options.show_ui;
       engine::FixedStepDesc clock_desc;
       clock_desc.step_seconds = world.step_seconds;
@@ -460,7 +477,6 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
       engine::InputState input;
       engine::Lighting lighting;
       std::vector<engine::DrawItem> items;
-      std::vector<glm::vec4> particle_scratch;
       std::vector<std::uint8_t> pixels;
       std::vector<PlayerAction> actions;
       std::filesystem::path hook_screenshot;
@@ -515,17 +531,19 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         const bool last_frame = options.frames > 0 && frame + 1 == options.frames;
         {
           engine::ScopedPhase phase(profiler, engine::Phase::render);
-          buildDrawList(world, assets, alpha, items, particle_scratch);
+          buildDrawList(world, assets, alpha, items);
           engine::FrameView view;
           view.view = engine::cameraView(world.camera);
           view.projection = engine::cameraProjection(
               world.camera, static_cast<float>(renderer.width) / static_cast<float>(renderer.height));
           view.eye = world.camera.position;
-          engine::ParticleBatch batch;
-          batch.particles = particle_scratch;
-          if (world.sprite_particles) batch.radius = world.sprite_particles->params.size;
-          engine::renderScene(renderer, view, lighting, items, std::span(&batch, 1), true);
+          engine::renderScene(renderer, view, lighting, items, {}, true);
           drawWater(water_pass, renderer, world, view);
+          if (world.sprite_particles) {
+            drawSpriteParticles(*world.sprite_particles, renderer.scene_fbo.id(), renderer.width, renderer.height,
+                                view.view, view.projection, view.eye);
+            engine::checkGl(renderer.errors, "sprites");
+          }
           if (input.screenshot || !hook_screenshot.empty() ||
               (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
             engine::readSceneRgba(renderer, pixels);
@@ -577,9 +595,11 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
               const SceneConfig edited = world.scene;
               const engine::FpsCamera camera = world.camera;
               std::string rebuild_error;
+              detachWorldGpu(world);
               if (buildWorld(edited, content_dir, world, rebuild_error)) {
                 world.camera = camera;
                 report.systems_constructed = world.systems;
+                attachWorldGpu(world, shaderDirectory(), content_dir);
               } else {
                 std::fprintf(stderr, "fluiddemo: restart failed: %s\n", rebuild_error.c_str());
               }

@@ -72,15 +72,25 @@ void checkPenetration(SoakMonitor& m, const World& world) {
     }
   }
   if (world.sprite_particles) {
+    // The GPU sprites as read back after their last step (soak: every step), against the depth
+    // maps they collide with on the GPU (baked from the same models; the CPU lookup of
+    // fluid/collide is the reference the shader decodes).
     const SpriteParticles& sp = *world.sprite_particles;
-    const Penetration p = worstPenetration(std::span(sp.position).first(sp.count), world.fountain,
-                                           fluid::ColliderPose{}, sp.params.size, 0.0f, m.scratch);
-    if (p.ratio > s.worst_sprite) {
-      s.worst_sprite = p.ratio;
-      s.worst_sprite_step = step;
+    m.points.clear();
+    for (const glm::vec4& p : sp.sample_positions) m.points.emplace_back(p);
+    for (std::size_t c = 0; c < sp.colliders.size(); ++c) {
+      const Penetration p =
+          worstPenetration(m.points, sp.colliders[c], fluid::ColliderPose{}, sp.params.size, 0.0f, m.scratch);
+      if (p.ratio > s.worst_sprite) {
+        s.worst_sprite = p.ratio;
+        s.worst_sprite_step = step;
+      }
+      if (p.ratio > m.desc.particle_tolerance) {
+        fail(m, step,
+             describe(("live sprite " + std::to_string(p.index) + " (" + sp.collider_names[c] + ")").c_str(), p,
+                      m.desc.particle_tolerance));
+      }
     }
-    if (p.ratio > m.desc.particle_tolerance)
-      fail(m, step, describe(("sprite particle " + std::to_string(p.index)).c_str(), p, m.desc.particle_tolerance));
   }
   if (world.rigid_bodies) {
     const RigidBodies& bodies = *world.rigid_bodies;
@@ -122,6 +132,9 @@ void soakBeforeStep(SoakMonitor& m, World& world, std::uint64_t step) {
     const int length = std::snprintf(line, sizeof(line), "%llu\n", static_cast<unsigned long long>(step + 1));
     if (::write(m.desc.progress_fd, line, static_cast<std::size_t>(length)) < 0) m.desc.progress_fd = -1;
   }
+  // The sprites live on the GPU: read them back after every step so the NaN and penetration
+  // checks see every live sprite (World::nonfinite_state and checkPenetration use the sample).
+  if (world.sprite_particles) world.sprite_particles->readback_every = 1;
   if (const std::optional<CrateThrow> due = throwDue(m.schedule, step); due && world.rigid_bodies) {
     throwCrateAt(world, *due);
     ++m.stats.throws;
@@ -143,8 +156,13 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   }
   if (world.sprite_particles) {
     const SpriteParticles& sp = *world.sprite_particles;
-    trackCount(sp.count, !m.have_counts, s.sprite_min, s.sprite_max);
-    s.max_speed = std::max(s.max_speed, maxSpeed(std::span(sp.velocity).first(sp.count)));
+    trackCount(liveSprites(sp), !m.have_counts, s.sprite_min, s.sprite_max);
+    for (const glm::vec4& v : sp.sample_velocities) s.max_speed = std::max(s.max_speed, glm::length(glm::vec3(v)));
+    // The read-back must be fresh: a check of stale data would pass whatever the GPU did.
+    if (sp.attached && sp.readback_every > 0 && sp.sample_step != sp.steps)
+      fail(m, world.steps,
+           "sprite read-back is stale (step " + std::to_string(sp.sample_step) + " of " + std::to_string(sp.steps) +
+               ")");
   }
   if (world.rigid_bodies) {
     for (const engine::BodyState& state : world.rigid_bodies->current)

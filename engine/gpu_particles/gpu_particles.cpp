@@ -475,6 +475,32 @@ bool setFlowField(GpuParticles& s, const FlowFieldDesc& flow, std::string& error
   return true;
 }
 
+namespace {
+
+// Bit set of the update pass's compile-time features for these parameters and colliders.
+unsigned updateVariant(const GpuParticles& s, const GpuStepParams& params) {
+  const float drag = stokesDragRate(params);
+  return (std::clamp(params.attractor_count, 0, kMaxAttractors) > 0 ? 1u : 0u) | (drag > 0.0f ? 2u : 0u) |
+         (drag > 0.0f && s.flow_enabled ? 4u : 0u) | (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u);
+}
+
+}  // namespace
+
+bool prepareStep(GpuParticles& s, const GpuStepParams& params) {
+  if (!s.ready) return false;
+  const unsigned variant = updateVariant(s, params);
+  if (s.update_variants[variant] != 0) return true;
+  std::string error;
+  s.update_variants[variant] = buildUpdateVariant(s.desc.shader_dir / "gpu_particles", variant, error);
+  if (s.update_variants[variant] == 0) {
+    // Shader files changed or a driver rejects a variant: turn the effect off, keep running.
+    s.error = "gpu particles disabled, update shader variant " + std::to_string(variant) + " failed:\n" + error;
+    s.ready = false;
+    return false;
+  }
+  return true;
+}
+
 void step(GpuParticles& s, const GpuStepParams& params) {
   if (!s.ready) return;
   s.time += s.desc.dt;
@@ -491,20 +517,8 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   if (rows == 0) return;
   const int attractor_count = std::clamp(params.attractor_count, 0, kMaxAttractors);
   const float drag = stokesDragRate(params);
-  const unsigned variant = (attractor_count > 0 ? 1u : 0u) | (drag > 0.0f ? 2u : 0u) |
-                           (drag > 0.0f && s.flow_enabled ? 4u : 0u) |
-                           (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u);
-  if (s.update_variants[variant] == 0) {
-    std::string error;
-    s.update_variants[variant] = buildUpdateVariant(s.desc.shader_dir / "gpu_particles", variant, error);
-    if (s.update_variants[variant] == 0) {
-      // Shader files changed or a driver rejects a variant: turn the effect off, keep running.
-      s.error = "gpu particles disabled, update shader variant " + std::to_string(variant) + " failed:\n" + error;
-      s.ready = false;
-      return;
-    }
-  }
-  const GLuint prog = s.update_variants[variant];
+  if (!prepareStep(s, params)) return;
+  const GLuint prog = s.update_variants[updateVariant(s, params)];
   beginStatePass(s, s.fbo[dst], rows);
   glUseProgram(prog);
   bindTexture(0, GL_TEXTURE_2D, s.state0[src]);

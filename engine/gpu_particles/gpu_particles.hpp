@@ -264,6 +264,10 @@ bool setFlowField(GpuParticles& system, const FlowFieldDesc& flow, std::string& 
 // One fixed step of desc.dt: the CPU retires particles whose lifetime ended (§3.3.1), then one fragment
 // pass integrates, collides and marks dead particles on the GPU (w = 0, moved far away).
 void step(GpuParticles& system, const GpuStepParams& params);
+// Builds now (once) the update-pass variant step() will use with these parameters and the
+// colliders uploaded, so the first step does not pay for the shader compile. False when the
+// system is not ready or the variant fails (then `ready` is false and `error` says why).
+bool prepareStep(GpuParticles& system, const GpuStepParams& params);
 // 6πηr/m of §3.3.2 in 1/s (0 when the parameters are not finite).
 float stokesDragRate(const GpuStepParams& params);
 

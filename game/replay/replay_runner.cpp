@@ -124,7 +124,7 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
   const ReplayFile& replay = *player.replay;
   row.step = world.steps;
   if (world.sph_fluid) row.particles = world.sph_fluid->world.particles.size();
-  if (world.sprite_particles) row.sprites = world.sprite_particles->count;
+  if (world.sprite_particles) row.sprites = liveSprites(*world.sprite_particles);
   if (world.fluid_surface) row.triangles = world.fluid_surface->mesh.indices.size() / 3;
   if (world.fluid_surface && world.fluid_surface->params.method == SurfaceMethodChoice::raycast &&
       world.fluid_surface->raycast_pool > 0) {

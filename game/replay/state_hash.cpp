@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <numeric>
-#include <sstream>
 
 namespace game {
 namespace {
@@ -38,19 +37,6 @@ std::uint64_t hashRigidBodies(const RigidBodies& bodies) {
     addVec3(h, k < physics.external_force.size() ? physics.external_force[k] : glm::vec3(0.0f));
     addVec3(h, k < physics.external_torque.size() ? physics.external_torque[k] : glm::vec3(0.0f));
   }
-  return h.value;
-}
-
-std::uint64_t hashSprites(const SpriteParticles& s) {
-  Fnv1a64 h;
-  h.add(static_cast<std::uint64_t>(s.count));
-  for (std::size_t i = 0; i < s.count; ++i) {
-    addVec3(h, s.position[i]);
-    addVec3(h, s.previous[i]);
-    addVec3(h, s.velocity[i]);
-    h.add(s.age[i]);
-  }
-  h.add(s.emit_debt);
   return h.value;
 }
 
@@ -88,24 +74,12 @@ std::uint64_t hashSph(const SphFluid& fluid, StateHashScratch& scratch) {
   return h.value;
 }
 
-std::uint64_t hashRng(const std::mt19937& rng) {
-  // The standard's text form of the engine is its whole state (624 words and the position).
-  std::ostringstream text;
-  text << rng;
-  const std::string state = std::move(text).str();
-  Fnv1a64 h;
-  h.bytes(state.data(), state.size());
-  return h.value;
-}
-
 }  // namespace
 
 void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& out) {
   out.parts.clear();
   if (world.rigid_bodies) out.parts.push_back({"rigid_bodies", hashRigidBodies(*world.rigid_bodies)});
-  if (world.sprite_particles) out.parts.push_back({"sprite_particles", hashSprites(*world.sprite_particles)});
   if (world.sph_fluid) out.parts.push_back({"sph_fluid", hashSph(*world.sph_fluid, scratch)});
-  if (world.sprite_particles) out.parts.push_back({"rng", hashRng(world.sprite_particles->rng)});
   Fnv1a64 h;
   h.add(world.steps);
   for (const SubsystemHash& part : out.parts) {

@@ -7,12 +7,12 @@
 // Hashed, per subsystem (a subsystem the scene does not list is left out):
 //   rigid_bodies      every crate's transform and velocities as Bullet holds them, the pending
 //                     external forces (the water's push for the next step), crates thrown
-//   sprite_particles  count, positions (current and previous), velocities, ages, emission debt
 //   sph_fluid         particles in id order (id, position, velocity, density, pressure), time,
 //                     step count, next id, the emitters' layer clocks, the colliders' poses and
 //                     the forces they took from the water
-//   rng               the seeded generators' states (today the sprite emitter's mt19937)
-// Left out: GPU-only state (the fluid surface's buffers, the GPU sprite effect), the fluid surface
+// Left out: GPU-only state: the fluid surface's buffers and the sprite_particles effect (GPU
+// state-preserving sprites: they never feed back into SPH or Bullet, and GPU float results differ
+// between drivers, so a hash of them would tie a replay to one driver); the fluid surface
 // mesh (derived from the particles and the camera every frame), the camera (an input, not state),
 // and Bullet's internal caches (contact manifolds, sleep timers), which act on the state hashed.
 
@@ -30,7 +30,7 @@ struct World;
 using Fnv1a64 = fluid::Fnv1a64;  // fluid/core/fnv1a.hpp
 
 struct SubsystemHash {
-  std::string_view name;  // "rigid_bodies", "sprite_particles", "sph_fluid", "rng"
+  std::string_view name;  // "rigid_bodies", "sph_fluid"
   std::uint64_t value = 0;
 };
 

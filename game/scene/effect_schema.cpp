@@ -40,14 +40,26 @@ const std::array kRigidBodyParams = {
 };
 
 const std::array kSpriteParticleParams = {
-    ParamSpec{"rate", ParamType::number, 0.0, 100000.0, num(1500.0), "particles emitted per second"},
-    ParamSpec{"speed", ParamType::number, 0.0, 50.0, num(7.0), "jet speed at the nozzle (m/s)"},
-    ParamSpec{"spread_degrees", ParamType::number, 0.0, 90.0, num(8.0), "half-angle of the jet cone"},
-    ParamSpec{"lifetime", ParamType::number, 0.1, 60.0, num(4.0), "seconds before a particle is recycled"},
+    ParamSpec{"rate", ParamType::number, 0.0, 100000.0, num(1500.0), "mist sprites emitted per second at the nozzle"},
+    ParamSpec{"speed", ParamType::number, 0.0, 50.0, num(7.0), "mist speed at the nozzle (m/s, +-20%)"},
+    ParamSpec{"spread_degrees", ParamType::number, 0.0, 90.0, num(8.0), "half-angle of the mist cone"},
+    ParamSpec{"lifetime", ParamType::number, 0.1, 60.0, num(4.0), "mist sprite lifetime (s, +-25%)"},
     ParamSpec{"max_particles", ParamType::integer, 0, 1000000, integer(10000),
-              "particle budget (fixed at construction)"},
+              "GPU sprite budget, mist and spray (fixed at construction; 0 = no GPU resources)"},
     ParamSpec{"size", ParamType::number, 0.005, 1.0, num(0.035), "sprite radius (m)"},
-    ParamSpec{"restitution", ParamType::number, 0.0, 1.0, num(0.3), "bounce off ground and basin"},
+    ParamSpec{"restitution", ParamType::number, 0.0, 1.0, num(0.3),
+              "Kolb 2004 resilience: bounce off the baked ground/basin/statue depth maps"},
+    ParamSpec{"friction", ParamType::number, 0.0, 1.0, num(0.15), "Kolb 2004 friction on the baked colliders"},
+    ParamSpec{"spray_rate", ParamType::number, 0.0, 10000.0, num(40.0),
+              "Ihmsen 2012 k: spray sprites per second from a surface particle with I_k = 1 (0 = no spray)"},
+    ParamSpec{"spray_energy_min", ParamType::number, 0.0, 1000.0, num(8.0),
+              "Ihmsen 2012 tau_k,min: specific kinetic energy |v|^2/2 (J/kg) where spray starts"},
+    ParamSpec{"spray_energy_max", ParamType::number, 0.0, 1000.0, num(30.0),
+              "Ihmsen 2012 tau_k,max: |v|^2/2 (J/kg) of full spray"},
+    ParamSpec{"spray_surface_density", ParamType::number, 0.0, 2.0, num(0.9),
+              "rho/rho0 at or below which an SPH particle counts as at the free surface"},
+    ParamSpec{"spray_lifetime", ParamType::number, 0.1, 60.0, num(1.2), "spray sprite lifetime (s, +-25%)"},
+    ParamSpec{"spray_max_per_step", ParamType::integer, 0, 100000, integer(200), "cap on spray births per step"},
 };
 
 const std::array kSphFluidParams = {
@@ -98,7 +110,7 @@ const std::array kSections = {
     SectionSpec{"scene", false, "simulation clock", kSceneParams},
     SectionSpec{"camera", false, "first-person camera", kCameraParams},
     SectionSpec{"rigid_bodies", true, "Bullet world: ground, basin, statue, crates", kRigidBodyParams},
-    SectionSpec{"sprite_particles", true, "fountain jet of gravity particles drawn as point sprites",
+    SectionSpec{"sprite_particles", true, "GPU sprites (Kolb 2004): nozzle mist and SPH spray, depth-map collisions",
                 kSpriteParticleParams},
     SectionSpec{"sph_fluid", true, "SPH water (CPU): nozzle jet, fountain colliders, drains", kSphFluidParams},
     SectionSpec{"fluid_surface", true, "marching-slices mesh of sph_fluid drawn as refractive water (needs sph_fluid)",

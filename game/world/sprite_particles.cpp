@@ -1,179 +1,324 @@
 #include "game/world/sprite_particles.hpp"
 
-#include "fluid/core/parallel.hpp"
+#include "engine/gl/gl.hpp"
+#include "fluid/core/finite.hpp"
+#include "game/commands/collider_model.hpp"
+#include "game/world/sph_fluid.hpp"
+
+#include <glm/gtc/constants.hpp>
 
 #include <algorithm>
-#include <atomic>
+#include <chrono>
 #include <cmath>
-#include <numbers>
+#include <cstdio>
+#include <random>
 
 namespace game {
 namespace {
 
-// Uniform in [0, 1) from the generator's raw bits: the same sequence on every standard library
-// (std::uniform_real_distribution is implementation-defined).
-float uniform01(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 16777216.0f); }
+// Depth-map resolution of the baked colliders: texels per side of each front-back pair. The
+// basin (6.4 m) gets 2.5 cm texels, the statue (2.1 m) 0.8 cm; the ground is a flat slab whose
+// top is exact at any resolution.
+constexpr int kColliderResolution = 256;
 
-constexpr float kDeepPenetration = 0.02f;  // m
-
-bool isInside(const fluid::SignedDistanceShape& shape, glm::vec3 point) {
-  fluid::ColliderSample sample;
-  shape.query(std::span(&point, 1), std::span(&sample, 1));
-  return sample.valid && sample.distance < 0.0f;
+// Smallest power-of-two texture (w, h with w = h or w = 2h) holding `capacity` texels.
+void textureSize(std::uint32_t capacity, std::uint32_t& w, std::uint32_t& h) {
+  w = 1;
+  h = 1;
+  while (w * h < capacity) (w == h ? w : h) <<= 1;
 }
 
-// Collision of particle i after integration (Kolb et al. 2004 §3.3.2 double check); returns 1
-// when it reacted or was pushed out. Touches only particle i's entries.
-int collideParticle(SpriteParticles& s, const fluid::SignedDistanceShape& shape,
-                    const fluid::CollisionMaterial& material, float dt, std::size_t i) {
-  int bounced = 0;
-  constexpr float skin = 1e-3f;
-  s.previous[i] = s.position[i];
-  // Shallow penetrations (a resting particle sinks g*dt^2, about 3 mm, per step) are left to
-  // the plain projection; only a deep one can have crossed a thin part.
-  if (s.previous_samples[i].distance >= 0.0f && s.predicted_samples[i].valid &&
-      s.predicted_samples[i].distance < -kDeepPenetration) {
-    // Outside before, inside after: move the predicted point back to where the path first
-    // enters the shape (bisection on the segment), so a fast particle crossing a thin part
-    // (the dish floor is 0.23 m, a jet particle moves up to ~0.15 m per step) is reflected
-    // off the side it came from instead of being projected out of the far side.
-    float outside = 0.0f, inside = 1.0f;
-    const glm::vec3 start = s.position[i], path = s.predicted[i] - s.position[i];
-    for (int k = 0; k < 8; ++k) {
-      const float mid = 0.5f * (outside + inside);
-      (isInside(shape, start + path * mid) ? inside : outside) = mid;
-    }
-    s.predicted[i] = start + path * inside;
-    shape.query(std::span(&s.predicted[i], 1), std::span(&s.predicted_samples[i], 1));
-  }
-  const fluid::CollisionResult result =
-      fluid::resolveCollision(s.position[i], s.previous_samples[i], s.predicted[i], s.velocity[i],
-                              s.predicted_samples[i], glm::vec3(0.0f), dt, skin, material);
-  s.position[i] = result.position;
-  s.velocity[i] = result.velocity;
-  if (result.outcome != fluid::CollisionOutcome::none) {
-    bounced = 1;
-    // Across the CSG joins of the shape the field underestimates the true distance, so one
-    // projection can stop short of the surface; a few more finish the push-out.
-    for (int k = 0; k < 4; ++k) {
-      fluid::ColliderSample sample;
-      shape.query(std::span(&s.position[i], 1), std::span(&sample, 1));
-      if (!sample.valid || sample.distance >= 0.0f) break;
-      s.position[i] += sample.normal * (skin - sample.distance);
-    }
-  }
-  s.age[i] += dt;
-  return bounced;
+// Ihmsen et al. 2012, eq. 1: Φ(I, τmin, τmax) = (min(I, τmax) − min(I, τmin)) / (τmax − τmin).
+float clampPotential(float value, float lo, float hi) {
+  if (!(hi > lo)) return value >= hi ? 1.0f : 0.0f;
+  return (std::min(value, hi) - std::min(value, lo)) / (hi - lo);
+}
+
+std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& p) {
+  std::vector<engine::ParticleTypeDesc> types(2);
+  const float d = 2.0f * p.size;  // key-frame sizes are diameters
+  // Mist: pale, grows a little as it disperses, fades out.
+  types[kMistType].keys = {{{glm::vec4(0.86f, 0.91f, 0.96f, 0.55f), d},
+                            {glm::vec4(0.88f, 0.92f, 0.97f, 0.45f), 1.3f * d},
+                            {glm::vec4(0.90f, 0.94f, 0.98f, 0.25f), 1.6f * d},
+                            {glm::vec4(0.92f, 0.95f, 1.00f, 0.0f), 1.8f * d}}};
+  // Spray: droplets torn off the SPH water, denser and bluer, smaller.
+  types[kSprayType].keys = {{{glm::vec4(0.70f, 0.82f, 0.95f, 0.85f), 0.8f * d},
+                             {glm::vec4(0.74f, 0.85f, 0.96f, 0.75f), 0.8f * d},
+                             {glm::vec4(0.80f, 0.89f, 0.98f, 0.45f), 0.7f * d},
+                             {glm::vec4(0.85f, 0.92f, 1.00f, 0.0f), 0.6f * d}}};
+  return types;
+}
+
+engine::GpuStepParams stepParams(const SpriteParticleParams& p) {
+  engine::GpuStepParams g;
+  g.gravity = p.gravity;
+  g.material.resilience = p.restitution;
+  g.material.friction = p.friction;
+  g.skin = 1e-3f;
+  g.push_out_iterations = 4;
+  return g;
+}
+
+// Mist births of one step: the debt keeps the long-run rate exact for any rate·dt.
+void emitMist(SpriteParticles& s, float dt) {
+  const SpriteParticleParams& p = s.params;
+  s.emit_debt += static_cast<double>(std::max(p.rate, 0.0f)) * dt;
+  const auto wanted = static_cast<std::uint32_t>(s.emit_debt);
+  s.emit_debt -= wanted;
+  if (wanted == 0) return;
+  engine::EmitterDesc mist;
+  mist.kind = engine::EmitterKind::spray;  // a cone (the emitter's "spray" shape)
+  mist.position = p.nozzle;
+  mist.direction = {0.0f, 1.0f, 0.0f};
+  mist.speed = p.speed;
+  mist.spread = glm::radians(std::clamp(p.spread_degrees, 0.0f, 90.0f));
+  mist.radius = 0.03f;
+  mist.count = wanted;
+  mist.lifetime = p.lifetime;
+  mist.type = kMistType;
+  mist.seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1));
+  engine::emit(mist, s.births);
+}
+
+void readBack(SpriteParticles& s) {
+  const std::uint32_t range = s.gpu.allocator.active_range;
+  s.sample_positions.clear();
+  s.sample_velocities.clear();
+  engine::readPositions(s.gpu, s.read_scratch);
+  for (std::uint32_t i = 0; i < range && i < s.read_scratch.size(); ++i)
+    if (s.gpu.allocator.live[i] != 0) s.sample_positions.push_back(s.read_scratch[i]);
+  engine::readState1(s.gpu, s.read_scratch);
+  for (std::uint32_t i = 0; i < range && i < s.read_scratch.size(); ++i)
+    if (s.gpu.allocator.live[i] != 0) s.sample_velocities.push_back(s.read_scratch[i]);
+  s.sample_step = s.steps;
 }
 
 }  // namespace
 
 SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle) {
   SpriteParticleParams p;
-  p.rate = static_cast<float>(section.number("rate"));
-  p.speed = static_cast<float>(section.number("speed"));
-  p.spread_degrees = static_cast<float>(section.number("spread_degrees"));
-  p.lifetime = static_cast<float>(section.number("lifetime"));
-  p.size = static_cast<float>(section.number("size"));
-  p.restitution = static_cast<float>(section.number("restitution"));
+  auto f = [&section](const char* key) { return static_cast<float>(section.number(key)); };
+  p.rate = f("rate");
+  p.speed = f("speed");
+  p.spread_degrees = f("spread_degrees");
+  p.lifetime = f("lifetime");
+  p.size = f("size");
+  p.restitution = f("restitution");
+  p.friction = f("friction");
+  p.spray_rate = f("spray_rate");
+  p.spray_energy_min = f("spray_energy_min");
+  p.spray_energy_max = f("spray_energy_max");
+  p.spray_surface_density = f("spray_surface_density");
+  p.spray_lifetime = f("spray_lifetime");
+  p.spray_max_per_step = section.integer("spray_max_per_step");
   p.gravity = gravity;
   p.nozzle = nozzle;
   return p;
 }
 
-void initSpriteParticles(SpriteParticles& particles, const SpriteParticleParams& params, std::size_t capacity,
-                         std::uint32_t seed) {
-  particles = SpriteParticles{};
-  particles.params = params;
-  particles.capacity = capacity;
-  particles.rng.seed(seed);
-  particles.position.resize(capacity);
-  particles.previous.resize(capacity);
-  particles.velocity.resize(capacity);
-  particles.age.resize(capacity);
-  particles.predicted.resize(capacity);
-  particles.previous_samples.resize(capacity);
-  particles.predicted_samples.resize(capacity);
+void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
+                         std::uint64_t seed) {
+  s = SpriteParticles{};
+  s.params = params;
+  s.capacity = capacity;
+  s.seed = seed;
 }
 
-void stepSpriteParticles(SpriteParticles& s, const fluid::SignedDistanceShape& shape, float dt) {
-  const SpriteParticleParams& p = s.params;
-  // Retire particles past their lifetime (swap with the last alive one; order is irrelevant).
-  for (std::size_t i = 0; i < s.count;) {
-    if (s.age[i] >= p.lifetime) {
-      const std::size_t last = --s.count;
-      s.position[i] = s.position[last];
-      s.previous[i] = s.previous[last];
-      s.velocity[i] = s.velocity[last];
-      s.age[i] = s.age[last];
+bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error) {
+  if (!s.colliders.empty()) return true;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<fluid::DepthMapCollider> colliders;
+  std::vector<std::string> names;
+  for (const char* model : {"ground.obj", "basin.obj", "statue.obj"}) {
+    const std::filesystem::path path = content_dir / "models" / model;
+    ColliderModel mesh;
+    if (!loadColliderModel(path.string(), mesh, error)) return false;
+    const fluid::MeshView view{mesh.positions, mesh.indices};
+    const fluid::Bounds bounds = fluid::meshBounds(view);
+    // The ground is an 80 m slab seen only from above: its y pair decides alone (the x and z
+    // pairs would only add lookups to every particle's collision). The basin and the statue get
+    // all three axis pairs.
+    std::vector<fluid::MapSpec> specs;
+    if (std::string(model) == "ground.obj") {
+      if (!fluid::parseMapSpec("y", bounds, kColliderResolution, fluid::DepthMapFormat::front_back16, specs, error)) {
+        error = path.string() + ": " + error;
+        return false;
+      }
     } else {
-      ++i;
+      specs = fluid::defaultMapSpecs(bounds, kColliderResolution);
     }
+    fluid::DepthMapCollider collider;
+    fluid::BakeDesc desc;
+    desc.normal_resolution = 128;
+    if (const fluid::BakeStatus status = fluid::bakeDepthMaps(view, specs, desc, collider); !status.ok()) {
+      error = path.string() + ": " + status.error;
+      return false;
+    }
+    colliders.push_back(std::move(collider));
+    names.emplace_back(model);
   }
-  // Emit: the debt keeps the long-run rate exact for any rate * dt.
-  s.emit_debt += static_cast<double>(std::max(p.rate, 0.0f)) * dt;
-  const auto wanted = static_cast<std::size_t>(s.emit_debt);
-  s.emit_debt -= static_cast<double>(wanted);
-  const std::size_t emit = std::min(wanted, s.capacity - s.count);
-  const float spread = glm::radians(std::clamp(p.spread_degrees, 0.0f, 90.0f));
-  const float cos_spread = std::cos(spread);
-  for (std::size_t k = 0; k < emit; ++k) {
-    // Direction uniform over the spherical cap of half-angle `spread` around +y.
-    const float cos_theta = 1.0f - uniform01(s.rng) * (1.0f - cos_spread);
-    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
-    const float phi = 2.0f * std::numbers::pi_v<float> * uniform01(s.rng);
-    const float speed = p.speed * (0.92f + 0.16f * uniform01(s.rng));
-    const glm::vec3 direction(sin_theta * std::cos(phi), cos_theta, sin_theta * std::sin(phi));
-    // Spread the births over the step so the jet has no visible bands.
-    const float fraction = (static_cast<float>(k) + 0.5f) / static_cast<float>(emit);
-    const std::size_t i = s.count++;
-    s.velocity[i] = direction * speed;
-    s.position[i] = p.nozzle + s.velocity[i] * (dt * fraction);
-    s.previous[i] = s.position[i];
-    s.age[i] = dt * fraction;
-  }
-  const std::size_t n = s.count;
-  fluid::CollisionMaterial material;
-  material.resilience = p.restitution;
-  material.friction = p.friction;
-  // Every particle is independent from here on, so ranges run in parallel and the result does
-  // not depend on the thread count; each range counts its own bounces. fluid::par rather than
-  // oneTBB directly: same splitting, but TSan builds run it on std::threads that TSan can follow
-  // (the system oneTBB is not instrumented; see fluid/core/parallel.hpp).
-  std::atomic<std::uint64_t> bounces{0};
-  fluid::par::parallel_for(
-      fluid::par::Range<std::size_t>(0, n, 1024), [&](const fluid::par::Range<std::size_t>& range) {
-        const std::size_t begin = range.begin(), count = range.size();
-        // Integrate (semi-implicit Euler): v* = v + g dt, x* = x + v* dt; then the double check.
-        for (std::size_t i = begin; i < range.end(); ++i) {
-          s.velocity[i] += p.gravity * dt;
-          s.predicted[i] = s.position[i] + s.velocity[i] * dt;
-        }
-        shape.query(std::span(s.position.data() + begin, count), std::span(s.previous_samples.data() + begin, count));
-        shape.query(std::span(s.predicted.data() + begin, count), std::span(s.predicted_samples.data() + begin, count));
-        std::uint64_t range_bounces = 0;
-        for (std::size_t i = begin; i < range.end(); ++i) range_bounces += collideParticle(s, shape, material, dt, i);
-        bounces += range_bounces;
-      });
-  s.bounces += bounces.load();
-  ++s.steps;
+  s.colliders = std::move(colliders);
+  s.collider_names = std::move(names);
+  s.bake_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return true;
 }
 
-std::string findNonFiniteParticle(const SpriteParticles& s) {
+bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir,
+                     const std::filesystem::path& content_dir, float dt) {
+  detachSpriteGpu(s);
+  s.gpu_error.clear();
+  if (s.capacity == 0) return true;  // nothing to simulate: no GL object at all
+  std::string error;
+  if (!bakeSpriteColliders(s, content_dir, error)) {
+    s.gpu_error = "sprite colliders: " + error;
+    return false;
+  }
+  engine::GpuParticlesDesc desc;
+  textureSize(s.capacity, desc.width, desc.height);
+  desc.types = particleTypes(s.params);
+  desc.shader_dir = shader_dir;
+  desc.dt = dt;
+  desc.sort_passes_per_frame = 6;
+  s.attached = true;
+  engine::createGpuParticles(desc, s.gpu);
+  if (!s.gpu.ready) {
+    s.gpu_error = s.gpu.error;
+    return false;
+  }
+  // The GPU system's allocator may hold more texels than the budget: keep the budget exact.
+  s.gpu.allocator.free_heap.erase(std::remove_if(s.gpu.allocator.free_heap.begin(), s.gpu.allocator.free_heap.end(),
+                                                 [&](std::uint32_t i) { return i >= s.capacity; }),
+                                  s.gpu.allocator.free_heap.end());
+  std::make_heap(s.gpu.allocator.free_heap.begin(), s.gpu.allocator.free_heap.end(), std::greater<>());
+  std::vector<std::vector<engine::GpuDepthMapView>> views(s.colliders.size());
+  std::vector<std::vector<float>> normals(s.colliders.size());
+  std::vector<engine::GpuColliderDesc> descs(s.colliders.size());
+  for (std::size_t c = 0; c < s.colliders.size(); ++c)
+    engine::describeCollider(s.colliders[c], fluid::ColliderPose{}, views[c], normals[c], descs[c]);
+  // The collider variant of the update shader is compiled here, not in the first step's frame.
+  if (!engine::setColliders(s.gpu, descs, error) || !engine::prepareStep(s.gpu, stepParams(s.params))) {
+    s.gpu_error = error.empty() ? s.gpu.error : error;
+    detachSpriteGpu(s);
+    s.attached = true;  // attached but off: stepping stays a no-op, the overlay shows why
+    return false;
+  }
+  return true;
+}
+
+void detachSpriteGpu(SpriteParticles& s) {
+  if (s.attached) {
+    glUseProgram(0);  // a deleted program stays alive while it is current
+    engine::destroyGpuParticles(s.gpu);
+  }
+  s.gpu = engine::GpuParticles{};
+  s.attached = false;
+}
+
+std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& p, float dt, std::uint64_t seed,
+                             double& debt, engine::BirthBatch& batch) {
+  // Ihmsen, Akinci, Akinci & Teschner 2012, "Unified spray, foam and air bubbles for
+  // particle-based fluids", §4: a fluid particle i generates n_d = I_k (k_ta I_ta + k_wc I_wc) Δt
+  // diffuse particles, I_k = Φ(E_k, τ_k,min, τ_k,max) its kinetic-energy potential (eq. 1 clamp).
+  // Subset used here: I_k with the specific energy ½|v|² (so the thresholds do not depend on the
+  // particle size), and instead of the wave-crest potential I_wc (curvature from colour-field
+  // normals, which needs a neighbour pass) a free-surface indicator I_s = 1 when ρ_i/ρ0 ≤
+  // spray_surface_density (a particle missing neighbours sits at the surface), else 0; the
+  // trapped-air term is left out. n_d = I_k · k · I_s · Δt, the fractions carried over in `debt`.
+  const fluid::SphWorld& w = sph.world;
+  const fluid::ParticleStore& store = w.particles;
+  const float rest = w.params.rest_density;
+  const float radius = w.params.particle_radius;
+  const std::size_t n = std::min(store.position.size(), store.velocity.size());
+  const auto cap = static_cast<std::size_t>(std::max(p.spray_max_per_step, 0));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float two_pi = glm::two_pi<float>();
+  std::size_t added = 0;
+  for (std::size_t i = 0; i < n && added < cap; ++i) {
+    const glm::vec3 v = store.velocity[i], x = store.position[i];
+    if (!fluid::isFinite(v) || !fluid::isFinite(x)) continue;
+    const float density = i < store.density.size() ? store.density[i] : rest;
+    if (!(density > 0.0f) || density / rest > p.spray_surface_density) continue;
+    const float energy = 0.5f * glm::dot(v, v);
+    const float ik = clampPotential(energy, p.spray_energy_min, p.spray_energy_max);
+    if (ik <= 0.0f) continue;
+    debt += static_cast<double>(ik * std::max(p.spray_rate, 0.0f) * dt);
+    if (debt < 1.0) continue;
+    debt -= 1.0;
+    // §4.1: positions uniform in the cylinder of radius r_i spanned by v_i Δt around x_i; the
+    // diffuse particle inherits the fluid velocity (plus the radial offset's direction, scaled
+    // small, so a sheet of spray fans out a little).
+    const float speed = std::sqrt(2.0f * energy);
+    const glm::vec3 axis = v / speed;
+    const glm::vec3 helper = std::fabs(axis.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
+    const glm::vec3 e1 = glm::normalize(glm::cross(helper, axis)), e2 = glm::cross(axis, e1);
+    const float r = radius * std::sqrt(unit(rng)), theta = two_pi * unit(rng), h = unit(rng);
+    const glm::vec3 radial = std::cos(theta) * e1 + std::sin(theta) * e2;
+    const glm::vec3 position = x + r * radial + h * dt * v;
+    const glm::vec3 velocity = v + (0.1f * speed) * (r / std::max(radius, 1e-6f)) * radial;
+    const float lifetime = std::max(1e-3f, p.spray_lifetime * (0.75f + 0.5f * unit(rng)));
+    batch.push(position, velocity, lifetime, kSprayType, (unit(rng) - 0.5f) * two_pi);
+    ++added;
+  }
+  if (debt > 1.0) debt = 1.0;  // what the cap refused is not owed to later steps
+  return added;
+}
+
+void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt) {
+  if (!s.attached || !s.gpu.ready) return;
+  s.births.clear();
+  emitMist(s, dt);
+  const std::size_t mist = s.births.size();
+  s.spray_last_step = 0;
+  if (sph != nullptr && sph->error.empty() && s.params.spray_rate > 0.0f) {
+    s.spray_last_step = static_cast<std::uint32_t>(
+        emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
+  }
+  const std::size_t born = engine::spawn(s.gpu, s.births);
+  const std::size_t mist_born = std::min(born, mist);
+  s.born_mist += mist_born;
+  s.born_spray += born - mist_born;
+  s.dropped += s.births.size() - born;
+  engine::step(s.gpu, stepParams(s.params));
+  ++s.steps;
+  if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
+}
+
+void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
+                         const glm::mat4& projection, glm::vec3 eye) {
+  if (!s.attached || !s.gpu.ready) return;
+  engine::sortStep(s.gpu, eye);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, width, height);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  // Keep the scene's alpha at 1 (the PNG output would otherwise turn see-through).
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
+  engine::drawSprites(s.gpu, projection * view, projection[1][1], height);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+std::uint32_t liveSprites(const SpriteParticles& s) {
+  return s.attached && s.gpu.ready ? s.gpu.allocator.live_count : 0u;
+}
+
+std::string findNonFiniteSprite(const SpriteParticles& s) {
   static constexpr const char* kAxis[] = {"x", "y", "z"};
-  for (std::size_t i = 0; i < s.count; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(s.position[i][a])) {
-        return "sprite_particles: particle " + std::to_string(i) + " position." + kAxis[a] + " = " +
-               std::to_string(s.position[i][a]);
-      }
-      if (!std::isfinite(s.velocity[i][a])) {
-        return "sprite_particles: particle " + std::to_string(i) + " velocity." + kAxis[a] + " = " +
-               std::to_string(s.velocity[i][a]);
+  auto check = [](const std::vector<glm::vec4>& values, const char* what) -> std::string {
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(values[i][a]))
+          return "sprite_particles: live sprite " + std::to_string(i) + " " + what + "." + kAxis[a] + " = " +
+                 std::to_string(values[i][a]);
       }
     }
-  }
-  return {};
+    return {};
+  };
+  std::string bad = check(s.sample_positions, "position");
+  if (bad.empty()) bad = check(s.sample_velocities, "velocity");
+  return bad;
 }
 
 }  // namespace game

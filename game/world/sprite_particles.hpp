@@ -1,67 +1,129 @@
 #pragma once
-// The `sprite_particles` effect: a fountain jet of plain gravity particles that bounce on the
-// ground, the basin and the statue (FountainShape) and are drawn as point sprites. Stands in
-// for the SPH fluid until that lands. SoA storage sized once at construction (max_particles);
-// stepping never allocates (outside TSan builds, whose fluid::par loops start std::threads).
-// Deterministic: a seeded generator, one fixed dt per step, and the per-particle work split over
-// fluid::par ranges (oneTBB) with no cross-particle dependency (results do not depend on the
-// thread count).
+// The `sprite_particles` effect: the fountain's mist and spray as GPU state-preserving particles
+// (engine/gpu_particles, Kolb, Latta & Rezk-Salama 2004 §3). The CPU decides births (§3.3.1:
+// "initial particle data is determined on the CPU"): the jet's mist from the nozzle, and spray
+// born from the SPH fluid after Ihmsen et al. 2012 (see emitSprayFromSph). Simulation,
+// collisions with depth maps baked from the level's models (Kolb §4), the odd-even merge sort
+// and the point-sprite draw all run on the GPU; nothing the GPU computes flows back into the
+// game (no feedback into SPH or Bullet), so the sprites are not part of the replay state hash.
+//
+// Two stages, so a world can exist without a GL context:
+//   initSpriteParticles   no GL: parameters, seed, budget. buildWorld calls it.
+//   attachSpriteGpu       needs the GL context current: bakes the colliders (once), creates the
+//                         textures/FBOs/shaders. runScene calls it; `replay --no-render` and
+//                         the unit tests without GL never do, and then stepping is a no-op (no
+//                         births, no cost: the effect simply is not simulated there).
+//   detachSpriteGpu       frees the GL objects; must run while the same context is current
+//                         (the destructor does not touch GL: the context may be gone).
+// A system whose shaders failed (`gpu.ready == false`, `gpu_error` set) keeps the game running
+// without the effect.
 
-#include "fluid/core/collider.hpp"
+#include "engine/gpu_particles/gpu_particles.hpp"
+#include "fluid/collide/collide.hpp"
 #include "game/scene/scene_config.hpp"
-#include "game/world/fountain.hpp"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
-#include <random>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 namespace game {
 
-// Live-tunable parameters (schema: effect_schema.cpp, section "sprite_particles").
+struct SphFluid;
+
+// Live-tunable parameters. No defaults here on purpose: the schema (effect_schema.cpp, section
+// "sprite_particles") is the only source of defaults, ranges and docs; spriteParamsFrom reads a
+// validated section, which always holds every key.
 struct SpriteParticleParams {
-  float rate = 1500.0f;         // particles per second
-  float speed = 7.0f;           // m/s at the nozzle
-  float spread_degrees = 6.0f;  // half-angle of the jet cone
-  float lifetime = 4.0f;        // s
-  float size = 0.06f;           // sprite radius, m
-  float restitution = 0.3f;     // Kolb §3.3.2 resilience ε
-  float friction = 0.15f;       // Kolb §3.3.2 friction ν
-  glm::vec3 gravity{0.0f, -9.81f, 0.0f};
-  glm::vec3 nozzle{0.0f, 2.5f, 0.0f};
+  // Mist: a cone of sprites from the nozzle.
+  float rate = 0.0f;            // sprites per second
+  float speed = 0.0f;           // m/s at the nozzle (±20 %)
+  float spread_degrees = 0.0f;  // half-angle of the cone
+  float lifetime = 0.0f;        // s (±25 %)
+  float size = 0.0f;            // sprite radius, m
+  float restitution = 0.0f;     // Kolb §3.3.2 resilience ε
+  float friction = 0.0f;        // Kolb §3.3.2 friction ν
+  // Spray from the SPH fluid (Ihmsen et al. 2012 §4, a subset; see emitSprayFromSph).
+  float spray_rate = 0.0f;             // k: sprites per second from a particle with I_k = I_s = 1
+  float spray_energy_min = 0.0f;       // τ_k,min: specific kinetic energy ½|v|² (J/kg) where I_k starts
+  float spray_energy_max = 0.0f;       // τ_k,max: where I_k reaches 1
+  float spray_surface_density = 0.0f;  // ρ/ρ0 at or below which a particle counts as at the free surface
+  float spray_lifetime = 0.0f;         // s (±25 %)
+  int spray_max_per_step = 0;          // cap on spray births per step
+  glm::vec3 gravity{0.0f};
+  glm::vec3 nozzle{0.0f};
 };
 
 SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle);
 
+// Particle types in the GPU system's key-frame table.
+inline constexpr std::uint32_t kMistType = 0;
+inline constexpr std::uint32_t kSprayType = 1;
+
 struct SpriteParticles {
   SpriteParticleParams params;
-  std::size_t capacity = 0;         // max_particles, fixed at construction
-  std::size_t count = 0;            // alive particles are [0, count)
-  std::vector<glm::vec3> position;  // m
-  std::vector<glm::vec3> previous;  // position before the last step (render interpolation)
-  std::vector<glm::vec3> velocity;  // m/s
-  std::vector<float> age;           // s
-  double emit_debt = 0.0;           // fractional particles owed to the next step
-  std::mt19937 rng;
-  std::uint64_t steps = 0;
-  std::uint64_t bounces = 0;  // collision reactions so far (for tests/overlay)
-  // Scratch reused every step.
-  std::vector<glm::vec3> predicted;
-  std::vector<fluid::ColliderSample> previous_samples;
-  std::vector<fluid::ColliderSample> predicted_samples;
+  std::uint32_t capacity = 0;  // max_particles, fixed at construction
+  std::uint64_t seed = 0;
+  std::uint64_t steps = 0;    // steps simulated on the GPU
+  double emit_debt = 0.0;     // fractional mist sprites owed to the next step
+  double spray_debt = 0.0;    // fractional spray sprites owed to the next step
+  engine::BirthBatch births;  // scratch, reused every step
+  // GPU side (attachSpriteGpu).
+  bool attached = false;
+  engine::GpuParticles gpu;
+  std::string gpu_error;  // why the effect is off (shader or collider failure); empty while fine
+  // Depth-map colliders baked from content/models (ground, basin, statue), collider space = world.
+  std::vector<fluid::DepthMapCollider> colliders;
+  std::vector<std::string> collider_names;
+  double bake_ms = 0.0;
+  // Counters for the overlay and tests.
+  std::uint64_t born_mist = 0, born_spray = 0;
+  std::uint64_t dropped = 0;  // births refused because the budget was full
+  std::uint32_t spray_last_step = 0;
+  // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the live
+  // sprites' positions and velocities are read into `sample` (xyz, w = 1) after the step.
+  int readback_every = 0;
+  std::vector<glm::vec4> sample_positions, sample_velocities;
+  std::uint64_t sample_step = 0;  // `steps` when the sample was taken (0 = none yet)
+  std::vector<glm::vec4> read_scratch;
 };
 
-// Allocates every array for `capacity` particles (the only allocation this system makes).
-void initSpriteParticles(SpriteParticles& particles, const SpriteParticleParams& params, std::size_t capacity,
-                         std::uint32_t seed);
+// CPU only (no GL): parameters, budget and seed.
+void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
+                         std::uint64_t seed);
 
-// One fixed step: emit, integrate (semi-implicit Euler), collide with `shape` using the double
-// check and reaction of Kolb et al. 2004 §3.3.2 (fluid::resolveCollision), retire old ones.
-void stepSpriteParticles(SpriteParticles& particles, const fluid::SignedDistanceShape& shape, float dt);
+// Bakes ground.obj, basin.obj and statue.obj of `content_dir`/models into depth-map colliders
+// (basin, statue: three front-back16 pairs along x, y, z, fluid::defaultMapSpecs, Kolb §5.2; the ground slab: its y
+// pair). No GL. Done once; false + error naming the model on failure.
+bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error);
 
-// Empty when every position/velocity is finite; otherwise names the first bad value.
-std::string findNonFiniteParticle(const SpriteParticles& particles);
+// Needs the GL context current. Bakes the colliders if not done yet, creates the GPU system for
+// `capacity` sprites and uploads the colliders. A failure leaves the effect off (gpu_error says
+// why) and returns false; the game goes on. A zero budget creates nothing and returns true.
+bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir,
+                     const std::filesystem::path& content_dir, float dt);
+void detachSpriteGpu(SpriteParticles& s);
+
+// One fixed step (GPU; no-op when not attached): retire, emit mist and spray (from `sph` when
+// given), integrate and collide (Kolb §3.3.1–3.3.2), read back when due.
+void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt);
+
+// Sorts back to front for `eye` (Kolb §3.3.3, a few merge-sort passes per frame) and draws the
+// sprites into `fbo` (colour + the scene's depth, depth-tested, not written).
+void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
+                         const glm::mat4& projection, glm::vec3 eye);
+
+// Live sprites as the CPU allocator counts them (0 when not attached).
+std::uint32_t liveSprites(const SpriteParticles& s);
+
+// Spray births (Ihmsen et al. 2012): appends to `batch`, returns the number appended. Pure
+// function of its inputs (seeded), no GL.
+std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& params, float dt, std::uint64_t seed,
+                             double& debt, engine::BirthBatch& batch);
+
+// Empty when the last read-back holds only finite values; otherwise names the first bad one.
+std::string findNonFiniteSprite(const SpriteParticles& s);
 
 }  // namespace game

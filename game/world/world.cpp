@@ -1,5 +1,6 @@
 #include "game/world/world.hpp"
 
+#include <cstdio>
 #include <optional>
 
 namespace game {
@@ -49,7 +50,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
   if (const SectionConfig* section = scene.effect("sprite_particles")) {
     auto particles = std::make_unique<SpriteParticles>();
     initSpriteParticles(*particles, spriteParamsFrom(*section, sceneGravity(scene), out.fountain.geometry().nozzle),
-                        static_cast<std::size_t>(section->integer("max_particles")), seed ^ 0x9e3779b9u);
+                        static_cast<std::uint32_t>(section->integer("max_particles")), seed ^ 0x9e3779b9u);
     out.sprite_particles = std::move(particles);
     out.systems.emplace_back("sprite_particles");
   }
@@ -79,6 +80,17 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
     out.systems.emplace_back("fluid_surface");
   }
   return true;
+}
+
+void attachWorldGpu(World& world, const std::filesystem::path& shader_dir, const std::filesystem::path& content_dir) {
+  if (!world.sprite_particles) return;
+  SpriteParticles& s = *world.sprite_particles;
+  if (!attachSpriteGpu(s, shader_dir, content_dir, static_cast<float>(world.step_seconds)))
+    std::fprintf(stderr, "fluiddemo: sprite_particles off: %s\n", s.gpu_error.c_str());
+}
+
+void detachWorldGpu(World& world) {
+  if (world.sprite_particles) detachSpriteGpu(*world.sprite_particles);
 }
 
 void applyLiveParams(World& world) {
@@ -142,11 +154,6 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::physics);
     stepRigidBodies(*world.rigid_bodies, world.step_seconds, world.substeps);
   }
-  if (world.sprite_particles) {
-    std::optional<engine::ScopedPhase> scope;
-    if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
-    stepSpriteParticles(*world.sprite_particles, world.fountain, static_cast<float>(world.step_seconds));
-  }
   std::string coupling_error;
   if (world.sph_fluid) {
     std::optional<engine::ScopedPhase> scope;
@@ -162,11 +169,18 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     if (world.body_coupling)
       coupling_error = forcesToBodies(*world.body_coupling, world.sph_fluid->world, *world.rigid_bodies->physics);
   }
+  // After the water: spray is born from this step's SPH state. GPU work; a no-op while the
+  // effect has no GL context (attachWorldGpu), so it only enters the phase when attached.
+  if (world.sprite_particles && world.sprite_particles->attached) {
+    std::optional<engine::ScopedPhase> scope;
+    if (profiler != nullptr) scope.emplace(*profiler, engine::Phase::fluid);
+    stepSpriteParticles(*world.sprite_particles, world.sph_fluid.get(), static_cast<float>(world.step_seconds));
+  }
   ++world.steps;
   if (world.nonfinite_state.empty()) {
     std::string bad;
     if (world.rigid_bodies) bad = findNonFiniteBodyState(*world.rigid_bodies);
-    if (bad.empty() && world.sprite_particles) bad = findNonFiniteParticle(*world.sprite_particles);
+    if (bad.empty() && world.sprite_particles) bad = findNonFiniteSprite(*world.sprite_particles);
     if (bad.empty() && world.sph_fluid) bad = findNonFiniteSph(*world.sph_fluid);
     if (bad.empty()) bad = coupling_error;
     if (!bad.empty()) world.nonfinite_state = bad + " at step " + std::to_string(world.steps);

@@ -36,7 +36,7 @@ struct World {
   SceneConfig scene;                                  // live copy; the overlay edits it
   std::vector<std::string> systems;                   // effect names constructed, schema order
   std::unique_ptr<RigidBodies> rigid_bodies;          // "rigid_bodies" only
-  std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only
+  std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only (GPU: attachWorldGpu)
   std::unique_ptr<SphFluid> sph_fluid;                // "sph_fluid" only
   std::unique_ptr<FluidSurface> fluid_surface;        // "fluid_surface" only (needs sph_fluid)
   // Crates <-> water, two-way: only with both rigid_bodies and sph_fluid (sph_fluid.couple_bodies).
@@ -58,6 +58,13 @@ glm::vec3 sceneGravity(const SceneConfig& scene);
 // Returns false with a message naming the file/effect on failure (also when fluid_surface is
 // listed without sph_fluid).
 bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error);
+
+// GL resources of the world's GPU effects (today: sprite_particles), created with the GL context
+// current (runScene after the renderer; never by `replay --no-render`, whose sprites then do not
+// run). A world without a GPU effect creates no GL object. detachWorldGpu frees them and must run
+// while the same context is current (before a rebuild and before the context goes).
+void attachWorldGpu(World& world, const std::filesystem::path& shader_dir, const std::filesystem::path& content_dir);
+void detachWorldGpu(World& world);
 
 // Re-reads the live-tunable parameters from world.scene (after the overlay edited them).
 // Parameters fixed at construction (crates, crate_size, max_particles, particle_radius, solver,

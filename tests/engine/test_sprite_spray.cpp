@@ -1,0 +1,132 @@
+// The sprite effect's CPU side (no GL): its parameters come from the schema only, and spray is
+// born from fast SPH particles at the free surface with the fluid's velocity (Ihmsen et al. 2012).
+#include "game/paths.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace {
+
+game::SceneConfig parse(const std::string& text) {
+  game::SceneConfig scene;
+  const game::SceneStatus status = game::parseSceneText(text, "test.json", scene);
+  EXPECT_TRUE(status.ok()) << status.error;
+  return scene;
+}
+
+game::SpriteParticleParams paramsOf(const game::SceneConfig& scene) {
+  return game::spriteParamsFrom(*scene.effect("sprite_particles"), glm::vec3(0.0f), glm::vec3(0.0f));
+}
+
+bool sameParams(const game::SpriteParticleParams& a, const game::SpriteParticleParams& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// Every number/integer row of the schema's sprite_particles section reaches the params struct
+// (except the budget, fixed at construction): changing it changes the params.
+TEST(SpriteParams, EverySchemaRowIsReadIntoTheStruct) {
+  const game::SceneConfig defaults = parse(R"({"effects": {"sprite_particles": {}}})");
+  const game::SpriteParticleParams base = paramsOf(defaults);
+  const game::SectionSpec* spec = game::findSection("sprite_particles");
+  ASSERT_NE(spec, nullptr);
+  int checked = 0;
+  for (const game::ParamSpec& row : spec->params) {
+    if (row.key == "max_particles") continue;
+    game::SceneConfig changed = defaults;
+    const double value = row.default_value.number == row.max ? row.min : row.max;
+    const std::string text =
+        row.type == game::ParamType::integer ? std::to_string(static_cast<long long>(value)) : std::to_string(value);
+    const std::string assignment = "sprite_particles." + std::string(row.key) + "=" + text;
+    ASSERT_TRUE(game::applyOverride(changed, assignment).ok()) << assignment;
+    EXPECT_FALSE(sameParams(base, paramsOf(changed))) << row.key << " is not read by spriteParamsFrom";
+    ++checked;
+  }
+  EXPECT_EQ(checked, 13);
+}
+
+// A non-finite value in the sprites' GPU read-back is named like any other state.
+TEST(SpriteReadBack, NonFiniteValuesAreNamed) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sprite_particles": {}}})"), game::contentDir(), world, error))
+      << error;
+  world.sprite_particles->sample_positions = {glm::vec4(0.0f, 1.0f, 0.0f, 1.0f)};
+  world.sprite_particles->sample_velocities = {glm::vec4(0.0f), glm::vec4(0.0f, INFINITY, 0.0f, 1.0f)};
+  EXPECT_EQ(game::findNonFiniteSprite(*world.sprite_particles), "sprite_particles: live sprite 1 velocity.y = inf");
+  game::stepWorld(world, nullptr);
+  EXPECT_EQ(world.nonfinite_state, "sprite_particles: live sprite 1 velocity.y = inf at step 1");
+}
+
+class SprayFromSph : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string error;
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 600}}})"), game::contentDir(),
+                                 world, error))
+        << error;
+    for (int i = 0; i < 60; ++i) game::stepWorld(world, nullptr);  // the jet is up and falling
+    ASSERT_EQ(world.nonfinite_state, "");
+    params = paramsOf(parse(R"({"effects": {"sprite_particles": {"spray_rate": 600}}})"));
+  }
+  std::size_t emit(const game::SpriteParticleParams& p, std::uint64_t seed, engine::BirthBatch& batch) {
+    double debt = 0.0;
+    batch.clear();
+    return game::emitSprayFromSph(*world.sph_fluid, p, 1.0f / 60.0f, seed, debt, batch);
+  }
+  game::World world;
+  game::SpriteParticleParams params;
+};
+
+TEST_F(SprayFromSph, FastSurfaceParticlesEmitAndSpritesInheritTheFluidVelocity) {
+  engine::BirthBatch batch;
+  const std::size_t n = emit(params, 5, batch);
+  ASSERT_GT(n, 0u);
+  ASSERT_EQ(batch.size(), n);
+  const fluid::SphWorld& w = world.sph_fluid->world;
+  const float dt = 1.0f / 60.0f, r = w.params.particle_radius;
+  for (std::size_t k = 0; k < n; ++k) {
+    EXPECT_EQ(batch.types[k], game::kSprayType);
+    // Some fluid particle that qualifies (fast, at the surface) is its source: the sprite lies in
+    // the cylinder of radius r along v·dt around it and moves with its velocity (±10 % of |v|).
+    bool found = false;
+    for (std::size_t i = 0; i < w.particles.position.size() && !found; ++i) {
+      const glm::vec3 x = w.particles.position[i], v = w.particles.velocity[i];
+      const float speed = glm::length(v);
+      if (0.5f * speed * speed <= params.spray_energy_min) continue;
+      if (w.particles.density[i] / w.params.rest_density > params.spray_surface_density) continue;
+      found = glm::length(batch.positions[k] - x) <= r + speed * dt + 1e-4f &&
+              glm::length(batch.velocities[k] - v) <= 0.1f * speed + 1e-4f;
+    }
+    EXPECT_TRUE(found) << "spray sprite " << k << " has no qualifying source particle";
+  }
+  engine::BirthBatch again;
+  emit(params, 5, again);
+  EXPECT_EQ(again.positions, batch.positions) << "same state and seed must give the same spray";
+}
+
+TEST_F(SprayFromSph, TheIhmsenPotentialsGateTheEmission) {
+  engine::BirthBatch batch;
+  game::SpriteParticleParams p = params;
+  p.spray_energy_min = 1e4f;  // no particle is that fast: I_k = 0
+  p.spray_energy_max = 2e4f;
+  EXPECT_EQ(emit(p, 5, batch), 0u);
+  p = params;
+  p.spray_surface_density = 0.0f;  // no particle counts as at the surface
+  EXPECT_EQ(emit(p, 5, batch), 0u);
+  p = params;
+  p.spray_rate = 0.0f;
+  EXPECT_EQ(emit(p, 5, batch), 0u);
+  p = params;
+  p.spray_max_per_step = 3;
+  EXPECT_EQ(emit(p, 5, batch), 3u);
+  // The rate scales the count (k in n_d = I_k k I_s dt): a tenth of it gives fewer sprites.
+  p = params;
+  const std::size_t full = emit(p, 5, batch);
+  p.spray_rate = params.spray_rate / 10.0f;
+  EXPECT_LT(emit(p, 5, batch), full);
+}
+
+}  // namespace
