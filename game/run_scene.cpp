@@ -537,7 +537,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           view.projection = engine::cameraProjection(
               world.camera, static_cast<float>(renderer.width) / static_cast<float>(renderer.height));
           view.eye = world.camera.position;
-          engine::renderScene(renderer, view, lighting, items, {}, true);
+          engine::renderScene(renderer, view, lighting, items, true);
           drawWater(water_pass, renderer, world, view);
           if (world.sprite_particles) {
             drawSpriteParticles(*world.sprite_particles, renderer.scene_fbo.id(), renderer.width, renderer.height,
@@ -574,7 +574,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
               report.frame_height = renderer.height;
               report.last_frame_rgba = pixels;
               // The same passes with nothing drawn but the clear, for the smoke test's blank check.
-              engine::renderScene(renderer, view, lighting, {}, {}, false);
+              engine::renderScene(renderer, view, lighting, {}, false);
               engine::readSceneRgba(renderer, report.blank_frame_rgba);
             }
           }

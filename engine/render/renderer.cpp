@@ -161,20 +161,10 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
   if (!out.sky_program) return false;
   out.mesh_program = loadProgram(shader_dir, "mesh.vert", "mesh.frag", error);
   if (!out.mesh_program) return false;
-  out.particle_program = loadProgram(shader_dir, "particles.vert", "particles.frag", error);
-  if (!out.particle_program) return false;
   out.shadow_program = loadProgram(shader_dir, "shadow.vert", "shadow.frag", error);
   if (!out.shadow_program) return false;
   if (!createShadowMap(out, shadow_size, error)) return false;
   out.empty_vao = GlVertexArray(genVertexArray());
-  out.particle_vao = GlVertexArray(genVertexArray());
-  out.particle_buffer = GlBuffer(genBuffer());
-  glBindVertexArray(out.particle_vao.id());
-  glBindBuffer(GL_ARRAY_BUFFER, out.particle_buffer.id());
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(glm::vec4), nullptr);
-  glVertexAttribDivisor(0, 1);  // one particle per instance; the quad's corners come from gl_VertexID
-  glBindVertexArray(0);
   ImageData white;
   white.width = white.height = 1;
   white.rgba = {255, 255, 255, 255};
@@ -190,7 +180,7 @@ bool resizeRenderer(Renderer& renderer, int width, int height, std::string& erro
 }
 
 void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, std::span<const DrawItem> items,
-                 std::span<const ParticleBatch> particles, bool draw_content) {
+                 bool draw_content) {
   glBindFramebuffer(GL_FRAMEBUFFER, r.scene_fbo.id());
   glViewport(0, 0, r.width, r.height);
   glDepthMask(GL_TRUE);
@@ -271,38 +261,6 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   glDisable(GL_CULL_FACE);
   checkGl(r.errors, "mesh pass");
 
-  // Sprite particles (instanced camera-facing quads), depth-tested and depth-writing.
-  const GLuint points = r.particle_program.id();
-  glUseProgram(points);
-  setUniform(points, "u_view", view.view);
-  setUniform(points, "u_projection", view.projection);
-  setUniform(points, "u_projection_scale", view.projection[1][1] * 0.5f * static_cast<float>(r.height));
-  setUniform(points, "u_sun_direction", sun);
-  setUniform(points, "u_sun_colour", lighting.sun_colour);
-  setUniform(points, "u_sky_zenith", lighting.sky_zenith);
-  setUniform(points, "u_sky_horizon", lighting.sky_horizon);
-  setUniform(points, "u_eye", view.eye);
-  setUniform(points, "u_fog_density", lighting.fog_density);
-  glBindVertexArray(r.particle_vao.id());
-  glBindBuffer(GL_ARRAY_BUFFER, r.particle_buffer.id());
-  for (const ParticleBatch& batch : particles) {
-    if (batch.particles.empty()) continue;
-    if (batch.particles.size() > r.particle_capacity) {
-      r.particle_capacity = std::max<std::size_t>(batch.particles.size(), r.particle_capacity * 2);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(r.particle_capacity * sizeof(glm::vec4)), nullptr,
-                   GL_STREAM_DRAW);
-    } else {
-      // Orphan the old storage so the driver need not wait for the previous frame's draw.
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(r.particle_capacity * sizeof(glm::vec4)), nullptr,
-                   GL_STREAM_DRAW);
-    }
-    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(batch.particles.size() * sizeof(glm::vec4)),
-                    batch.particles.data());
-    setUniform(points, "u_radius", batch.radius);
-    setUniform(points, "u_colour", batch.colour);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 6, static_cast<GLsizei>(batch.particles.size()));
-  }
-  checkGl(r.errors, "particle pass");
 
   // Sky last: a full-screen triangle at the far plane, depth-tested with LEQUAL so it only
   // shades the pixels nothing else covered (no overdraw under the ground).

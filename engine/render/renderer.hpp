@@ -1,9 +1,9 @@
 #pragma once
 // Forward renderer. Every scene pass draws into the scene FBO (colour RGBA8 + depth texture,
 // so later passes such as fluid refraction can sample both); the window only receives a blit.
-// Passes in order: sun shadow map (depth only) -> lit textured meshes -> sprite particles ->
-// sky (full-screen triangle behind everything)
-// (instanced camera-facing quads shaded as spheres).
+// Passes in order: sun shadow map (depth only) -> lit textured meshes -> sky (full-screen
+// triangle behind everything). Water and sprites are drawn after it by their own passes
+// (engine/fluid_render, engine/gpu_particles).
 // Output is display-ready (tone-mapped, gamma-encoded) RGBA8.
 
 #include "engine/assets/assets.hpp"
@@ -47,14 +47,6 @@ struct DrawItem {
   bool casts_shadow = true;  // false for the ground (it only receives)
 };
 
-// Sprite particles shaded as small spheres. xyz = world position (m), w = 0..1 shade
-// (0 = fresh jet, brighter; 1 = old, deeper blue).
-struct ParticleBatch {
-  std::span<const glm::vec4> particles;
-  float radius = 0.05f;                 // world-space sprite radius (m)
-  glm::vec3 colour{0.35f, 0.6f, 0.9f};  // linear
-};
-
 struct FrameView {
   glm::mat4 view{1.0f};
   glm::mat4 projection{1.0f};
@@ -77,15 +69,11 @@ struct Renderer {
   std::filesystem::path shader_dir;
   GlProgram sky_program;
   GlProgram mesh_program;
-  GlProgram particle_program;
   GlProgram shadow_program;
   GlFramebuffer shadow_fbo;
   GlTexture shadow_depth;   // depth texture compared in the mesh shader (sampler2DShadow)
   int shadow_size = 2048;   // texels per side
   GlVertexArray empty_vao;  // core profile needs a VAO for attribute-less draws
-  GlVertexArray particle_vao;
-  GlBuffer particle_buffer;
-  std::size_t particle_capacity = 0;  // vec4s the buffer holds; grows, never shrinks
   GpuTexture white;
   GlFramebuffer scene_fbo;
   GlTexture scene_colour;
@@ -102,10 +90,10 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
                     int shadow_size = 2048);
 bool resizeRenderer(Renderer& renderer, int width, int height, std::string& error);
 
-// Clears the scene FBO and, when `draw_content` is true, draws meshes, particles and sky.
+// Clears the scene FBO and, when `draw_content` is true, draws meshes and sky.
 // `draw_content = false` gives the "nothing drawn" frame the smoke test compares against.
 void renderScene(Renderer& renderer, const FrameView& view, const Lighting& lighting, std::span<const DrawItem> items,
-                 std::span<const ParticleBatch> particles, bool draw_content);
+                 bool draw_content);
 
 // Copies the scene FBO to the default framebuffer of size window_w x window_h.
 void presentToWindow(Renderer& renderer, int window_width, int window_height);

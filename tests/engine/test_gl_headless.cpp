@@ -73,7 +73,7 @@ TEST_F(Headless, LinkErrorAndMissingFileAreNamed) {
   EXPECT_NE(error.find("absent.frag: cannot open shader file"), std::string::npos) << error;
 }
 
-TEST_F(Headless, RendererDrawsSkyMeshesAndSpritesWithoutGlErrors) {
+TEST_F(Headless, RendererDrawsSkyAndMeshesWithoutGlErrors) {
   engine::Renderer renderer;
   std::string error;
   ASSERT_TRUE(engine::createRenderer(kShaders, 80, 60, renderer, error)) << error;
@@ -87,18 +87,14 @@ TEST_F(Headless, RendererDrawsSkyMeshesAndSpritesWithoutGlErrors) {
   item.mesh = &mesh;
   item.tint = {1.0f, 0.1f, 0.1f};
   item.model = glm::scale(glm::mat4(1.0f), glm::vec3(3.0f));
-  const std::vector<glm::vec4> sprites = {{0, 0.5f, 0, 0}, {0.5f, 0.7f, 0, 1}};
-  engine::ParticleBatch batch;
-  batch.particles = sprites;
-  batch.radius = 0.2f;
   engine::FrameView view;
   view.eye = {0, 2, 4};
   view.view = glm::lookAt(view.eye, glm::vec3(0), glm::vec3(0, 1, 0));
   view.projection = glm::perspective(1.0f, 80.0f / 60.0f, 0.1f, 100.0f);
-  engine::renderScene(renderer, view, {}, std::span(&item, 1), std::span(&batch, 1), true);
+  engine::renderScene(renderer, view, {}, std::span(&item, 1), true);
   std::vector<std::uint8_t> drawn, blank;
   engine::readSceneRgba(renderer, drawn);
-  engine::renderScene(renderer, view, {}, {}, {}, false);
+  engine::renderScene(renderer, view, {}, {}, false);
   engine::readSceneRgba(renderer, blank);
   EXPECT_EQ(renderer.errors.count, 0) << renderer.errors.first;
   ASSERT_EQ(drawn.size(), 80u * 60u * 4u);
