@@ -38,6 +38,7 @@ class BlockMesher {
     begin(block);
     buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
+    seedSeams();
     seed(particles);
     const PhaseClock::time_point seeded = PhaseClock::now();
     march();
@@ -85,6 +86,7 @@ class BlockMesher {
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
   std::int64_t g0_[3] = {0, 0, 0};
+  int bc_[3] = {0, 0, 0};  // the block's position in the block grid
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   // Particle contributions summed (SurfaceStats::particlesLookedUp), kept here rather than in
@@ -111,6 +113,9 @@ class BlockMesher {
 
   void begin(const BlockDesc& block) {
     blockOrigin(su_, block, g0_);
+    bc_[0] = block.bx;
+    bc_[1] = block.by;
+    bc_[2] = block.bz;
     for (int i = 0; i <= nx_ + 3; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;  // + 3: padding (resize)
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
@@ -735,6 +740,70 @@ class BlockMesher {
     } else {
       w_.chainLo[k] = std::int16_t(z);
       w_.chainHi[k] = std::int16_t(z0);
+    }
+  }
+
+  // Seeding at the seams (§3 with §4). §4 seeds from particles, and a block has only those that
+  // reach its interior, so its field in the margin is partial: a surface component that crosses
+  // a seam can have a piece in this block's interior that none of the block's own descents reaches
+  // (its particles' nearest corners read outside in the partial field, or lie in the neighbour's
+  // interior), while the neighbour, whose field there is complete, emits the rest: a hole. Every
+  // component that crosses the seam crosses the seam plane itself, whose corners are interior to
+  // both blocks, so both evaluate them exactly and alike: seeding every cube of the interior whose
+  // face on a seam plane the surface crosses makes both blocks march every such component (each
+  // piece of it in this interior is joined to the rest through such a face). What is left to the
+  // descents are the components wholly inside one interior, which only that block emits.
+  // Faces on the outer boundary of the block grid are skipped: the grid reaches past every
+  // particle's Rc by at least one cube (planBlocks), so the field is zero there.
+  void seedSeams() {
+    const int m = su_.m;
+    for (int a = 0; a < 3; ++a) {
+      if (bc_[a] > 0) seedSeamFace(a, m, m);
+      if (bc_[a] + 1 < su_.nb[a]) seedSeamFace(a, m + su_.b[a], m + su_.b[a] - 1);
+    }
+  }
+
+  // One face of the interior box: plane `q` (local lattice index) across axis a, whose interior
+  // cubes have index `cube` along a. Inside flags are taken a row of corners at a time (rows along
+  // `ra`, corners along `ca`; along z for the x and y faces, one column walk per row).
+  void seedSeamFace(int a, int q, int cube) {
+    const int m = su_.m;
+    const int ra = a == 1 ? 0 : 1, ca = a == 2 ? 0 : 2;
+    const int c0 = m, c1 = m + su_.b[ca];
+    auto fillRow = [&](int r, std::uint8_t* row) {
+      std::fill(row + c0, row + c1 + 1, std::uint8_t(0));
+      bool any = false;
+      if (a == 2) {
+        for (int x = c0; x <= c1; ++x) any |= (row[x] = insideAt(x, r, q)) != 0;
+        return any;
+      }
+      const int x = a == 0 ? q : r, y = a == 0 ? r : q;
+      const std::size_t k = col(x, y);
+      const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
+      if (begin == end) return false;
+      // No element reaches below the first one's reachMin or above the last one's reachMax.
+      const int lo = std::max(c0, 0x8000 - int(entries_[begin].reachMinB));
+      const int hi = std::min(c1, int(entries_[end - 1].reachMax));
+      for (int z = lo; z <= hi; ++z) any |= (row[z] = insideAt(x, y, z)) != 0;
+      return any;
+    };
+    std::uint8_t* prev = w_.seamRows.data();
+    std::uint8_t* cur = prev + w_.seamRows.size() / 2;
+    bool anyPrev = fillRow(m, prev);
+    for (int r = m; r < m + su_.b[ra]; ++r) {
+      const bool anyCur = fillRow(r + 1, cur);
+      if (anyPrev || anyCur)
+        for (int c = c0; c < c1; ++c) {
+          const unsigned in = unsigned(prev[c]) + prev[c + 1] + cur[c] + cur[c + 1];
+          if (in == 0 || in == 4) continue;
+          int at[3];
+          at[a] = cube;
+          at[ra] = r;
+          at[ca] = c;
+          pushTodo(at[2], at[0], at[1]);
+        }
+      std::swap(prev, cur);
+      anyPrev = anyCur;
     }
   }
 

@@ -251,6 +251,7 @@ struct Worker {
   std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
   std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
+  std::vector<std::uint8_t> seamRows;  // seeding at seams: inside flags of two rows of a face
   std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
   std::vector<Slice<Policy>*> freeSlices;
   std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
@@ -275,6 +276,7 @@ struct Worker {
     chainLo.assign(cols, 0);
     chainHi.assign(cols, -1);
     chainTouched.clear();
+    seamRows.assign(2 * std::size_t(std::max({nx, ny, nz}) + 1), 0);
     slicePool.clear();
     freeSlices.clear();
     active.assign(nz + 1, nullptr);
