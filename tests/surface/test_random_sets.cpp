@@ -62,11 +62,14 @@ TEST(RandomSets, SeamHolesOfMarginDescentsAreClosed) {
 }
 
 // Seeds that left holes at block seams: a surface component crossing a seam had a piece in one
-// block's interior that none of that block's own §4 descents reached (312, 2363, 4168, 6392: the
-// nearest corner of the particles there lies in the block's margin, where the block's field sums
-// only the particles reaching its interior and reads outside; 4395, 5888, 6560: see the commit
-// message), while the neighbour emitted the rest. Closed by seeding from the crossings on the
-// seam planes (BlockMesher::seedSeams).
+// block's interior that none of that block's own §4 seeds reached, while a neighbour marched the
+// rest. The block's field in its margin sums only the particles reaching its interior, so (312,
+// 2363, 4168, 6392) the nearest corner of the particles around that piece lies in the margin and
+// reads outside there, or (4395, 5888, 6560) the piece joins what the block does seed only through
+// the neighbour's interior, while the particles at the piece itself seed nothing (their nearest
+// corners are outside, Rc = S in 6560; or their descents stay inside for Rc and stop on §4's "a
+// particle below seeds it", 4395, where the piece is a side wall). Closed by seam propagation
+// (BlockMesher::seedFromNeighbours): a seam square crossed from one side seeds the other side.
 TEST(RandomSets, SeamHolesOfPartialMarginFieldsAreClosed) {
   RandomSetChecker checker;
   for (int seed : {312, 2363, 4168, 4395, 5888, 6392, 6560}) {

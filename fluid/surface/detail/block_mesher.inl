@@ -21,8 +21,11 @@ class BlockMesher {
     assert(!(append && setup.exact));
   }
 
-  void run(const BlockDesc& block, std::span<const Particle> particles) {
+  // `seams`: the squares neighbours asked this block to seed (in), the seam squares it marches (out).
+  void run(const BlockDesc& block, std::span<const Particle> particles, BlockSeams& seams) {
     particles_ = particles;
+    seams_ = &seams;
+    seams.visits.clear();
     if (append_) {
       out_.stats = {};
       out_.cornerBytes = out_.particleBytes = 0;
@@ -38,8 +41,8 @@ class BlockMesher {
     begin(block);
     buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
-    seedSeams();
     seed(particles);
+    seedFromNeighbours();
     const PhaseClock::time_point seeded = PhaseClock::now();
     march();
     out_.stats.particlesLookedUp += looked_;
@@ -86,7 +89,8 @@ class BlockMesher {
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
   std::int64_t g0_[3] = {0, 0, 0};
-  int bc_[3] = {0, 0, 0};  // the block's position in the block grid
+  // The block's position in the block grid.
+  int bc_[3] = {0, 0, 0};
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   // Particle contributions summed (SurfaceStats::particlesLookedUp), kept here rather than in
@@ -95,6 +99,7 @@ class BlockMesher {
   int activeLo_ = std::numeric_limits<int>::max(), activeHi_ = -1;  // lowest, highest active slice z
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
+  BlockSeams* seams_ = nullptr;          // seam propagation (runBlocks): seeds in, visits out
   const bool append_;
   std::uint32_t vertexBase_ = 0;             // out_'s vertices before this block (0 unless append_)
   std::size_t indexBase_ = 0, runBase_ = 0;  // likewise its indices and slab runs
@@ -116,6 +121,14 @@ class BlockMesher {
     bc_[0] = block.bx;
     bc_[1] = block.by;
     bc_[2] = block.bz;
+    // Face bits (mc::CaseTable::faceMask) of the seam planes per local cube index: the interior's
+    // first and last cubes along an axis, unless that face is the grid's outer one (field 0 there).
+    std::uint8_t* seam[3] = {w_.seamX.data(), w_.seamY.data(), w_.seamZ.data()};
+    for (int a = 0; a < 3; ++a) {
+      std::fill(seam[a], seam[a] + su_.n[a] + 1, std::uint8_t(0));
+      if (bc_[a] > 0) seam[a][su_.m] |= std::uint8_t(1u << (2 * a));
+      if (bc_[a] + 1 < su_.nb[a]) seam[a][su_.m + su_.b[a] - 1] |= std::uint8_t(2u << (2 * a));
+    }
     for (int i = 0; i <= nx_ + 3; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;  // + 3: padding (resize)
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
@@ -743,68 +756,38 @@ class BlockMesher {
     }
   }
 
-  // Seeding at the seams (§3 with §4). §4 seeds from particles, and a block has only those that
-  // reach its interior, so its field in the margin is partial: a surface component that crosses
-  // a seam can have a piece in this block's interior that none of the block's own descents reaches
-  // (its particles' nearest corners read outside in the partial field, or lie in the neighbour's
-  // interior), while the neighbour, whose field there is complete, emits the rest: a hole. Every
-  // component that crosses the seam crosses the seam plane itself, whose corners are interior to
-  // both blocks, so both evaluate them exactly and alike: seeding every cube of the interior whose
-  // face on a seam plane the surface crosses makes both blocks march every such component (each
-  // piece of it in this interior is joined to the rest through such a face). What is left to the
-  // descents are the components wholly inside one interior, which only that block emits.
-  // Faces on the outer boundary of the block grid are skipped: the grid reaches past every
-  // particle's Rc by at least one cube (planBlocks), so the field is zero there.
-  void seedSeams() {
-    const int m = su_.m;
-    for (int a = 0; a < 3; ++a) {
-      if (bc_[a] > 0) seedSeamFace(a, m, m);
-      if (bc_[a] + 1 < su_.nb[a]) seedSeamFace(a, m + su_.b[a], m + su_.b[a] - 1);
+  // Seam propagation (§3 with §4; runBlocks): a block has only the particles that reach its
+  // interior, so its field in the margin is partial and its own §4 seeds can miss the piece of a
+  // surface component that lies in its interior while a neighbour marches the rest (a hole at the
+  // seam). Such a piece joins the rest through squares of a seam plane, whose corners are interior
+  // to both blocks and evaluated alike, so the neighbour's march crosses them: runBlocks hands
+  // every square crossed from one side only to the block on the other, which seeds the interior
+  // cube behind it here and runs again. Seeds come only from surfaces some block reached from §4
+  // seeds, so no block starts a component that §4 leaves out.
+  void seedFromNeighbours() {
+    for (const SeamSquare& sq : seams_->seeds) {
+      int l[3];
+      for (int a = 0; a < 3; ++a) l[a] = int(sq.g[a] - g0_[a]);
+      if (l[sq.axis] != su_.m) --l[sq.axis];  // on the high plane m + b: the cube below it
+      assert(l[sq.axis] == su_.m || l[sq.axis] == su_.m + su_.b[sq.axis] - 1);
+      pushTodo(l[2], l[0], l[1]);
     }
   }
 
-  // One face of the interior box: plane `q` (local lattice index) across axis a, whose interior
-  // cubes have index `cube` along a. Inside flags are taken a row of corners at a time (rows along
-  // `ra`, corners along `ca`; along z for the x and y faces, one column walk per row).
-  void seedSeamFace(int a, int q, int cube) {
-    const int m = su_.m;
-    const int ra = a == 1 ? 0 : 1, ca = a == 2 ? 0 : 2;
-    const int c0 = m, c1 = m + su_.b[ca];
-    auto fillRow = [&](int r, std::uint8_t* row) {
-      std::fill(row + c0, row + c1 + 1, std::uint8_t(0));
-      bool any = false;
-      if (a == 2) {
-        for (int x = c0; x <= c1; ++x) any |= (row[x] = insideAt(x, r, q)) != 0;
-        return any;
+  // An emitted cube on the interior's boundary: records its crossed faces that lie on a seam plane
+  // for the propagation above. `f`: those faces as mc::CaseTable::faceMask bits (2 axis + side;
+  // the march masks the cube's faceMask with seamX/Y/Z).
+  [[gnu::noinline, gnu::cold]] void noteSeamFaces(unsigned f, int x, int y, int z) {
+    const int l[3] = {x, y, z};
+    for (int a = 0; a < 3; ++a)
+      for (int side = 0; side < 2; ++side) {
+        if (!((f >> (2 * a + side)) & 1u)) continue;
+        SeamSquare sq;
+        for (int i = 0; i < 3; ++i) sq.g[i] = g0_[i] + l[i];
+        sq.g[a] += side;
+        sq.axis = a;
+        seams_->visits.push_back(sq);
       }
-      const int x = a == 0 ? q : r, y = a == 0 ? r : q;
-      const std::size_t k = col(x, y);
-      const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
-      if (begin == end) return false;
-      // No element reaches below the first one's reachMin or above the last one's reachMax.
-      const int lo = std::max(c0, 0x8000 - int(entries_[begin].reachMinB));
-      const int hi = std::min(c1, int(entries_[end - 1].reachMax));
-      for (int z = lo; z <= hi; ++z) any |= (row[z] = insideAt(x, y, z)) != 0;
-      return any;
-    };
-    std::uint8_t* prev = w_.seamRows.data();
-    std::uint8_t* cur = prev + w_.seamRows.size() / 2;
-    bool anyPrev = fillRow(m, prev);
-    for (int r = m; r < m + su_.b[ra]; ++r) {
-      const bool anyCur = fillRow(r + 1, cur);
-      if (anyPrev || anyCur)
-        for (int c = c0; c < c1; ++c) {
-          const unsigned in = unsigned(prev[c]) + prev[c + 1] + cur[c] + cur[c + 1];
-          if (in == 0 || in == 4) continue;
-          int at[3];
-          at[a] = cube;
-          at[ra] = r;
-          at[ca] = c;
-          pushTodo(at[2], at[0], at[1]);
-        }
-      std::swap(prev, cur);
-      anyPrev = anyCur;
-    }
   }
 
   void pushTodo(int slab, int x, int y) {
@@ -1038,7 +1021,12 @@ class BlockMesher {
 #endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
-        if (emit) polygonize(cs, cp, x, y, z);
+        if (emit) {
+          polygonize(cs, cp, x, y, z);
+          // Crossed faces on a seam plane (seam propagation): rare, kept out of line.
+          if (cs.faceMask & (w_.seamX[x] | w_.seamY[y] | w_.seamZ[z])) [[unlikely]]
+            noteSeamFaces(cs.faceMask & (w_.seamX[x] | w_.seamY[y] | w_.seamZ[z]), x, y, z);
+        }
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
         auto pushIn = [&](SliceCell& n, std::uint32_t next) {
