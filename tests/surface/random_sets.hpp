@@ -18,6 +18,8 @@
 //     sweep frame: see checkRandomSet), except whole oracle components with no particle's nearest
 //     corner inside, which the paper's seeding (§4) cannot find (compareWithOracle; counted);
 //   - 2 and 3 threads give the one-thread mesh bit for bit (positions, normals, indices, keys).
+// Not a failure, counted: seeds whose block sizes left out different such components (a block
+// can reach one through its margin, where its field is partial; seam propagation then completes it).
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/detail/field.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -240,6 +242,7 @@ struct RandomSetChecker {
   fluid::SurfaceExtractor slices[3];  // 1, 2, 3 threads
   fluid::BaselineExtractor dense;
   fluid::SurfaceMesh ref, mesh[3];
+  std::vector<Tri> firstSet;  // the first block size's triangles (checkRandomSet)
 };
 
 // The oracle's triangles less `got`: must be whole connected components of the oracle mesh (welded
@@ -296,9 +299,13 @@ inline std::string compareWithOracle(const std::vector<Tri>& got, const std::vec
 
 // The first property that does not hold, or "" (see the header comment). `ghosts` (if given)
 // counts the oracle components that §4 seeding cannot reach (compareWithOracle).
-inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std::size_t* ghostCount = nullptr) {
+// `blockSizeDependent` (if given) counts the seeds whose block sizes found different sets of those
+// components (each block size found them whole or not at all, so each still matches the oracle).
+inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std::size_t* ghostCount = nullptr,
+                                  std::size_t* blockSizeDependent = nullptr) {
   std::size_t ghostsLocal = 0;
   std::size_t& ghosts = ghostCount ? *ghostCount : ghostsLocal;
+  bool setsDiffer = false;
   const fluid::SurfaceInput in = r.input();
   fluid::SurfaceParams p = r.params;
   // With a view order the mesher sweeps in a rotated frame (paper §5): local axis a is world axis
@@ -350,7 +357,12 @@ inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std:
       return at + ": not closed or not consistently oriented (" + std::to_string(topo.badEdges) + " edges)";
     if (topo.degenerate) return at + ": " + std::to_string(topo.degenerate) + " degenerate triangles";
     if (topo.keyPositionMismatch) return at + ": one lattice edge with two positions";
-    const std::string diff = compareWithOracle(canonicalTriangles(m), refTris, ck, frameSeeds, po, ghosts);
+    const std::vector<Tri> got = canonicalTriangles(m);
+    const std::string diff = compareWithOracle(got, refTris, ck, frameSeeds, po, ghosts);
+    if (b == r.blockSizes[0])
+      ck.firstSet = got;
+    else
+      setsDiffer = setsDiffer || got != ck.firstSet;
     if (!diff.empty()) return at + ": " + diff;
     for (std::size_t v = 0; v < m.positions.size(); ++v)
       if (refPos.at(m.edgeKeys[v]) != toFrame(m.positions[v]))
@@ -368,6 +380,7 @@ inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std:
       if (!(vol > 0)) return at + ": signed volume " + std::to_string(vol / 6) + " is not positive (inward winding)";
     }
   }
+  if (setsDiffer && blockSizeDependent) ++*blockSizeDependent;
   return {};
 }
 

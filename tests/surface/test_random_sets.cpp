@@ -4,8 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <iterator>
 #include <string>
 
 using namespace surface_test;
@@ -14,13 +12,6 @@ namespace {
 
 constexpr int kSeeds = 320;  // 8 ctest cases of 40 seeds (every kind 5 times in each)
 constexpr int kChunk = 40;
-
-// Open: holes at block seams where a particle's nearest corner lies in a block's margin and reads
-// outside there, because the block's field sums only the particles that reach its interior, while
-// the full field is inside; that block then never seeds the part of the surface in its interior
-// (312: 0.3316 in the full field > T = 0.2396). Of seeds 1..4000, 312 and 2363 (see
-// RandomSets.DISABLED_SeamHolesOpen). The slice skips exactly those in its range.
-constexpr int kKnownOpen[] = {312};
 
 class RandomSets : public ::testing::TestWithParam<int> {};
 
@@ -31,7 +22,6 @@ TEST_P(RandomSets, ClosedOrientedThreadInvariantAndEqualToTheDenseOracle) {
   const int first = GetParam();
   std::size_t triangles = 0;
   for (int seed = first; seed < first + kChunk; ++seed) {
-    if (std::find(std::begin(kKnownOpen), std::end(kKnownOpen), seed) != std::end(kKnownOpen)) continue;
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     const std::string failure = checkRandomSet(r, checker);
     EXPECT_TRUE(failure.empty()) << "seed " << seed << " (" << r.what << ", " << r.x.size()
@@ -71,12 +61,16 @@ TEST(RandomSets, SeamHolesOfMarginDescentsAreClosed) {
   }
 }
 
-// Known open (see kKnownOpen): holes at seams, all of them seeding misses (each closes when a debug
-// build seeds every crossing cube of each block's interior). 312, 2363, 4168, 6392: a margin seed
-// corner outside in the block's field (a descent from the nearest interior corner closes them, but
-// also seeds ghost components in one block only, see BlockMesher::seed); 4395, 5888, 6560 (seeds
-// 4001..8000): not closed by that either, cause not pinned down.
-TEST(RandomSets, DISABLED_SeamHolesOpen) {
+// Seeds that left holes at block seams: a surface component crossing a seam had a piece in one
+// block's interior that none of that block's own §4 seeds reached, while a neighbour marched the
+// rest. The block's field in its margin sums only the particles reaching its interior, so (312,
+// 2363, 4168, 6392) the nearest corner of the particles around that piece lies in the margin and
+// reads outside there, or (4395, 5888, 6560) the piece joins what the block does seed only through
+// the neighbour's interior, while the particles at the piece itself seed nothing (their nearest
+// corners are outside, Rc = S in 6560; or their descents stay inside for Rc and stop on §4's "a
+// particle below seeds it", 4395, where the piece is a side wall). Closed by seam propagation
+// (BlockMesher::seedFromNeighbours): a seam square crossed from one side seeds the other side.
+TEST(RandomSets, SeamHolesOfPartialMarginFieldsAreClosed) {
   RandomSetChecker checker;
   for (int seed : {312, 2363, 4168, 4395, 5888, 6392, 6560}) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));

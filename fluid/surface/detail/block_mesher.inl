@@ -21,8 +21,11 @@ class BlockMesher {
     assert(!(append && setup.exact));
   }
 
-  void run(const BlockDesc& block, std::span<const Particle> particles) {
+  // `seams`: the squares neighbours asked this block to seed (in), the seam squares it marches (out).
+  void run(const BlockDesc& block, std::span<const Particle> particles, BlockSeams& seams) {
     particles_ = particles;
+    seams_ = &seams;
+    seams.visits.clear();
     if (append_) {
       out_.stats = {};
       out_.cornerBytes = out_.particleBytes = 0;
@@ -39,6 +42,7 @@ class BlockMesher {
     buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
     seed(particles);
+    seedFromNeighbours();
     const PhaseClock::time_point seeded = PhaseClock::now();
     march();
     out_.stats.particlesLookedUp += looked_;
@@ -85,6 +89,8 @@ class BlockMesher {
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
   std::int64_t g0_[3] = {0, 0, 0};
+  // The block's position in the block grid.
+  int bc_[3] = {0, 0, 0};
   int offsetRange_ = 0;  // offsets table half-width: m + 2 >= |corner - anchor| of any influence
   int activeSlices_ = 0;
   // Particle contributions summed (SurfaceStats::particlesLookedUp), kept here rather than in
@@ -93,6 +99,7 @@ class BlockMesher {
   int activeLo_ = std::numeric_limits<int>::max(), activeHi_ = -1;  // lowest, highest active slice z
   std::uint64_t peakCornerBytes_ = 0;
   std::span<const Particle> particles_;  // the block's particles; CacheParticle i is particles_[i]
+  BlockSeams* seams_ = nullptr;          // seam propagation (runBlocks): seeds in, visits out
   const bool append_;
   std::uint32_t vertexBase_ = 0;             // out_'s vertices before this block (0 unless append_)
   std::size_t indexBase_ = 0, runBase_ = 0;  // likewise its indices and slab runs
@@ -111,6 +118,17 @@ class BlockMesher {
 
   void begin(const BlockDesc& block) {
     blockOrigin(su_, block, g0_);
+    bc_[0] = block.bx;
+    bc_[1] = block.by;
+    bc_[2] = block.bz;
+    // Face bits (mc::CaseTable::faceMask) of the seam planes per local cube index: the interior's
+    // first and last cubes along an axis, unless that face is the grid's outer one (field 0 there).
+    std::uint8_t* seam[3] = {w_.seamX.data(), w_.seamY.data(), w_.seamZ.data()};
+    for (int a = 0; a < 3; ++a) {
+      std::fill(seam[a], seam[a] + su_.n[a] + 1, std::uint8_t(0));
+      if (bc_[a] > 0) seam[a][su_.m] |= std::uint8_t(1u << (2 * a));
+      if (bc_[a] + 1 < su_.nb[a]) seam[a][su_.m + su_.b[a] - 1] |= std::uint8_t(2u << (2 * a));
+    }
     for (int i = 0; i <= nx_ + 3; ++i) w_.cx[i] = double(g0_[0] + i) * su_.s;  // + 3: padding (resize)
     for (int i = 0; i <= ny_; ++i) w_.cy[i] = double(g0_[1] + i) * su_.s;
     for (int i = 0; i <= nz_; ++i) w_.cz[i] = double(g0_[2] + i) * su_.s;
@@ -738,6 +756,40 @@ class BlockMesher {
     }
   }
 
+  // Seam propagation (§3 with §4; runBlocks): a block has only the particles that reach its
+  // interior, so its field in the margin is partial and its own §4 seeds can miss the piece of a
+  // surface component that lies in its interior while a neighbour marches the rest (a hole at the
+  // seam). Such a piece joins the rest through squares of a seam plane, whose corners are interior
+  // to both blocks and evaluated alike, so the neighbour's march crosses them: runBlocks hands
+  // every square crossed from one side only to the block on the other, which seeds the interior
+  // cube behind it here and runs again. Seeds come only from surfaces some block reached from §4
+  // seeds, so no block starts a component that §4 leaves out.
+  void seedFromNeighbours() {
+    for (const SeamSquare& sq : seams_->seeds) {
+      int l[3];
+      for (int a = 0; a < 3; ++a) l[a] = int(sq.g[a] - g0_[a]);
+      if (l[sq.axis] != su_.m) --l[sq.axis];  // on the high plane m + b: the cube below it
+      assert(l[sq.axis] == su_.m || l[sq.axis] == su_.m + su_.b[sq.axis] - 1);
+      pushTodo(l[2], l[0], l[1]);
+    }
+  }
+
+  // An emitted cube on the interior's boundary: records its crossed faces that lie on a seam plane
+  // for the propagation above. `f`: those faces as mc::CaseTable::faceMask bits (2 axis + side;
+  // the march masks the cube's faceMask with seamX/Y/Z).
+  [[gnu::noinline, gnu::cold]] void noteSeamFaces(unsigned f, int x, int y, int z) {
+    const int l[3] = {x, y, z};
+    for (int a = 0; a < 3; ++a)
+      for (int side = 0; side < 2; ++side) {
+        if (!((f >> (2 * a + side)) & 1u)) continue;
+        SeamSquare sq;
+        for (int i = 0; i < 3; ++i) sq.g[i] = g0_[i] + l[i];
+        sq.g[a] += side;
+        sq.axis = a;
+        seams_->visits.push_back(sq);
+      }
+  }
+
   void pushTodo(int slab, int x, int y) {
     w_.todo[slab].push_back(std::uint32_t(x) | (std::uint32_t(y) << 16));
     lowestTodo_ = std::min(lowestTodo_, slab);
@@ -969,7 +1021,12 @@ class BlockMesher {
 #endif
         if (cube == 0 || cube == 255) continue;
         const mc::CaseTable& cs = table[cube];
-        if (emit) polygonize(cs, cp, x, y, z);
+        if (emit) {
+          polygonize(cs, cp, x, y, z);
+          // Crossed faces on a seam plane (seam propagation): rare, kept out of line.
+          if (cs.faceMask & (w_.seamX[x] | w_.seamY[y] | w_.seamZ[z])) [[unlikely]]
+            noteSeamFaces(cs.faceMask & (w_.seamX[x] | w_.seamY[y] | w_.seamZ[z]), x, y, z);
+        }
         // Push neighbours across crossed faces unless done (Alg. 1).
         const unsigned f = cs.faceMask;
         auto pushIn = [&](SliceCell& n, std::uint32_t next) {

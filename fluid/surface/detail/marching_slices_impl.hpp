@@ -251,6 +251,7 @@ struct Worker {
   std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
   std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
   std::vector<std::uint32_t> chainTouched;
+  std::vector<std::uint8_t> seamX, seamY, seamZ;  // seam face bits per local cube index (BlockMesher::begin)
   std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
   std::vector<Slice<Policy>*> freeSlices;
   std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
@@ -275,6 +276,9 @@ struct Worker {
     chainLo.assign(cols, 0);
     chainHi.assign(cols, -1);
     chainTouched.clear();
+    seamX.assign(nx + 1, 0);
+    seamY.assign(ny + 1, 0);
+    seamZ.assign(nz + 1, 0);
     slicePool.clear();
     freeSlices.clear();
     active.assign(nz + 1, nullptr);
@@ -405,6 +409,28 @@ inline void buildRuns(BlockOut& out) {
   }
 }
 
+// A unit square of a seam plane (the plane between two blocks' interiors, §3): g = its lowest
+// lattice corner, `axis` = the plane's normal. For seam propagation (BlockMesher::seedFromNeighbours).
+struct SeamSquare {
+  std::int64_t g[3];
+  std::int32_t axis;
+  friend bool operator==(const SeamSquare& a, const SeamSquare& b) {
+    return a.axis == b.axis && a.g[0] == b.g[0] && a.g[1] == b.g[1] && a.g[2] == b.g[2];
+  }
+  friend bool operator<(const SeamSquare& a, const SeamSquare& b) {
+    if (a.axis != b.axis) return a.axis < b.axis;
+    for (int i = 0; i < 3; ++i)
+      if (a.g[i] != b.g[i]) return a.g[i] < b.g[i];
+    return false;
+  }
+};
+
+// One block's seam propagation state for one extract() call.
+struct BlockSeams {
+  std::vector<SeamSquare> seeds;   // squares its neighbours' marches crossed and its own did not (sorted)
+  std::vector<SeamSquare> visits;  // seam squares its last run's march crossed (BlockMesher::noteSeamFaces)
+};
+
 // ---------------------------------------------------------------------------------------------
 // The per-block algorithm, BlockMesher<Policy> (block_mesher.inl). A second copy in namespace
 // avx2 is compiled for AVX2 (VEX three-operand encoding, 4-wide doubles in the cache fill) and
@@ -427,16 +453,16 @@ namespace avx2 {
 // Runs one block with the mesher copy Setup::avx2 asks for.
 template <class Policy>
 void runMesher(Worker<Policy>& w, const Setup& su, const Policy& policy, BlockOut& out, bool append,
-               const BlockDesc& block, std::span<const Particle> particles) {
+               const BlockDesc& block, std::span<const Particle> particles, BlockSeams& seams) {
 #if defined(FLUID_SURFACE_AVX2_MESHER)
   if (su.avx2) {
     avx2::BlockMesher<Policy> mesher(w, su, policy, out, append);
-    mesher.run(block, particles);
+    mesher.run(block, particles, seams);
     return;
   }
 #endif
   BlockMesher<Policy> mesher(w, su, policy, out, append);
-  mesher.run(block, particles);
+  mesher.run(block, particles, seams);
 }
 
 struct FollowWorker;  // approach 2 (baselines.hpp), defined in marching_slices.cpp
@@ -471,6 +497,12 @@ struct ExtractorState {
   std::vector<std::uint32_t> vertexBase, indexBase, runBase;
   std::vector<std::uint32_t> runOrder;  // block indices, largest first (runParallelLargestFirst)
   bool firstInPlace = false;            // the mesh's arrays are in outs[0] for the run (firstBlockInPlace)
+  // Seam propagation (runBlocks): per block (emission order), every block's seam squares with
+  // the block that crossed them, blocks to run again, and (grid key, block) pairs sorted by key.
+  std::vector<BlockSeams> seams;
+  std::vector<std::pair<SeamSquare, std::uint32_t>> seamVisits;
+  std::vector<std::uint32_t> rerun;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> blockByKey;
 };
 
 // Runs fn(slot, i) for i in [0, n) on the arena's workers; slot < max_concurrency identifies the
@@ -597,6 +629,85 @@ inline void swapMeshArrays(BlockOut& o, SurfaceMesh& out) {
   o.indices.swap(out.indices);
 }
 
+// A block's position in the block grid as one number (extractImpl's block key).
+inline std::uint64_t gridKey(const Setup& su, int bx, int by, int bz) {
+  return (std::uint64_t(bz) * std::uint64_t(su.nb[1]) + std::uint64_t(by)) * std::uint64_t(su.nb[0]) +
+         std::uint64_t(bx);
+}
+
+// Seam propagation (BlockMesher::seedFromNeighbours): pairs up the seam squares the blocks'
+// last runs crossed. A square crossed from one side only becomes a seed of the block on the
+// other side (the corners are interior to both, so that block's march crosses it too once
+// seeded). Returns whether any block got new seeds (listed in st.rerun, emission order).
+inline bool collectSeamSeeds(ExtractorState& st, const Setup& su) {
+  auto& all = st.seamVisits;
+  all.clear();
+  for (std::uint32_t i = 0; i < st.blocks.size(); ++i)
+    for (const SeamSquare& sq : st.seams[i].visits) all.push_back({sq, i});
+  std::sort(all.begin(), all.end());
+  st.rerun.clear();
+  for (std::size_t k = 0; k < all.size();) {
+    std::size_t e = k + 1;
+    while (e < all.size() && all[e].first == all[k].first) ++e;
+    if (e - k == 1) {
+      const SeamSquare& sq = all[k].first;
+      const BlockDesc& from = st.blocks[all[k].second];
+      int bc[3] = {from.bx, from.by, from.bz};
+      const int a = sq.axis;
+      bc[a] += sq.g[a] == su.lattice0[a] + std::int64_t(bc[a]) * su.b[a] ? -1 : 1;
+      if (st.blockByKey.empty()) {  // (grid key, block index), built when first needed
+        for (std::uint32_t i = 0; i < st.blocks.size(); ++i)
+          st.blockByKey.push_back({gridKey(su, st.blocks[i].bx, st.blocks[i].by, st.blocks[i].bz), i});
+        std::sort(st.blockByKey.begin(), st.blockByKey.end());
+      }
+      const std::uint64_t key = gridKey(su, bc[0], bc[1], bc[2]);
+      const auto it = std::lower_bound(st.blockByKey.begin(), st.blockByKey.end(), std::make_pair(key, 0u));
+      // The square's corners are interior to that block too, and an inside one is reached by a
+      // particle, which then belongs to that block as well (blockSpan): it exists.
+      assert(it != st.blockByKey.end() && it->first == key);
+      std::vector<SeamSquare>& seeds = st.seams[it->second].seeds;
+      // Seeded before, yet not crossed by that block's run: the two blocks disagree on the field
+      // at the square's corners, which the shared lattice arithmetic rules out.
+      assert(!std::binary_search(seeds.begin(), seeds.end(), sq));
+      if (st.rerun.empty() || st.rerun.back() != it->second) st.rerun.push_back(it->second);
+      seeds.push_back(sq);
+    }
+    k = e;
+  }
+  std::sort(st.rerun.begin(), st.rerun.end());
+  st.rerun.erase(std::unique(st.rerun.begin(), st.rerun.end()), st.rerun.end());
+  for (std::uint32_t i : st.rerun) std::sort(st.seams[i].seeds.begin(), st.seams[i].seeds.end());
+  return !st.rerun.empty();
+}
+
+// runBlocks' one-worker pass over all blocks, appending to the mesh's arrays (appendBlocks).
+template <class Policy, class Span>
+void appendPass(ExtractorState& st, const Setup& su, const Policy& policy,
+                std::vector<std::unique_ptr<Worker<Policy>>>& workers, SurfaceMesh& out, Span&& blockSpan) {
+  BlockOut& sh = st.shared;
+  // The mesh's arrays become the shared block output's for the run; the same swap hands them back.
+  // The slab runs go along: appended blocks write theirs with mesh index positions. (Cleared after
+  // the swap: a second pass drops what the first one appended.)
+  auto swapArrays = [&] {
+    swapMeshArrays(sh, out);
+    sh.runs.swap(out.slabRuns);
+  };
+  swapArrays();
+  sh.reset();
+  for (std::size_t i = 0; i < st.blocks.size(); ++i) {
+    runMesher(*workers[0], su, policy, sh, true, st.blocks[i], blockSpan(i), st.seams[i]);
+    BlockOut& o = st.outs[i];
+    o.reset();
+    o.stats = sh.stats;
+    o.cornerBytes = sh.cornerBytes;
+    o.particleBytes = sh.particleBytes;
+    o.vertexCount = sh.vertexCount;
+    o.indexCount = sh.indexCount;
+    o.runCount = sh.runCount;
+  }
+  swapArrays();
+}
+
 // `out`: the mesh, whose arrays the blocks append to directly when appendBlocks() (swapped into
 // ExtractorState::shared for the run and back after it; extractImpl then copies nothing).
 template <class Policy>
@@ -609,33 +720,19 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
     w->resize(su.n);
     w->peakBytes = 0;
   }
+  if (st.seams.size() < st.blocks.size()) st.seams.resize(st.blocks.size());
+  st.blockByKey.clear();
+  for (std::size_t i = 0; i < st.blocks.size(); ++i) st.seams[i].seeds.clear();
+  auto blockSpan = [&](std::size_t i) {
+    return std::span<const Particle>(st.blockParticles.data() + st.blocks[i].first, st.blocks[i].count);
+  };
   if (appendBlocks(st, su)) {
     // One thread: the blocks in emission order, each appending to the mesh's own arrays. The
     // same vertices and indices as concatenating per-block outputs (ids continue from the
-    // blocks before), without the copy.
-    BlockOut& sh = st.shared;
-    sh.reset();
-    // The mesh's arrays become the shared block output's for the run; the same swap hands them back.
-    // The slab runs go along: appended blocks write theirs with mesh index positions.
-    auto swapArrays = [&] {
-      swapMeshArrays(sh, out);
-      sh.runs.swap(out.slabRuns);
-    };
-    swapArrays();
-    for (std::size_t i = 0; i < st.blocks.size(); ++i) {
-      const BlockDesc& b = st.blocks[i];
-      runMesher(*workers[0], su, policy, sh, true, b,
-                std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
-      BlockOut& o = st.outs[i];
-      o.reset();
-      o.stats = sh.stats;
-      o.cornerBytes = sh.cornerBytes;
-      o.particleBytes = sh.particleBytes;
-      o.vertexCount = sh.vertexCount;
-      o.indexCount = sh.indexCount;
-      o.runCount = sh.runCount;
-    }
-    swapArrays();
+    // blocks before), without the copy. When seam propagation asks for more, every block runs
+    // again in turn (each with the same seeds as before but those blocks' new ones: the same output).
+    do appendPass(st, su, policy, workers, out, blockSpan);
+    while (collectSeamSeeds(st, su));
     return;
   }
   // Several workers (or one block): the first block in emission order writes into the mesh's own
@@ -644,10 +741,15 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
   st.firstInPlace = firstBlockInPlace(st);
   if (st.firstInPlace) swapMeshArrays(st.outs[0], out);
   runParallelLargestFirst(st, workers, [&](Worker<Policy>& w, std::size_t i) {
-    const BlockDesc& b = st.blocks[i];
-    runMesher(w, su, policy, st.outs[i], false, b,
-              std::span<const Particle>(st.blockParticles.data() + b.first, b.count));
+    runMesher(w, su, policy, st.outs[i], false, st.blocks[i], blockSpan(i), st.seams[i]);
   });
+  // Seam propagation: the blocks handed seeds run again (each replaces its output) until no
+  // seam square is crossed from one side only.
+  while (collectSeamSeeds(st, su))
+    parallelItems(*st.arena, st.rerun.size(), [&](int slot, std::size_t k) {
+      const std::size_t i = st.rerun[k];
+      runMesher(*workers[std::size_t(slot)], su, policy, st.outs[i], false, st.blocks[i], blockSpan(i), st.seams[i]);
+    });
   if (workers.size() > 1) shareCapacities(workers);
 }
 
