@@ -18,7 +18,8 @@
 //    tangent plane); the volume and its gradient enter the density and pressure terms like
 //    Akinci et al. 2012 boundary particles;
 //  - as a hard constraint after the position update: Kolb et al. 2004 §3.3.2 double check
-//    (fluid::resolveCollision), so no particle ends a step inside a collider.
+//    (fluid::resolveCollision), so no particle ends a step inside a collider, except where a moving
+//    collider overlaps a still one: there the particle ends outside the still one (sphColliderMoves).
 // Two-way coupling: each collider reports the force and torque the fluid exerted on it during the
 // last step (pressure from the boundary terms + collision impulses).
 //
@@ -126,6 +127,15 @@ struct SphCollider {
   glm::vec3 torque{0.0f};
 };
 
+// Whether the collider moves during a step (integrate_pose with a non-zero velocity). The
+// end-of-step collision passes project particles out of moving colliders first and out of still
+// ones last, so where a moving collider overlaps a still one (no position outside both) the
+// particle ends outside the still one: still colliders win (see stepSph, section 7).
+inline bool sphColliderMoves(const SphCollider& c) {
+  return c.integrate_pose && (glm::dot(c.pose.linear_velocity, c.pose.linear_velocity) > 0.0f ||
+                              glm::dot(c.pose.angular_velocity, c.pose.angular_velocity) > 0.0f);
+}
+
 // A nozzle: emits discs of particles (square lattice of spacing d inside `radius`) along
 // `direction` at `speed`, `rate` particles per second, while start_time <= t < end_time.
 // A lattice point is skipped (not emitted) where a collider is nearer than the particle radius, an
@@ -219,6 +229,8 @@ struct SphScratch {
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after
   // collider c's last query).
   std::vector<std::uint32_t> collide_stale;
+  std::vector<std::uint32_t> collide_order;  // collision passes: moving colliders first, still ones last
+  std::vector<glm::vec4> push_plane;  // per particle: the moving face that pushed it this step (xyz normal, w offset)
   std::vector<glm::vec3> reduce_force, reduce_torque;
   bool initialised = false;
   // Testing aid: run the pair loops' portable code even where the CPU has AVX2. Both give
