@@ -1605,10 +1605,9 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
         // one-off push from the last step must not be repeated on a particle that already
         // expands, since the solver never pulls particles back (only compression is corrected).
         // The share is 0.2 rather than the paper's full kappa: a push repeated where it is no
-        // longer needed is never taken back, so a larger share keeps a resting column moving (the
-        // at-rest test of tests/sph, 432 particles: v_rms 8.4 mm/s without warm start, 9.6 with
-        // 0.2, 13.6 with 0.4) and with 0.5 the randomised stability test (a jet against a
-        // collider) gains energy (see SphParams::warm_start).
+        // longer needed is never taken back, so any share keeps a resting column moving (off by
+        // default: SphParams::warm_start gives the figures) and with 0.5 the randomised stability
+        // test (a jet against a collider) gains energy.
         // The stored sum was found for the last step's dt. Its steady part (the pressure that
         // holds a column up) does not depend on dt, but the part that removed a standing
         // compression does, as 1 / dt^2 (eq. 8-9: kappa = (rho* - rho_0) alpha / dt^2): applied over
