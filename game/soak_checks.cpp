@@ -98,6 +98,42 @@ Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::Sig
   return worst;
 }
 
+Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> still, float radius,
+                                 PenetrationScratch& scratch, std::size_t& squeezed) {
+  Penetration worst;
+  squeezed = 0;
+  if (points.empty()) return worst;
+  scratch.local.resize(points.size());
+  scratch.samples.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) scratch.local[i] = fluid::toColliderSpace(pose, points[i]);
+  shape.query(scratch.local, scratch.samples);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const fluid::ColliderSample s = scratch.samples[i];
+    if (!s.valid || s.distance >= 0.0f) continue;
+    // The way out: the surface point along the outward normal (world space).
+    const glm::vec3 exit = points[i] - s.distance * fluid::toWorldDirection(pose, s.normal);
+    bool blocked = false;
+    for (const PlacedShape& other : still) {
+      const glm::vec3 local = fluid::toColliderSpace(other.pose, exit);
+      fluid::ColliderSample o;
+      other.shape->query(std::span<const glm::vec3>(&local, 1), std::span<fluid::ColliderSample>(&o, 1));
+      blocked = blocked || (o.valid && o.distance < 0.0f);
+    }
+    if (blocked) {
+      ++squeezed;
+      continue;
+    }
+    if (-s.distance > worst.depth) {
+      worst.depth = -s.distance;
+      worst.index = i;
+      worst.position = points[i];
+    }
+  }
+  worst.ratio = radius > 0.0f ? worst.depth / radius : 0.0f;
+  return worst;
+}
+
 ThrowSchedule makeThrowSchedule(const ThrowScheduleDesc& desc, std::uint32_t seed) {
   ThrowSchedule s;
   s.desc = desc;

@@ -82,6 +82,23 @@ struct PenetrationScratch {
 Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
                              const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch);
 
+// A still collider (placed) for worstFreePenetration.
+struct PlacedShape {
+  const fluid::SignedDistanceShape* shape = nullptr;
+  fluid::ColliderPose pose;
+};
+
+// Deepest penetration of the points into a collider that moves (a crate coupled to the SPH fluid),
+// leaving out the points that have no free position there: the SPH solver's rule where a moving
+// collider overlaps a still one is that the still one wins (fluid/sph/sph.hpp, sphColliderMoves),
+// so a particle squeezed between a crate and the basin ends outside the basin and inside the crate.
+// A point counts as squeezed when its way out of `shape`, the nearest point of its surface
+// (p - distance * normal), lies inside one of `still` (distance < 0): the crate reaches into the
+// basin there. `squeezed` receives how many points were left out for that reason.
+Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> still, float radius,
+                                 PenetrationScratch& scratch, std::size_t& squeezed);
+
 // ---- crate throws -----------------------------------------------------------------------------
 
 // Where soak throws come from and go: the thrower stands on a ring around the fountain (so throws

@@ -26,10 +26,12 @@ struct SoakDesc {
   std::uint32_t seed = 1;
   // Tolerated penetration as a fraction of the particle radius (SPH particle_radius, sprite size).
   // The SPH solver and the sprites end every step with the particle centre on or outside every
-  // collider surface (Kolb et al. 2004 §3.3.2 push-out, fluid/core/collider.hpp); what remains is
-  // float rounding and water squeezed between two colliders (a crate resting on the basin floor),
-  // where no position is outside both. A quarter radius is far above rounding and far below the
-  // depth of a particle that went through a wall.
+  // collider surface (Kolb et al. 2004 §3.3.2 push-out, fluid/core/collider.hpp), except water
+  // squeezed where a crate reaches into the fountain: no position is outside both, the solver keeps
+  // it outside the fountain (still colliders win), and the check leaves out the particles inside a
+  // crate there (worstFreePenetration). What remains is float rounding and the projections'
+  // remainder at corners. A quarter radius is far above rounding and far below the depth of a
+  // particle that went through a wall.
   float particle_tolerance = 0.25f;
   // Crates: the box reaches at least (half edge - centre distance) into the fountain's solid. Resting
   // contacts stay within Bullet's few-centimetre margin, but a thrown crate (14 m/s) travels 0.12 m,
@@ -52,6 +54,10 @@ struct SoakStats {
   std::uint64_t rss_warmup = 0, rss_end = 0;  // resident set at the end of warm-up and at the last frame
   float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
   std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
+  // SPH particles inside a crate where the crate reaches into the fountain (no free position; not
+  // failures, see worstFreePenetration): the most in one frame, and the frames with any.
+  std::size_t sph_squeezed_max = 0;
+  std::uint64_t sph_squeezed_frames = 0;
   MemoryGrowth memory;
 };
 
@@ -62,7 +68,8 @@ struct SoakMonitor {
   SoakStats stats;
   std::vector<std::uint64_t> rss_samples;  // after warm-up; reserved up front
   PenetrationScratch scratch;
-  std::vector<glm::vec3> points;  // crate centres
+  std::vector<glm::vec3> points;   // crate centres
+  std::vector<PlacedShape> still;  // the SPH colliders that do not move this frame
   bool have_counts = false;
   std::string failure;  // the first failure, naming the step and what
 };

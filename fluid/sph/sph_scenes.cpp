@@ -51,7 +51,7 @@ const KeySpec kDambreakBox[] = {
 const KeySpec kSolver[] = {
     {"cfl", 0.4f, 0.01f, 1.0f, "CFL number: dt <= cfl * d / v_max"},
     {"force_bound", 0.0025f, 0.0f, 1.0f, "DFSPH force condition |g| dt^2 <= force_bound * cfl * d; 0 = off"},
-    {"warm_start", 1.0f, 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)"},
+    {"warm_start", 0.0f, 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)"},
     {"max_dt", 0.005f, 1e-7f, 1.0f, "upper bound of the time step (s)"},
     {"viscosity", 0.01f, 0.0f, 100.0f, "Laplacian viscosity nu"},
     {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},

@@ -243,6 +243,28 @@ struct ColliderQuery {
   }
 };
 
+// Where a still collider pushes a particle out (outward normal ns, by `need` along it) that a
+// moving collider pushed out earlier in the same step (its face as the plane
+// dot(plane.xyz, x) >= plane.w), the position nearest to p outside both tangent planes: the two
+// projections one after the other only converge slowly in a narrow wedge (a tilted crate edge
+// on the basin floor) and end wherever the last one put the particle. The planes' intersection,
+// when the still projection alone would violate the moving face: x = p + l1 ns + l2 nm with both
+// constraints active (a 2x2 system). `still_only` (the still projection) is kept where the faces
+// are nearly parallel or the wedge's free side is more than `reach` away: there the moving
+// collider overlaps the still one, no free position is near, and the still collider wins.
+glm::vec3 wedgePosition(glm::vec3 p, glm::vec3 ns, float need, glm::vec4 plane, float reach, glm::vec3 still_only) {
+  const glm::vec3 nm(plane);
+  const float c = glm::dot(ns, nm);
+  const float r1 = need, r2 = plane.w - glm::dot(nm, p);  // displacements required along ns and nm
+  if (c * r1 >= r2) return still_only;                    // the still projection keeps the moving face
+  const float det = 1.0f - c * c;
+  if (det < 1e-3f) return still_only;
+  const float l1 = (r1 - c * r2) / det, l2 = (r2 - c * r1) / det;
+  if (l1 < 0.0f || l2 < 0.0f) return still_only;
+  const glm::vec3 x = p + l1 * ns + l2 * nm;
+  return glm::length(x - p) <= reach ? x : still_only;
+}
+
 // --- pair loops ------------------------------------------------------------------------------
 // The per-pair gradients G[k] = m_j grad W_ij live in three float arrays (SoA, 12 bytes a pair).
 // Every pair loop of the DFSPH step (density + gradients, viscosity, and the two loops of each
@@ -1583,10 +1605,9 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
         // one-off push from the last step must not be repeated on a particle that already
         // expands, since the solver never pulls particles back (only compression is corrected).
         // The share is 0.2 rather than the paper's full kappa: a push repeated where it is no
-        // longer needed is never taken back, so a larger share keeps a resting column moving (the
-        // at-rest test of tests/sph, 432 particles: v_rms 8.4 mm/s without warm start, 9.6 with
-        // 0.2, 13.6 with 0.4) and with 0.5 the randomised stability test (a jet against a
-        // collider) gains energy (see SphParams::warm_start).
+        // longer needed is never taken back, so any share keeps a resting column moving (off by
+        // default: SphParams::warm_start gives the figures) and with 0.5 the randomised stability
+        // test (a jet against a collider) gains energy.
         // The stored sum was found for the last step's dt. Its steady part (the pressure that
         // holds a column up) does not depend on dt, but the part that removed a standing
         // compression does, as 1 / dt^2 (eq. 8-9: kappa = (rho* - rho_0) alpha / dt^2): applied over
@@ -1694,8 +1715,9 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   }
 
   // 7. Collisions: Kolb et al. 2004 §3.3.2 double check against the collider at its end-of-step
-  // pose, with the step-start sample as "previous". Repeated while a later collider pushed a
-  // particle into an earlier one (corners), so no particle ends the step inside a collider.
+  // pose, with the step-start sample as "previous". Repeated (up to 4 passes) while a later
+  // collider pushed a particle into an earlier one (corners), so no particle ends the step inside a
+  // collider where a position outside all of them exists nearby.
   // One parallel region per (pass, collider): query, reaction and the reaction force/torque sums.
   // Queries that cannot change the outcome are skipped (bit-identical results):
   //  - in passes after the first, a particle that has not moved since collider c last queried it
@@ -1706,6 +1728,23 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   //    reaction and nothing tunnelled, so no query is needed. (The tunnelling test below could
   //    only fire there on a normal flip across a medial axis, e.g. between the fountain's spire
   //    and its dish wall, which is not a crossing for a collider that does not move.)
+  // Order within a pass: the colliders that move during the step first, the still ones
+  // (sphColliderMoves false) last, so a pass ends with the still colliders' projections. Where a
+  // moving collider's end-of-step pose overlaps a still one (a crate, advanced by its velocities
+  // through the step, reaching into the basin wall, which Bullet stops only afterwards), a particle
+  // between them has no position outside both, and alternating projections would otherwise leave
+  // it wherever the last collider put it: inside the wall, carried further by the crate every
+  // step. Still colliders win: the particle ends outside them, inside the moving collider only
+  // where that overlaps a still one, and the moving collider gets the reactions of its own
+  // projections (its push on the particle) like any other contact.
+  w.collide_order.resize(nc);
+  w.push_plane.resize(n);
+  {
+    std::size_t k = 0;
+    for (const bool moving_first : {true, false})
+      for (std::size_t c = 0; c < nc; ++c)
+        if (sphColliderMoves(world.colliders[c]) == moving_first) w.collide_order[k++] = static_cast<std::uint32_t>(c);
+  }
   const float skin = P.collision_skin > 0.0f ? P.collision_skin : 0.01f * P.particle_radius;
   w.end_samples.resize(nc);
   w.collide_stale.resize(n);
@@ -1717,13 +1756,12 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   };
   for (int pass = 0; pass < 4 && nc > 0; ++pass) {
     std::size_t inside_total = 0;
-    for (std::size_t c = 0; c < nc; ++c) {
+    for (std::size_t k = 0; k < nc; ++k) {
+      const std::size_t c = w.collide_order[k];
       SphCollider& col = world.colliders[c];
       const ColliderPose pose = col.integrate_pose ? advancedPose(col.pose, dt) : col.pose;
       // Does not move during the step: the end pose is the start pose, so are the samples' distances.
-      const bool still = !col.integrate_pose ||
-                         (glm::dot(col.pose.linear_velocity, col.pose.linear_velocity) == 0.0f &&
-                          glm::dot(col.pose.angular_velocity, col.pose.angular_velocity) == 0.0f);
+      const bool still = !sphColliderMoves(col);
       const bool skip_far = still && col.lipschitz_distance;
       const std::uint32_t bit = track_stale ? 1u << c : 0u;
       const ColliderQuery query(col, pose);
@@ -1736,7 +1774,10 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
             std::uint32_t which[kGrain];
             std::uint32_t q = 0;
             for (std::size_t i = b; i < e; ++i) {
-              if (pass == 0 && c == 0) w.collide_stale[i] = all_colliders;
+              if (pass == 0 && k == 0) {
+                w.collide_stale[i] = all_colliders;
+                w.push_plane[i] = glm::vec4(0.0f);
+              }
               if (track_stale && pass > 0 && !(w.collide_stale[i] & bit)) continue;  // unchanged: same sample
               w.collide_stale[i] &= ~bit;
               const ColliderSample& s0 = s0s[i];
@@ -1773,6 +1814,13 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
               } else {
                 res = resolveCollision(w.old_position[i], s0, X[i], V[i], s, colliderVelocityAt(pose, X[i]), dt, skin,
                                        col.material);
+              }
+              if (!still) {
+                // The moving face the particle now rests on: n . x >= n . x_now (it sits skin outside).
+                const glm::vec3 nm = crossed ? s0.normal : s.normal;
+                w.push_plane[i] = glm::vec4(nm, glm::dot(nm, res.position));
+              } else if (!crossed && w.push_plane[i] != glm::vec4(0.0f)) {
+                res.position = wedgePosition(X[i], s.normal, skin - s.distance, w.push_plane[i], d, res.position);
               }
               const glm::vec3 reaction = -m * (res.velocity - V[i]) / dt;  // on the collider
               Xmut[i] = res.position;

@@ -135,6 +135,30 @@ TEST(SoakPenetration, ACrateCentreNearerThanItsHalfEdgeCountsAsSunk) {
   EXPECT_GT(q.ratio, game::SoakDesc{}.crate_tolerance);
 }
 
+// A 0.6 m crate whose bottom reaches 2 cm into the ground (y = 0). A particle just above the
+// ground inside its bottom has no free position (its way out of the crate is under the ground):
+// left out and counted as squeezed. A particle as deep inside the crate's side, well above the
+// ground, could leave: it counts.
+TEST(SoakPenetration, InsideACrateCountsOnlyWhereTheCrateDoesNotReachIntoAStillCollider) {
+  const fluid::BoxShape crate(glm::vec3(0.3f));
+  const fluid::ColliderPose pose{.translation = glm::vec3(6.0f, 0.28f, 0.0f)};
+  const game::FountainShape fountain;
+  const std::vector<game::PlacedShape> still = {{&fountain, {}}};
+  game::PenetrationScratch scratch;
+  std::size_t squeezed = 0;
+  const std::vector<glm::vec3> squeezed_point = {{6.0f, 0.001f, 0.0f}};  // 2.1 cm inside the bottom face
+  EXPECT_EQ(game::worstFreePenetration(squeezed_point, crate, pose, still, 0.01f, scratch, squeezed).depth, 0.0f);
+  EXPECT_EQ(squeezed, 1u);
+  // Without the ground as a still collider the same point counts, 2.1 radii deep.
+  EXPECT_NEAR(game::worstFreePenetration(squeezed_point, crate, pose, {}, 0.01f, scratch, squeezed).ratio, 2.1f, 1e-3f);
+  EXPECT_EQ(squeezed, 0u);
+  const std::vector<glm::vec3> free_point = {{6.0f + 0.3f - 0.019f, 0.3f, 0.0f}, squeezed_point[0]};
+  const game::Penetration p = game::worstFreePenetration(free_point, crate, pose, still, 0.01f, scratch, squeezed);
+  EXPECT_NEAR(p.depth, 0.019f, 1e-5f);
+  EXPECT_EQ(p.index, 0u);
+  EXPECT_EQ(squeezed, 1u);
+}
+
 std::vector<game::CrateThrow> allThrows(std::uint32_t seed, std::uint64_t steps, double mean_interval = 2.0) {
   game::ThrowScheduleDesc desc;
   desc.mean_interval_s = mean_interval;
