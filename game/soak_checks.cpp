@@ -76,14 +76,24 @@ MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const Mem
   return out;
 }
 
-Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
-                             const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch) {
-  Penetration worst;
-  if (points.empty()) return worst;
+namespace {
+
+// The shape's samples of world-space `points` at `pose`, into scratch.samples.
+void queryInColliderSpace(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                          const fluid::ColliderPose& pose, PenetrationScratch& scratch) {
   scratch.local.resize(points.size());
   scratch.samples.resize(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) scratch.local[i] = fluid::toColliderSpace(pose, points[i]);
   shape.query(scratch.local, scratch.samples);
+}
+
+}  // namespace
+
+Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
+                             const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch) {
+  Penetration worst;
+  if (points.empty()) return worst;
+  queryInColliderSpace(points, shape, pose, scratch);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const fluid::ColliderSample& s = scratch.samples[i];
     if (!s.valid) continue;
@@ -104,10 +114,7 @@ Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid:
   Penetration worst;
   squeezed = 0;
   if (points.empty()) return worst;
-  scratch.local.resize(points.size());
-  scratch.samples.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) scratch.local[i] = fluid::toColliderSpace(pose, points[i]);
-  shape.query(scratch.local, scratch.samples);
+  queryInColliderSpace(points, shape, pose, scratch);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const fluid::ColliderSample s = scratch.samples[i];
     if (!s.valid || s.distance >= 0.0f) continue;
