@@ -146,6 +146,33 @@ bool setExternalForce(PhysicsWorld& world, BodyId id, glm::vec3 force, glm::vec3
   return true;
 }
 
+int applyBlast(PhysicsWorld& world, const fluid::Blast& blast) {
+  if (!fluid::validateBlast(blast).empty()) return -1;
+  int pushed = 0;
+  for (auto& body : world.bodies) {
+    if (body->getInvMass() == 0.0f) continue;
+    btVector3 aabb_min, aabb_max;
+    body->getAabb(aabb_min, aabb_max);
+    const glm::vec3 lo = toGlm(aabb_min), hi = toGlm(aabb_max);
+    // Distance to the box's nearest point, not its centre: an explosive lying against a crate
+    // gives it the full near-field push.
+    const glm::vec3 nearest = glm::clamp(blast.centre, lo, hi);
+    const float impulse_per_area = fluid::blastImpulsePerArea(blast, glm::length(nearest - blast.centre));
+    if (!(impulse_per_area > 0.0f)) continue;
+    const glm::vec3 centre = toGlm(body->getCenterOfMassPosition());
+    const glm::vec3 direction = fluid::blastDirection(blast, centre);
+    // Projected area of the axis-aligned box along `direction` (exact for the box; a rotated
+    // crate's bounding box overstates its area by at most sqrt(3)).
+    const glm::vec3 extent = hi - lo;
+    const float area = std::abs(direction.x) * extent.y * extent.z + std::abs(direction.y) * extent.x * extent.z +
+                       std::abs(direction.z) * extent.x * extent.y;
+    body->applyImpulse(bt(impulse_per_area * area * direction), bt(nearest - centre));
+    body->activate(true);
+    ++pushed;
+  }
+  return pushed;
+}
+
 int bodyCount(const PhysicsWorld& world) { return static_cast<int>(world.bodies.size()); }
 
 BodyState bodyState(const PhysicsWorld& world, BodyId id) {

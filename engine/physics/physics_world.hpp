@@ -4,6 +4,7 @@
 // order; they are never removed, only reset (thrown crates are recycled), so ids stay valid.
 
 #include "engine/assets/assets.hpp"
+#include "fluid/core/blast.hpp"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -89,6 +90,12 @@ bool setExternalForce(PhysicsWorld& world, BodyId id, glm::vec3 force, glm::vec3
 // Advances exactly `substeps` internal steps of step_seconds / substeps each (no Bullet
 // interpolation, so the result depends only on the inputs).
 void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps);
+
+// Pushes every dynamic body within the blast's reach (fluid/core/blast.hpp): the impulse per area at
+// the body's nearest point times the area its bounding box shows the blast, applied at that point,
+// so a crate hit off-centre also spins. Returns the number of bodies pushed, or -1 (nothing applied)
+// when validateBlast rejects the blast.
+int applyBlast(PhysicsWorld& world, const fluid::Blast& blast);
 
 int bodyCount(const PhysicsWorld& world);
 BodyState bodyState(const PhysicsWorld& world, BodyId id);

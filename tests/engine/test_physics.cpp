@@ -101,3 +101,54 @@ TEST(Physics, ResetTeleportsAndNonFiniteBodiesAreFound) {
 }
 
 }  // namespace
+
+namespace {
+
+fluid::Blast blastAt(glm::vec3 centre) {
+  fluid::Blast blast;
+  blast.centre = centre;
+  blast.impulse_at_1m = 60.0f;
+  blast.core_radius = 0.25f;
+  blast.reach = 4.0f;
+  return blast;
+}
+
+TEST(PhysicsBlast, PushesNearerBodiesHarderAndAwayFromTheCentre) {
+  auto world = engine::createPhysicsWorld({});
+  engine::addStaticPlane(*world, {0, 1, 0}, 0.0f);
+  const engine::BodyId near_box = engine::addBox(*world, box({1.0f, 0.25f, 0.0f}), glm::vec3(0.25f));
+  const engine::BodyId far_box = engine::addBox(*world, box({-2.5f, 0.25f, 0.0f}), glm::vec3(0.25f));
+  const engine::BodyId out_of_reach = engine::addBox(*world, box({0.0f, 0.25f, 6.0f}), glm::vec3(0.25f));
+  EXPECT_EQ(engine::applyBlast(*world, blastAt({0.0f, 0.25f, 0.0f})), 2);
+  const glm::vec3 v_near = engine::bodyState(*world, near_box).linear_velocity;
+  const glm::vec3 v_far = engine::bodyState(*world, far_box).linear_velocity;
+  EXPECT_GT(v_near.x, 0.0f);
+  EXPECT_LT(v_far.x, 0.0f);
+  EXPECT_GT(std::abs(v_near.x), 4.0f * std::abs(v_far.x));  // nearest faces at 0.75 m and 2.25 m: 9x by 1/r^2
+  // The impulse is I(r) * A / m: 60 / 0.75^2 * 0.5^2 / 2 kg = 13.3 m/s; Bullet's collision margin
+  // grows the box a little, so allow 10 %.
+  EXPECT_NEAR(v_near.x, 60.0f / (0.75f * 0.75f) * 0.25f / 2.0f, 1.4f);
+  EXPECT_EQ(engine::bodyState(*world, out_of_reach).linear_velocity, glm::vec3(0.0f));
+}
+
+TEST(PhysicsBlast, AnOffCentreHitSpinsTheBodyAndItStaysFiniteAfterTenBlasts) {
+  auto world = engine::createPhysicsWorld({});
+  engine::addStaticPlane(*world, {0, 1, 0}, 0.0f);
+  const engine::BodyId id = engine::addBox(*world, box({0.0f, 0.25f, 0.0f}), glm::vec3(0.25f));
+  EXPECT_EQ(engine::applyBlast(*world, blastAt({0.6f, 0.45f, 0.3f})), 1);
+  EXPECT_GT(glm::length(engine::bodyState(*world, id).angular_velocity), 0.1f);
+  for (int i = 0; i < 10; ++i) engine::applyBlast(*world, blastAt({0.0f, 0.25f, 0.0f}));  // inside the box
+  for (int i = 0; i < 120; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  EXPECT_EQ(engine::findNonFiniteBody(*world), -1);
+}
+
+TEST(PhysicsBlast, AnInvalidBlastIsRefusedAndMovesNothing) {
+  auto world = engine::createPhysicsWorld({});
+  const engine::BodyId id = engine::addBox(*world, box({0.0f, 1.0f, 0.0f}), glm::vec3(0.25f));
+  fluid::Blast blast = blastAt({0.0f, 0.0f, 0.0f});
+  blast.centre.x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(engine::applyBlast(*world, blast), -1);
+  EXPECT_EQ(engine::bodyState(*world, id).linear_velocity, glm::vec3(0.0f));
+}
+
+}  // namespace
