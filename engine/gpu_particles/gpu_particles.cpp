@@ -90,6 +90,7 @@ GLuint buildUpdateVariant(const std::filesystem::path& dir, unsigned variant, st
   if (variant & 32u) defines += "#define FORMAT_FIXED8\n";
   if (variant & 64u) defines += "#define FORMAT_FRONT_BACK16\n";
   if (variant & 128u) defines += "#define FORMAT_CUBE8\n";
+  if (variant & 256u) defines += "#define BLASTS\n";
   const std::vector<ShaderStageFiles> stages{{GL_VERTEX_SHADER, {dir / "fullscreen.vert"}},
                                              {GL_FRAGMENT_SHADER, {dir / "collide.glsl", dir / "update.frag"}}};
   return buildProgram(stages, defines, error);
@@ -477,11 +478,39 @@ bool setFlowField(GpuParticles& s, const FlowFieldDesc& flow, std::string& error
 
 namespace {
 
+int activeBlasts(const GpuStepParams& params) { return std::clamp(params.blast_count, 0, kMaxBlasts); }
+
 // Bit set of the update pass's compile-time features for these parameters and colliders.
 unsigned updateVariant(const GpuParticles& s, const GpuStepParams& params) {
   const float drag = stokesDragRate(params);
   return (std::clamp(params.attractor_count, 0, kMaxAttractors) > 0 ? 1u : 0u) | (drag > 0.0f ? 2u : 0u) |
-         (drag > 0.0f && s.flow_enabled ? 4u : 0u) | (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u);
+         (drag > 0.0f && s.flow_enabled ? 4u : 0u) | (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u) |
+         (activeBlasts(params) > 0 ? 256u : 0u);
+}
+
+}  // namespace
+
+namespace {
+
+// An invalid blast (validateBlast) is skipped rather than sent: it would push NaN into every sprite.
+void setBlastUniforms(GLuint prog, const GpuStepParams& params) {
+  std::array<glm::vec4, kMaxBlasts> centre_impulse{};
+  std::array<glm::vec2, kMaxBlasts> radii{};
+  int count = 0;
+  for (int k = 0; k < activeBlasts(params); ++k) {
+    const fluid::Blast& blast = params.blasts[static_cast<std::size_t>(k)];
+    if (!fluid::validateBlast(blast).empty()) continue;
+    centre_impulse[static_cast<std::size_t>(count)] = glm::vec4(blast.centre, blast.impulse_at_1m);
+    radii[static_cast<std::size_t>(count)] = glm::vec2(blast.core_radius, blast.reach);
+    ++count;
+  }
+  const float area_over_mass = std::numbers::pi_v<float> * params.particle_radius * params.particle_radius /
+                               std::max(params.particle_mass, 1e-12f);
+  glUniform1i(loc(prog, "u_blast_count"), count);
+  glUniform4fv(loc(prog, "u_blasts"), kMaxBlasts, glm::value_ptr(centre_impulse[0]));
+  glUniform2fv(loc(prog, "u_blast_radii"), kMaxBlasts, glm::value_ptr(radii[0]));
+  glUniform1f(loc(prog, "u_blast_area_over_mass"), std::isfinite(area_over_mass) ? area_over_mass : 0.0f);
+  glUniform1f(loc(prog, "u_blast_max_dv"), std::max(params.blast_max_speed_change, 0.0f));
 }
 
 }  // namespace
@@ -550,6 +579,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform4fv(loc(prog, "u_attractors"), kMaxAttractors, glm::value_ptr(att[0]));
   glUniform1fv(loc(prog, "u_softening"), kMaxAttractors, soft.data());
   glUniform1f(loc(prog, "u_drag"), drag);
+  setBlastUniforms(prog, params);
   glUniform3fv(loc(prog, "u_flow_origin"), 1, glm::value_ptr(s.flow_origin));
   glUniform3fv(loc(prog, "u_flow_extent"), 1, glm::value_ptr(s.flow_extent));
   // Colliders.

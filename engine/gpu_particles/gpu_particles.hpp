@@ -22,6 +22,7 @@
 // and all per-frame calls on it are no-ops: the game keeps running without the effect.
 
 #include "fluid/collide/collide.hpp"
+#include "fluid/core/blast.hpp"
 #include "fluid/core/collider.hpp"
 
 #include <GL/gl.h>
@@ -160,6 +161,7 @@ struct GpuParticlesDesc {
 };
 
 inline constexpr int kMaxAttractors = 4;
+inline constexpr int kMaxBlasts = 4;  // explosions applied in one step
 
 // Softened point attractor: a = strength·(c − p)/(|c − p|² + softening²)^{3/2}; strength < 0 repels.
 struct Attractor {
@@ -184,6 +186,12 @@ struct GpuStepParams {
   // because a nearest-texel depth map is piecewise constant: the push along one texel's normal
   // can land over a neighbouring texel whose surface is higher. Clamped to [0, 8].
   int push_out_iterations = 4;
+  // Explosions this step (fluid/core/blast.hpp, the model the SPH water and the crates use): each
+  // live sprite gains dv = I(r) * (pi r^2 / m), capped at blast_max_speed_change. Set them for one
+  // step only; blasts past kMaxBlasts are ignored.
+  std::array<fluid::Blast, kMaxBlasts> blasts{};
+  int blast_count = 0;
+  float blast_max_speed_change = 40.0f;  // m/s
 };
 
 // Flow field for the Stokes drag: a W×H×D grid of velocities (m/s) over an axis-aligned box;
@@ -220,7 +228,7 @@ struct GpuParticles {
   GpuProgram birth, sort_key, sort_pass, sprite;
   // Update-pass variants, built on first use: bit 0 attractors, 1 drag, 2 flow field,
   // 3 colliders, 4..7 depth-map formats present (float32, fixed8, front_back16, cube8).
-  std::array<GLuint, 256> update_variants{};
+  std::array<GLuint, 512> update_variants{};
   float time = 0.0f;  // s since creation, advanced by step()
   IndexAllocator allocator;
   std::vector<std::pair<float, std::uint32_t>> death_queue;  // min-heap on death time

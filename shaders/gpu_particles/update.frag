@@ -21,6 +21,34 @@ uniform sampler3D u_flow;
 uniform vec3 u_flow_origin;
 uniform vec3 u_flow_extent;
 
+#ifdef BLASTS
+uniform int u_blast_count;
+uniform vec4 u_blasts[4];        // xyz centre, w specific impulse 1 m away (Pa s)
+uniform vec2 u_blast_radii[4];   // core radius, reach (m)
+uniform float u_blast_area_over_mass;  // pi r^2 / m, m^2/kg
+uniform float u_blast_max_dv;          // m/s
+
+// The blast law of fluid/core/blast.hpp (I = I1 / max(r, core)^2, smoothstep taper over the outer
+// fifth of the reach, straight up at the centre), so sprites fly with the water and the crates.
+vec3 blastVelocityChange(vec3 p) {
+  vec3 dv = vec3(0.0);
+  for (int k = 0; k < u_blast_count; ++k) {
+    vec3 d = p - u_blasts[k].xyz;
+    float distance = length(d);
+    float reach = u_blast_radii[k].y;
+    if (!(distance < reach)) continue;
+    float r = max(distance, u_blast_radii[k].x);
+    float taper_start = 0.8 * reach;
+    float t = clamp((reach - distance) / (reach - taper_start), 0.0, 1.0);
+    float taper = distance > taper_start ? t * t * (3.0 - 2.0 * t) : 1.0;
+    float speed = min(u_blasts[k].w / (r * r) * taper * u_blast_area_over_mass, u_blast_max_dv);
+    vec3 direction = distance > 1e-6 ? d / distance : vec3(0.0, 1.0, 0.0);
+    dv += speed * direction;
+  }
+  return dv;
+}
+#endif
+
 layout(location = 0) out vec4 out_state0;
 layout(location = 1) out vec4 out_state1;
 
@@ -94,12 +122,18 @@ void main() {
   vec3 next_p, next_v, next_s1;
   if (u_verlet == 0) {
     vec3 v = s1.xyz;
+#ifdef BLASTS
+    v += blastVelocityChange(p);
+#endif
     next_v = v + acceleration(p, v) * u_dt;
     next_p = p + next_v * u_dt;
     collide(p, next_p, next_v);
     next_s1 = next_v;
   } else {
     vec3 p2 = s1.xyz;
+#ifdef BLASTS
+    p2 -= blastVelocityChange(p) * u_dt;  // Verlet keeps no velocity: dv moves P_{i-2} back
+#endif
     vec3 v = (p - p2) / u_dt;
     next_p = 2.0 * p - p2 + acceleration(p, v) * (u_dt * u_dt);
     next_v = (next_p - p) / u_dt;

@@ -576,3 +576,70 @@ TEST_F(GpuParticlesTest, ZeroParticlesAndACountThatChangesEveryFrame) {
   EXPECT_GT(max_live, 100u);
   EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
+
+namespace {
+
+// Sprites at rest on a line through the blast, no gravity: the velocity after one step is the
+// blast's dv from the shared CPU model (fluid/core/blast.hpp).
+GpuStepParams blastStep(glm::vec3 centre) {
+  GpuStepParams p;
+  p.gravity = glm::vec3(0.0f);
+  p.particle_radius = 0.01f;
+  p.particle_mass = 1e-3f;
+  p.blast_count = 1;
+  p.blasts[0].centre = centre;
+  p.blasts[0].impulse_at_1m = 2.0f;
+  p.blasts[0].core_radius = 0.1f;
+  p.blasts[0].reach = 3.0f;
+  p.blast_max_speed_change = 40.0f;
+  return p;
+}
+
+BirthBatch restingLine(int n) {
+  BirthBatch b;
+  for (int k = 0; k < n; ++k) b.push({-3.2f + 0.1f * static_cast<float>(k), 0.5f, 0.2f}, glm::vec3(0.0f), 10.0f, 0, 1.0f);
+  return b;
+}
+
+}  // namespace
+
+TEST_F(GpuParticlesTest, BlastGivesEachSpriteTheSharedModelsVelocityChangeOnce) {
+  for (const Integrator integrator : {Integrator::euler, Integrator::verlet}) {
+    destroyGpuParticles(system_);
+    ASSERT_NO_FATAL_FAILURE(create(16, 16, integrator));
+    const BirthBatch births = restingLine(64);
+    ASSERT_EQ(spawn(system_, births), 64u);
+    const GpuStepParams with_blast = blastStep({0.0f, 0.5f, 0.2f});
+    step(system_, with_blast);
+    GpuStepParams calm = with_blast;
+    calm.blast_count = 0;
+    step(system_, calm);  // the push is given once, then the sprite coasts
+    std::vector<glm::vec4> positions, state1;
+    readPositions(system_, positions);
+    readState1(system_, state1);
+    const float area_over_mass = 3.14159265f * 0.01f * 0.01f / 1e-3f;
+    float max_error = 0.0f, fastest = 0.0f;
+    for (std::size_t k = 0; k < 64; ++k) {
+      const glm::vec3 expected =
+          fluid::blastVelocityChange(with_blast.blasts[0], births.positions[k], area_over_mass, 40.0f);
+      const glm::vec3 velocity = integrator == Integrator::euler
+                                     ? glm::vec3(state1[k])
+                                     : (glm::vec3(positions[k]) - glm::vec3(state1[k])) / system_.desc.dt;
+      max_error = std::max(max_error, glm::length(velocity - expected));
+      fastest = std::max(fastest, glm::length(expected));
+    }
+    EXPECT_GT(fastest, 10.0f);  // the line crosses the core: the test sees a real push
+    EXPECT_LT(max_error, 1e-3f * fastest) << (integrator == Integrator::euler ? "euler" : "verlet");
+  }
+}
+
+TEST_F(GpuParticlesTest, AnInvalidBlastIsSkippedAndMovesNothing) {
+  ASSERT_NO_FATAL_FAILURE(create(16, 16, Integrator::euler));
+  ASSERT_EQ(spawn(system_, restingLine(64)), 64u);
+  GpuStepParams params = blastStep({0.0f, 0.5f, 0.2f});
+  params.blasts[0].reach = std::numeric_limits<float>::quiet_NaN();
+  step(system_, params);
+  std::vector<glm::vec4> state1;
+  readState1(system_, state1);
+  for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(glm::vec3(state1[k]), glm::vec3(0.0f)) << k;
+}
