@@ -45,7 +45,8 @@ PhysicsWorld::PhysicsWorld() = default;
 PhysicsWorld::~PhysicsWorld() {
   // Bodies must leave the world before the world (and then shapes/meshes) go away.
   if (world) {
-    for (auto& body : bodies) world->removeRigidBody(body.get());
+    for (auto& body : bodies)
+      if (body->isInWorld()) world->removeRigidBody(body.get());
   }
   bodies.clear();
   world.reset();
@@ -150,7 +151,7 @@ int applyBlast(PhysicsWorld& world, const fluid::Blast& blast) {
   if (!fluid::validateBlast(blast).empty()) return -1;
   int pushed = 0;
   for (auto& body : world.bodies) {
-    if (body->getInvMass() == 0.0f) continue;
+    if (body->getInvMass() == 0.0f || !body->isInWorld()) continue;
     btVector3 aabb_min, aabb_max;
     body->getAabb(aabb_min, aabb_max);
     const glm::vec3 lo = toGlm(aabb_min), hi = toGlm(aabb_max);
@@ -202,6 +203,23 @@ void resetBody(PhysicsWorld& world, BodyId id, const BodyState& state) {
   body.setAngularVelocity(bt(state.angular_velocity));
   body.clearForces();
   body.activate(true);
+}
+
+void setBodyEnabled(PhysicsWorld& world, BodyId id, bool enabled) {
+  assert(id >= 0 && id < bodyCount(world));
+  btRigidBody* body = world.bodies[static_cast<std::size_t>(id)].get();
+  if (enabled == body->isInWorld()) return;
+  if (enabled) {
+    world.world->addRigidBody(body);  // takes the world's gravity again
+    body->activate(true);
+  } else {
+    world.world->removeRigidBody(body);
+  }
+}
+
+bool bodyEnabled(const PhysicsWorld& world, BodyId id) {
+  assert(id >= 0 && id < bodyCount(world));
+  return world.bodies[static_cast<std::size_t>(id)]->isInWorld();
 }
 
 void setGravity(PhysicsWorld& world, glm::vec3 gravity) {

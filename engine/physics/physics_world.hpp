@@ -99,6 +99,12 @@ int applyBlast(PhysicsWorld& world, const fluid::Blast& blast);
 
 int bodyCount(const PhysicsWorld& world);
 BodyState bodyState(const PhysicsWorld& world, BodyId id);
+// Takes a body out of the simulation (Bullet neither moves it nor collides with it) or puts it
+// back at its current state. Ids stay valid: a game recycles short-lived bodies (explosives)
+// instead of removing them.
+void setBodyEnabled(PhysicsWorld& world, BodyId id, bool enabled);
+bool bodyEnabled(const PhysicsWorld& world, BodyId id);
+
 // Teleports a body and sets its velocities (wakes it up).
 void resetBody(PhysicsWorld& world, BodyId id, const BodyState& state);
 void setGravity(PhysicsWorld& world, glm::vec3 gravity);

@@ -152,3 +152,18 @@ TEST(PhysicsBlast, AnInvalidBlastIsRefusedAndMovesNothing) {
 }
 
 }  // namespace
+
+TEST(Physics, ADisabledBodyStaysPutAndMovesAgainWhenEnabled) {
+  auto world = engine::createPhysicsWorld({});
+  const engine::BodyId id = engine::addBox(*world, box({0.0f, 2.0f, 0.0f}), glm::vec3(0.25f));
+  engine::setBodyEnabled(*world, id, false);
+  EXPECT_FALSE(engine::bodyEnabled(*world, id));
+  for (int i = 0; i < 30; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  EXPECT_EQ(engine::bodyState(*world, id).position.y, 2.0f);
+  fluid::Blast blast;
+  blast.centre = {0.0f, 1.5f, 0.0f};
+  EXPECT_EQ(engine::applyBlast(*world, blast), 0) << "a disabled body is out of the blast's reach too";
+  engine::setBodyEnabled(*world, id, true);
+  for (int i = 0; i < 30; ++i) engine::stepPhysics(*world, 1.0 / 60.0, 2);
+  EXPECT_LT(engine::bodyState(*world, id).position.y, 1.0f);
+}

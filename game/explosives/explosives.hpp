@@ -1,0 +1,64 @@
+#pragma once
+// Explosives, one game system for every scene that lists them (the fountain, the blob monster):
+// the player throws a fused charge, a Bullet sphere that bounces and rolls; when its fuse runs out
+// (or, optionally, on a hard impact) it detonates where it lies. A detonation is a fluid::Blast
+// (fluid/core/blast.hpp) that this step's consumers apply with the one shared law: the crates
+// (engine::applyBlast), the SPH water, the blob monster's particles and the GPU sprites; the
+// system itself only pushes Bullet bodies. Charges are recycled, never removed, so body ids stay
+// valid (engine/physics).
+
+#include "engine/physics/physics_world.hpp"
+#include "fluid/core/blast.hpp"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace game {
+
+struct ExplosiveParams {
+  float fuse_seconds = 2.5f;      // from the throw to the detonation
+  float throw_speed = 9.0f;       // m/s
+  float radius = 0.1f;            // m, the charge's sphere
+  float mass = 1.2f;              // kg
+  float impact_speed_change = 0;  // m/s: detonate early when one step changes its velocity by more; 0 = fuse only
+  fluid::Blast blast;             // impulse_at_1m, core_radius, reach; the centre is the charge at detonation
+  int max_live = 6;               // charges in flight at once; a throw beyond recycles the oldest
+};
+
+// Empty when usable; otherwise names the bad field and value.
+std::string validateExplosiveParams(const ExplosiveParams& params);
+
+struct Charge {
+  engine::BodyId body = -1;
+  double detonates_at = 0.0;  // s, system time
+  glm::vec3 last_velocity{0.0f};
+  bool live = false;
+};
+
+struct Explosives {
+  ExplosiveParams params;
+  std::vector<Charge> charges;           // one Bullet body each, created on first use, then recycled
+  std::vector<fluid::Blast> detonations;  // this step's blasts, for the other effects to apply
+  double time = 0.0;                     // s
+  std::uint64_t thrown = 0, detonated = 0;
+  std::uint64_t bodies_pushed = 0;  // crates and charges moved by blasts so far
+};
+
+// Throws a charge from `origin` along `direction` (normalised here; zero = forward -z) at
+// params.throw_speed, adding to `initial_velocity` (the thrower's own). Creates its Bullet body
+// on first use.
+void throwExplosive(Explosives& explosives, engine::PhysicsWorld& physics, glm::vec3 origin, glm::vec3 direction,
+                    glm::vec3 initial_velocity = glm::vec3(0.0f));
+
+// Advances the fuses by `dt` after the physics step: every charge whose fuse ran out (or that hit
+// something hard enough, see impact_speed_change) detonates. `detonations` is cleared first and
+// then holds this step's blasts; each one has already pushed the Bullet bodies (live charges too,
+// which may throw a neighbouring charge). The detonated charge leaves the simulation.
+void stepExplosives(Explosives& explosives, engine::PhysicsWorld& physics, double dt);
+
+int liveCharges(const Explosives& explosives);
+
+}  // namespace game
