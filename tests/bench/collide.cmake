@@ -4,5 +4,5 @@
 foreach(name collide_tables collide_query)
   add_executable(bench_${name} ${CMAKE_CURRENT_LIST_DIR}/${name}.cpp ${PROJECT_SOURCE_DIR}/tests/collide/collide_meshes.cpp)
   target_include_directories(bench_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/collide)
-  target_link_libraries(bench_${name} PRIVATE fluid TBB::tbb bench_plot fluiddemo_options)
+  target_link_libraries(bench_${name} PRIVATE fluid TBB::tbb bench_csv fluiddemo_options)
 endforeach()
