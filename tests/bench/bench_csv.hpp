@@ -40,8 +40,9 @@ inline std::string write(const std::string& path, const Table& table) {
   };
   line(table.header);
   for (const auto& row : table.rows) {
-    if (row.size() != table.header.size()) return path + ": a row has " + std::to_string(row.size()) +
-                                                  " fields, the header " + std::to_string(table.header.size());
+    if (row.size() != table.header.size())
+      return path + ": a row has " + std::to_string(row.size()) + " fields, the header " +
+             std::to_string(table.header.size());
     line(row);
   }
   out.flush();
