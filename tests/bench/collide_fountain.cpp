@@ -34,8 +34,8 @@ namespace {
 
 namespace fs = std::filesystem;
 const fs::path kContent = fs::path(FLUIDDEMO_SOURCE_DIR) / "content";
-// The game's SPH support: 4 r with the fountain scene's particle_radius 0.04 m (fluid::SphParams).
-constexpr float kSupport = 0.16f;
+// The game's SPH support: 4 r (fluid::SphParams) with the fountain scene's particle_radius, set in main.
+float support_radius = 0.0f;
 
 struct Model {
   std::string name;
@@ -50,7 +50,7 @@ struct Errors {
 };
 
 // `got` against `reference` on `points`: misclassification over all points; beyond-reach count
-// and |Δd| over the band |d_ref| < kSupport.
+// and |Δd| over the band |d_ref| < support_radius.
 Errors compare(const std::vector<fluid::ColliderSample>& reference, const std::vector<fluid::ColliderSample>& got) {
   Errors e;
   e.points = reference.size();
@@ -58,7 +58,7 @@ Errors compare(const std::vector<fluid::ColliderSample>& reference, const std::v
     const bool in_ref = reference[k].distance < 0.0f, in_got = got[k].valid && got[k].distance < 0.0f;
     e.wrong += in_ref != in_got;
     if (in_ref != in_got) e.deepest_wrong = std::max(e.deepest_wrong, std::fabs(double(reference[k].distance)));
-    if (std::fabs(reference[k].distance) >= kSupport) continue;
+    if (std::fabs(reference[k].distance) >= support_radius) continue;
     ++e.band;
     if (!got[k].valid) {
       ++e.beyond_reach;
@@ -124,7 +124,7 @@ int perModelTable(const std::vector<fluid::LevelColliderEntry>& entries, const s
       "m | "
       "beyond reach there | mean \\|Δd\\| there (m) | max \\|Δd\\| there (m) | bytes |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|\n",
-      kSupport);
+      support_radius);
   for (std::size_t m = 0; m < models.size(); ++m) {
     const fluid::Bounds b = fluid::meshBounds(models[m].view());
     // The ground is an 80 m slab: measure it over the fountain's courtyard, not all of it.
@@ -172,7 +172,7 @@ int fountainTable(const std::vector<fluid::CachedCollider>& baked, const std::ve
   std::printf(
       "| collider | misclass %% | deepest misclassified (m) | points with \\|d\\| < %.2f m | beyond reach there | "
       "mean \\|Δd\\| there (m) | max \\|Δd\\| there (m) |\n|---|---|---|---|---|---|---|\n",
-      kSupport);
+      support_radius);
   std::vector<std::unique_ptr<fluid::MeshDistance>> exact;
   std::vector<const fluid::SignedDistanceShape*> exact_shapes, baked_shapes;
   for (const Model& m : models) exact.push_back(std::make_unique<fluid::MeshDistance>(m.view()));
@@ -224,7 +224,7 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
   }
   std::printf(
       "| SPH boundary (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
-      "collisions per step |\n|---|---|---|---|---|---|\n");
+      "collisions per step | emitted | removed (drains) |\n|---|---|---|---|---|---|---|---|\n");
   for (int variant = 0; variant < 4; ++variant) {
     const int t = threads[static_cast<std::size_t>(variant / 2) % threads.size()];
     if (variant >= 2 && threads.size() < 2) break;
@@ -236,12 +236,15 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
     }
     std::vector<double> ms;
     double steps = 0.0, collisions = 0.0;
+    std::size_t emitted = 0, removed = 0;
     for (int frame = 0; frame < frames; ++frame) {
       double frame_ms = 0.0;
       if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
             frame_ms += x.step_ms;
             steps += 1.0;
             collisions += static_cast<double>(x.collisions);
+            emitted += x.emitted;
+            removed += x.removed;
           })) {
         std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
         return 1;
@@ -251,10 +254,10 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
     std::vector<double> sorted = ms;
     std::sort(sorted.begin(), sorted.end());
     std::printf(
-        "| %s (%d) | %zu | %.2f | %.2f | %.1f | %.0f |\n",
+        "| %s (%d) | %zu | %.2f | %.2f | %.1f | %.0f | %zu | %zu |\n",
         variant % 2 == 0 ? "FountainShape (analytic, 1 collider)" : "baked content/colliders (3 depth-map colliders)",
         t, f.world.particles.size(), sorted[sorted.size() / 2], sorted.back(), steps / frames,
-        collisions / std::max(steps, 1.0));
+        collisions / std::max(steps, 1.0), emitted, removed);
   }
   return 0;
 }
@@ -283,6 +286,17 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string load_before = benchplot::loadAverage();
+  {
+    game::SceneConfig scene;
+    const game::SceneStatus st = game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), scene);
+    const game::SectionConfig* sph = st.ok() ? scene.effect("sph_fluid") : nullptr;
+    if (sph == nullptr) {
+      std::fprintf(stderr, "bench_collide_fountain: fountain.json: %s\n",
+                   st.ok() ? "no sph_fluid effect" : st.error.c_str());
+      return 1;
+    }
+    support_radius = 4.0f * static_cast<float>(sph->number("particle_radius"));
+  }
   std::vector<fluid::LevelColliderEntry> entries;
   std::vector<Model> models;
   if (!loadModels(entries, models)) return 1;
