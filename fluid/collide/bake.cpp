@@ -100,8 +100,13 @@ int threadCount(int requested) {
 }
 
 // One ortho map (both compares when front_back).
-void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm::mat4& t_map, int n, bool want_less,
-                 bool want_greater, Buffer& less, Buffer& greater) {
+// `margin` (map units per axis) widens every triangle's cover beyond the texel square (see
+// MapSpec::margin): a texel no triangle covers but one within the margin (the ring) gets, in
+// both the LESS and the GREATER buffer, the depth of the laterally nearest triangle's nearest
+// outline point. Equal front and back depths make one of the two eq. (1) votes >= 0 at any
+// depth, so a ring texel never calls a point inside (a point beside the silhouette is outside).
+void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm::mat4& t_map, int n, glm::dvec2 margin,
+                 bool want_less, bool want_greater, Buffer& less, Buffer& greater) {
   const std::size_t tris = mesh.indices.size() / 3;
   std::vector<dvec3> v(mesh.positions.size());
   for (std::size_t k = 0; k < v.size(); ++k) v[k] = apply(t_map, mesh.positions[k]);
@@ -114,16 +119,23 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
     const double lo_y = std::min({a.y, b.y, c.y}), hi_y = std::max({a.y, b.y, c.y});
     TexelBox box;
     // Texels whose square [centre ± half a texel] can overlap the triangle's bounds.
-    box.i0 = std::max(1, static_cast<int>(std::ceil(lo_x * n - 1.0)));
-    box.i1 = std::min(n - 2, static_cast<int>(std::floor(hi_x * n)));
-    box.j0 = std::max(1, static_cast<int>(std::ceil(lo_y * n - 1.0)));
-    box.j1 = std::min(n - 2, static_cast<int>(std::floor(hi_y * n)));
+    box.i0 = std::max(1, static_cast<int>(std::ceil((lo_x - margin.x) * n - 1.0)));
+    box.i1 = std::min(n - 2, static_cast<int>(std::floor((hi_x + margin.x) * n)));
+    box.j0 = std::max(1, static_cast<int>(std::ceil((lo_y - margin.y) * n - 1.0)));
+    box.j1 = std::min(n - 2, static_cast<int>(std::floor((hi_y + margin.y) * n)));
     boxes[tri] = box;
   }
   const std::size_t texels = static_cast<std::size_t>(n) * n;
   if (want_less) less.reset(texels, std::numeric_limits<double>::infinity());
   if (want_greater) greater.reset(texels, -std::numeric_limits<double>::infinity());
   const double h = 0.5 / n;  // half a texel in map coordinates
+  const bool with_ring = margin.x > 0.0 || margin.y > 0.0;
+  Buffer ring;  // ring texels: depth, triangle, and the lateral distance² (map units) deciding them
+  std::vector<double> ring_d2;
+  if (with_ring) {
+    ring.reset(texels, 0.0);
+    ring_d2.assign(texels, std::numeric_limits<double>::infinity());
+  }
   const int band = 8;
   auto raster_band = [&](int b) {
     const int row0 = b * band, row1 = std::min(n - 1, row0 + band - 1);
@@ -142,13 +154,16 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
           // (separating axes: the bounding box, done by the loop bounds, and the three edge
           // normals). A point inside the collider therefore never lands on a background texel,
           // which makes "invalid vote = far outside" safe for enclosing maps (§4.1).
-          bool separated = false;
+          // The ring (with a margin): the same test with the square widened by the margin.
+          bool separated = false, in_ring = false;
           for (int e = 0; e < 3 && !separated; ++e) {
             const dvec3 a = p[e], c = p[(e + 1) % 3], o = p[(e + 2) % 3];
             const double mx = -(c.y - a.y), my = c.x - a.x;
             const double ta = mx * a.x + my * a.y, to = mx * o.x + my * o.y;
             const double centre = mx * x + my * y, reach = h * (std::fabs(mx) + std::fabs(my));
-            separated = centre + reach < std::min(ta, to) || centre - reach > std::max(ta, to);
+            const double wide = reach + margin.x * std::fabs(mx) + margin.y * std::fabs(my);
+            separated = centre + wide < std::min(ta, to) || centre - wide > std::max(ta, to);
+            in_ring = in_ring || centre + reach < std::min(ta, to) || centre - reach > std::max(ta, to);
           }
           if (separated) continue;
           // Depth at the texel centre when it is inside (inclusive edges: no cracks), otherwise
@@ -156,11 +171,11 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
           const double w0 = ((p[1].x - x) * (p[2].y - y) - (p[1].y - y) * (p[2].x - x)) * inv_area;
           const double w1 = ((p[2].x - x) * (p[0].y - y) - (p[2].y - y) * (p[0].x - x)) * inv_area;
           const double w2 = 1.0 - w0 - w1;
-          double z;
+          double z, best = 0.0;
           if (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) {
             z = w0 * p[0].z + w1 * p[1].z + w2 * p[2].z;
           } else {
-            double best = std::numeric_limits<double>::infinity();
+            best = std::numeric_limits<double>::infinity();
             z = p[0].z;
             for (int e = 0; e < 3; ++e) {
               const dvec3 a = p[e], c = p[(e + 1) % 3];
@@ -175,6 +190,14 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
           }
           if (z < 0.0 || z > 1.0) continue;  // clipped by near/far planes
           const std::size_t k = static_cast<std::size_t>(j) * n + i;
+          if (in_ring) {
+            if (best < ring_d2[k]) {
+              ring_d2[k] = best;
+              ring.depth[k] = z;
+              ring.triangle[k] = static_cast<std::int32_t>(tri);
+            }
+            continue;
+          }
           if (want_less && z < less.depth[k]) {
             less.depth[k] = z;
             less.triangle[k] = static_cast<std::int32_t>(tri);
@@ -190,6 +213,17 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
   par::parallel_for(par::Range<int>(0, (n + band - 1) / band, 1), [&](const par::Range<int>& r) {
     for (int b = r.begin(); b != r.end(); ++b) raster_band(b);
   });
+  if (!with_ring) return;
+  for (std::size_t k = 0; k < texels; ++k) {
+    if (ring.triangle[k] < 0) continue;
+    const bool covered = want_less ? less.triangle[k] >= 0 : greater.triangle[k] >= 0;
+    if (covered) continue;
+    for (Buffer* b : {want_less ? &less : nullptr, want_greater ? &greater : nullptr}) {
+      if (b == nullptr) continue;
+      b->depth[k] = ring.depth[k];
+      b->triangle[k] = ring.triangle[k];
+    }
+  }
 }
 
 // Depth cube: rays from the centre of the normalised volume through each texel centre.
@@ -513,6 +547,10 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
       status.error = where + "view volume half extents must be positive and finite";
       return status;
     }
+    if (!(spec.margin >= 0.0f && spec.margin <= 1e5f)) {
+      status.error = where + "margin must be finite and >= 0";
+      return status;
+    }
     if (spec.kind == MapKind::ortho) {
       const glm::vec3 c = glm::cross(spec.ortho.up, spec.ortho.forward);
       if (!(glm::dot(c, c) > 1e-12f) || !finite(c)) {
@@ -573,7 +611,10 @@ BakeStatus bakeDepthMaps(const MeshView& mesh, std::span<const MapSpec> specs, c
         const bool both = spec.format == DepthMapFormat::front_back16;
         const bool want_less = both || spec.compare == DepthCompare::less;
         const bool want_greater = both || spec.compare == DepthCompare::greater;
-        rasterOrtho(mesh, skip, map.collider_to_map, n, want_less, want_greater, less, greater);
+        const glm::dvec2 margin(spec.margin / (2.0 * spec.ortho.half_extent.x),
+                                spec.margin / (2.0 * spec.ortho.half_extent.y));
+        rasterOrtho(mesh, skip, map.collider_to_map, n, margin, want_less, want_greater, less, greater);
+        map.margin_ring = spec.margin > 0.0f && both;
         auto oriented = [&](std::int32_t tri, bool) { return normals[static_cast<std::size_t>(tri)]; };
         map.encloses_collider = true;
         for (int corner = 0; corner < 8; ++corner) {

@@ -150,7 +150,12 @@ struct DepthMap {
   float z_scale = 1.0f;                       // ortho only: collider units per unit of P'z
   glm::vec3 cube_scale{1.0f};                 // cube only: s_x, s_y, s_z
   bool encloses_collider = false;             // invalid votes count as far outside
-  std::vector<std::uint8_t> texels;           // N·N (·6 for cube8) texels of texelBytes(format)
+  // front_back16 baked with MapSpec::margin > 0: texels whose front and back depth bits are equal
+  // are margin-ring texels, whose votes count only where no other vote says outside (sample).
+  // File: bit 1 of the map's flags word (version 2). The GLSL decoder may ignore it: ring votes
+  // then compete like the others (finite, never inside, shorter than the true distance).
+  bool margin_ring = false;
+  std::vector<std::uint8_t> texels;  // N·N (·6 for cube8) texels of texelBytes(format)
 };
 
 // A collider: k depth maps in collider space, plus the normal index resolution R_n used by
@@ -215,6 +220,15 @@ struct MapSpec {
   OrthoView ortho{};
   CubeView cube{};
   int resolution = 256;  // texels per side, 4..4096
+  // Ortho maps: collider units by which every triangle's texel cover is widened (0 = the
+  // conservative cover alone). A texel within `margin` of the silhouette then holds the depth of
+  // the nearest silhouette point instead of background, so a point outside the collider but
+  // within `margin` of it gets a finite distance (the depth difference along the map's axis to
+  // that silhouette point) instead of "beyond reach": a projection shortens distances, so a ray
+  // passing farther than `margin` from the collider's silhouette still means the point is
+  // farther than `margin` from the collider, and "invalid = far outside" stays true. Give it the
+  // SPH support radius. Cubes ignore it (their rays start inside the volume).
+  float margin = 0.0f;
 };
 
 struct BakeDesc {
@@ -258,9 +272,19 @@ std::vector<MapSpec> defaultMapSpecs(const Bounds& bounds, int resolution,
 bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution, DepthMapFormat format,
                   std::vector<MapSpec>& out, std::string& error);
 
-// ---- Files: "FLDMAPS\0", version, maps, FNV-1a checksum --------------------------------
+// ---- Files: "FLDMAPS\0", version, maps, source record, FNV-1a checksum ----------------
 
-inline constexpr std::uint32_t kColliderFileVersion = 1;
+// Version 2 adds the source record after the maps (version 1 files, without it, still load).
+inline constexpr std::uint32_t kColliderFileVersion = 2;
+
+// Where a baked collider came from, so a changed model or changed bake parameters are detected
+// (fluid/collide/collider_cache.hpp). Empty for colliders baked without a record.
+struct ColliderSource {
+  std::string model;                // the model file's name as the baker was given it
+  std::uint64_t model_fnv1a64 = 0;  // FNV-1a 64 of the model file's bytes
+  std::string recipe;               // bake parameters, canonical text (bakeRecipeText)
+  bool empty() const { return model.empty() && model_fnv1a64 == 0 && recipe.empty(); }
+};
 
 struct FileStatus {
   std::string error;  // empty = success; names file and field
@@ -269,12 +293,14 @@ struct FileStatus {
 enum class Overwrite { refuse, replace };
 
 FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollider& collider,
-                        Overwrite overwrite = Overwrite::refuse);
-// Rejects wrong magic, version, sizes, truncation, trailing bytes and checksum mismatch.
-FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out);
+                        Overwrite overwrite = Overwrite::refuse, const ColliderSource& source = {});
+// Rejects wrong magic, version, sizes, truncation, trailing bytes, a malformed source record and
+// checksum mismatch. `source` (optional) receives the source record (empty for version 1 files).
+FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out, ColliderSource* source = nullptr);
 // In-memory forms used by the file functions (and the truncation/garbage tests).
-std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider);
-FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out);
+std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider, const ColliderSource& source = {});
+FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out,
+                               ColliderSource* source = nullptr);
 
 // ---- Batch queries and the particle step ----------------------------------------------
 

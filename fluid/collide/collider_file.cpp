@@ -6,19 +6,28 @@
 //   u32      normal index resolution R_n (2..256)
 //   u32      map count k (1..1024)
 //   u32      reserved, 0
-//   k × map: u32 format, u32 compare, u32 resolution, u32 encloses (0/1),
+//   k × map: u32 format, u32 compare, u32 resolution, u32 flags (bit 0: encloses the collider;
+//            bit 1, version 2 front_back16 only: margin ring, DepthMap::margin_ring),
 //            f32[16] collider_to_map (column-major), f32 z_scale, f32[3] cube_scale,
 //            u64 texel byte count (must equal N·N·(6 for cube8)·texelBytes), texel bytes
+//   version 2 only: u32 source record byte count (<= kMaxSourceBytes), then the record: UTF-8
+//            lines "model=NAME", "model_fnv1a64=16 hex digits", "recipe=TEXT", each ending in
+//            '\n' (all three, in this order; an empty record = no source)
 //   u64      FNV-1a 64 of every byte before it
+// The record sits after the maps so that version 1 and 2 maps start at the same offsets.
 #include "fluid/collide/collide.hpp"
 
-#include "fluid/core/fnv1a.hpp"
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string_view>
+#include "fluid/core/fnv1a.hpp"
+
+#include <unistd.h>
 
 namespace fluid {
 
@@ -27,6 +36,45 @@ static_assert(std::endian::native == std::endian::little, "collider files assume
 namespace {
 
 constexpr char kMagic[8] = {'F', 'L', 'D', 'M', 'A', 'P', 'S', '\0'};
+constexpr std::uint32_t kMaxSourceBytes = 4096;
+constexpr const char* kSourceKeys[3] = {"model", "model_fnv1a64", "recipe"};
+
+std::string sourceText(const ColliderSource& source) {
+  if (source.empty()) return {};
+  char hash[20];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(source.model_fnv1a64));
+  return std::string(kSourceKeys[0]) + "=" + source.model + "\n" + kSourceKeys[1] + "=" + hash + "\n" + kSourceKeys[2] +
+         "=" + source.recipe + "\n";
+}
+
+// Parses the record written by sourceText; returns "" or what is wrong (naming the field).
+std::string parseSourceText(std::string_view text, ColliderSource& out) {
+  out = {};
+  if (text.empty()) return {};
+  for (const char* key : kSourceKeys) {
+    const std::size_t eol = text.find('\n');
+    const std::string_view line = text.substr(0, eol);
+    const std::size_t eq = line.find('=');
+    if (eol == std::string_view::npos || eq == std::string_view::npos || line.substr(0, eq) != key)
+      return std::string("source record: expected a line '") + key + "=...'";
+    const std::string_view value = line.substr(eq + 1);
+    for (char c : value)
+      if (static_cast<unsigned char>(c) < 0x20)
+        return std::string("source record: ") + key + " has a control character";
+    if (std::string_view(key) == "model_fnv1a64") {
+      std::uint64_t hash = 0;
+      const auto [end, errc] = std::from_chars(value.data(), value.data() + value.size(), hash, 16);
+      if (value.size() != 16 || errc != std::errc() || end != value.data() + value.size())
+        return "source record: model_fnv1a64 '" + std::string(value.substr(0, 20)) + "' is not 16 hex digits";
+      out.model_fnv1a64 = hash;
+    } else {
+      (std::string_view(key) == "model" ? out.model : out.recipe) = std::string(value);
+    }
+    text.remove_prefix(eol + 1);
+  }
+  if (!text.empty()) return "source record: " + std::to_string(text.size()) + " bytes after the recipe line";
+  return {};
+}
 
 std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) { return fluid::fnv1a64(bytes.data(), bytes.size()); }
 
@@ -87,7 +135,7 @@ std::int64_t firstBadTexel(const DepthMap& m, std::uint32_t rn) {
 
 }  // namespace
 
-std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider) {
+std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider, const ColliderSource& source) {
   std::vector<std::uint8_t> out;
   for (char c : kMagic) out.push_back(static_cast<std::uint8_t>(c));
   put(out, kColliderFileVersion);
@@ -98,7 +146,7 @@ std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider) {
     put(out, static_cast<std::uint32_t>(m.format));
     put(out, static_cast<std::uint32_t>(m.compare));
     put(out, m.resolution);
-    put(out, static_cast<std::uint32_t>(m.encloses_collider ? 1 : 0));
+    put(out, static_cast<std::uint32_t>((m.encloses_collider ? 1 : 0) | (m.margin_ring ? 2 : 0)));
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) put(out, m.collider_to_map[c][r]);
     put(out, m.z_scale);
@@ -108,11 +156,15 @@ std::vector<std::uint8_t> serializeCollider(const DepthMapCollider& collider) {
     put(out, static_cast<std::uint64_t>(m.texels.size()));
     out.insert(out.end(), m.texels.begin(), m.texels.end());
   }
+  const std::string text = sourceText(source);
+  put(out, static_cast<std::uint32_t>(text.size()));
+  out.insert(out.end(), text.begin(), text.end());
   put(out, fnv1a(out));
   return out;
 }
 
-FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out) {
+FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::string& name, DepthMapCollider& out,
+                               ColliderSource* source) {
   // Every message names the file and the byte offset of the field it is about.
   FileStatus st;
   Reader in{bytes};
@@ -127,7 +179,7 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
   std::uint32_t version = 0, rn = 0, count = 0, reserved = 0;
   field_at = in.at;
   if (!in.get(version)) return fail("truncated header (version)");
-  if (version != kColliderFileVersion) {
+  if (version != 1 && version != kColliderFileVersion) {
     return fail("unsupported version " + std::to_string(version) + " (this build reads version " +
                 std::to_string(kColliderFileVersion) + "; re-bake the collider)");
   }
@@ -160,10 +212,13 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
     if (m.resolution < 4 || m.resolution > 4096)
       return fail(where + "resolution " + std::to_string(m.resolution) + " out of range 4..4096");
     field_at += 4;
-    if (encloses > 1) return fail(where + "bad encloses flag " + std::to_string(encloses));
+    // Bit 0: encloses the collider; bit 1 (version 2, front_back16 only): margin ring.
+    const std::uint32_t allowed = version >= 2 && format == 3 ? 3u : 1u;
+    if ((encloses & ~allowed) != 0) return fail(where + "bad flags word " + std::to_string(encloses));
     m.format = static_cast<DepthMapFormat>(format);
     m.compare = static_cast<DepthCompare>(compare);
-    m.encloses_collider = encloses == 1;
+    m.encloses_collider = (encloses & 1u) != 0;
+    m.margin_ring = (encloses & 2u) != 0;
     float values[20];
     for (float& v : values) {
       field_at = in.at;
@@ -200,9 +255,26 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
     in.at += size;
     maps.push_back(std::move(m));
   }
+  ColliderSource record;
+  std::size_t record_at = 0;
+  std::string_view record_text;
+  if (version >= 2) {
+    field_at = in.at;
+    std::uint32_t length = 0;
+    if (bytes.size() - in.at < 12 || !in.get(length)) return fail("truncated source record length");
+    if (length > kMaxSourceBytes)
+      return fail("source record length " + std::to_string(length) + " out of range 0.." +
+                  std::to_string(kMaxSourceBytes));
+    record_at = in.at;
+    if (bytes.size() - in.at < std::size_t{length} + 8) return fail("truncated source record");
+    record_text = std::string_view(reinterpret_cast<const char*>(bytes.data() + in.at), length);
+    in.at += length;
+  }
   field_at = in.at;
   if (bytes.size() - in.at != 8) return fail(std::to_string(bytes.size() - in.at - 8) + " unexpected trailing bytes");
   if (stored != expected) return fail("checksum mismatch (file corrupted)");
+  field_at = record_at;
+  if (const std::string problem = parseSourceText(record_text, record); !problem.empty()) return fail(problem);
   // After the checksum: a texel that does not decode means a bad writer, not a damaged file.
   for (std::size_t k = 0; k < maps.size(); ++k) {
     if (const std::int64_t bad = firstBadTexel(maps[k], rn); bad >= 0) {
@@ -213,28 +285,40 @@ FileStatus deserializeCollider(std::span<const std::uint8_t> bytes, const std::s
     }
   }
   out = DepthMapCollider(std::move(maps), static_cast<int>(rn));
+  if (source != nullptr) *source = std::move(record);
   return st;
 }
 
-FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollider& collider, Overwrite overwrite) {
+FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollider& collider, Overwrite overwrite,
+                        const ColliderSource& source) {
   FileStatus st;
   std::error_code ec;
   if (overwrite == Overwrite::refuse && std::filesystem::exists(path, ec)) {
     st.error = path.string() + ": already exists (use --force to replace it)";
     return st;
   }
-  const std::vector<std::uint8_t> bytes = serializeCollider(collider);
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) {
-    st.error = path.string() + ": cannot open for writing";
-    return st;
+  const std::vector<std::uint8_t> bytes = serializeCollider(collider, source);
+  // Written beside the target and renamed over it: a reader (or a second process baking the same
+  // cache entry) sees the old file or the new one, never half of one.
+  std::filesystem::path partial = path;
+  partial += ".partial." + std::to_string(::getpid());
+  {
+    std::ofstream file(partial, std::ios::binary | std::ios::trunc);
+    if (!file) {
+      st.error = path.string() + ": cannot open for writing";
+      return st;
+    }
+    file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    file.flush();
+    if (!file) st.error = path.string() + ": write failed";
   }
-  file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!file) st.error = path.string() + ": write failed";
+  if (st.ok()) std::filesystem::rename(partial, path, ec);
+  if (st.ok() && ec) st.error = path.string() + ": cannot replace: " + ec.message();
+  if (!st.ok()) std::filesystem::remove(partial, ec);
   return st;
 }
 
-FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out) {
+FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out, ColliderSource* source) {
   FileStatus st;
   std::ifstream file(path, std::ios::binary);
   if (!file) {
@@ -246,7 +330,7 @@ FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out
     st.error = path.string() + ": read failed";
     return st;
   }
-  return deserializeCollider(bytes, path.string(), out);
+  return deserializeCollider(bytes, path.string(), out, source);
 }
 
 }  // namespace fluid

@@ -66,7 +66,9 @@ inline std::uint16_t loadU16(const std::uint8_t* p) {
   return v;
 }
 
-void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
+// `ring` receives the votes of margin-ring texels (MapSpec::margin) of front_back16 maps baked
+// with one: equal front and back depth bits mark them. They are only a fallback (see sample).
+void orthoVotes(Winner& w, Winner& ring, const DepthMap& map, glm::vec3 p) {
   const glm::vec3 q = transformPoint(map.collider_to_map, p);
   const bool two = map.format == DepthMapFormat::front_back16;
   // Outside the map's footprint: invalid vote (§4.1).
@@ -99,17 +101,19 @@ void orthoVotes(Winner& w, const DepthMap& map, glm::vec3 p) {
       return vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
     }
     case DepthMapFormat::front_back16: {
-      const float front = depthHalf(loadU16(t + 4));
-      const float back = depthHalf(loadU16(t + 6));
+      const std::uint16_t front_bits = loadU16(t + 4), back_bits = loadU16(t + 6);
+      const float front = depthHalf(front_bits);
+      const float back = depthHalf(back_bits);
+      Winner& to = map.margin_ring && front_bits == back_bits && front >= 0.0f ? ring : w;
       if (front < 0.0f || !less_ok) {
         invalidVote(w, map);
       } else {
-        vote(w, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
+        vote(to, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
       }
       if (back < 0.0f || !greater_ok) {
         invalidVote(w, map);
       } else {
-        vote(w, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
+        vote(to, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
       }
       return;
     }
@@ -207,14 +211,20 @@ ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
   out.valid = false;
   out.distance = FLT_MAX;
   if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return out;
-  Winner w;
+  Winner main, ring;
   for (const DepthMap& map : maps_) {
     if (map.format == DepthMapFormat::cube8) {
-      cubeVote(w, map, p);
+      cubeVote(main, map, p);
     } else {
-      orthoVotes(w, map, p);
+      orthoVotes(main, ring, map, p);
     }
   }
+  // Margin-ring votes only measure the depth offset to the nearest silhouette point (never
+  // "inside", but short of the lateral offset), so they decide only where no map sees the
+  // point outside: with no vote, only "far outside" votes, or only inside votes (a point beside
+  // a silhouette that the other maps place between their surfaces).
+  const bool main_outside = main.any_vote && main.map != nullptr && main.f >= 0.0f;
+  const Winner& w = ring.any_vote && !main_outside ? ring : main;
   if (!w.any_vote || w.map == nullptr) return out;  // no opinion, or only "far outside"
   out.valid = true;
   out.distance = w.f;

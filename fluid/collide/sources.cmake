@@ -4,5 +4,6 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/depth_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/bake.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collider_file.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/collider_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_distance.cpp
 )

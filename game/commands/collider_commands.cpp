@@ -5,6 +5,7 @@
 
 #include "fluid/collide/collide.hpp"
 #include "fluid/collide/mesh_checks.hpp"
+#include "fluid/core/fnv1a.hpp"
 #include "fluid/io/particle_io.hpp"
 #include "game/commands/cli_parse.hpp"
 #include "game/commands/collider_model.hpp"
@@ -274,6 +275,18 @@ std::string openMeshMessage(const ColliderModel& model, const std::string& label
          "; depth maps of an open mesh call points inside it outside";
 }
 
+fluid::ModelLoader colliderModelLoader() {
+  return [](const std::filesystem::path& model, std::vector<glm::vec3>& positions, std::vector<std::uint32_t>& indices,
+            std::string& error) {
+    ColliderModel mesh;
+    if (!loadColliderModel(model.string(), mesh, error)) return false;
+    if (error = openMeshMessage(mesh, model.string()); !error.empty()) return false;
+    positions = std::move(mesh.positions);
+    indices = std::move(mesh.indices);
+    return true;
+  };
+}
+
 namespace {
 
 // "\r"-updated progress on stderr when it is a terminal; silent when piped or redirected.
@@ -300,14 +313,46 @@ class BakeProgress {
 
 }  // namespace
 
+namespace {
+
+// bake-collider --level: every collider of CONTENT/colliders/LEVEL.colliders, re-baked where the
+// model or the recipe changed (or, with --check, an error naming the stale file).
+int bakeLevelColliders(const std::string& content, const std::string& level, bool check) {
+  std::vector<fluid::CachedCollider> parts;
+  const fluid::CacheStatus st =
+      fluid::loadLevelColliders(content, level, colliderModelLoader(),
+                                check ? fluid::CachePolicy::load_only : fluid::CachePolicy::load_or_bake, parts);
+  if (!st.ok()) {
+    std::fprintf(stderr, "bake-collider: %s\n", st.error.c_str());
+    return 1;
+  }
+  for (const fluid::CachedCollider& part : parts) {
+    std::printf("%s: %s (%s, %d depth maps, %zu bytes; %s)\n", part.name.c_str(),
+                part.rebaked ? "re-baked" : "up to date", part.source.model.c_str(), part.collider.depthMapCount(),
+                part.collider.bytes(), part.rebaked ? part.rebake_reason.c_str() : part.source.recipe.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
 int bakeColliderCommand(const Args& args) {
   CLI::App app{"Bake depth-map colliders (Kolb et al. 2004 §4) from a model (OBJ and anything assimp reads).",
                "fluiddemo bake-collider"};
-  std::string model, out_path, maps = "axes", format_name = "front-back16";
+  std::string model, out_path, maps = "axes", format_name = "front-back16", level, content = "content";
   int resolution = 256, normal_resolution = 256, threads = 0;
-  bool force = false, allow_open = false;
-  app.add_option("MODEL", model, "model file (OBJ, glTF, PLY, ...): a closed surface")->required();
-  app.add_option("--out", out_path, "collider file to write")->required();
+  float margin = 0.0f;
+  bool force = false, allow_open = false, check = false;
+  app.add_option("MODEL", model, "model file (OBJ, glTF, PLY, ...): a closed surface");
+  app.add_option("--out", out_path, "collider file to write (with MODEL)");
+  app.add_option("--level", level,
+                 "instead of MODEL: bake the colliders listed in CONTENT/colliders/LEVEL.colliders whose files are "
+                 "missing or stale (model hash or bake parameters changed)");
+  app.add_option("--content", content, "content directory of --level")->capture_default_str();
+  app.add_flag("--check", check, "with --level: bake nothing, fail when a collider file is missing or stale");
+  app.add_option("--margin", margin,
+                 "silhouette margin of the ortho maps (model units): points this close outside get a finite distance")
+      ->capture_default_str();
   app.add_option("--maps", maps,
                  "comma-separated maps: axes | x | y | z (front-back pairs along an axis), cube (GREATER cube at the "
                  "centre), cube-less, cube@X:Y:Z:H (LESS cube for a concave region)")
@@ -321,6 +366,17 @@ int bakeColliderCommand(const Args& args) {
   app.add_flag("--allow-open", allow_open,
                "bake a mesh with holes anyway (warning only); points inside it may then read as outside");
   if (const int code = parseCommandLine(app, "bake-collider", args); code >= 0) return code;
+  if (!level.empty()) {
+    if (!model.empty() || !out_path.empty()) {
+      std::fprintf(stderr, "bake-collider: --level takes no MODEL or --out (the level's list names them)\n");
+      return 2;
+    }
+    return bakeLevelColliders(content, level, check);
+  }
+  if (model.empty() || out_path.empty() || check) {
+    std::fprintf(stderr, "bake-collider: give MODEL and --out FILE, or --level LEVEL [--check]\n");
+    return 2;
+  }
   fluid::DepthMapFormat format;
   if (!fluid::parseFormat(format_name, format) || format == fluid::DepthMapFormat::cube8) {
     std::fprintf(stderr, "bake-collider: --format '%s' unknown (expected float, fixed8 or front-back16)\n",
@@ -351,7 +407,8 @@ int bakeColliderCommand(const Args& args) {
   }
   const fluid::MeshView view{mesh.positions, mesh.indices};
   std::vector<fluid::MapSpec> specs;
-  if (!fluid::parseMapSpec(maps, fluid::meshBounds(view), resolution, format, specs, error)) {
+  const fluid::BakeRecipe recipe{maps, resolution, format, normal_resolution, margin};
+  if (!fluid::recipeMapSpecs(recipe, fluid::meshBounds(view), specs, error)) {
     std::fprintf(stderr, "bake-collider: %s\n", error.c_str());
     return 2;
   }
@@ -373,8 +430,18 @@ int bakeColliderCommand(const Args& args) {
     return 1;
   }
   const fluid::DepthMapCollider collider(std::move(baked), normal_resolution);
+  // The source record: the model's hash and the recipe, so a cache (fluid::loadOrBakeCollider)
+  // can tell when this file no longer matches its model.
+  fluid::ColliderSource source;
+  source.model = std::filesystem::path(model).filename().string();
+  source.recipe = fluid::bakeRecipeText(recipe);
+  {
+    std::ifstream in(model, std::ios::binary);
+    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    source.model_fnv1a64 = fluid::fnv1a64(bytes.data(), bytes.size());
+  }
   const fluid::FileStatus saved =
-      fluid::saveCollider(out_path, collider, force ? fluid::Overwrite::replace : fluid::Overwrite::refuse);
+      fluid::saveCollider(out_path, collider, force ? fluid::Overwrite::replace : fluid::Overwrite::refuse, source);
   if (!saved.ok()) {
     std::fprintf(stderr, "bake-collider: %s\n", saved.error.c_str());
     return 1;

@@ -3,6 +3,8 @@
 // a model file read with assimp, node transforms applied, checked for what a depth-map collider
 // needs (fluid/collide/mesh_checks.hpp). Also used by the fuzz targets (tests/fuzz).
 
+#include "fluid/collide/collider_cache.hpp"
+
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -30,5 +32,10 @@ bool loadColliderModelFromMemory(std::span<const std::uint8_t> bytes, const std:
 
 // "" when the mesh is closed, else the message for an open one ("LABEL: the mesh is open: ...").
 std::string openMeshMessage(const ColliderModel& model, const std::string& label);
+
+// loadColliderModel as the loader of fluid::loadOrBakeCollider / fluid::loadLevelColliders
+// (fluid/collide/collider_cache.hpp), which read no model formats themselves. An open mesh is
+// an error here (a collider cache never bakes one).
+fluid::ModelLoader colliderModelLoader();
 
 }  // namespace game

@@ -2,13 +2,13 @@
 //   1. L1 normal index angular error against resolution (§4.2, eq. (3));
 //   2. accuracy against time per shape, map set, format and resolution, measured against the
 //      exact mesh distance (fluid::MeshDistance) on seeded random points.
-// Usage: bench_collide_tables [--points N] [--l1-samples N] [--res 64,128,...] [--png FILE [--force]]
-// --png also draws table 2 as charts (error against ns per query, log-log; one curve per map set,
-// one point per resolution) into FILE.
+// Usage: bench_collide_tables [--points N] [--l1-samples N] [--res 64,128,...] [--csv FILE [--force]]
+// --csv also writes the rows of table 2 to FILE, which scripts/plots/collide_accuracy.py draws as
+// charts (error against ns per query, log-log; one curve per map set, one point per resolution).
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
 #include "load_average.hpp"
-#include "plot_png.hpp"
+#include "bench_csv.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -103,26 +103,16 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Chart curves of one shape: per map set, (ns/query, misclass %) and (ns/query, mean |Δd|) per resolution.
-struct ShapeCurves {
-  std::string shape;
-  std::vector<benchplot::Series> misclass, distance;
-  std::vector<std::string> zeroPoints;  // "map set at res²" rows with an error of 0 (not drawable on log axes)
+// Chart data: one CSV row per table row, plus the "map set at res²" rows with an error of 0, which a
+// log axis cannot hold.
+struct ChartData {
+  benchcsv::Table table{{"shape", "maps", "depth_maps", "res", "misclass_pct", "mean_abs_dd", "max_abs_dd",
+                         "mean_normal_err_deg", "max_normal_err_deg", "ns_per_query", "bytes", "bake_ms"},
+                        {}};
+  std::vector<std::string> zeroPoints;
 };
 
-// Legend name of a map set: the table's name, shortened to fit beside the chart.
-std::string legendName(std::string name) {
-  auto replace = [&](const std::string& from, const std::string& to) {
-    for (std::size_t at = name.find(from); at != std::string::npos; at = name.find(from, at + to.size()))
-      name.replace(at, from.size(), to);
-  };
-  replace("1 cube8 (GREATER, centre)", "1 cube8, centre");
-  replace("paper Fig. 6: ", "fig. 6 ");
-  replace("front-back16", "fb16");
-  return name;
-}
-
-void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::vector<ShapeCurves>* curves) {
+void accuracyTable(std::size_t count, const std::vector<int>& resolutions, ChartData* chart) {
   std::vector<Shape> shapes = {{"sphere", collide_test::makeSphere(1.0f, 48, 96)},
                                {"torus", collide_test::makeTorus(1.0f, 0.35f, 96, 32)},
                                {"basin", collide_test::makeBasin(96)}};
@@ -143,8 +133,6 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::
       "max normal err (deg) | ns/query | bytes | bake ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Shape& shape : shapes) {
-    ShapeCurves sc;
-    sc.shape = shape.name;
     const fluid::Bounds b = fluid::meshBounds(shape.mesh.view());
     const glm::vec3 ext = b.hi - b.lo;
     const float size = std::max({ext.x, ext.y, ext.z});
@@ -195,24 +183,19 @@ void accuracyTable(std::size_t count, const std::vector<int>& resolutions, std::
                     100.0 * double(wrong) / double(count), band ? sum_d / double(band) : 0.0, max_d,
                     band ? sum_n / double(band) : 0.0, max_n, median(times), collider.bytes(), bake_ms);
         std::fflush(stdout);
-        if (sc.misclass.size() <= ci) {
-          sc.misclass.resize(ci + 1);
-          sc.distance.resize(ci + 1);
-          for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) {
-            s->label = legendName(config.name);
-            s->color = benchplot::seriesColor(ci);
-          }
-        }
+        if (chart == nullptr) continue;
         const double misclassPct = 100.0 * double(wrong) / double(count), meanDd = band ? sum_d / double(band) : 0.0;
-        sc.misclass[ci].points.push_back({median(times), misclassPct});
-        sc.distance[ci].points.push_back({median(times), meanDd});
-        if (!(misclassPct > 0.0) || !(meanDd > 0.0))
-          sc.zeroPoints.push_back(config.name + " at " + std::to_string(res) + "²" +
-                                  (!(misclassPct > 0.0) ? " (misclassification)" : " (distance error)"));
-        for (benchplot::Series* s : {&sc.misclass[ci], &sc.distance[ci]}) s->pointLabels.push_back(std::to_string(res));
+        using benchcsv::number;
+        chart->table.rows.push_back({shape.name, config.name, std::to_string(collider.depthMapCount()),
+                                     std::to_string(res), number(misclassPct), number(meanDd), number(max_d),
+                                     number(band ? sum_n / double(band) : 0.0), number(max_n), number(median(times)),
+                                     std::to_string(collider.bytes()), number(bake_ms)});
+        for (const auto& [value, what] : {std::pair{misclassPct, " (misclassification)"},
+                                          std::pair{meanDd, " (distance error)"}})
+          if (!benchcsv::drawableOnLogAxes(median(times), value))
+            chart->zeroPoints.push_back(shape.name + ", " + config.name + " at " + std::to_string(res) + "²" + what);
       }
     }
-    if (curves) curves->push_back(std::move(sc));
   }
   std::printf("\n");
 }
@@ -223,7 +206,7 @@ int main(int argc, char** argv) {
   std::size_t points = 100000;
   int l1_samples = 1000000;
   std::vector<int> resolutions = {64, 128, 256, 512, 1024};
-  std::string png;
+  std::string csv;
   bool force = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -236,12 +219,12 @@ int main(int argc, char** argv) {
       std::stringstream list(argv[++i]);
       std::string item;
       while (std::getline(list, item, ',')) resolutions.push_back(std::atoi(item.c_str()));
-    } else if (a == "--png" && i + 1 < argc) {
-      png = argv[++i];
+    } else if (a == "--csv" && i + 1 < argc) {
+      csv = argv[++i];
     } else if (a == "--force") {
       force = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--points N] [--l1-samples N] [--res 64,128,...] [--png FILE [--force]]\n",
+      std::fprintf(stderr, "usage: %s [--points N] [--l1-samples N] [--res 64,128,...] [--csv FILE [--force]]\n",
                    argv[0]);
       return 2;
     }
@@ -250,59 +233,37 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bad arguments\n");
     return 2;
   }
-  if (!png.empty() && std::filesystem::exists(png) && !force) {
-    std::fprintf(stderr, "%s: %s exists; pass --force to replace it\n", argv[0], png.c_str());
+  if (!csv.empty() && std::filesystem::exists(csv) && !force) {
+    std::fprintf(stderr, "%s: %s exists; pass --force to replace it\n", argv[0], csv.c_str());
     return 1;
   }
   using benchplot::loadAverage;
   const std::string loadBefore = loadAverage();
   l1Table(l1_samples);
-  std::vector<ShapeCurves> curves;
-  accuracyTable(points, resolutions, png.empty() ? nullptr : &curves);
+  ChartData chart;
+  accuracyTable(points, resolutions, csv.empty() ? nullptr : &chart);
   std::printf("Load average (1, 5, 15 min) from /proc/loadavg: %s at the start, %s at the end of the tables.\n",
               loadBefore.c_str(), loadAverage().c_str());
-  if (png.empty()) return 0;
-  // One column per shape: misclassification on top, mean |Δd| below, both against ns per query.
-  benchplot::Canvas canvas(2120, 960);
-  std::vector<std::string> zeroPoints;
-  for (std::size_t c = 0; c < curves.size() && c < 3; ++c) {
-    // Plot area 400 px wide, legend (up to 24 characters) beside it.
-    const int left = 90 + 700 * int(c), right = left + 400;
-    std::string shape = curves[c].shape;
-    for (char& ch : shape) ch = char(std::toupper(static_cast<unsigned char>(ch)));
-    const int skipped =
-        benchplot::drawLogLogChart(
-            canvas, {.left = left, .top = 40, .right = right, .bottom = 400, .legendOutside = true},
-            {shape + " - MISCLASSIFIED POINTS", "NS PER QUERY, 1 THREAD (LOG)", "MISCLASSIFIED, PERCENT (LOG)"},
-            curves[c].misclass, true) +
-        benchplot::drawLogLogChart(
-            canvas, {.left = left, .top = 520, .right = right, .bottom = 880, .legendOutside = true},
-            {shape + " - DISTANCE ERROR", "NS PER QUERY, 1 THREAD (LOG)", "MEAN DISTANCE ERROR (LOG)"},
-            curves[c].distance, true);
-    if (skipped != int(curves[c].zeroPoints.size())) {
-      std::fprintf(stderr, "%s: %d points left off the chart, %zu with zero error\n", argv[0], skipped,
-                   curves[c].zeroPoints.size());
-      return 1;
-    }
-    for (const std::string& z : curves[c].zeroPoints) zeroPoints.push_back(curves[c].shape + ", " + z);
-  }
-  // The chart's link and what it leaves out, for the page (named after the file written).
+  if (csv.empty()) return 0;
+  // The chart's link (named after the CSV: scripts/plots/collide_accuracy.py writes the .png beside
+  // it) and what it leaves out, for the page.
+  const std::string png = std::filesystem::path(csv).replace_extension(".png").filename().string();
   std::printf("\n![misclassified points and mean distance error against ns per query, per shape and map set, one "
               "point per resolution](%s)\n\n",
-              std::filesystem::path(png).filename().string().c_str());
+              png.c_str());
   std::printf("The chart draws the accuracy table above (log-log; the labels at the points are the resolutions).");
-  if (zeroPoints.empty()) {
+  if (chart.zeroPoints.empty()) {
     std::printf(" Every point has a non-zero error and is drawn.\n");
   } else {
     std::printf(" Points with zero error cannot sit on a log axis and are left out:");
-    for (std::size_t i = 0; i < zeroPoints.size(); ++i) std::printf("%s %s", i ? ";" : "", zeroPoints[i].c_str());
+    for (std::size_t i = 0; i < chart.zeroPoints.size(); ++i)
+      std::printf("%s %s", i ? ";" : "", chart.zeroPoints[i].c_str());
     std::printf(".\n");
   }
-  const std::string err = benchplot::writePng(png, canvas);
-  if (!err.empty()) {
+  if (const std::string err = benchcsv::write(csv, chart.table); !err.empty()) {
     std::fprintf(stderr, "%s: %s\n", argv[0], err.c_str());
     return 1;
   }
-  std::fprintf(stderr, "%s: wrote %s\n", argv[0], png.c_str());
+  std::fprintf(stderr, "%s: wrote %s\n", argv[0], csv.c_str());
   return 0;
 }

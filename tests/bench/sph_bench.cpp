@@ -3,8 +3,9 @@
 //                                           threads, both solvers, with the neighbour-search share
 //   bench_sph dambreak_box [--seconds T]    the SPlisHSPlasH dam break: ms/step, mean dt, mean
 //                                           density error over 30 fps frames, compute s per sim s
-//   bench_sph accuracy [--png FILE]         dam break (a = 0.1 m) for 2 s per solver and knob set:
-//                                           density error, volume change, compute time; PNG plot
+//   bench_sph accuracy [--csv FILE]         dam break (a = 0.1 m) for 2 s per solver and knob set:
+//                                           density error, volume change, compute time; the rows as
+//                                           CSV for scripts/plots/sph_accuracy.py
 //   bench_sph seeds [--from A] [--to B]     the randomised stability runs of tests/sph for seeds
 //                                           A..B (tests/sph/randomised_runs.hpp): every run that
 //                                           breaks a bound, and the count
@@ -13,7 +14,7 @@
 //                                           workload for callgrind instruction counts)
 // All tables are printed as markdown on stdout. Timings are wall time of stepSph (steady_clock)
 // and process CPU time; on a loaded machine compare within one run only.
-#include "plot_png.hpp"
+#include "bench_csv.hpp"
 
 #include "fluid/sph/sph_scenes.hpp"
 #include "tests/sph/randomised_runs.hpp"
@@ -204,7 +205,7 @@ int damBreakBox(double seconds, const std::vector<int>& thread_counts, const Ove
   return 0;
 }
 
-int accuracy(const std::string& png) {
+int accuracy(const std::string& csv) {
   // `sweep`: the chart's curve this run belongs to (runs of one sweep differ in one knob and are
   // joined in table order); `point`: its label at the marker.
   struct Config {
@@ -217,30 +218,32 @@ int accuracy(const std::string& png) {
   // tolerance, the force condition (force_bound = 0: CFL only), the WCSPH sound speed (its
   // stiffness), and the particle spacing.
   const std::vector<Config> configs = {
-      {SphSolverKind::dfsph, {{"cfl", "0.2"}}, "DFSPH, CFL", "0.2"},
-      {SphSolverKind::dfsph, {{"cfl", "0.4"}}, "DFSPH, CFL", "0.4"},
-      {SphSolverKind::dfsph, {{"cfl", "0.8"}}, "DFSPH, CFL", "0.8"},
-      {SphSolverKind::dfsph, {{"cfl", "0.8"}, {"density_error", "0.01"}}, "DFSPH, OTHER", "CFL 0.8, ETA 1 PERCENT"},
+      {SphSolverKind::dfsph, {{"cfl", "0.2"}}, "DFSPH, CFL number", "0.2"},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}}, "DFSPH, CFL number", "0.4"},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}}, "DFSPH, CFL number", "0.8"},
+      {SphSolverKind::dfsph, {{"cfl", "0.8"}, {"density_error", "0.01"}}, "DFSPH, other knobs", "CFL 0.8, η 1 %"},
       {SphSolverKind::dfsph,
        {{"cfl", "0.9"}, {"density_error", "0.0002"}, {"force_bound", "0"}},
-       "DFSPH, OTHER",
-       "CFL 0.9, ETA 0.02 PERCENT, NO FORCE"},
-      {SphSolverKind::dfsph, {{"cfl", "0.4"}, {"spacing", "0.0067"}}, "DFSPH, OTHER", "SPACING 0.0067"},
-      {SphSolverKind::wcsph, {{"sound_speed", "14"}}, "WCSPH, SOUND SPEED", "14"},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}}, "WCSPH, SOUND SPEED", "28"},
-      {SphSolverKind::wcsph, {{"sound_speed", "56"}}, "WCSPH, SOUND SPEED", "56"},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}, "WCSPH, OTHER", "C 28, CFL 0.8"},
-      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}, "WCSPH, OTHER", "C 28, SPACING 0.0067"},
+       "DFSPH, other knobs",
+       "CFL 0.9, η 0.02 %, no force bound"},
+      {SphSolverKind::dfsph, {{"cfl", "0.4"}, {"spacing", "0.0067"}}, "DFSPH, other knobs", "spacing 0.0067"},
+      {SphSolverKind::wcsph, {{"sound_speed", "14"}}, "WCSPH, sound speed", "14"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}}, "WCSPH, sound speed", "28"},
+      {SphSolverKind::wcsph, {{"sound_speed", "56"}}, "WCSPH, sound speed", "56"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"cfl", "0.8"}}, "WCSPH, other knobs", "c 28, CFL 0.8"},
+      {SphSolverKind::wcsph, {{"sound_speed", "28"}, {"spacing", "0.0067"}}, "WCSPH, other knobs", "c 28, spacing 0.0067"},
   };
   std::printf(
       "| solver | knobs | particles | steps | mean dt (ms) | iterations/step | mean density error (frames) | max "
       "density error | volume change after 2 s | ms per simulated s (wall) | CPU s per simulated s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
-  struct Point {
-    double x, y;
-    const Config* config;
-  };
-  std::vector<Point> points;
+  // The chart's data (scripts/plots/sph_accuracy.py): x = CPU s per simulated s, y = mean density
+  // error; `sweep` names the curve (runs of one knob joined in table order), `point` the marker.
+  benchcsv::Table table{{"solver", "knobs", "sweep", "point", "particles", "steps", "mean_dt_ms", "iterations_per_step",
+                         "mean_density_error_pct", "max_density_error_pct", "volume_change_pct", "wall_ms_per_sim_s",
+                         "cpu_s_per_sim_s"},
+                        {}};
+  int undrawable = 0;
   for (const Config& c : configs) {
     Overrides o{{"width", "0.1"}, {"spacing", "0.01"}};
     std::string knobs;
@@ -258,41 +261,21 @@ int accuracy(const std::string& png) {
                 100.0 * r.frame_error, 100.0 * r.max_error, 100.0 * r.volume_change, r.wall_ms / r.sim_seconds,
                 r.cpu_s / r.sim_seconds);
     std::fflush(stdout);
-    points.push_back({r.cpu_s / r.sim_seconds, 100.0 * r.frame_error, &c});
+    using benchcsv::number;
+    table.rows.push_back({sphSolverName(c.solver), knobs, c.sweep, c.point, std::to_string(r.particles),
+                          std::to_string(r.steps), number(1e3 * r.mean_dt), number(r.mean_iterations),
+                          number(100.0 * r.frame_error), number(100.0 * r.max_error), number(100.0 * r.volume_change),
+                          number(r.wall_ms / r.sim_seconds), number(r.cpu_s / r.sim_seconds)});
+    undrawable += !benchcsv::drawableOnLogAxes(r.cpu_s / r.sim_seconds, 100.0 * r.frame_error);
   }
-  if (png.empty()) return 0;
-  // Log-log plot: x = CPU s per simulated s, y = mean density error (%). One curve per knob sweep
-  // (joined in table order: the knob rising), and the single-knob-set runs as labelled points.
-  benchplot::Canvas cv(900, 480);
-  std::vector<benchplot::Series> series;
-  for (const Point& p : points) {
-    auto it = std::find_if(series.begin(), series.end(),
-                           [&](const benchplot::Series& s) { return s.label == p.config->sweep; });
-    if (it == series.end()) {
-      static const std::uint32_t kColors[] = {0x1f5fd0, 0x7fa8f0, 0xd03020, 0xf09070};
-      benchplot::Series s;
-      s.label = p.config->sweep;
-      s.color = kColors[series.size() % 4];
-      s.connect = s.label.find("OTHER") == std::string::npos;
-      series.push_back(std::move(s));
-      it = series.end() - 1;
-    }
-    it->points.push_back({p.x, p.y});
-    it->pointLabels.push_back(p.config->point);
-  }
-  // (The palette pairs each solver's sweep with a lighter shade for its other knob sets.)
-  const int skipped = benchplot::drawLogLogChart(
-      cv, {.left = 90, .top = 40, .right = 690, .bottom = 400, .legendOutside = true},
-      {"DAM BREAK 2 S - ERROR AGAINST TIME", "CPU S PER SIMULATED S (LOG)", "MEAN DENSITY ERROR, PERCENT (LOG)"},
-      series, true);
-  if (skipped > 0)  // printed with the table, so the page says what the chart leaves out
-    std::printf("\n%d runs have a zero error or time and are not drawn on the log axes.\n", skipped);
-  const std::string err = benchplot::writePng(png, cv);
-  if (!err.empty()) {
+  if (csv.empty()) return 0;
+  if (undrawable > 0)  // printed with the table, so the page says what the chart leaves out
+    std::printf("\n%d runs have a zero error or time and are not drawn on the log axes.\n", undrawable);
+  if (const std::string err = benchcsv::write(csv, table); !err.empty()) {
     std::fprintf(stderr, "bench_sph: %s\n", err.c_str());
     return 1;
   }
-  std::fprintf(stderr, "bench_sph: wrote %s\n", png.c_str());
+  std::fprintf(stderr, "bench_sph: wrote %s\n", csv.c_str());
   return 0;
 }
 
@@ -321,14 +304,14 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] "
-                 "[--set k=v] | accuracy [--png FILE] | seeds [--from A] [--to B] | steps [--solver S] [--steps N] "
+                 "[--set k=v] | accuracy [--csv FILE] | seeds [--from A] [--to B] | steps [--solver S] [--steps N] "
                  "[--threads T] [--set key=value ...]\n");
     return 2;
   }
   const std::string cmd = argv[1];
   int steps = 20, seed_from = 1, seed_to = 12;
   double seconds = 2.0;
-  std::string png;
+  std::string csv;
   SphSolverKind solver = SphSolverKind::dfsph;
   bool solver_given = false;  // dambreak_box: only that solver's rows
   Overrides extra;            // --set key=value, applied after each configuration's own keys
@@ -362,8 +345,8 @@ int main(int argc, char** argv) {
       number_ok = wholeInt(v, seed_to);
     else if (k == "--seconds")
       number_ok = wholeReal(v, seconds);
-    else if (k == "--png")
-      png = v;
+    else if (k == "--csv")
+      csv = v;
     else if (k == "--set") {
       const auto eq = v.find('=');
       if (eq == std::string::npos) {
@@ -400,7 +383,7 @@ int main(int argc, char** argv) {
   }
   if (cmd == "throughput") return throughput(steps);
   if (cmd == "dambreak_box") return damBreakBox(seconds, threads, extra, solver_given ? &solver : nullptr);
-  if (cmd == "accuracy") return accuracy(png);
+  if (cmd == "accuracy") return accuracy(csv);
   if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
   if (cmd == "seeds") return seedSweep(seed_from, seed_to);
   std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());

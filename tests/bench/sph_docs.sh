@@ -9,7 +9,8 @@ BOX_SECONDS=${1:-2}
 OUT=docs/sph.md
 mkdir -p docs
 tmp=$(mktemp -d)
-"$BENCH" accuracy --png docs/sph_accuracy.png > "$tmp/accuracy.md"
+"$BENCH" accuracy --csv docs/sph_accuracy.csv > "$tmp/accuracy.md"
+scripts/plots/sph_accuracy.py docs/sph_accuracy.csv docs/sph_accuracy.png
 "$BENCH" throughput --steps 20 > "$tmp/throughput.md"
 "$BENCH" seeds --from 1 --to 300 > "$tmp/seeds.txt"
 "$BENCH" dambreak_box --seconds "$BOX_SECONDS" --threads 12 > "$tmp/box.md"
@@ -38,7 +39,7 @@ fi
   echo
   echo "## Accuracy against time (dam break, 2 s)"
   echo
-  echo "Command: \`$BENCH accuracy --png docs/sph_accuracy.png\` (machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg) at the end)."
+  echo "Command: \`$BENCH accuracy --csv docs/sph_accuracy.csv\` (machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg) at the end); chart: \`scripts/plots/sph_accuracy.py docs/sph_accuracy.csv docs/sph_accuracy.png\`."
   echo
   cat "$tmp/accuracy.md"
   echo

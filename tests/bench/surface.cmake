@@ -1,7 +1,7 @@
 # Benchmarks of fluid/surface: bench_surface reproduces the paper's Figure 7 and writes
 # docs/surface.md (see the header of surface_bench.cpp). Built, not run by ctest.
 add_executable(bench_surface ${CMAKE_CURRENT_LIST_DIR}/surface_bench.cpp)
-target_link_libraries(bench_surface PRIVATE fluid bench_plot fluiddemo_options)
+target_link_libraries(bench_surface PRIVATE fluid bench_csv fluiddemo_options)
 target_include_directories(bench_surface PRIVATE ${PROJECT_SOURCE_DIR}/tests/surface)
 target_compile_definitions(bench_surface PRIVATE FLUIDDEMO_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data")
 

@@ -1,8 +1,9 @@
 // bench_surface: reproduces the marching-slices paper's Figure 7 on the project's particle sets,
 // plus thread scaling, accuracy against time and back-to-front quality, and writes the markdown
 // that docs/surface.md is made of. Every number in that file comes from one run of this program.
-// With --out it also draws the accuracy and order tables as charts (error against ms, log-log),
-// written next to FILE as <stem>_accuracy.png and <stem>_order.png and linked from the page.
+// With --out it also writes the data of the accuracy and order tables next to FILE as
+// <stem>_accuracy.csv and <stem>_order.csv; scripts/plots/surface_charts.py draws them (error
+// against ms, log-log) as <stem>_accuracy.png and <stem>_order.png, which the page links.
 //
 //   bench_surface [--reps N] [--out FILE [--force]] [--quick]
 //
@@ -15,7 +16,7 @@
 #include "mesh_checks.hpp"
 #include "load_average.hpp"
 #include "order_metrics.hpp"
-#include "plot_png.hpp"
+#include "bench_csv.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -28,6 +29,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <time.h>
@@ -154,15 +156,15 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  // The charts go next to the page, named after it (docs/surface.md: docs/surface_accuracy.png and
-  // docs/surface_order.png), and the page links them by file name.
-  std::string accuracyPng, orderPng;
+  // The charts' data go next to the page, named after it (docs/surface.md: docs/surface_accuracy.csv
+  // and docs/surface_order.csv); the charts drawn from them (.png) are linked by file name.
+  std::string accuracyCsv, orderCsv;
   if (!outPath.empty()) {
     const std::filesystem::path out(outPath);
-    accuracyPng = (out.parent_path() / (out.stem().string() + "_accuracy.png")).string();
-    orderPng = (out.parent_path() / (out.stem().string() + "_order.png")).string();
+    accuracyCsv = (out.parent_path() / (out.stem().string() + "_accuracy.csv")).string();
+    orderCsv = (out.parent_path() / (out.stem().string() + "_order.csv")).string();
   }
-  for (const std::string& path : {outPath, accuracyPng, orderPng})
+  for (const std::string& path : {outPath, accuracyCsv, orderCsv})
     if (!path.empty() && std::filesystem::exists(path) && !force) {
       std::fprintf(stderr, "bench_surface: %s exists; pass --force to replace it\n", path.c_str());
       return 1;
@@ -396,7 +398,10 @@ int main(int argc, char** argv) {
         "volume error = mesh volume (divergence theorem) vs true volume. ms = median extraction time, 1 thread.\n\n"
      << "| shape | S | triangles | ms per mesh | volume error % | max vertex error | mean vertex error |\n"
      << "|---|---|---|---|---|---|---|\n";
-  std::vector<benchplot::Series> volumeSeries, vertexSeries;  // per shape: (ms, |volume error| %), (ms, max error)
+  // Chart data (scripts/plots/surface_charts.py): per shape and S, ms against |volume error| and max vertex error.
+  benchcsv::Table accuracyTable{
+      {"shape", "cube", "triangles", "ms_per_mesh", "volume_error_pct", "max_vertex_error", "mean_vertex_error"}, {}};
+  int undrawable = 0;
   {
     struct Shape {
       const char* name;
@@ -413,9 +418,6 @@ int main(int argc, char** argv) {
           if (x * x + y * y + z * z <= 16.0) ball.ps.push_back(ball.centre + glm::dvec3(x, y, z));
     shapes.push_back(ball);
     for (Shape& sh : shapes) {
-      benchplot::Series vol, vtx;
-      vol.label = vtx.label = sh.name;
-      vol.color = vtx.color = benchplot::seriesColor(volumeSeries.size());
       // Round particle positions to float first: that is what the extractor sees.
       for (glm::dvec3& p : sh.ps) p = glm::dvec3(glm::vec3(p));
       std::vector<float> xs, ys, zs;
@@ -457,34 +459,24 @@ int main(int argc, char** argv) {
         md << "| " << sh.name << " | " << cube << " | " << m.stats.triangles << " | " << fmt("%.3f", median(t)) << " | "
            << fmt("%+.3f", volumeErrorPct) << " | " << fmt("%.5f", maxErr) << " | "
            << fmt("%.5f", sumErr / double(std::max<std::size_t>(1, m.positions.size()))) << " |\n";
-        const std::string label = "S=" + fmt("%g", cube);
-        vol.points.push_back({median(t), std::abs(volumeErrorPct)});
-        vol.pointLabels.push_back(label);
-        vtx.points.push_back({median(t), maxErr});
-        vtx.pointLabels.push_back(label);
+        accuracyTable.rows.push_back({sh.name, fmt("%g", cube), std::to_string(m.stats.triangles),
+                                      benchcsv::number(median(t)), benchcsv::number(volumeErrorPct),
+                                      benchcsv::number(maxErr),
+                                      benchcsv::number(sumErr / double(std::max<std::size_t>(1, m.positions.size())))});
+        undrawable += !benchcsv::drawableOnLogAxes(median(t), std::abs(volumeErrorPct));
+        undrawable += !benchcsv::drawableOnLogAxes(median(t), maxErr);
       }
-      volumeSeries.push_back(std::move(vol));
-      vertexSeries.push_back(std::move(vtx));
     }
   }
-  // The charts are drawn here so that the page can say how many points a log axis could not hold.
-  benchplot::Canvas accuracyChart(1400, 480), orderChart(720, 480);
+  // Counted here so that the page can say how many points a log axis could not hold.
   auto notDrawn = [&](int skipped) {
     if (skipped > 0) md << "\n" << skipped << " chart points are zero and cannot be drawn on log axes.\n";
   };
-  if (!accuracyPng.empty()) {
-    // Two charts side by side, one point per cube size S (finer = slower, more exact).
-    int skipped = benchplot::drawLogLogChart(
-        accuracyChart, {.left = 90, .top = 40, .right = 690, .bottom = 400},
-        {"VOLUME ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "VOLUME ERROR, ABS. PERCENT (LOG)"}, volumeSeries,
-        true);
-    skipped += benchplot::drawLogLogChart(
-        accuracyChart, {.left = 790, .top = 40, .right = 1390, .bottom = 400},
-        {"LARGEST VERTEX ERROR AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)", "MAX VERTEX ERROR (LOG)"}, vertexSeries,
-        true);
+  if (!accuracyCsv.empty()) {
     md << "\n![volume error and largest vertex error against ms per mesh, log-log, one point per cube size S]("
-       << std::filesystem::path(accuracyPng).filename().string() << ")\n";
-    notDrawn(skipped);
+       << std::filesystem::path(outPath).stem().string() << "_accuracy.png)\n\nChart command: `scripts/plots/surface_charts.py "
+       << outPath << "` (draws both charts from the CSVs this run wrote beside the page).\n";
+    notDrawn(undrawable);
   }
 
   // ---------------------------------------------------------------------------------------------
@@ -496,7 +488,9 @@ int main(int argc, char** argv) {
         "`b2f exact` = plus one index range per slab in sweep order. ms = median over the 8 views, 1 thread.\n\n"
      << "| set | S | none: mean | b2f: mean | b2f: worst | b2f exact: mean | ms none | ms b2f | ms b2f exact |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
-  std::vector<benchplot::Series> orderSeries;  // per set: (ms, mean fraction out of order) for none, b2f, exact
+  // Chart data: per set and method (none, b2f, b2f exact), ms against the mean fraction out of order.
+  benchcsv::Table orderTable{{"set", "cube", "method", "ms_per_mesh", "mean_fraction_out_of_order"}, {}};
+  undrawable = 0;
   for (const SetConfig& cfg : kSets) {
     if (cfg.cube != 1.0f && std::string(cfg.label) == "fountain") continue;
     const fluid::ParticlePositions ps = surface_test::loadSet(cfg.file);
@@ -537,21 +531,18 @@ int main(int argc, char** argv) {
     md << "| " << cfg.label << " | " << cfg.cube << " | " << fmt("%.4f", sNone / views) << " | "
        << fmt("%.4f", sB / views) << " | " << fmt("%.4f", wB) << " | " << fmt("%.4f", sE / views) << " | "
        << fmt("%.2f", median(tNone)) << " | " << fmt("%.2f", median(tB)) << " | " << fmt("%.2f", median(tE)) << " |\n";
-    benchplot::Series ser;
-    ser.label = cfg.label;
-    ser.color = benchplot::seriesColor(orderSeries.size());
-    ser.points = {{median(tNone), sNone / views}, {median(tB), sB / views}, {median(tE), sE / views}};
-    ser.pointLabels = {"NONE", "B2F", "EXACT"};
-    orderSeries.push_back(std::move(ser));
+    for (const auto& [method, ms, fraction] : {std::tuple{"none", median(tNone), sNone / views},
+                                               std::tuple{"b2f", median(tB), sB / views},
+                                               std::tuple{"b2f exact", median(tE), sE / views}}) {
+      orderTable.rows.push_back(
+          {cfg.label, fmt("%g", cfg.cube), method, benchcsv::number(ms), benchcsv::number(fraction)});
+      undrawable += !benchcsv::drawableOnLogAxes(ms, fraction);
+    }
   }
-  if (!orderPng.empty()) {
-    const int skipped = benchplot::drawLogLogChart(orderChart, {},
-                                                   {"BACK-TO-FRONT ORDER AGAINST TIME", "MS PER MESH, 1 THREAD (LOG)",
-                                                    "FRACTION OF PAIRS OUT OF ORDER (LOG)"},
-                                                   orderSeries, true);
+  if (!orderCsv.empty()) {
     md << "\n![mean fraction of triangle pairs out of order against ms per mesh, log-log, per set: none, b2f, b2f exact]("
-       << std::filesystem::path(orderPng).filename().string() << ")\n";
-    notDrawn(skipped);
+       << std::filesystem::path(outPath).stem().string() << "_order.png)\n";
+    notDrawn(undrawable);
   }
 
   md << "\nLoad average (1, 5, 15 min) from /proc/loadavg: " << loadBefore << " at the start, " << loadAverage()
@@ -569,8 +560,8 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::fprintf(stderr, "bench_surface: wrote %s\n", outPath.c_str());
-    for (const auto& [path, canvas] : {std::pair{accuracyPng, &accuracyChart}, std::pair{orderPng, &orderChart}}) {
-      const std::string err = benchplot::writePng(path, *canvas);
+    for (const auto& [path, table] : {std::pair{accuracyCsv, &accuracyTable}, std::pair{orderCsv, &orderTable}}) {
+      const std::string err = benchcsv::write(path, *table);
       if (!err.empty()) {
         std::fprintf(stderr, "bench_surface: %s\n", err.c_str());
         return 1;

@@ -67,8 +67,8 @@ TEST(ColliderFile, RejectsWrongMagicVersionAndCorruption) {
   bad[0] = 'X';
   EXPECT_NE(fluid::deserializeCollider(bad, "f", out).error.find("bad magic"), std::string::npos);
   bad = good;
-  bad[8] = 2;  // version 2
-  EXPECT_NE(fluid::deserializeCollider(bad, "f", out).error.find("unsupported version 2"), std::string::npos);
+  bad[8] = 3;  // version 3 (this build reads 1 and 2)
+  EXPECT_NE(fluid::deserializeCollider(bad, "f", out).error.find("unsupported version 3"), std::string::npos);
   bad = good;
   bad[bad.size() / 2] ^= 0x40;  // a texel byte
   EXPECT_NE(fluid::deserializeCollider(bad, "f", out).error.find("checksum"), std::string::npos);

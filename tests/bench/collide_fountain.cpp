@@ -1,0 +1,319 @@
+// The fountain level's baked depth-map colliders (content/colliders/fountain.colliders, Kolb et
+// al. 2004 §4) measured three ways, for docs/collide.md:
+//   1. per model (ground, basin, statue) against the exact distance to the same OBJ mesh
+//      (fluid::MeshDistance): the default six axis maps as sprite_particles bakes them today,
+//      and the recipe of content/colliders;
+//   2. the whole fountain (ground ∪ basin ∪ statue, baked) against the analytic FountainShape
+//      (game/world/fountain.hpp), the game's collider today, and the exact meshes against it
+//      (how far the OBJ models themselves are from the CSG cylinders);
+//   3. the cost of the switch: the game's SPH fountain (game::initSphFluid) stepped with
+//      FountainShape, then with the three baked colliders, from the same filled state.
+// Usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2]
+#include "fluid/collide/collider_cache.hpp"
+#include "game/commands/collider_model.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
+#include "game/world/sph_fluid.hpp"
+#include "game/world/world.hpp"
+#include "load_average.hpp"
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kContent = fs::path(FLUIDDEMO_SOURCE_DIR) / "content";
+// The game's SPH support: 4 r (fluid::SphParams) with the fountain scene's particle_radius, set in main.
+float support_radius = 0.0f;
+
+struct Model {
+  std::string name;
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  fluid::MeshView view() const { return {positions, indices}; }
+};
+
+struct Errors {
+  std::size_t points = 0, wrong = 0, band = 0, beyond_reach = 0;
+  double sum_d = 0.0, max_d = 0.0, deepest_wrong = 0.0;
+};
+
+// `got` against `reference` on `points`: misclassification over all points; beyond-reach count
+// and |Δd| over the band |d_ref| < support_radius.
+Errors compare(const std::vector<fluid::ColliderSample>& reference, const std::vector<fluid::ColliderSample>& got) {
+  Errors e;
+  e.points = reference.size();
+  for (std::size_t k = 0; k < reference.size(); ++k) {
+    const bool in_ref = reference[k].distance < 0.0f, in_got = got[k].valid && got[k].distance < 0.0f;
+    e.wrong += in_ref != in_got;
+    if (in_ref != in_got) e.deepest_wrong = std::max(e.deepest_wrong, std::fabs(double(reference[k].distance)));
+    if (std::fabs(reference[k].distance) >= support_radius) continue;
+    ++e.band;
+    if (!got[k].valid) {
+      ++e.beyond_reach;
+      continue;
+    }
+    const double dd = std::fabs(double(got[k].distance) - reference[k].distance);
+    e.sum_d += dd;
+    e.max_d = std::max(e.max_d, dd);
+  }
+  return e;
+}
+
+std::vector<glm::vec3> uniformPoints(glm::vec3 lo, glm::vec3 hi, std::size_t count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<glm::vec3> points(count);
+  for (glm::vec3& p : points) p = lo + (hi - lo) * glm::vec3(u(rng), u(rng), u(rng));
+  return points;
+}
+
+// Union of static colliders (CSG): the smallest valid distance; invalid where all are.
+void unionQuery(const std::vector<const fluid::SignedDistanceShape*>& shapes, const std::vector<glm::vec3>& points,
+                std::vector<fluid::ColliderSample>& out) {
+  std::vector<fluid::ColliderSample> part(points.size());
+  out.assign(points.size(), fluid::ColliderSample{});
+  for (std::size_t k = 0; k < out.size(); ++k) out[k].valid = false;
+  for (const fluid::SignedDistanceShape* s : shapes) {
+    fluid::queryParallel(*s, points, part);
+    for (std::size_t k = 0; k < out.size(); ++k)
+      if (part[k].valid && (!out[k].valid || part[k].distance < out[k].distance)) out[k] = part[k];
+  }
+}
+
+void printErrors(const std::string& head, const Errors& e, const std::string& tail) {
+  std::printf("| %s | %.3f | %.4f | %zu | %zu | %.4f | %.3f |%s\n", head.c_str(),
+              100.0 * double(e.wrong) / double(e.points), e.deepest_wrong, e.band, e.beyond_reach,
+              e.band > e.beyond_reach ? e.sum_d / double(e.band - e.beyond_reach) : 0.0, e.max_d, tail.c_str());
+}
+
+bool loadModels(std::vector<fluid::LevelColliderEntry>& entries, std::vector<Model>& models) {
+  if (const fluid::CacheStatus st = fluid::readLevelColliders(kContent / "colliders" / "fountain.colliders", entries);
+      !st.ok()) {
+    std::fprintf(stderr, "bench_collide_fountain: %s\n", st.error.c_str());
+    return false;
+  }
+  const fluid::ModelLoader loader = game::colliderModelLoader();
+  for (const fluid::LevelColliderEntry& e : entries) {
+    Model m{e.name, {}, {}};
+    std::string error;
+    if (!loader(kContent / e.model, m.positions, m.indices, error)) {
+      std::fprintf(stderr, "bench_collide_fountain: %s\n", error.c_str());
+      return false;
+    }
+    models.push_back(std::move(m));
+  }
+  return true;
+}
+
+int perModelTable(const std::vector<fluid::LevelColliderEntry>& entries, const std::vector<Model>& models,
+                  std::size_t count) {
+  std::printf(
+      "| model | maps | depth maps | margin (m) | misclass %% | deepest misclassified (m) | points with \\|d\\| < %.2f "
+      "m | "
+      "beyond reach there | mean \\|Δd\\| there (m) | max \\|Δd\\| there (m) | bytes |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|\n",
+      support_radius);
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const fluid::Bounds b = fluid::meshBounds(models[m].view());
+    // The ground is an 80 m slab: measure it over the fountain's courtyard, not all of it.
+    const bool ground = entries[m].name == "ground";
+    const glm::vec3 size = b.hi - b.lo, pad(0.1f * std::max({size.x, size.y, size.z}));
+    const glm::vec3 lo = ground ? glm::vec3(-4.0f, -1.2f, -4.0f) : b.lo - pad;
+    const glm::vec3 hi = ground ? glm::vec3(4.0f, 0.5f, 4.0f) : b.hi + pad;
+    const std::vector<glm::vec3> points = uniformPoints(lo, hi, count, 42);
+    const fluid::MeshDistance exact(models[m].view());
+    std::vector<fluid::ColliderSample> reference(count), got(count);
+    fluid::queryParallel(exact, points, reference);
+    // Today's in-memory bake (game/world/sprite_particles.cpp), then the shipped recipe.
+    fluid::BakeRecipe today = entries[m].recipe;
+    today.maps = ground ? "y" : "axes";
+    today.margin = 0.0f;
+    for (const fluid::BakeRecipe& recipe : {today, entries[m].recipe}) {
+      std::vector<fluid::MapSpec> specs;
+      std::string error;
+      fluid::DepthMapCollider collider;
+      if (!fluid::recipeMapSpecs(recipe, b, specs, error) ||
+          !fluid::bakeDepthMaps(models[m].view(), specs, {recipe.normal_resolution, 0}, collider).ok()) {
+        std::fprintf(stderr, "bench_collide_fountain: %s: bake failed %s\n", entries[m].name.c_str(), error.c_str());
+        return 1;
+      }
+      fluid::queryParallel(collider, points, got);
+      char head[256];
+      std::snprintf(head, sizeof head, "%s | %s, %d² | %d | %.2f", entries[m].name.c_str(), recipe.maps.c_str(),
+                    recipe.resolution, collider.depthMapCount(), static_cast<double>(recipe.margin));
+      char bytes[32];
+      std::snprintf(bytes, sizeof bytes, " %zu |", collider.bytes());
+      printErrors(head, compare(reference, got), bytes);
+    }
+  }
+  std::printf("\n");
+  return 0;
+}
+
+int fountainTable(const std::vector<fluid::CachedCollider>& baked, const std::vector<Model>& models,
+                  std::size_t count) {
+  const game::FountainShape analytic;
+  const std::vector<glm::vec3> points =
+      uniformPoints(glm::vec3(-3.6f, -0.3f, -3.6f), glm::vec3(3.6f, 2.8f, 3.6f), count, 7);
+  std::vector<fluid::ColliderSample> reference(count), got;
+  fluid::queryParallel(analytic, points, reference);
+  std::printf(
+      "| collider | misclass %% | deepest misclassified (m) | points with \\|d\\| < %.2f m | beyond reach there | "
+      "mean \\|Δd\\| there (m) | max \\|Δd\\| there (m) |\n|---|---|---|---|---|---|---|\n",
+      support_radius);
+  std::vector<std::unique_ptr<fluid::MeshDistance>> exact;
+  std::vector<const fluid::SignedDistanceShape*> exact_shapes, baked_shapes;
+  for (const Model& m : models) exact.push_back(std::make_unique<fluid::MeshDistance>(m.view()));
+  for (const auto& e : exact) exact_shapes.push_back(e.get());
+  for (const fluid::CachedCollider& c : baked) baked_shapes.push_back(&c.collider);
+  unionQuery(exact_shapes, points, got);
+  printErrors("exact distance to the OBJ meshes (the models' own difference)", compare(reference, got), "");
+  unionQuery(baked_shapes, points, got);
+  printErrors("baked content/colliders (" + std::to_string(baked.size()) + " colliders)", compare(reference, got), "");
+  std::printf("\n");
+  return 0;
+}
+
+bool buildFountain(game::SphFluid& out, std::string& error) {
+  game::SceneConfig scene;
+  game::SceneStatus st = game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), scene);
+  const game::SectionConfig* section = st.ok() ? scene.effect("sph_fluid") : nullptr;
+  if (section == nullptr) {
+    error = st.ok() ? "fountain.json has no sph_fluid effect" : st.error;
+    return false;
+  }
+  game::SphFluidParams params;
+  return game::sphParamsFrom(*section, params, error) &&
+         game::initSphFluid(out, params, game::FountainGeometry{}, game::sceneGravity(scene), error);
+}
+
+int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, const std::vector<int>& threads) {
+  game::SphFluid filled;
+  std::string error;
+  if (!buildFountain(filled, error)) {
+    std::fprintf(stderr, "bench_collide_fountain: %s\n", error.c_str());
+    return 1;
+  }
+  // Fill with FountainShape (as the game does) until the budget is nearly reached.
+  const double target = 0.9 * static_cast<double>(filled.world.params.max_particles);
+  while (static_cast<double>(filled.world.particles.size()) < target && filled.world.time < 60.0)
+    if (!game::stepSphFluid(filled, 1.0 / 60.0)) {
+      std::fprintf(stderr, "bench_collide_fountain: %s\n", filled.error.c_str());
+      return 1;
+    }
+  // The fountain collider is the first of the world's colliders (game::initSphFluid).
+  const fluid::SphCollider analytic = filled.world.colliders.front();
+  std::vector<fluid::SphCollider> with_baked;
+  for (const fluid::CachedCollider& c : baked) {
+    fluid::SphCollider s = analytic;
+    s.shape = std::make_shared<fluid::DepthMapCollider>(c.collider);
+    s.lipschitz_distance = false;  // depth-map distances are measured along the map axes
+    with_baked.push_back(s);
+  }
+  std::printf(
+      "| SPH boundary (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
+      "collisions per step | emitted | removed (drains) |\n|---|---|---|---|---|---|---|---|\n");
+  for (int variant = 0; variant < 4; ++variant) {
+    const int t = threads[static_cast<std::size_t>(variant / 2) % threads.size()];
+    if (variant >= 2 && threads.size() < 2) break;
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(t));
+    game::SphFluid f = filled;
+    if (variant % 2 == 1) {
+      f.world.colliders.erase(f.world.colliders.begin());
+      f.world.colliders.insert(f.world.colliders.begin(), with_baked.begin(), with_baked.end());
+    }
+    std::vector<double> ms;
+    double steps = 0.0, collisions = 0.0;
+    std::size_t emitted = 0, removed = 0;
+    for (int frame = 0; frame < frames; ++frame) {
+      double frame_ms = 0.0;
+      if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
+            frame_ms += x.step_ms;
+            steps += 1.0;
+            collisions += static_cast<double>(x.collisions);
+            emitted += x.emitted;
+            removed += x.removed;
+          })) {
+        std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
+        return 1;
+      }
+      ms.push_back(frame_ms);
+    }
+    std::vector<double> sorted = ms;
+    std::sort(sorted.begin(), sorted.end());
+    std::printf(
+        "| %s (%d) | %zu | %.2f | %.2f | %.1f | %.0f | %zu | %zu |\n",
+        variant % 2 == 0 ? "FountainShape (analytic, 1 collider)" : "baked content/colliders (3 depth-map colliders)",
+        t, f.world.particles.size(), sorted[sorted.size() / 2], sorted.back(), steps / frames,
+        collisions / std::max(steps, 1.0), emitted, removed);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::size_t points = 200000;
+  int frames = 60;
+  std::vector<int> threads{1};
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i];
+    if (k == "--points")
+      points = std::strtoull(argv[i + 1], nullptr, 10);
+    else if (k == "--frames")
+      frames = std::atoi(argv[i + 1]);
+    else if (k == "--threads") {
+      threads.clear();
+      for (const char* c = argv[i + 1]; *c; ++c)
+        if (*c >= '1' && *c <= '9') threads.push_back(*c - '0');
+    } else
+      points = 0;
+  }
+  if (argc % 2 == 0 || points == 0 || frames < 1 || threads.empty() || threads.size() > 2) {
+    std::fprintf(stderr, "usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2]\n");
+    return 2;
+  }
+  const std::string load_before = benchplot::loadAverage();
+  {
+    game::SceneConfig scene;
+    const game::SceneStatus st = game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), scene);
+    const game::SectionConfig* sph = st.ok() ? scene.effect("sph_fluid") : nullptr;
+    if (sph == nullptr) {
+      std::fprintf(stderr, "bench_collide_fountain: fountain.json: %s\n",
+                   st.ok() ? "no sph_fluid effect" : st.error.c_str());
+      return 1;
+    }
+    support_radius = 4.0f * static_cast<float>(sph->number("particle_radius"));
+  }
+  std::vector<fluid::LevelColliderEntry> entries;
+  std::vector<Model> models;
+  if (!loadModels(entries, models)) return 1;
+  std::vector<fluid::CachedCollider> baked;
+  if (const fluid::CacheStatus st = fluid::loadLevelColliders(kContent, "fountain", game::colliderModelLoader(),
+                                                              fluid::CachePolicy::load_only, baked);
+      !st.ok()) {
+    std::fprintf(stderr, "bench_collide_fountain: %s\n", st.error.c_str());
+    return 1;
+  }
+  std::printf("### Per model, against the exact distance to its own mesh\n\n");
+  if (perModelTable(entries, models, points) != 0) return 1;
+  std::printf("### The fountain against the analytic FountainShape\n\n");
+  if (fountainTable(baked, models, points) != 0) return 1;
+  std::printf("### SPH step cost, %d frames of 1/60 s from the same filled state\n\n", frames);
+  if (sphCostTable(baked, frames, threads) != 0) return 1;
+  std::printf("\nLoad average (1, 5, 15 min) from /proc/loadavg: %s at the start, %s at the end.\n",
+              load_before.c_str(), benchplot::loadAverage().c_str());
+  return 0;
+}
