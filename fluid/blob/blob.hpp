@@ -62,10 +62,11 @@ struct BlobParams {
   // Akinci 2013 cohesion: peak attraction (m/s^2) between two particles at h/2; h = cohesion_radius d.
   // 4: at rest the body keeps its shape within 0.03 body radii; 12 squeezed it to 0.09 (the
   // surface pull compresses every contact below it; tests/blob prints the idle shape error).
-  float cohesion = 4.0f;         // >= 0
-  float cohesion_radius = 2.0f;  // h / d in [1.1, 3]
-  float repulsion = 3000.0f;     // 1/s^2 >= 0: contact spring for r < d (keeps the spacing)
-  float pair_damping = 3.0f;     // 1/s >= 0: damping of the relative normal velocity of neighbours
+  float cohesion = 4.0f;  // >= 0
+  float cohesion_radius =
+      1.5f;  // h / d in [1.1, 3]: 1.5 reaches the 18 nearest lattice neighbours (2: 32, twice the pair work)
+  float repulsion = 3000.0f;  // 1/s^2 >= 0: contact spring for r < d (keeps the spacing)
+  float pair_damping = 3.0f;  // 1/s >= 0: damping of the relative normal velocity of neighbours
   // Müller 2005 goal springs, scaled per particle by the behaviour's weight.
   float goal_stiffness = 500.0f;  // 1/s^2 >= 0 (omega^2)
   float goal_damping = 20.0f;     // 1/s >= 0, relative to the goal's velocity; fades out beyond 1-2 x goal_reach
@@ -125,7 +126,9 @@ struct BlobCollider {
 
 struct BlobScratch {
   NeighborGrid grid;
-  NeighborLists neighbors;
+  NeighborLists neighbors;  // Verlet lists: candidates within h + skin of the positions below
+  std::vector<glm::vec3> verlet_position;
+  bool verlet_valid = false;
   std::vector<glm::vec3> accel, previous, before, goal;
   std::vector<std::uint8_t> outcome;  // per particle: 0 no collision, 1 reacted, 2 found by the sweep
 };
