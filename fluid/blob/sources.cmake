@@ -2,4 +2,5 @@
 target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/body.cpp
   ${CMAKE_CURRENT_LIST_DIR}/behaviour.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/tentacle_uv.cpp
 )
