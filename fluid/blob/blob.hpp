@@ -112,7 +112,10 @@ struct BlobTarget {
   std::vector<std::vector<std::uint32_t>> tentacle_particles;
 };
 
-// A level collider or a rigid body (crate). Moving colliders (pose velocities) push particles.
+// A level collider or a rigid body (crate). Moving colliders (pose velocities, integrated over the
+// sub-steps; the game resets the pose from Bullet every step) push particles. Colliders are
+// resolved in list order, each against the result of the previous: list crates first and the
+// level last, so where a crate presses into a wall the particle ends outside the wall.
 struct BlobCollider {
   std::shared_ptr<const SignedDistanceShape> shape;  // non-null, read-only, shared
   ColliderPose pose;

@@ -111,6 +111,40 @@ TEST(BlobBody, TargetInsideAWallStaysOutsideAndFinite) {
   EXPECT_GE(blobtest::minDistance(w, 1), -0.01f * w.params.spacing);
 }
 
+TEST(BlobBody, SqueezedIntoACornerByCratesStaysSane) {
+  fluid::BlobWorld w = blobtest::restingBlob();
+  // Two crates close in on the body at 2 m/s, pressing it into the corner of two walls; the walls
+  // come last in the list, so where a crate overlaps a wall the particle ends outside the wall.
+  for (glm::vec3 from : {glm::vec3(-1.6f, 0.5f, 0.0f), glm::vec3(0.0f, 0.5f, -1.6f)}) {
+    fluid::BlobCollider crate = blobtest::collider(std::make_shared<fluid::BoxShape>(glm::vec3(0.5f)), from);
+    crate.pose.linear_velocity = -2.0f * glm::normalize(glm::vec3(from.x, 0.0f, from.z));
+    w.colliders.push_back(crate);
+  }
+  w.colliders.push_back(blobtest::ground());
+  w.colliders.push_back(blobtest::wall(0.8f, 0.5f));  // x >= 0.8
+  fluid::BlobCollider back_wall = blobtest::collider(std::make_shared<fluid::BoxShape>(glm::vec3(3.0f, 2.0f, 0.25f)),
+                                                     glm::vec3(0.0f, 1.0f, 1.05f));  // z >= 0.8
+  w.colliders.push_back(back_wall);
+  const std::size_t n = w.particles.size();
+  float pushed = 0.0f;            // momentum the crates took from the body (N s)
+  for (int s = 0; s < 90; ++s) {  // 1.5 s: the crates stop 0.4 m short of the walls
+    for (int c = 0; c < 2; ++c) {
+      const glm::vec3 p = w.colliders[c].pose.translation;
+      if ((c == 0 ? p.x : p.z) > 0.4f - 0.5f) w.colliders[c].pose.linear_velocity = glm::vec3(0.0f);
+    }
+    ASSERT_TRUE(fluid::stepBlob(w).ok());
+    pushed += glm::length(w.colliders[0].impulse) + glm::length(w.colliders[1].impulse);
+  }
+  expectSane(w, n);
+  EXPECT_LT(fluid::blobMaxSpeed(w.particles.velocity), 20.0f);
+  for (std::size_t c = 2; c < 5; ++c) EXPECT_GE(blobtest::minDistance(w, c), -0.01f * w.params.spacing) << c;
+  EXPECT_GT(pushed, 10.0f);  // the body pushed back on the crates
+  float top = -1e30f;
+  for (const glm::vec3& x : w.particles.position) top = std::max(top, x.y);
+  std::printf("[blob] corner: squeezed up to %.2f m high, crates took %.0f N s, max speed %.2f m/s\n", top, pushed,
+              fluid::blobMaxSpeed(w.particles.velocity));
+}
+
 // Runs a behaviour mix for `steps` and returns the positions and velocities as bytes.
 std::vector<glm::vec3> scriptedRun(std::uint64_t seed, int steps) {
   fluid::BlobWorld w;
