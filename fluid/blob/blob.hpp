@@ -133,6 +133,7 @@ struct BlobScratch {
   std::vector<glm::vec3> verlet_position;
   bool verlet_valid = false;
   std::vector<glm::vec3> accel, previous, before, goal;
+  std::vector<glm::vec4> pos4, vel4;  // pair loop: position + radius scale, velocity
   std::vector<std::uint8_t> outcome;  // per particle: 0 no collision, 1 reacted, 2 found by the sweep
 };
 
