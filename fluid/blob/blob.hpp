@@ -5,7 +5,7 @@
 // original shape after being blown apart. The paper gives no body model; ours combines two:
 //
 //  - Shape matching (Müller, Heidelberger, Teschner & Gross 2005, "Meshless deformations based on
-//    shape matching", §3.3, eq. 5-7): every behaviour is a target shape (one goal offset per
+//    shape matching", its rigid shape matching section): every behaviour is a target shape (one goal offset per
 //    particle); the goal of particle i is g_i = c + R q_i with R the rotation of the best rigid fit
 //    of the target to the current positions (polar part of A_pq = sum m p_i q_i^T) when the
 //    behaviour lets the body turn, and c the behaviour's anchor (or the centroid, as in the paper).
@@ -16,9 +16,9 @@
 //    g_i, saturated far away) rather than Müller's position projection, so behaviours drive the
 //    body by forces and never teleport particles, and the body stays soft and sloshy.
 //  - Pairwise cohesion (Akinci, Akinci & Teschner 2013, "Versatile surface tension and adhesion for
-//    SPH fluids", eq. 2 and the cohesion kernel C(r) of eq. 3) plus a short-range contact
+//    SPH fluids": the cohesion force with its spline kernel C(r)) plus a short-range contact
 //    repulsion: C(r) attracts neighbours up to the support h and makes the body behave like a goo
-//    that keeps one skin. Akinci's curvature term (eq. 4-5) is left out: shape matching already
+//    that keeps one skin. Akinci's curvature (surface area minimisation) term is left out: shape matching already
 //    removes the surface wrinkles it would flatten, and it needs per-particle normals every step.
 //
 // Collisions: each collider is a fluid::SignedDistanceShape (analytic or baked depth maps from
@@ -98,12 +98,12 @@ struct BlobParticles {
 // What the current behaviour asks of each particle (set by fluid/blob/behaviour.hpp).
 // Goal of i: anchor + R offset[i] (R = identity unless rotate), pulled with weight[i].
 struct BlobTarget {
-  std::vector<glm::vec3> offset;               // m, per particle
-  std::vector<float> weight;                   // in [0, 4], per particle
-  glm::vec3 anchor{0.0f};                      // m, world
-  glm::vec3 anchor_velocity{0.0f};             // m/s: the goal's velocity (damping is relative to it)
-  bool anchor_at_centroid = true;              // Müller 2005: c = current centroid (anchor ignored)
-  bool rotate = true;                          // best-fit rotation of the offsets (Müller 2005 eq. 7)
+  std::vector<glm::vec3> offset;    // m, per particle
+  std::vector<float> weight;        // in [0, 4], per particle
+  glm::vec3 anchor{0.0f};           // m, world
+  glm::vec3 anchor_velocity{0.0f};  // m/s: the goal's velocity (damping is relative to it)
+  bool anchor_at_centroid = true;   // Müller 2005: c = current centroid (anchor ignored)
+  bool rotate = true;               // best-fit rotation of the offsets (Müller 2005: the rotational part of A_pq)
   glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // last R (warm start of the polar decomposition)
   // Tentacles of the current behaviour (empty otherwise): base on the core surface, unit direction
   // and reach (m), and the particles of each from base to tip.
@@ -197,7 +197,7 @@ std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float rad
 
 glm::vec3 blobCentroid(std::span<const glm::vec3> positions);
 // Rotation of the best rigid fit of `rest` (offsets from their centroid) onto `positions` (Müller
-// 2005 eq. 7: the polar part of A_pq), by the iterative method of Müller, Bender, Chentanez &
+// 2005: the rotational part of A_pq), by the iterative method of Müller, Bender, Chentanez &
 // Macklin 2016 ("A robust method to extract the rotational part of deformations"), warm-started.
 glm::quat blobBestRotation(std::span<const glm::vec3> positions, std::span<const glm::vec3> rest,
                            glm::quat warm = glm::quat(1.0f, 0.0f, 0.0f, 0.0f), int iterations = 30);

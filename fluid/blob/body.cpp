@@ -52,7 +52,7 @@ void resetTexturing(BlobParticles& p) {
   p.tentacle.assign(n, -1);
 }
 
-// Goal of every particle for the current target (Müller 2005 eq. 5-7 with our anchor).
+// Goal of every particle for the current target (Müller 2005 shape matching, g_i = c + R q_i, with our anchor).
 void computeGoals(BlobWorld& world, glm::vec3& goal_velocity) {
   BlobTarget& t = world.target;
   const auto& x = world.particles.position;
@@ -122,7 +122,7 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
       s.vel4[i] = glm::vec4(parts.velocity[i], 0.0f);
     }
   });
-  // Akinci et al. 2013, eq. 3: the cohesion spline C(r) divided by its peak C(h/2) = h^6/64 (the
+  // Akinci et al. 2013: the cohesion spline C(r) divided by its peak C(h/2) = h^6/64 (the
   // 32/(pi h^9) factor cancels), so BlobParams::cohesion is the peak acceleration between two
   // particles; below r ~ 0.27 h it turns into a weak repulsion, the contact spring does the rest.
   const float h6 = h2 * h2 * h2;
@@ -158,7 +158,7 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
           dist = 0.0f;
           nrm = i < j ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(0.0f, -1.0f, 0.0f);
         }
-        // Akinci 2013 eq. 2 (cohesion part) per unit mass, contact spring, damping of the
+        // Akinci 2013 cohesion force per unit mass, contact spring, damping of the
         // relative normal velocity: one scalar along the pair's axis.
         float f = -p.cohesion * cohesion_shape;
         const float contact = half_d * (xi.w + xj.w);
@@ -453,11 +453,11 @@ glm::quat blobBestRotation(std::span<const glm::vec3> positions, std::span<const
                            int iterations) {
   const glm::vec3 c = blobCentroid(positions);
   const glm::vec3 c0 = blobCentroid(rest);
-  // A_pq = sum p_i q_i^T (Müller 2005 eq. 7; equal masses), accumulated in double.
+  // A_pq = sum p_i q_i^T (Müller 2005; equal masses), accumulated in double.
   glm::dmat3 a(0.0);
   for (std::size_t i = 0; i < positions.size(); ++i)
     a += glm::outerProduct(glm::dvec3(positions[i] - c), glm::dvec3(rest[i] - c0));
-  // Müller et al. 2016, eq. 8-9: rotate q by omega = sum r_i x a_i / |sum r_i . a_i| until it stops.
+  // Müller et al. 2016: rotate q by omega = sum r_i x a_i / |sum r_i . a_i| until it stops.
   glm::dquat q = glm::normalize(glm::dquat(warm));
   for (int it = 0; it < iterations; ++it) {
     const glm::dmat3 r = glm::mat3_cast(q);
