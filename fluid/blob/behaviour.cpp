@@ -279,6 +279,25 @@ void startCoatWall(BlobWorld& world, const BlobBehaviour& b) {
   for (std::size_t i = 0; i < n; ++i) t.offset[i] = slots[slot_of[i]];
 }
 
+// Chase around obstacles (a "bug" algorithm: Lumelsky & Stepanov 1987): probe one body radius
+// ahead; where a wall (normal within 45 degrees of horizontal, so the ground does not count) is
+// nearer than the body radius, drop the part of the heading that goes into it and slide along it
+// until the way to the target is free. The side is chosen at the first wall and kept for the whole
+// chase: re-choosing it at every wall flipped it back and forth in front of a wall straight across
+// the way (the probe is free for a step, then blocked again).
+glm::vec3 steerAroundWalls(BlobWorld& world, glm::vec3 anchor, glm::vec3 heading, float radius) {
+  BlobTarget& t = world.target;
+  const ColliderSample s = sampleWalls(world, -1, anchor + heading * radius);
+  if (!s.valid || s.distance >= radius || std::abs(s.normal.y) > 0.7f) return heading;
+  glm::vec3 n(s.normal.x, 0.0f, s.normal.z);
+  n = glm::normalize(n);
+  const float into = glm::dot(heading, n);
+  if (into >= 0.0f) return heading;
+  const glm::vec3 along = glm::cross(glm::vec3(0.0f, 1.0f, 0.0f), n);  // horizontal, along the wall
+  if (t.steer_side == 0.0f) t.steer_side = glm::dot(heading, along) >= 0.0f ? 1.0f : -1.0f;
+  return t.steer_side * along;
+}
+
 template <class T>
 void checkRange(std::ostringstream& err, const std::string& where, const char* key, T value, T lo, T hi) {
   if (!err.str().empty()) return;
@@ -435,7 +454,7 @@ void updateBlobBehaviour(BlobWorld& world, const BlobBehaviour& b, glm::vec3 tar
     lead.y = 0.0f;
     glm::vec3 next = t.anchor;
     if (dist > 1e-6f && std::isfinite(dist) && glm::length(lead) < 0.25f * radius)
-      next += to / dist * std::min(dist, b.speed * dt);
+      next += steerAroundWalls(world, t.anchor, to / dist, radius) * std::min(dist, b.speed * dt);
     next.y = c.y;
     t.anchor_velocity = (next - t.anchor) / dt;
     t.anchor_velocity.y = 0.0f;

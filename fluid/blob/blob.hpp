@@ -110,6 +110,7 @@ struct BlobTarget {
   std::vector<glm::vec3> tentacle_base, tentacle_dir;
   std::vector<float> tentacle_length;
   std::vector<std::vector<std::uint32_t>> tentacle_particles;
+  float steer_side = 0.0f;  // chase: side (+1/-1) it slides along walls in its way; 0 = none met yet
 };
 
 // A level collider or a rigid body (crate). Moving colliders (pose velocities, integrated over the

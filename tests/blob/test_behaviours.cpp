@@ -171,6 +171,21 @@ TEST(BlobBehaviours, ChaseClosesOnAMovingTargetAtTheConfiguredSpeed) {
   EXPECT_TRUE(fluid::blobAllFinite(w.particles));
 }
 
+TEST(BlobBehaviours, ChaseGoesAroundAWallInItsWay) {
+  fluid::BlobWorld w = blobtest::restingBlob();
+  w.colliders.push_back(blobtest::ground());
+  w.colliders.push_back(blobtest::wall(1.5f, 0.3f, 2.0f, 1.0f));  // 2 m wide, 2 m high, across the way
+  BlobBehaviour b;
+  b.kind = BlobBehaviourKind::chase;
+  b.speed = 1.5f;
+  b.catch_distance = 0.8f;
+  const glm::vec3 target(4.0f, 0.0f, 0.0f);
+  const float t = runUntilGoal(w, b, 5.0f, target);  // straight: 2.7 s; flipping sides before the wall: 7.9 s
+  std::printf("[blob] chase around a 2 m wall: target (4 m away behind it) caught after %.2f s\n", t);
+  EXPECT_GT(t, 0.0f);
+  EXPECT_GE(blobtest::minDistance(w, 1), -0.01f * w.params.spacing);
+}
+
 TEST(BlobBehaviours, ReassemblesIntoTheRestShapeAfterABlast) {
   fluid::BlobWorld w = blobtest::restingBlob();
   w.colliders.push_back(blobtest::ground());
