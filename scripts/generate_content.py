@@ -26,6 +26,14 @@ BASIN_FLOOR = 0.2
 GROUND_HALF_SIZE = 40.0
 GROUND_DEPTH = 1.0  # the ground model is a slab under y = 0 (only its top is ever seen)
 
+# --- blob monster street (issue 19; the scene places these, the game bakes their colliders) ---
+BLOB_STREET_HALF_SIZE = 15.0  # street ground: 30 m square slab, GROUND_DEPTH deep
+BLOB_SEWER_HALF_SIZE = 0.8    # the sewer block fills a 1.6 m square hole in the street ground
+BLOB_SEWER_DEPTH = 2.5        # block from y = 0 down to -2.5 m
+BLOB_PIPE_RADIUS = 0.45       # vertical bore the monster rises through (fluid/blob emerge)
+BLOB_PIPE_DEPTH = 2.3         # bore floor at y = -2.3 m
+BLOB_WALL_SIZE = (8.0, 3.5, 0.5)  # the wall to coat: length (x), height above ground, thickness (z)
+
 
 # ----------------------------------------------------------------------------- OBJ writing
 class Mesh:
@@ -200,6 +208,122 @@ def crate():
     return mesh
 
 
+def box(mesh, lo, hi, tile=2.5):
+    """Appends a closed axis-aligned box [lo, hi] (outward normals, uv in metres / tile)."""
+    for axis in range(3):
+        for side in (0, 1):
+            n = [0.0, 0.0, 0.0]
+            n[axis] = 1.0 if side else -1.0
+            u_axis, v_axis = [(2, 1), (0, 2), (0, 1)][axis]
+            corners = []
+            for cu, cv in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                p = [0.0, 0.0, 0.0]
+                p[axis] = hi[axis] if side else lo[axis]
+                p[u_axis] = hi[u_axis] if cu else lo[u_axis]
+                p[v_axis] = hi[v_axis] if cv else lo[v_axis]
+                corners.append(mesh.vertex(p, [p[u_axis] / tile, p[v_axis] / tile], n))
+            mesh.triangle(corners[0], corners[1], corners[2])
+            mesh.triangle(corners[0], corners[2], corners[3])
+    return mesh
+
+
+def blob_street():
+    """The street ground around the sewer: one closed slab (top at y = 0, GROUND_DEPTH deep) with a
+    square hole for the sewer block: top and bottom are square rings, plus outer and hole walls."""
+    mesh = Mesh()
+    h, s, d = BLOB_STREET_HALF_SIZE, BLOB_SEWER_HALF_SIZE, GROUND_DEPTH
+    corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]  # counter-clockwise seen from below (-y)
+    for y, n in ((0.0, [0.0, 1.0, 0.0]), (-d, [0.0, -1.0, 0.0])):
+        outer = [mesh.vertex([h * cx, y, h * cz], [h * cx / 2.5, h * cz / 2.5], n) for cx, cz in corners]
+        inner = [mesh.vertex([s * cx, y, s * cz], [s * cx / 2.5, s * cz / 2.5], n) for cx, cz in corners]
+        for k in range(4):
+            j = (k + 1) % 4
+            mesh.triangle(outer[k], outer[j], inner[j])
+            mesh.triangle(outer[k], inner[j], inner[k])
+    for size, sign in ((h, 1.0), (s, -1.0)):  # outer walls face out, the hole's walls face into the hole
+        for k in range(4):
+            j = (k + 1) % 4
+            (ax, az), (bx, bz) = corners[k], corners[j]
+            n = normalize([sign * (ax + bx), 0.0, sign * (az + bz)])
+            along = 0 if az == bz else 2
+            pa, pb = [size * ax, 0.0, size * az], [size * bx, 0.0, size * bz]
+            ta = mesh.vertex(pa, [pa[along] / 2.5, 0.0], n)
+            tb = mesh.vertex(pb, [pb[along] / 2.5, 0.0], n)
+            ba = mesh.vertex([pa[0], -d, pa[2]], [pa[along] / 2.5, d / 2.5], n)
+            bb = mesh.vertex([pb[0], -d, pb[2]], [pb[along] / 2.5, d / 2.5], n)
+            mesh.triangle(ta, tb, bb)
+            mesh.triangle(ta, bb, ba)
+    return mesh
+
+
+def blob_sewer(segments=32):
+    """Square block with a round vertical bore, open at the top (y = 0): the pipe the blob emerges
+    from. `segments` is a multiple of 8 so the square's corners are vertices of the top annulus."""
+    mesh = Mesh()
+    hs, r, depth, bore = BLOB_SEWER_HALF_SIZE, BLOB_PIPE_RADIUS, BLOB_SEWER_DEPTH, BLOB_PIPE_DEPTH
+    angles = [2.0 * math.pi * k / segments for k in range(segments)]
+    circle = [(r * math.cos(a), r * math.sin(a)) for a in angles]
+    square = [(hs * math.cos(a) / max(abs(math.cos(a)), abs(math.sin(a))),
+               hs * math.sin(a) / max(abs(math.cos(a)), abs(math.sin(a)))) for a in angles]
+    up, down = [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]
+    for k in range(segments):
+        j = (k + 1) % segments
+        # top annulus between the bore and the block's edge
+        c0 = mesh.vertex([circle[k][0], 0.0, circle[k][1]], [circle[k][0], circle[k][1]], up)
+        c1 = mesh.vertex([circle[j][0], 0.0, circle[j][1]], [circle[j][0], circle[j][1]], up)
+        s0 = mesh.vertex([square[k][0], 0.0, square[k][1]], [square[k][0], square[k][1]], up)
+        s1 = mesh.vertex([square[j][0], 0.0, square[j][1]], [square[j][0], square[j][1]], up)
+        mesh.triangle(c0, s0, s1)
+        mesh.triangle(c0, s1, c1)
+        # bore wall (normals point into the bore, toward the axis)
+        n0 = [-math.cos(angles[k]), 0.0, -math.sin(angles[k])]
+        n1 = [-math.cos(angles[j]), 0.0, -math.sin(angles[j])]
+        u0, u1 = k / segments * 2.0, (k + 1) / segments * 2.0
+        a = mesh.vertex([circle[k][0], 0.0, circle[k][1]], [u0, 0.0], n0)
+        b = mesh.vertex([circle[j][0], 0.0, circle[j][1]], [u1, 0.0], n1)
+        c = mesh.vertex([circle[k][0], -bore, circle[k][1]], [u0, bore / 1.5], n0)
+        e = mesh.vertex([circle[j][0], -bore, circle[j][1]], [u1, bore / 1.5], n1)
+        mesh.triangle(a, b, e)
+        mesh.triangle(a, e, c)
+        # bore floor and block bottom (fans) and the block's outer sides
+        centre = mesh.vertex([0.0, -bore, 0.0], [0.0, 0.0], up)
+        f0 = mesh.vertex([circle[k][0], -bore, circle[k][1]], [circle[k][0], circle[k][1]], up)
+        f1 = mesh.vertex([circle[j][0], -bore, circle[j][1]], [circle[j][0], circle[j][1]], up)
+        mesh.triangle(centre, f0, f1)
+        bottom = mesh.vertex([0.0, -depth, 0.0], [0.0, 0.0], down)
+        g0 = mesh.vertex([square[k][0], -depth, square[k][1]], [square[k][0], square[k][1]], down)
+        g1 = mesh.vertex([square[j][0], -depth, square[j][1]], [square[j][0], square[j][1]], down)
+        mesh.triangle(bottom, g0, g1)
+        mid = [(square[k][0] + square[j][0]) * 0.5, (square[k][1] + square[j][1]) * 0.5]
+        side = [1.0 if mid[0] > 0 else -1.0, 0.0, 0.0] if abs(mid[0]) > abs(mid[1]) else \
+            [0.0, 0.0, 1.0 if mid[1] > 0 else -1.0]
+        along = 0 if side[0] == 0.0 else 1  # the coordinate that varies along this side
+        t0 = mesh.vertex([square[k][0], 0.0, square[k][1]], [square[k][along] / 2.5, 0.0], side)
+        t1 = mesh.vertex([square[j][0], 0.0, square[j][1]], [square[j][along] / 2.5, 0.0], side)
+        b0 = mesh.vertex([square[k][0], -depth, square[k][1]], [square[k][along] / 2.5, depth / 2.5], side)
+        b1 = mesh.vertex([square[j][0], -depth, square[j][1]], [square[j][along] / 2.5, depth / 2.5], side)
+        mesh.triangle(t0, t1, b1)
+        mesh.triangle(t0, b1, b0)
+    return mesh
+
+
+def blob_grate(bars=5, width=0.05, height=0.04):
+    """Visual grate over the pipe: parallel bars along z across the bore, resting on the block."""
+    mesh = Mesh()
+    span = BLOB_PIPE_RADIUS + 0.1
+    for i in range(bars):
+        x = -BLOB_PIPE_RADIUS + 2.0 * BLOB_PIPE_RADIUS * (i + 0.5) / bars
+        box(mesh, [x - 0.5 * width, 0.0, -span], [x + 0.5 * width, height, span], tile=0.5)
+    return mesh
+
+
+def blob_wall():
+    """The wall the monster coats: a closed slab standing on the ground (founded 0.2 m below it),
+    centred on x and z = 0, its coatable face toward -z."""
+    length, height, thickness = BLOB_WALL_SIZE
+    return box(Mesh(), [-0.5 * length, -0.2, -0.5 * thickness], [0.5 * length, height, 0.5 * thickness])
+
+
 # ----------------------------------------------------------------------------- PNG writing
 def write_png(path, width, height, pixels):
     """pixels: bytearray of RGB, top row first."""
@@ -332,6 +456,33 @@ def crate_texture(size=256):
     return pixels
 
 
+def blob_tentacle_texture(size=256):
+    """Tentacle skin for fluid/blob's (u, v): u around the tentacle (tiles at u = 0/1), v from base
+    (v = 0, bottom row) to tip. Green-grey slime, darker rings that get closer toward the tip, and
+    pale suckers on the underside (u near 0.5)."""
+    noises = [ValueNoise(p, 900 + p) for p in (4, 8, 16, 32)]
+    pixels = bytearray(size * size * 3)
+    for y in range(size):
+        for x in range(size):
+            u, v = x / size, 1.0 - (y + 0.5) / size
+            n = fbm(noises, u, v)
+            # rings: phase grows faster toward the tip, so rings crowd together as the radius tapers
+            phase = 14.0 * v + 8.0 * v * v + 1.5 * n
+            ring = 0.5 + 0.5 * math.cos(2.0 * math.pi * phase)
+            shade = 0.7 + 0.35 * n - 0.18 * ring ** 4
+            colour = [92 * shade, 138 * shade, 70 * shade]
+            # suckers: a row of discs along the underside, one per ring
+            du = (u - 0.5) * 9.0
+            dv = (phase % 1.0) - 0.5
+            d = math.hypot(du, dv * 1.3)
+            if d < 0.32:
+                rim = 1.0 if d > 0.24 else 0.0
+                colour = [200 - 50 * rim, 160 - 40 * rim, 150 - 40 * rim]
+            k = (y * size + x) * 3
+            pixels[k:k + 3] = bytes(clamp8(c) for c in colour)
+    return pixels
+
+
 def main():
     os.makedirs(MODELS, exist_ok=True)
     os.makedirs(TEXTURES, exist_ok=True)
@@ -339,10 +490,17 @@ def main():
     statue().write(os.path.join(MODELS, "statue.obj"), "fountain statue: column, dish and spire")
     ground().write(os.path.join(MODELS, "ground.obj"), "courtyard ground, 80 m square slab, 1 m deep")
     crate().write(os.path.join(MODELS, "crate.obj"), "unit crate centred on the origin")
-    for name, make in (("paving.png", paving_texture), ("stone.png", stone_texture), ("crate.png", crate_texture)):
+    blob_street().write(os.path.join(MODELS, "blob_street.obj"),
+                        "blob street ground: 30 m square slab, 1 m deep, with the sewer block's 1.6 m hole")
+    blob_sewer().write(os.path.join(MODELS, "blob_sewer.obj"),
+                       "blob sewer: 1.6 m square block, 2.5 m deep, with a 0.45 m radius bore 2.3 m deep")
+    blob_grate().write(os.path.join(MODELS, "blob_grate.obj"), "blob sewer grate: five bars over the bore (visual)")
+    blob_wall().write(os.path.join(MODELS, "blob_wall.obj"), "blob wall to coat: 8 m long, 3.5 m high, 0.5 m thick")
+    for name, make in (("paving.png", paving_texture), ("stone.png", stone_texture), ("crate.png", crate_texture),
+                       ("blob_tentacle.png", blob_tentacle_texture)):
         write_png(os.path.join(TEXTURES, name), 256, 256, make())
-    print("generate_content: wrote content/models/{basin,statue,ground,crate}.obj and "
-          "content/textures/{paving,stone,crate}.png")
+    print("generate_content: wrote content/models/{basin,statue,ground,crate,blob_street,blob_sewer,blob_grate,"
+          "blob_wall}.obj and content/textures/{paving,stone,crate,blob_tentacle}.png")
     return 0
 
 

@@ -1,0 +1,109 @@
+// bench_blob: the blob monster's cost per frame (issue 19: "body step + meshing per frame at 250,
+// 1,000 and 4,000 particles, 1 and 2 threads"). A body on the ground growing four tentacles toward a
+// target (the busiest behaviour: goal springs, pairs, ground contacts), warmed up for one second.
+//   bench_blob [--benchmark_filter=...]
+// Each case reports the mean (Google Benchmark's time) and p95_ms over its iterations.
+#include "fluid/blob/behaviour.hpp"
+#include "fluid/blob/blob.hpp"
+#include "fluid/sph/analytic_colliders.hpp"
+#include "fluid/surface/marching_slices.hpp"
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <vector>
+
+namespace {
+
+struct Scene {
+  fluid::BlobWorld world;
+  fluid::BlobBehaviour behaviour;
+  glm::vec3 target{4.0f, 1.0f, 0.0f};
+};
+
+void makeScene(Scene& s, std::size_t particles) {
+  s.world.params.particle_count = particles;
+  fluid::initBlob(s.world, glm::vec3(0.0f, 0.6f, 0.0f));
+  fluid::BlobCollider ground;
+  ground.shape = std::make_shared<fluid::PlaneShape>(glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
+  s.world.colliders.push_back(ground);
+  s.behaviour.kind = fluid::BlobBehaviourKind::tentacles;
+  s.behaviour.tentacles = 4;
+  s.behaviour.tentacle_particles = static_cast<int>(std::min<std::size_t>(30, particles / 10));
+  fluid::startBlobBehaviour(s.world, s.behaviour, s.target);
+  for (int k = 0; k < 60; ++k) {
+    fluid::updateBlobBehaviour(s.world, s.behaviour, s.target, s.world.params.step);
+    fluid::stepBlob(s.world);
+  }
+}
+
+void frame(Scene& s) {
+  fluid::updateBlobBehaviour(s.world, s.behaviour, s.target, s.world.params.step);
+  fluid::stepBlob(s.world);
+}
+
+void report(benchmark::State& state, std::vector<double>& ms) {
+  std::sort(ms.begin(), ms.end());
+  if (!ms.empty()) state.counters["p95_ms"] = ms[std::min(ms.size() - 1, ms.size() * 95 / 100)];
+}
+
+void BM_BlobStep(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(1)));
+  Scene s;
+  makeScene(s, static_cast<std::size_t>(state.range(0)));
+  std::vector<double> ms;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    frame(s);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  report(state, ms);
+}
+
+// The same plus the marching-slices mesh of the body with the tentacles' strength and radius
+// scale (Rc = 2 d, cube d / 3: six cubes per cutoff, as the paper's Figure 7 blob row has ten).
+void BM_BlobStepAndMesh(benchmark::State& state) {
+  const int n_threads = static_cast<int>(state.range(1));
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(n_threads));
+  Scene s;
+  makeScene(s, static_cast<std::size_t>(state.range(0)));
+  fluid::SurfaceExtractor extractor;
+  fluid::SurfaceMesh mesh;
+  fluid::SurfaceParams sp;
+  sp.rc = 2.0f * s.world.params.spacing;
+  sp.cube = s.world.params.spacing / 3.0f;
+  sp.threads = n_threads;
+  std::vector<float> xs, ys, zs;
+  std::vector<double> ms;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    frame(s);
+    const auto& x = s.world.particles.position;
+    xs.resize(x.size());
+    ys.resize(x.size());
+    zs.resize(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) xs[i] = x[i].x, ys[i] = x[i].y, zs[i] = x[i].z;
+    fluid::SurfaceInput in{xs, ys, zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
+    extractor.extract(in, sp, mesh);
+    benchmark::DoNotOptimize(mesh.indices.data());
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  state.counters["triangles"] = static_cast<double>(mesh.indices.size() / 3);
+  report(state, ms);
+}
+
+void cases(benchmark::internal::Benchmark* b) {
+  for (int n : {250, 1000, 4000})
+    for (int t : {1, 2}) b->Args({n, t});
+  b->ArgNames({"particles", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+BENCHMARK(BM_BlobStep)->Apply(cases);
+BENCHMARK(BM_BlobStepAndMesh)->Apply(cases);
+
+}  // namespace
+
+BENCHMARK_MAIN();
