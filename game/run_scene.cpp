@@ -90,8 +90,8 @@ void buildDrawList(const World& world, const SceneAssets& assets, float alpha, s
   statue.mesh = &assets.statue;
   statue.tint = glm::vec3(0.95f, 0.97f, 1.0f);
   items.push_back(statue);
-  if (world.rigid_bodies) {
-    const RigidBodies& bodies = *world.rigid_bodies;
+  if (findState<RigidBodies>(world)) {
+    const RigidBodies& bodies = *findState<RigidBodies>(world);
     for (std::size_t i = 0; i < bodies.crates.size(); ++i) {
       engine::DrawItem crate;
       crate.mesh = &assets.crate;
@@ -101,27 +101,6 @@ void buildDrawList(const World& world, const SceneAssets& assets, float alpha, s
       items.push_back(crate);
     }
   }
-}
-
-// The GPU sprites' live state: the CPU index allocator (Kolb §3.3.1) knows every live sprite
-// without a read-back.
-void drawSpriteStatus(const SpriteParticles& s) {
-  if (!s.gpu_error.empty()) {
-    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "sprites off: %s", s.gpu_error.c_str());
-    return;
-  }
-  if (!s.attached) {
-    ImGui::Text("sprites: no GL context (not simulated)");
-    return;
-  }
-  const engine::IndexAllocator& a = s.gpu.allocator;
-  ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
-              s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
-  ImGui::Text("  born: mist %llu, spray %llu (%u this step), dropped (budget full) %llu",
-              static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
-              s.spray_last_step, static_cast<unsigned long long>(s.dropped));
-  ImGui::Text("  sort pass %u of %u, colliders baked in %.0f ms", s.gpu.sort_step,
-              engine::sortPassCount(s.gpu.capacity), s.bake_ms);
 }
 
 // Overlay window with the scene's tunable parameters; edits world.scene in place.
@@ -136,26 +115,7 @@ std::pair<bool, bool> drawScenePanel(World& world) {
     return {false, false};
   }
   ImGui::Text("scene '%s', step %llu", world.scene.name.c_str(), static_cast<unsigned long long>(world.steps));
-  if (world.sprite_particles) drawSpriteStatus(*world.sprite_particles);
-  if (world.rigid_bodies) {
-    ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*world.rigid_bodies->physics),
-                world.rigid_bodies->thrown);
-  }
-  if (world.fluid_surface) {
-    // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases summed
-    // over blocks).
-    const fluid::SurfaceStats& surface = world.fluid_surface->mesh.stats;
-    ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(surface.triangles),
-                surface.blocks);
-    ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
-                surface.marchMs, surface.prepareMs + surface.gatherMs);
-    if (world.fluid_surface->params.method == SurfaceMethodChoice::raycast) {
-      ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
-                  static_cast<unsigned long long>(world.fluid_surface->raycast_records),
-                  static_cast<unsigned long long>(world.fluid_surface->raycast_dropped),
-                  static_cast<double>(world.fluid_surface->raycast_pool) * 16.0 / (1024.0 * 1024.0));
-    }
-  }
+  for (const std::unique_ptr<Effect>& effect : world.effects) effect->drawStatus();
   if (world.failures.count > 0) {
     ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "run-time failures: %llu (frames go on)",
                        static_cast<unsigned long long>(world.failures.count));
@@ -289,11 +249,11 @@ void createWaterPass(WaterPass& pass, engine::FluidMethod method, int width, int
 }
 
 void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const engine::FrameView& view) {
-  if (!world.fluid_surface || !world.sph_fluid) {
+  if (!findState<FluidSurface>(world) || !findState<SphFluid>(world)) {
     releaseWaterPass(pass);
     return;
   }
-  const FluidSurfaceParams& p = world.fluid_surface->params;
+  const FluidSurfaceParams& p = findState<FluidSurface>(world)->params;
   if (!p.visible) return;  // the renderer's objects stay for when the water shows again
   const engine::FluidMethod method = methodOf(p);
   if (pass.created && (pass.width != renderer.width || pass.height != renderer.height || pass.method != method))
@@ -302,7 +262,7 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
   GLuint scene_fbo = 0;
   std::string upload_error;
   bool uploaded = true;
-  const std::vector<glm::vec3>& particles = world.sph_fluid->world.particles.position;
+  const std::vector<glm::vec3>& particles = findState<SphFluid>(world)->world.particles.position;
   if (method == engine::FluidMethod::screen_space && pass.screen_space.ready) {
     scene_fbo = pass.screen_space.scene.fbo;
     uploaded = engine::uploadScreenSpaceParticles(pass.screen_space, particles, upload_error);
@@ -311,7 +271,7 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
     uploaded = engine::uploadRaycastParticles(pass.raycast, particles, upload_error);
   } else if (method == engine::FluidMethod::mesh && pass.renderer.ready) {
     scene_fbo = pass.renderer.scene_fbo;
-    const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+    const fluid::SurfaceMesh& mesh = findState<FluidSurface>(world)->mesh;
     uploaded = engine::uploadFluidMesh(pass.renderer, mesh.positions, mesh.normals, mesh.indices, upload_error);
   }
   if (scene_fbo == 0) return;  // the chosen renderer is unavailable
@@ -343,7 +303,7 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
   water.sky_horizon = lighting.sky_horizon;
   water.light_direction = lighting.sun_direction;
   // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
-  const float rc = p.smoothing * fluid::sphSpacing(world.sph_fluid->world.params);
+  const float rc = p.smoothing * fluid::sphSpacing(findState<SphFluid>(world)->world.params);
   // Keep the scene's alpha at 1: the PNG output would otherwise turn see-through under water.
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
   if (method == engine::FluidMethod::screen_space) {
@@ -356,10 +316,10 @@ void drawWater(WaterPass& pass, engine::Renderer& renderer, World& world, const 
     rp.rc = rc;
     rp.threshold = p.threshold;
     engine::drawRaycastFluid(pass.raycast, renderer.scene_fbo.id(), camera, water, rp);
-    world.fluid_surface->raycast_records = pass.raycast.used;
-    world.fluid_surface->raycast_dropped = pass.raycast.dropped;
-    world.fluid_surface->raycast_pool = pass.raycast.pool_records;
-    world.fluid_surface->raycast_pool_bound = pass.raycast.max_pool_records;
+    findState<FluidSurface>(world)->raycast_records = pass.raycast.used;
+    findState<FluidSurface>(world)->raycast_dropped = pass.raycast.dropped;
+    findState<FluidSurface>(world)->raycast_pool = pass.raycast.pool_records;
+    findState<FluidSurface>(world)->raycast_pool_bound = pass.raycast.max_pool_records;
   } else {
     engine::drawFluid(pass.renderer, renderer.scene_fbo.id(), camera, water);
   }
@@ -539,9 +499,9 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
           view.eye = world.camera.position;
           engine::renderScene(renderer, view, lighting, items, true);
           drawWater(water_pass, renderer, world, view);
-          if (world.sprite_particles) {
-            drawSpriteParticles(*world.sprite_particles, renderer.scene_fbo.id(), renderer.width, renderer.height,
-                                view.view, view.projection, view.eye);
+          if (findState<SpriteParticles>(world)) {
+            drawSpriteParticles(*findState<SpriteParticles>(world), renderer.scene_fbo.id(), renderer.width,
+                                renderer.height, view.view, view.projection, view.eye);
             engine::checkGl(renderer.errors, "sprites");
           }
           if (input.screenshot || !hook_screenshot.empty() ||

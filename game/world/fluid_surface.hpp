@@ -33,8 +33,9 @@ struct FluidSurfaceParams {
   bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
 };
 
-// Reads the "fluid_surface" section. False + error naming the field for an unknown `order` or
-// `method`.
+// Reads a validated "fluid_surface" section through the effect's parameter table
+// (game/effects/fluid_surface.cpp). The schema already refused unknown methods and orders, so it
+// returns true; the signature stays for callers that check.
 bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error);
 
 struct FluidSurface {

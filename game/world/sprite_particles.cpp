@@ -96,27 +96,6 @@ void readBack(SpriteParticles& s) {
 
 }  // namespace
 
-SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle) {
-  SpriteParticleParams p;
-  auto f = [&section](const char* key) { return static_cast<float>(section.number(key)); };
-  p.rate = f("rate");
-  p.speed = f("speed");
-  p.spread_degrees = f("spread_degrees");
-  p.lifetime = f("lifetime");
-  p.size = f("size");
-  p.restitution = f("restitution");
-  p.friction = f("friction");
-  p.spray_rate = f("spray_rate");
-  p.spray_energy_min = f("spray_energy_min");
-  p.spray_energy_max = f("spray_energy_max");
-  p.spray_surface_density = f("spray_surface_density");
-  p.spray_lifetime = f("spray_lifetime");
-  p.spray_max_per_step = section.integer("spray_max_per_step");
-  p.gravity = gravity;
-  p.nozzle = nozzle;
-  return p;
-}
-
 void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
                          std::uint64_t seed) {
   s = SpriteParticles{};
