@@ -34,12 +34,29 @@ std::string number(double value) {
   return text;
 }
 
+std::string whole(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.0f", value);
+  return text;
+}
+
+// A Markdown table cell: '|' would end the cell.
+std::string cell(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
 std::string defaultText(const ParamSpec& spec) {
   const ParamValue& v = spec.default_value;
   switch (spec.type) {
     case ParamType::number:
-    case ParamType::integer:
       return number(v.number);
+    case ParamType::integer:
+      return whole(v.number);
     case ParamType::boolean:
       return v.boolean ? "true" : "false";
     case ParamType::vec3: {
@@ -60,6 +77,7 @@ std::string defaultText(const ParamSpec& spec) {
 
 std::string rangeText(const ParamSpec& spec) {
   if (spec.type == ParamType::boolean || spec.type == ParamType::text) return "";
+  if (spec.type == ParamType::integer) return whole(spec.min) + " .. " + whole(spec.max);
   return number(spec.min) + " .. " + number(spec.max);
 }
 
@@ -78,7 +96,7 @@ int sceneKeysCommand(const Args& args) {
     for (const ParamSpec& spec : section.params) {
       const std::string key(spec.key), meaning(spec.doc);
       std::printf("| `%s` | %s | %s | %s | %s |\n", key.c_str(), typeName(spec).c_str(), rangeText(spec).c_str(),
-                  defaultText(spec).c_str(), meaning.c_str());
+                  defaultText(spec).c_str(), cell(meaning).c_str());
     }
   }
   return 0;

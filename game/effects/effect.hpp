@@ -78,6 +78,14 @@ struct FrameContext {
   engine::Profiler* profiler = nullptr;  // may be null
 };
 
+struct LevelAssets;
+
+// What an effect hands the renderer for one frame.
+struct SubmitContext {
+  const LevelAssets& assets;  // the level's GPU meshes and textures (the crate model)
+  float alpha = 1.0f;         // interpolation between the last two steps
+};
+
 struct GpuContext {
   const std::filesystem::path& shader_dir;
   const std::filesystem::path& content_dir;
@@ -97,7 +105,7 @@ class Effect {
   // CPU work for the frame about to be drawn; false + error when the effect refused its input
   // (the frame goes on without it).
   virtual bool prepareFrame(const FrameContext&, std::string& /*error*/) { return true; }
-  virtual void submit(engine::FrameBatches& /*frame*/, float /*alpha*/) {}
+  virtual void submit(engine::FrameBatches& /*frame*/, const SubmitContext&) {}
   virtual void drawStatus() const {}  // the overlay's status lines (ImGui text)
 };
 

@@ -2,6 +2,7 @@
 // meshed by marching slices (fluid/surface) or drawn straight from the particles (screen space,
 // ray casting). State and mesher glue: game/world/fluid_surface.hpp.
 #include "game/world/fluid_surface.hpp"
+#include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
 
@@ -17,6 +18,18 @@ constexpr std::string_view kOrderNames[] = {"sorted", "unsorted", "exact"};
 constexpr SurfaceOrderChoice kOrderValues[] = {SurfaceOrderChoice::sorted, SurfaceOrderChoice::unsorted,
                                                SurfaceOrderChoice::exact};
 constexpr std::string_view kNeeds[] = {"sph_fluid"};
+
+engine::FluidMethod methodOf(SurfaceMethodChoice method) {
+  switch (method) {
+    case SurfaceMethodChoice::screen_space:
+      return engine::FluidMethod::screen_space;
+    case SurfaceMethodChoice::raycast:
+      return engine::FluidMethod::raycast;
+    case SurfaceMethodChoice::mesh:
+      break;
+  }
+  return engine::FluidMethod::mesh;
+}
 
 const ParamTable<FluidSurfaceParams>& table() {
   using P = FluidSurfaceParams;
@@ -56,6 +69,26 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     return false;
   }
 
+  // The mesh (back-to-front) or the particles, with the optics; the engine's water pass draws it.
+  void submit(engine::FrameBatches& frame, const SubmitContext&) override {
+    const FluidSurfaceParams& p = state.params;
+    engine::WaterBatch water;
+    water.method = methodOf(p.method);
+    water.visible = p.visible;
+    water.positions = state.mesh.positions;
+    water.normals = state.mesh.normals;
+    water.indices = state.mesh.indices;
+    water.particles = fluid_.world.particles.position;
+    // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
+    water.rc = p.smoothing * fluid::sphSpacing(fluid_.world.params);
+    water.threshold = p.threshold;
+    water.refraction = p.refraction;
+    water.opacity = p.opacity;
+    water.absorption = p.absorption;
+    water.raycast_counts = &state.raycast;
+    frame.water.push_back(water);
+  }
+
   // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases
   // summed over blocks).
   void drawStatus() const override {
@@ -66,9 +99,9 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
     if (state.params.method == SurfaceMethodChoice::raycast) {
       ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
-                  static_cast<unsigned long long>(state.raycast_records),
-                  static_cast<unsigned long long>(state.raycast_dropped),
-                  static_cast<double>(state.raycast_pool) * 16.0 / (1024.0 * 1024.0));
+                  static_cast<unsigned long long>(state.raycast.records),
+                  static_cast<unsigned long long>(state.raycast.dropped),
+                  static_cast<double>(state.raycast.pool) * 16.0 / (1024.0 * 1024.0));
     }
   }
 

@@ -2,10 +2,14 @@
 // stacked at start, more thrown by the player). State and physics: game/world/rigid_bodies.hpp.
 #include "game/world/rigid_bodies.hpp"
 #include "engine/physics/physics_world.hpp"
+#include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "game/world/level_assets.hpp"
 
 #include <imgui.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 namespace game {
 namespace {
@@ -18,6 +22,13 @@ const ParamTable<RigidBodyParams>& table() {
       param<&RigidBodyParams::throw_speed>("throw_speed", 0.0, 100.0, "speed of a crate thrown with left click (m/s)"),
   };
   return rows;
+}
+
+glm::mat4 bodyMatrix(const engine::BodyState& a, const engine::BodyState& b, float alpha, float scale) {
+  const glm::vec3 position = glm::mix(a.position, b.position, alpha);
+  const glm::quat rotation = glm::slerp(a.rotation, b.rotation, alpha);
+  return glm::translate(glm::mat4(1.0f), position) * glm::mat4_cast(rotation) *
+         glm::scale(glm::mat4(1.0f), glm::vec3(scale));
 }
 
 class RigidBodiesEffect final : public EffectOf<RigidBodies> {
@@ -41,6 +52,18 @@ class RigidBodiesEffect final : public EffectOf<RigidBodies> {
   }
 
   std::string findNonFinite() const override { return findNonFiniteBodyState(state); }
+
+  // Every crate, interpolated between the last two steps (slerp for the rotation).
+  void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
+    for (std::size_t i = 0; i < state.crates.size(); ++i) {
+      engine::DrawItem crate;
+      crate.mesh = &ctx.assets.crate;
+      crate.texture = &ctx.assets.wood;
+      crate.specular = 0.08f;
+      crate.model = bodyMatrix(state.previous[i], state.current[i], ctx.alpha, state.params.crate_size);
+      frame.opaque.push_back(crate);
+    }
+  }
 
   void drawStatus() const override {
     ImGui::Text("rigid bodies: %d (crates thrown %d)", engine::bodyCount(*state.physics), state.thrown);

@@ -1,6 +1,7 @@
 // The `sprite_particles` effect: mist from the nozzle and spray from the SPH water as GPU
 // state-preserving particles (Kolb et al. 2004). State and GPU code: game/world/sprite_particles.hpp.
 #include "game/world/sprite_particles.hpp"
+#include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
 #include "game/world/fountain.hpp"
@@ -66,6 +67,10 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
       std::fprintf(stderr, "fluiddemo: sprite_particles off: %s\n", state.gpu_error.c_str());
   }
   void detachGpu() override { detachSpriteGpu(state); }
+
+  void submit(engine::FrameBatches& frame, const SubmitContext&) override {
+    if (state.attached && state.gpu.ready) frame.sprites.push_back(&state.gpu);
+  }
 
   // The CPU index allocator (Kolb §3.3.1) knows every live sprite without a read-back.
   void drawStatus() const override {

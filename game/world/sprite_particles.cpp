@@ -1,6 +1,5 @@
 #include "game/world/sprite_particles.hpp"
 
-#include "engine/gl/gl.hpp"
 #include "fluid/core/finite.hpp"
 #include "game/commands/collider_model.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -186,10 +185,7 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
 }
 
 void detachSpriteGpu(SpriteParticles& s) {
-  if (s.attached) {
-    glUseProgram(0);  // a deleted program stays alive while it is current
-    engine::destroyGpuParticles(s.gpu);
-  }
+  if (s.attached) engine::destroyGpuParticles(s.gpu);
   s.gpu = engine::GpuParticles{};
   s.attached = false;
 }
@@ -262,21 +258,6 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt) {
   engine::step(s.gpu, stepParams(s.params));
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
-}
-
-void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
-                         const glm::mat4& projection, glm::vec3 eye) {
-  if (!s.attached || !s.gpu.ready) return;
-  engine::sortStep(s.gpu, eye);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glViewport(0, 0, width, height);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  // Keep the scene's alpha at 1 (the PNG output would otherwise turn see-through).
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
-  engine::drawSprites(s.gpu, projection * view, projection[1][1], height);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 std::uint32_t liveSprites(const SpriteParticles& s) {

@@ -114,10 +114,8 @@ void detachSpriteGpu(SpriteParticles& s);
 // given), integrate and collide (Kolb §3.3.1–3.3.2), read back when due.
 void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt);
 
-// Sorts back to front for `eye` (Kolb §3.3.3, a few merge-sort passes per frame) and draws the
-// sprites into `fbo` (colour + the scene's depth, depth-tested, not written).
-void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
-                         const glm::mat4& projection, glm::vec3 eye);
+// Drawing: the effect submits `gpu` to the frame (engine::FrameBatches::sprites); the engine's
+// sprite pass sorts it for the eye (Kolb §3.3.3) and draws it.
 
 // Live sprites as the CPU allocator counts them (0 when not attached).
 std::uint32_t liveSprites(const SpriteParticles& s);

@@ -102,6 +102,11 @@ void meshWorld(World& world, engine::Profiler* profiler) {
     if (!effect->prepareFrame(frame, error)) recordFailure(world, error);
 }
 
+void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha) {
+  const SubmitContext context{assets, alpha};
+  for (const std::unique_ptr<Effect>& effect : world.effects) effect->submit(frame, context);
+}
+
 void playerThrow(World& world) {
   if (world.links.bodies == nullptr) return;
   throwCrate(*world.links.bodies, world.camera.position, engine::cameraForward(world.camera));

@@ -62,7 +62,8 @@ const State* findState(const World& world) {
 }
 
 // Gravity of the scene's particles: the rigid bodies' gravity when that effect is listed, else
-// (0, -9.81, 0) m/s^2.
+// (0, -9.81, 0) m/s^2. For code that builds one effect's state without a World (the fountain
+// benchmark); inside a World the effects read EffectLinks::gravity.
 glm::vec3 sceneGravity(const SceneConfig& scene);
 
 // Builds the world. `content_dir` is the content/ folder (models for the Bullet meshes).
@@ -88,6 +89,11 @@ void applyLiveParams(World& world);
 // after the step and records the first one in world.nonfinite_state; a solver error is recorded in
 // world.failures.
 void stepWorld(World& world, engine::Profiler* profiler);
+
+// What the world draws this frame: every effect's batches (Effect::submit) in registry order,
+// interpolated by `alpha` between the last two steps. The level's own meshes are not included
+// (submitLevel, level_assets.hpp).
+void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha);
 
 // Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the
 // profiler's meshing phase (may be null). Call once per rendered frame, after stepping.
