@@ -17,5 +17,6 @@ int meshCommand(const Args& args);           // game/commands/mesh_command.cpp (
 int simulateCommand(const Args& args);       // game/commands/simulate_command.cpp (fluid/sph)
 int bakeColliderCommand(const Args& args);   // game/commands/collider_commands.cpp (fluid/collide)
 int queryColliderCommand(const Args& args);  // game/commands/collider_commands.cpp (fluid/collide)
+int sceneKeysCommand(const Args& args);      // game/commands/scene_keys_command.cpp (the schema)
 
 }  // namespace game

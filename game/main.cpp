@@ -27,6 +27,8 @@ constexpr Subcommand kSubcommands[] = {
      game::bakeColliderCommand},
     {"query-collider", "signed distance and normal per point: query-collider FILE --points FILE.xyz",
      game::queryColliderCommand},
+    {"scene-keys", "every scene key with its type, range, default and meaning, as Markdown: scene-keys",
+     game::sceneKeysCommand},
 };
 
 void printUsage(std::FILE* stream) {

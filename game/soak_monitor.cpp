@@ -26,7 +26,7 @@ std::string describe(const char* what, const Penetration& p, float tolerance) {
 // crate leaves along the camera's forward axis at throw_speed, so aim above the target by the drop
 // over the flight (flight time from the straight distance, ignoring the arc's extra length).
 void throwCrateAt(World& world, const CrateThrow& t) {
-  const RigidBodies& bodies = *world.rigid_bodies;
+  const RigidBodies& bodies = *findState<RigidBodies>(world);
   const glm::vec3 to_target = t.target - t.from;
   const float flight = glm::length(to_target) / std::max(bodies.params.throw_speed, 0.1f);
   const glm::vec3 aim = to_target - 0.5f * bodies.params.gravity * flight * flight;
@@ -54,8 +54,8 @@ float maxSpeed(std::span<const glm::vec3> velocities) {
 void checkPenetration(SoakMonitor& m, const World& world) {
   const std::uint64_t step = world.steps;
   SoakStats& s = m.stats;
-  if (world.sph_fluid) {
-    const fluid::SphWorld& sph = world.sph_fluid->world;
+  if (const SphFluid* fluid = findState<SphFluid>(world)) {
+    const fluid::SphWorld& sph = fluid->world;
     const float radius = sph.params.particle_radius;
     // Where a moving collider (a crate) overlaps a still one (the fountain), the solver leaves a
     // particle between them outside the still one (fluid/sph: still colliders win): inside the
@@ -85,11 +85,11 @@ void checkPenetration(SoakMonitor& m, const World& world) {
     s.sph_squeezed_frames += squeezed_now > 0 ? 1u : 0u;
     s.sph_squeezed_max = std::max(s.sph_squeezed_max, squeezed_now);
   }
-  if (world.sprite_particles) {
+  if (const SpriteParticles* sp_state = findState<SpriteParticles>(world)) {
     // The GPU sprites as read back after their last step (soak: every step), against the depth
     // maps they collide with on the GPU (baked from the same models; the CPU lookup of
     // fluid/collide is the reference the shader decodes).
-    const SpriteParticles& sp = *world.sprite_particles;
+    const SpriteParticles& sp = *sp_state;
     m.points.clear();
     for (const glm::vec4& p : sp.sample_positions) m.points.emplace_back(p);
     for (std::size_t c = 0; c < sp.colliders.size(); ++c) {
@@ -106,8 +106,8 @@ void checkPenetration(SoakMonitor& m, const World& world) {
       }
     }
   }
-  if (world.rigid_bodies) {
-    const RigidBodies& bodies = *world.rigid_bodies;
+  if (const RigidBodies* bodies_state = findState<RigidBodies>(world)) {
+    const RigidBodies& bodies = *bodies_state;
     m.points.clear();
     for (const engine::BodyState& state : bodies.current) m.points.push_back(state.position);
     const float size = bodies.params.crate_size;
@@ -148,8 +148,8 @@ void soakBeforeStep(SoakMonitor& m, World& world, std::uint64_t step) {
   }
   // The sprites live on the GPU: read them back after every step so the NaN and penetration
   // checks see every live sprite (World::nonfinite_state and checkPenetration use the sample).
-  if (world.sprite_particles) world.sprite_particles->readback_every = 1;
-  if (const std::optional<CrateThrow> due = throwDue(m.schedule, step); due && world.rigid_bodies) {
+  if (SpriteParticles* sprites = findState<SpriteParticles>(world)) sprites->readback_every = 1;
+  if (const std::optional<CrateThrow> due = throwDue(m.schedule, step); due && findState<RigidBodies>(world)) {
     throwCrateAt(world, *due);
     ++m.stats.throws;
   }
@@ -160,16 +160,16 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   s.steps = world.steps;
   if (!world.nonfinite_state.empty()) fail(m, world.steps, "non-finite state: " + world.nonfinite_state);
   if (world.failures.count > 0) fail(m, world.steps, "run-time failure: " + world.failures.first);
-  s.has_sph = world.sph_fluid != nullptr;
-  s.has_sprites = world.sprite_particles != nullptr;
-  s.has_crates = world.rigid_bodies != nullptr;
-  if (world.sph_fluid) {
-    const fluid::ParticleStore& p = world.sph_fluid->world.particles;
+  s.has_sph = findState<SphFluid>(world) != nullptr;
+  s.has_sprites = findState<SpriteParticles>(world) != nullptr;
+  s.has_crates = findState<RigidBodies>(world) != nullptr;
+  if (const SphFluid* fluid = findState<SphFluid>(world)) {
+    const fluid::ParticleStore& p = fluid->world.particles;
     trackCount(p.size(), !m.have_counts, s.sph_min, s.sph_max);
     s.max_speed = std::max(s.max_speed, maxSpeed(p.velocity));
   }
-  if (world.sprite_particles) {
-    const SpriteParticles& sp = *world.sprite_particles;
+  if (const SpriteParticles* sp_state = findState<SpriteParticles>(world)) {
+    const SpriteParticles& sp = *sp_state;
     trackCount(liveSprites(sp), !m.have_counts, s.sprite_min, s.sprite_max);
     for (const glm::vec4& v : sp.sample_velocities) s.max_speed = std::max(s.max_speed, glm::length(glm::vec3(v)));
     // The read-back must be fresh: a check of stale data would pass whatever the GPU did.
@@ -178,8 +178,8 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
            "sprite read-back is stale (step " + std::to_string(sp.sample_step) + " of " + std::to_string(sp.steps) +
                ")");
   }
-  if (world.rigid_bodies) {
-    for (const engine::BodyState& state : world.rigid_bodies->current)
+  if (const RigidBodies* bodies = findState<RigidBodies>(world)) {
+    for (const engine::BodyState& state : bodies->current)
       s.max_crate_speed = std::max(s.max_crate_speed, glm::length(state.linear_velocity));
   }
   m.have_counts = true;

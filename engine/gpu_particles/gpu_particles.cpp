@@ -262,6 +262,7 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
 }
 
 void destroyGpuParticles(GpuParticles& s) {
+  glUseProgram(0);  // a deleted program stays alive while it is current
   auto textures = [](std::span<GLuint> ids) {
     for (GLuint& id : ids) {
       if (id != 0) glDeleteTextures(1, &id);

@@ -2,8 +2,8 @@
 // Forward renderer. Every scene pass draws into the scene FBO (colour RGBA8 + depth texture,
 // so later passes such as fluid refraction can sample both); the window only receives a blit.
 // Passes in order: sun shadow map (depth only) -> lit textured meshes -> sky (full-screen
-// triangle behind everything). Water and sprites are drawn after it by their own passes
-// (engine/fluid_render, engine/gpu_particles).
+// triangle behind everything). Water and sprites follow in renderFrame (engine/render/frame.hpp),
+// which owns the whole frame.
 // Output is display-ready (tone-mapped, gamma-encoded) RGBA8.
 
 #include "engine/assets/assets.hpp"
@@ -51,6 +51,7 @@ struct FrameView {
   glm::mat4 view{1.0f};
   glm::mat4 projection{1.0f};
   glm::vec3 eye{0.0f};
+  float near_plane = 0.05f, far_plane = 400.0f;  // of `projection` (the water passes linearise depth)
 };
 
 struct Lighting {

@@ -123,19 +123,19 @@ void applyReplayInputs(ReplayPlayer& player, World& world) {
 bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, ReplayResult& result) {
   const ReplayFile& replay = *player.replay;
   row.step = world.steps;
-  if (world.sph_fluid) row.particles = world.sph_fluid->world.particles.size();
-  if (world.sprite_particles) row.sprites = liveSprites(*world.sprite_particles);
-  if (world.fluid_surface) row.triangles = world.fluid_surface->mesh.indices.size() / 3;
-  if (world.fluid_surface && world.fluid_surface->params.method == SurfaceMethodChoice::raycast &&
-      world.fluid_surface->raycast_pool > 0) {
-    const FluidSurface& s = *world.fluid_surface;
+  const FluidSurface* surface = findState<FluidSurface>(world);
+  if (const SphFluid* fluid = findState<SphFluid>(world)) row.particles = fluid->world.particles.size();
+  if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
+  if (surface) row.triangles = surface->mesh.indices.size() / 3;
+  if (surface && surface->params.method == SurfaceMethodChoice::raycast && surface->raycast.pool > 0) {
+    const FluidSurface& s = *surface;
     RaycastTally& t = result.raycast;
     ++t.frames;
-    t.records_max = std::max(t.records_max, s.raycast_records);
-    t.dropped_total += s.raycast_dropped;
-    t.frames_dropping += s.raycast_dropped > 0;
-    t.pool_records_max = std::max(t.pool_records_max, s.raycast_pool);
-    t.pool_bound = std::max(t.pool_bound, s.raycast_pool_bound);
+    t.records_max = std::max(t.records_max, s.raycast.records);
+    t.dropped_total += s.raycast.dropped;
+    t.frames_dropping += s.raycast.dropped > 0;
+    t.pool_records_max = std::max(t.pool_records_max, s.raycast.pool);
+    t.pool_bound = std::max(t.pool_bound, s.raycast.pool_bound);
   }
   std::size_t& cursor = player.checkpoint_cursor;
   for (; cursor < replay.events.size() && replay.events[cursor].step <= world.steps; ++cursor) {

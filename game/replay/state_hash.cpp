@@ -78,8 +78,9 @@ std::uint64_t hashSph(const SphFluid& fluid, StateHashScratch& scratch) {
 
 void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& out) {
   out.parts.clear();
-  if (world.rigid_bodies) out.parts.push_back({"rigid_bodies", hashRigidBodies(*world.rigid_bodies)});
-  if (world.sph_fluid) out.parts.push_back({"sph_fluid", hashSph(*world.sph_fluid, scratch)});
+  if (const RigidBodies* bodies = findState<RigidBodies>(world))
+    out.parts.push_back({"rigid_bodies", hashRigidBodies(*bodies)});
+  if (const SphFluid* fluid = findState<SphFluid>(world)) out.parts.push_back({"sph_fluid", hashSph(*fluid, scratch)});
   Fnv1a64 h;
   h.add(world.steps);
   for (const SubsystemHash& part : out.parts) {

@@ -9,7 +9,8 @@
 //     "camera":  { "position": [0, -12, 3], "yaw_degrees": 90, ... },   // optional section
 //     "effects": { "rigid_bodies": { "crates": 6 }, "sprite_particles": {} }
 //   }
-// Every key is checked against the schema (effect_schema.cpp): unknown sections, effects or
+// Every key is checked against the schema (effect_schema.cpp: the scene and camera rows, then one
+// section per effect from its parameter table in game/effects/): unknown sections, effects or
 // keys, wrong JSON types and out-of-range values are errors naming the file, the key path
 // and the value. Keys left out take the schema default.
 // Command-line overrides use the same validation: `--set section.key=value`, e.g.
@@ -53,7 +54,8 @@ struct SectionSpec {
   std::span<const ParamSpec> params;
 };
 
-// All sections and effects the engine knows (game/scene/effect_schema.cpp).
+// All sections and effects the game knows (game/scene/effect_schema.cpp), effects in registry
+// order.
 std::span<const SectionSpec> sceneSchema();
 const SectionSpec* findSection(std::string_view name);
 

@@ -2,41 +2,6 @@
 
 namespace game {
 
-bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error) {
-  FluidSurfaceParams p;
-  const std::string& order = section.text("order");
-  if (order == "sorted") {
-    p.order = SurfaceOrderChoice::sorted;
-  } else if (order == "unsorted") {
-    p.order = SurfaceOrderChoice::unsorted;
-  } else if (order == "exact") {
-    p.order = SurfaceOrderChoice::exact;
-  } else {
-    error = "fluid_surface.order: unknown order '" + order + "' (expected sorted, unsorted or exact)";
-    return false;
-  }
-  const std::string& method = section.text("method");
-  if (method == "mesh") {
-    p.method = SurfaceMethodChoice::mesh;
-  } else if (method == "screen_space") {
-    p.method = SurfaceMethodChoice::screen_space;
-  } else if (method == "raycast") {
-    p.method = SurfaceMethodChoice::raycast;
-  } else {
-    error = "fluid_surface.method: unknown method '" + method + "' (expected mesh, screen_space or raycast)";
-    return false;
-  }
-  p.smoothing = static_cast<float>(section.number("smoothing"));
-  p.cube = static_cast<float>(section.number("cube"));
-  p.threshold = static_cast<float>(section.number("threshold"));
-  p.refraction = static_cast<float>(section.number("refraction"));
-  p.opacity = static_cast<float>(section.number("opacity"));
-  p.absorption = section.vec3("absorption");
-  p.visible = section.boolean("visible");
-  out = p;
-  return true;
-}
-
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
   if (s.params.method != SurfaceMethodChoice::mesh) {  // the particle renderers need no mesh
     s.mesh.clear();

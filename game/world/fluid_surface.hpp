@@ -3,8 +3,9 @@
 // 2008) turn the `sph_fluid` particles into a triangle mesh, emitted back-to-front for the
 // camera (paper §5) so the water renderer (engine/fluid_render) can blend it in index order.
 // Requires sph_fluid (buildWorld refuses a scene listing it alone). This part is CPU only; the
-// GL side (engine::FluidRenderer) lives with the renderer in run_scene.cpp.
+// effect submits the mesh or the particles as an engine::WaterBatch and the engine draws it.
 
+#include "engine/render/frame.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -33,8 +34,9 @@ struct FluidSurfaceParams {
   bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
 };
 
-// Reads the "fluid_surface" section. False + error naming the field for an unknown `order` or
-// `method`.
+// Reads a validated "fluid_surface" section through the effect's parameter table
+// (game/effects/fluid_surface.cpp). The schema already refused unknown methods and orders, so it
+// returns true; the signature stays for callers that check.
 bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error);
 
 struct FluidSurface {
@@ -44,10 +46,10 @@ struct FluidSurface {
   std::vector<float> xs, ys, zs;  // SoA copy of the particle positions, reused every frame
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
-  // Method raycast, last frame (written by the renderer): fragment-list records asked for and
-  // records dropped because the pool was full (engine::RaycastRenderer::used / dropped), and the
-  // pool's size in records after the frame (it grows with the demand up to raycast_pool_bound).
-  std::uint64_t raycast_records = 0, raycast_dropped = 0, raycast_pool = 0, raycast_pool_bound = 0;
+  // Method raycast, last frame (written by the engine's water pass): fragment-list records asked
+  // for and records dropped because the pool was full, and the pool's size in records after the
+  // frame (it grows with the demand up to pool_bound).
+  engine::RaycastCounts raycast;
 };
 
 // Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With

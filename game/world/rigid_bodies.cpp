@@ -14,15 +14,6 @@ constexpr float kCrateDensity = 250.0f;  // kg/m^3, light wood
 
 }  // namespace
 
-RigidBodyParams rigidParamsFrom(const SectionConfig& section) {
-  RigidBodyParams p;
-  p.gravity = section.vec3("gravity");
-  p.crates = section.integer("crates");
-  p.crate_size = static_cast<float>(section.number("crate_size"));
-  p.throw_speed = static_cast<float>(section.number("throw_speed"));
-  return p;
-}
-
 bool buildRigidBodies(const RigidBodyParams& params, const std::filesystem::path& content_dir, std::uint32_t seed,
                       RigidBodies& out, std::string& error) {
   out = RigidBodies{};

@@ -21,6 +21,8 @@ struct RigidBodyParams {
   float throw_speed = 14.0f;  // m/s
 };
 
+// Reads a validated "rigid_bodies" section through the effect's parameter table
+// (game/effects/rigid_bodies.cpp). The defaults above are the scene defaults.
 RigidBodyParams rigidParamsFrom(const SectionConfig& section);
 
 struct RigidBodies {

@@ -7,29 +7,6 @@
 
 namespace game {
 
-bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::string& error) {
-  SphFluidParams p;
-  const std::string& solver = section.text("solver");
-  if (!fluid::parseSphSolver(solver, p.solver)) {
-    error = "sph_fluid.solver: unknown solver '" + solver + "' (expected dfsph or wcsph)";
-    return false;
-  }
-  p.max_particles = static_cast<std::size_t>(section.integer("max_particles"));
-  p.particle_radius = static_cast<float>(section.number("particle_radius"));
-  p.jet_speed = static_cast<float>(section.number("jet_speed"));
-  p.nozzle_radius = static_cast<float>(section.number("nozzle_radius"));
-  p.rate = static_cast<float>(section.number("rate"));
-  p.viscosity = static_cast<float>(section.number("viscosity"));
-  p.drain = section.boolean("drain");
-  p.cfl = static_cast<float>(section.number("cfl"));
-  p.max_time_step = static_cast<float>(section.number("max_time_step"));
-  p.density_error = static_cast<float>(section.number("density_error"));
-  p.force_bound = static_cast<float>(section.number("force_bound"));
-  p.warm_start = section.boolean("warm_start");
-  out = p;
-  return true;
-}
-
 void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.viscosity = params.viscosity;
   solver.cfl = params.cfl;
@@ -40,6 +17,43 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.warm_start = params.warm_start;
 }
 
+void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,
+                    fluid::SphWorld& world) {
+  fluid::SphParams& sp = world.params;
+  sp.gravity = gravity;
+  applySolverKnobs(params, sp);
+  // A cap well above the jet speed: a stray fast particle cannot force tiny CFL steps.
+  sp.max_speed = 3.0f * params.jet_speed + 5.0f;
+  // WCSPH: the sound speed must stay ~10x the fastest flow (Becker & Teschner 2007 §4).
+  sp.sound_speed = std::max(20.0f, 10.0f * params.jet_speed);
+  for (fluid::SphEmitter& e : world.emitters) {
+    e.speed = params.jet_speed;
+    e.rate = params.rate;
+  }
+  world.sinks.clear();
+  if (params.drain) {
+    // Four drains in the basin floor against the wall (+x, -x, +z, -z), each 0.6 m wide.
+    const float inner = g.basin_inner_radius, depth = 0.5f, half = 0.3f;
+    const float y0 = g.basin_floor - 0.05f, y1 = g.basin_floor + 4.0f * params.particle_radius;
+    world.sinks.push_back({{inner - depth, y0, -half}, {inner + 0.1f, y1, half}});
+    world.sinks.push_back({{-inner - 0.1f, y0, -half}, {-inner + depth, y1, half}});
+    world.sinks.push_back({{-half, y0, inner - depth}, {half, y1, inner + 0.1f}});
+    world.sinks.push_back({{-half, y0, -inner - 0.1f}, {half, y1, -inner + depth}});
+  }
+  // Whatever escapes the basin onto the ground is drained too (it would only pile up there).
+  world.sinks.push_back({{-100.0f, -1.0f, -100.0f}, {100.0f, 0.12f, 100.0f}});
+  // Strays (a particle flung off the rim at the speed cap) are removed once they leave the
+  // fountain's neighbourhood: above the jet's reach or 0.8 m beyond the basin on any side.
+  const float reach = g.basin_outer_radius + 0.8f, far = 1000.0f;
+  const float top =
+      g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
+  world.sinks.push_back({{-far, top, -far}, {far, far, far}});
+  world.sinks.push_back({{reach, -far, -far}, {far, far, far}});
+  world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}});
+  world.sinks.push_back({{-far, -far, reach}, {far, far, far}});
+  world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}});
+}
+
 bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,
                   std::string& error) {
   out = SphFluid{};
@@ -47,16 +61,17 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   fluid::SphParams& sp = out.world.params;
   sp.solver = params.solver;
   sp.particle_radius = params.particle_radius;
-  sp.gravity = gravity;
   sp.max_particles = params.max_particles;
-  applySolverKnobs(params, sp);
-  // A cap well above the jet speed: a stray fast particle cannot force tiny CFL steps.
-  sp.max_speed = 3.0f * params.jet_speed + 5.0f;
-  // WCSPH: the sound speed must stay ~10x the fastest flow (Becker & Teschner 2007 §4).
-  sp.sound_speed = std::max(20.0f, 10.0f * params.jet_speed);
   // The neighbour grid only needs to cover the fountain (strays are clamped into border cells).
   sp.domain_min = glm::vec3(-g.basin_outer_radius - 1.0f, -0.5f, -g.basin_outer_radius - 1.0f);
   sp.domain_max = glm::vec3(g.basin_outer_radius + 1.0f, g.nozzle.y + 4.0f, g.basin_outer_radius + 1.0f);
+  fluid::SphEmitter nozzle;
+  // Start one spacing above the spire top so the first layer is not inside the collider.
+  nozzle.position = g.nozzle + glm::vec3(0.0f, 2.0f * params.particle_radius, 0.0f);
+  nozzle.direction = glm::vec3(0.0f, 1.0f, 0.0f);
+  nozzle.radius = params.nozzle_radius;
+  out.world.emitters.push_back(nozzle);
+  deriveSphFluid(params, g, gravity, out.world);
   if (const fluid::SphStatus st = fluid::validateSphParams(sp); !st.ok()) {
     error = "sph_fluid: " + st.error;
     return false;
@@ -69,37 +84,6 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
   collider.lipschitz_distance = true;
   collider.material.resilience = 0.0f;  // water does not bounce (Kolb 2004 §3.3.2 ε)
   out.world.colliders.push_back(collider);
-
-  fluid::SphEmitter nozzle;
-  // Start one spacing above the spire top so the first layer is not inside the collider.
-  nozzle.position = g.nozzle + glm::vec3(0.0f, 2.0f * params.particle_radius, 0.0f);
-  nozzle.direction = glm::vec3(0.0f, 1.0f, 0.0f);
-  nozzle.speed = params.jet_speed;
-  nozzle.radius = params.nozzle_radius;
-  nozzle.rate = params.rate;
-  out.world.emitters.push_back(nozzle);
-
-  if (params.drain) {
-    // Four drains in the basin floor against the wall (+x, -x, +z, -z), each 0.6 m wide.
-    const float inner = g.basin_inner_radius, depth = 0.5f, half = 0.3f;
-    const float y0 = g.basin_floor - 0.05f, y1 = g.basin_floor + 4.0f * params.particle_radius;
-    out.world.sinks.push_back({{inner - depth, y0, -half}, {inner + 0.1f, y1, half}});
-    out.world.sinks.push_back({{-inner - 0.1f, y0, -half}, {-inner + depth, y1, half}});
-    out.world.sinks.push_back({{-half, y0, inner - depth}, {half, y1, inner + 0.1f}});
-    out.world.sinks.push_back({{-half, y0, -inner - 0.1f}, {half, y1, -inner + depth}});
-  }
-  // Whatever escapes the basin onto the ground is drained too (it would only pile up there).
-  out.world.sinks.push_back({{-100.0f, -1.0f, -100.0f}, {100.0f, 0.12f, 100.0f}});
-  // Strays (a particle flung off the rim at the speed cap) are removed once they leave the
-  // fountain's neighbourhood: above the jet's reach or 0.8 m beyond the basin on any side.
-  const float reach = g.basin_outer_radius + 0.8f, far = 1000.0f;
-  const float top =
-      g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
-  out.world.sinks.push_back({{-far, top, -far}, {far, far, far}});
-  out.world.sinks.push_back({{reach, -far, -far}, {far, far, far}});
-  out.world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}});
-  out.world.sinks.push_back({{-far, -far, reach}, {far, far, far}});
-  out.world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}});
   fluid::reserveSph(out.world, params.max_particles);
   return true;
 }

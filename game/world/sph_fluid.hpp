@@ -8,6 +8,7 @@
 
 #include "fluid/sph/sph.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/body_fluid_coupling.hpp"
 #include "game/world/fountain.hpp"
 
 #include <functional>
@@ -31,9 +32,12 @@ struct SphFluidParams {
   float density_error = 0.0005f;  // dfsph tolerance (mean predicted compression)
   float force_bound = 0.0025f;    // dfsph force condition; 0 = off
   bool warm_start = true;         // dfsph warm start of the density solve (2017 §4.3)
+  bool couple_bodies = true;      // crates and water push each other (with rigid_bodies; fixed at construction)
 };
 
-// Reads the "sph_fluid" section. False + error naming the field when `solver` is unknown.
+// Reads a validated "sph_fluid" section through the effect's parameter table
+// (game/effects/sph_fluid.cpp; the defaults above are the scene defaults). The schema already
+// refused unknown solvers, so it returns true; the signature stays for callers that check.
 bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::string& error);
 
 struct SphFluid {
@@ -42,11 +46,23 @@ struct SphFluid {
   std::uint64_t steps = 0;         // game steps taken
   std::uint64_t solver_steps = 0;  // adaptive SPH steps taken
   std::string error;               // first solver error; the system stops stepping after one
+  // Crates <-> water, two-way: only with rigid_bodies listed and couple_bodies on. Shared so a
+  // SphFluid stays copyable (the fountain benchmark snapshots one); a copy shares the coupling.
+  std::shared_ptr<BodyFluidCoupling> coupling;
 };
 
 // Copies the solver knobs that may change while the fluid runs (viscosity, cfl, max_time_step,
 // density_error, force_bound, warm_start) into the solver's parameters.
 void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
+
+// Everything that follows from the tunable parameters, the gravity and the level: the solver
+// knobs, the speed cap and the WCSPH sound speed (from jet_speed), the nozzle's speed and rate,
+// and the drains and stray sinks (the top one from the jet's reach). initSphFluid calls it, and
+// so does a live edit, so raising jet_speed live moves the cap, the sound speed and the top sink
+// exactly as a rebuild would. Fixed-at-construction fields (solver, max_particles,
+// particle_radius, nozzle_radius, drain) must be the world's own.
+void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
+                    fluid::SphWorld& world);
 
 // Builds the SPH world: parameters, the fountain collider, the nozzle emitter at `nozzle`
 // (pointing up), the drains; reserves every buffer for max_particles. False + error (naming

@@ -1,6 +1,5 @@
 #include "game/world/sprite_particles.hpp"
 
-#include "engine/gl/gl.hpp"
 #include "fluid/core/finite.hpp"
 #include "game/commands/collider_model.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -96,27 +95,6 @@ void readBack(SpriteParticles& s) {
 
 }  // namespace
 
-SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle) {
-  SpriteParticleParams p;
-  auto f = [&section](const char* key) { return static_cast<float>(section.number(key)); };
-  p.rate = f("rate");
-  p.speed = f("speed");
-  p.spread_degrees = f("spread_degrees");
-  p.lifetime = f("lifetime");
-  p.size = f("size");
-  p.restitution = f("restitution");
-  p.friction = f("friction");
-  p.spray_rate = f("spray_rate");
-  p.spray_energy_min = f("spray_energy_min");
-  p.spray_energy_max = f("spray_energy_max");
-  p.spray_surface_density = f("spray_surface_density");
-  p.spray_lifetime = f("spray_lifetime");
-  p.spray_max_per_step = section.integer("spray_max_per_step");
-  p.gravity = gravity;
-  p.nozzle = nozzle;
-  return p;
-}
-
 void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
                          std::uint64_t seed) {
   s = SpriteParticles{};
@@ -207,10 +185,7 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
 }
 
 void detachSpriteGpu(SpriteParticles& s) {
-  if (s.attached) {
-    glUseProgram(0);  // a deleted program stays alive while it is current
-    engine::destroyGpuParticles(s.gpu);
-  }
+  if (s.attached) engine::destroyGpuParticles(s.gpu);
   s.gpu = engine::GpuParticles{};
   s.attached = false;
 }
@@ -283,21 +258,6 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt) {
   engine::step(s.gpu, stepParams(s.params));
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
-}
-
-void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
-                         const glm::mat4& projection, glm::vec3 eye) {
-  if (!s.attached || !s.gpu.ready) return;
-  engine::sortStep(s.gpu, eye);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glViewport(0, 0, width, height);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  // Keep the scene's alpha at 1 (the PNG output would otherwise turn see-through).
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
-  engine::drawSprites(s.gpu, projection * view, projection[1][1], height);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 std::uint32_t liveSprites(const SpriteParticles& s) {

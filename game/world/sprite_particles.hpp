@@ -33,29 +33,33 @@ namespace game {
 
 struct SphFluid;
 
-// Live-tunable parameters. No defaults here on purpose: the schema (effect_schema.cpp, section
-// "sprite_particles") is the only source of defaults, ranges and docs; spriteParamsFrom reads a
-// validated section, which always holds every key.
+// The effect's parameters; their defaults are the scene defaults (game/effects/sprite_particles.cpp
+// binds each to its scene key). Mist and spray are live-tunable; max_particles is the budget,
+// fixed at construction.
 struct SpriteParticleParams {
   // Mist: a cone of sprites from the nozzle.
-  float rate = 0.0f;            // sprites per second
-  float speed = 0.0f;           // m/s at the nozzle (±20 %)
-  float spread_degrees = 0.0f;  // half-angle of the cone
-  float lifetime = 0.0f;        // s (±25 %)
-  float size = 0.0f;            // sprite radius, m
-  float restitution = 0.0f;     // Kolb §3.3.2 resilience ε
-  float friction = 0.0f;        // Kolb §3.3.2 friction ν
+  float rate = 1500.0f;                 // sprites per second
+  float speed = 7.0f;                   // m/s at the nozzle (±20 %)
+  float spread_degrees = 8.0f;          // half-angle of the cone
+  float lifetime = 4.0f;                // s (±25 %)
+  std::uint32_t max_particles = 10000;  // GPU budget, mist and spray
+  float size = 0.035f;                  // sprite radius, m
+  float restitution = 0.3f;             // Kolb §3.3.2 resilience ε
+  float friction = 0.15f;               // Kolb §3.3.2 friction ν
   // Spray from the SPH fluid (Ihmsen et al. 2012 §4, a subset; see emitSprayFromSph).
-  float spray_rate = 0.0f;             // k: sprites per second from a particle with I_k = I_s = 1
-  float spray_energy_min = 0.0f;       // τ_k,min: specific kinetic energy ½|v|² (J/kg) where I_k starts
-  float spray_energy_max = 0.0f;       // τ_k,max: where I_k reaches 1
-  float spray_surface_density = 0.0f;  // ρ/ρ0 at or below which a particle counts as at the free surface
-  float spray_lifetime = 0.0f;         // s (±25 %)
-  int spray_max_per_step = 0;          // cap on spray births per step
+  float spray_rate = 40.0f;            // k: sprites per second from a particle with I_k = I_s = 1
+  float spray_energy_min = 8.0f;       // τ_k,min: specific kinetic energy ½|v|² (J/kg) where I_k starts
+  float spray_energy_max = 30.0f;      // τ_k,max: where I_k reaches 1
+  float spray_surface_density = 0.9f;  // ρ/ρ0 at or below which a particle counts as at the free surface
+  float spray_lifetime = 1.2f;         // s (±25 %)
+  int spray_max_per_step = 200;        // cap on spray births per step
+  // From the world, not the scene section: the particles' gravity and the level's nozzle.
   glm::vec3 gravity{0.0f};
   glm::vec3 nozzle{0.0f};
 };
 
+// Reads a validated "sprite_particles" section (the effect's parameter table) and sets the
+// world-given fields.
 SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle);
 
 // Particle types in the GPU system's key-frame table.
@@ -110,10 +114,8 @@ void detachSpriteGpu(SpriteParticles& s);
 // given), integrate and collide (Kolb §3.3.1–3.3.2), read back when due.
 void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt);
 
-// Sorts back to front for `eye` (Kolb §3.3.3, a few merge-sort passes per frame) and draws the
-// sprites into `fbo` (colour + the scene's depth, depth-tested, not written).
-void drawSpriteParticles(SpriteParticles& s, unsigned fbo, int width, int height, const glm::mat4& view,
-                         const glm::mat4& projection, glm::vec3 eye);
+// Drawing: the effect submits `gpu` to the frame (engine::FrameBatches::sprites); the engine's
+// sprite pass sorts it for the eye (Kolb §3.3.3) and draws it.
 
 // Live sprites as the CPU allocator counts them (0 when not attached).
 std::uint32_t liveSprites(const SpriteParticles& s);

@@ -1,10 +1,11 @@
 #pragma once
-// The game world built from a SceneConfig. One system per listed effect, constructed ONLY when
-// the scene lists it: an unlisted effect's pointer stays null, it allocates nothing, and
-// stepWorld never enters its profiler phase. `systems` lists what was built, in schema order.
+// The game world built from a SceneConfig: one Effect per listed effect (game/effects/),
+// constructed ONLY when the scene lists it, in registry order. An unlisted effect allocates
+// nothing and stepWorld never enters its profiler phase. `systems` lists what was built.
 
 #include "engine/camera/camera.hpp"
 #include "engine/profile/profiler.hpp"
+#include "game/effects/effect.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/body_fluid_coupling.hpp"
 #include "game/world/fluid_surface.hpp"
@@ -33,15 +34,11 @@ struct RuntimeFailures {
 };
 
 struct World {
-  SceneConfig scene;                                  // live copy; the overlay edits it
-  std::vector<std::string> systems;                   // effect names constructed, schema order
-  std::unique_ptr<RigidBodies> rigid_bodies;          // "rigid_bodies" only
-  std::unique_ptr<SpriteParticles> sprite_particles;  // "sprite_particles" only (GPU: attachWorldGpu)
-  std::unique_ptr<SphFluid> sph_fluid;                // "sph_fluid" only
-  std::unique_ptr<FluidSurface> fluid_surface;        // "fluid_surface" only (needs sph_fluid)
-  // Crates <-> water, two-way: only with both rigid_bodies and sph_fluid (sph_fluid.couple_bodies).
-  std::unique_ptr<BodyFluidCoupling> body_coupling;
-  FountainShape fountain;  // analytic collision shape for particles
+  SceneConfig scene;                             // live copy; the overlay edits it
+  std::vector<std::string> systems;              // effect names constructed, registry order
+  std::vector<std::unique_ptr<Effect>> effects;  // the listed effects, registry order
+  EffectLinks links;                             // what the effects offer each other
+  FountainShape fountain;                        // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
   int substeps = 1;
@@ -50,25 +47,41 @@ struct World {
   RuntimeFailures failures;     // systems that refused content this run (the frame went on)
 };
 
+// The state of the built effect of type EffectOf<State> (RigidBodies, SphFluid, SpriteParticles,
+// FluidSurface), or null when the scene does not list it. For readers of one effect's state
+// (tests, soak checks, state hashes); the world itself never asks.
+template <class State>
+State* findState(World& world) {
+  for (const std::unique_ptr<Effect>& effect : world.effects)
+    if (auto* typed = dynamic_cast<EffectOf<State>*>(effect.get())) return &typed->state;
+  return nullptr;
+}
+template <class State>
+const State* findState(const World& world) {
+  return findState<State>(const_cast<World&>(world));
+}
+
 // Gravity of the scene's particles: the rigid bodies' gravity when that effect is listed, else
-// (0, -9.81, 0) m/s^2.
+// (0, -9.81, 0) m/s^2. For code that builds one effect's state without a World (the fountain
+// benchmark); inside a World the effects read EffectLinks::gravity.
 glm::vec3 sceneGravity(const SceneConfig& scene);
 
 // Builds the world. `content_dir` is the content/ folder (models for the Bullet meshes).
-// Returns false with a message naming the file/effect on failure (also when fluid_surface is
-// listed without sph_fluid).
+// Returns false with a message naming the file/effect on failure (also when an effect is listed
+// without one it needs, e.g. fluid_surface without sph_fluid).
 bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_dir, World& out, std::string& error);
 
-// GL resources of the world's GPU effects (today: sprite_particles), created with the GL context
+// GL resources of the world's effects (Effect::attachGpu), created with the GL context
 // current (runScene after the renderer; never by `replay --no-render`, whose sprites then do not
 // run). A world without a GPU effect creates no GL object. detachWorldGpu frees them and must run
 // while the same context is current (before a rebuild and before the context goes).
 void attachWorldGpu(World& world, const std::filesystem::path& shader_dir, const std::filesystem::path& content_dir);
 void detachWorldGpu(World& world);
 
-// Re-reads the live-tunable parameters from world.scene (after the overlay edited them).
-// Parameters fixed at construction (crates, crate_size, max_particles, particle_radius, solver,
-// drain, scene.*) need a rebuild.
+// Re-reads the live-tunable parameters from world.scene (after the overlay edited them): the
+// camera, then Effect::applyLive of each effect in registry order. Parameters fixed at
+// construction (crates, crate_size, max_particles, particle_radius, solver, drain, scene.*) need
+// a rebuild.
 void applyLiveParams(World& world);
 
 // One fixed simulation step of every constructed system, timed into `profiler` (physics for
@@ -76,6 +89,11 @@ void applyLiveParams(World& world);
 // after the step and records the first one in world.nonfinite_state; a solver error is recorded in
 // world.failures.
 void stepWorld(World& world, engine::Profiler* profiler);
+
+// What the world draws this frame: every effect's batches (Effect::submit) in registry order,
+// interpolated by `alpha` between the last two steps. The level's own meshes are not included
+// (submitLevel, level_assets.hpp).
+void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha);
 
 // Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the
 // profiler's meshing phase (may be null). Call once per rendered frame, after stepping.

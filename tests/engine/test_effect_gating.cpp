@@ -85,12 +85,12 @@ TEST(EffectGating, WithoutRigidBodiesNoBulletObjectIsEverAllocated) {
   game::playerThrow(world);  // left click without the effect: nothing happens
   runSteps(world, profiler, 1);
   EXPECT_EQ(world.systems, std::vector<std::string>{"sprite_particles"});
-  EXPECT_EQ(world.rigid_bodies, nullptr);
-  ASSERT_NE(world.sprite_particles, nullptr);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world), nullptr);
+  ASSERT_NE(game::findState<game::SpriteParticles>(world), nullptr);
   // No GL context here: the GPU sprites are built but not attached, so they do not run (their
   // GL side is tested in gl_engine: Headless.ASceneWithoutSpritesCreatesNoGlParticleResources).
-  EXPECT_FALSE(world.sprite_particles->attached);
-  EXPECT_EQ(game::liveSprites(*world.sprite_particles), 0u);
+  EXPECT_FALSE(game::findState<game::SpriteParticles>(world)->attached);
+  EXPECT_EQ(game::liveSprites(*game::findState<game::SpriteParticles>(world)), 0u);
   EXPECT_EQ(counter.count(), 0) << "Bullet allocated memory although rigid_bodies is not listed";
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 0u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 0u);
@@ -107,15 +107,15 @@ TEST(EffectGating, WithRigidBodiesTheCounterSeesBullet) {
   engine::Profiler profiler;
   runSteps(world, profiler, 10);
   EXPECT_EQ(world.systems, std::vector<std::string>{"rigid_bodies"});
-  EXPECT_EQ(world.sprite_particles, nullptr);
-  ASSERT_NE(world.rigid_bodies, nullptr);
-  EXPECT_EQ(world.rigid_bodies->crates.size(), 3u);
+  EXPECT_EQ(game::findState<game::SpriteParticles>(world), nullptr);
+  ASSERT_NE(game::findState<game::RigidBodies>(world), nullptr);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world)->crates.size(), 3u);
   EXPECT_GT(counter.count(), 0);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 10u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 0u);
-  const std::size_t before = world.rigid_bodies->crates.size();
+  const std::size_t before = game::findState<game::RigidBodies>(world)->crates.size();
   game::playerThrow(world);
-  EXPECT_EQ(world.rigid_bodies->crates.size(), before + 1);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world)->crates.size(), before + 1);
   world = game::World{};  // destroy before the counter restores Bullet's allocator
 }
 
@@ -127,8 +127,8 @@ TEST(EffectGating, AnEmptyEffectListBuildsNothing) {
   engine::Profiler profiler;
   runSteps(world, profiler, 5);
   EXPECT_TRUE(world.systems.empty());
-  EXPECT_EQ(world.rigid_bodies, nullptr);
-  EXPECT_EQ(world.sprite_particles, nullptr);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world), nullptr);
+  EXPECT_EQ(game::findState<game::SpriteParticles>(world), nullptr);
   EXPECT_EQ(counter.count(), 0);
   for (const engine::PhaseStats& stats : profiler.stats) EXPECT_EQ(stats.frames, 0u);
 }
@@ -143,7 +143,7 @@ TEST(EffectGating, ThrownCratesAreCappedAndRecycled) {
     game::playerThrow(world);
     game::stepWorld(world, nullptr);
   }
-  EXPECT_EQ(world.rigid_bodies->crates.size(), 2u + game::RigidBodies::kMaxThrown);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world)->crates.size(), 2u + game::RigidBodies::kMaxThrown);
   EXPECT_EQ(world.nonfinite_state, "");
 }
 
@@ -187,8 +187,8 @@ TEST(EffectGating, WithoutTheFluidEffectsNothingFluidIsBuiltOrRun) {
     runFrames(world, profiler, 30);
     allocations = counter.count();
   }
-  EXPECT_EQ(world.sph_fluid, nullptr);
-  EXPECT_EQ(world.fluid_surface, nullptr);
+  EXPECT_EQ(game::findState<game::SphFluid>(world), nullptr);
+  EXPECT_EQ(game::findState<game::FluidSurface>(world), nullptr);
   EXPECT_EQ(allocations, 0) << "stepping/meshing allocated although no fluid effect is listed";
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
 }
@@ -201,10 +201,10 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
                                game::contentDir(), world, error))
       << error;
   EXPECT_EQ(world.systems, (std::vector<std::string>{"sph_fluid", "fluid_surface"}));
-  ASSERT_NE(world.sph_fluid, nullptr);
-  ASSERT_NE(world.fluid_surface, nullptr);
-  EXPECT_EQ(world.sprite_particles, nullptr);
-  EXPECT_EQ(world.rigid_bodies, nullptr);
+  ASSERT_NE(game::findState<game::SphFluid>(world), nullptr);
+  ASSERT_NE(game::findState<game::FluidSurface>(world), nullptr);
+  EXPECT_EQ(game::findState<game::SpriteParticles>(world), nullptr);
+  EXPECT_EQ(game::findState<game::RigidBodies>(world), nullptr);
   engine::Profiler profiler;
   // The positive control of the allocation check above: the fluid does allocate (its mesh).
   long allocations = 0;
@@ -215,17 +215,17 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
   }
   EXPECT_GT(allocations, 0);
   EXPECT_EQ(world.nonfinite_state, "");
-  const std::size_t n = world.sph_fluid->world.particles.size();
+  const std::size_t n = game::findState<game::SphFluid>(world)->world.particles.size();
   EXPECT_GT(n, 100u);
   EXPECT_LE(n, 400u);
-  EXPECT_GT(world.fluid_surface->mesh.indices.size(), 0u);
-  EXPECT_EQ(world.fluid_surface->meshes, 60u);
+  EXPECT_GT(game::findState<game::FluidSurface>(world)->mesh.indices.size(), 0u);
+  EXPECT_EQ(game::findState<game::FluidSurface>(world)->meshes, 60u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 60u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 60u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 0u);
   // The jet rises from the nozzle: the highest particle is above the spire top.
   float top = 0.0f;
-  for (const glm::vec3& p : world.sph_fluid->world.particles.position) top = std::max(top, p.y);
+  for (const glm::vec3& p : game::findState<game::SphFluid>(world)->world.particles.position) top = std::max(top, p.y);
   EXPECT_GT(top, world.fountain.geometry().spire_top);
 }
 
@@ -235,11 +235,11 @@ TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
   ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200, "solver": "wcsph"}}})"),
                                game::contentDir(), world, error))
       << error;
-  EXPECT_EQ(world.fluid_surface, nullptr);
+  EXPECT_EQ(game::findState<game::FluidSurface>(world), nullptr);
   engine::Profiler profiler;
   runFrames(world, profiler, 20);
-  EXPECT_EQ(world.sph_fluid->world.params.solver, fluid::SphSolverKind::wcsph);
-  EXPECT_GT(world.sph_fluid->world.particles.size(), 0u);
+  EXPECT_EQ(game::findState<game::SphFluid>(world)->world.params.solver, fluid::SphSolverKind::wcsph);
+  EXPECT_GT(game::findState<game::SphFluid>(world)->world.particles.size(), 0u);
   EXPECT_EQ(world.nonfinite_state, "");
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 20u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 0u);
@@ -259,7 +259,7 @@ TEST(EffectGating, FluidSurfaceWithoutSphFluidIsAnErrorNamingFileAndEffect) {
   EXPECT_FALSE(game::buildWorld(scene, game::contentDir(), world, error));
   EXPECT_NE(error.find(file.string()), std::string::npos) << error;
   EXPECT_NE(error.find("fluid_surface requires effect sph_fluid"), std::string::npos) << error;
-  EXPECT_EQ(world.fluid_surface, nullptr);
+  EXPECT_EQ(game::findState<game::FluidSurface>(world), nullptr);
   std::filesystem::remove(file);
 }
 
@@ -300,7 +300,7 @@ TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
     EXPECT_TRUE(game::buildWorld(parse(text), game::contentDir(), world, error)) << error;
     engine::Profiler profiler;
     runFrames(world, profiler, 45);
-    const fluid::SurfaceMesh& mesh = world.fluid_surface->mesh;
+    const fluid::SurfaceMesh& mesh = game::findState<game::FluidSurface>(world)->mesh;
     const engine::OutOfOrder o = engine::countOutOfOrderPairs(mesh.positions, mesh.indices, world.camera.position);
     triangles = o.triangles;
     return static_cast<double>(o.pairs) / std::max<double>(1.0, 0.5 * double(o.triangles) * double(o.triangles));
@@ -330,13 +330,13 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
     ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200}}})"), game::contentDir(),
                                  fluid_only, error))
         << error;
-    EXPECT_EQ(fluid_only.body_coupling, nullptr);
+    EXPECT_EQ(game::findState<game::SphFluid>(fluid_only)->coupling, nullptr);
     ASSERT_TRUE(game::buildWorld(
         parse(
             R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"max_particles": 200, "couple_bodies": false}}})"),
         game::contentDir(), switched_off, error))
         << error;
-    EXPECT_EQ(switched_off.body_coupling, nullptr);
+    EXPECT_EQ(game::findState<game::SphFluid>(switched_off)->coupling, nullptr);
   }
   game::World world;
   ASSERT_TRUE(
@@ -344,34 +344,38 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
                                                     "sph_fluid": {"max_particles": 800}}})"),
                        game::contentDir(), world, error))
       << error;
-  ASSERT_NE(world.body_coupling, nullptr);
+  ASSERT_NE(game::findState<game::SphFluid>(world)->coupling, nullptr);
   engine::Profiler profiler;
   runFrames(world, profiler, 40);                      // the jet is up
-  EXPECT_EQ(world.body_coupling->forces_applied, 0u);  // no crate yet
+  EXPECT_EQ(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);  // no crate yet
   const glm::vec3 nozzle = world.fountain.geometry().nozzle;
-  game::throwCrate(*world.rigid_bodies, nozzle + glm::vec3(0.0f, 1.2f, 0.0f), glm::vec3(0.0f, -1.0f, 0.0f));
+  game::throwCrate(*game::findState<game::RigidBodies>(world), nozzle + glm::vec3(0.0f, 1.2f, 0.0f),
+                   glm::vec3(0.0f, -1.0f, 0.0f));
   double upward_impulse = 0.0;
   int coupled_steps = 0;
   for (int i = 0; i < 40; ++i) {
     game::stepWorld(world, &profiler);
-    const game::BodyFluidCoupling& c = *world.body_coupling;
+    const game::BodyFluidCoupling& c = *game::findState<game::SphFluid>(world)->coupling;
     if (c.coupled.size() == 1) {
       ++coupled_steps;
-      upward_impulse += world.sph_fluid->world.colliders[c.first_collider].force.y * world.step_seconds;
+      upward_impulse +=
+          game::findState<game::SphFluid>(world)->world.colliders[c.first_collider].force.y * world.step_seconds;
     }
   }
   EXPECT_EQ(world.nonfinite_state, "");
   EXPECT_GT(coupled_steps, 10);
-  EXPECT_GT(world.body_coupling->forces_applied, 0u);
+  EXPECT_GT(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);
   EXPECT_GT(upward_impulse, 0.0) << "the jet pushes the crate up";
-  const engine::BodyState crate = engine::bodyState(*world.rigid_bodies->physics, world.rigid_bodies->crates.back());
+  const engine::BodyState crate = engine::bodyState(*game::findState<game::RigidBodies>(world)->physics,
+                                                    game::findState<game::RigidBodies>(world)->crates.back());
   std::size_t inside = 0;
-  for (const glm::vec3& x : world.sph_fluid->world.particles.position) {
+  for (const glm::vec3& x : game::findState<game::SphFluid>(world)->world.particles.position) {
     const glm::vec3 local = glm::inverse(crate.rotation) * (x - crate.position);
     inside += glm::all(glm::lessThan(glm::abs(local), glm::vec3(0.2f - 1e-3f)));
   }
   EXPECT_EQ(inside, 0u);
   std::printf(
       "[ metric ] crate on the jet: coupled %d of 40 steps, upward impulse %.2f N s, forces capped %llu times\n",
-      coupled_steps, upward_impulse, static_cast<unsigned long long>(world.body_coupling->clamped));
+      coupled_steps, upward_impulse,
+      static_cast<unsigned long long>(game::findState<game::SphFluid>(world)->coupling->clamped));
 }

@@ -60,7 +60,7 @@ TEST_F(SpriteGl, ASceneWithoutSpritesCreatesNoGlParticleResources) {
         << error;
     game::attachWorldGpu(world, kShaders, game::contentDir());
     for (int i = 0; i < 3; ++i) game::stepWorld(world, nullptr);
-    EXPECT_EQ(world.sprite_particles, nullptr);
+    EXPECT_EQ(game::findState<game::SpriteParticles>(world), nullptr);
     EXPECT_EQ(countGlObjects(), before) << "a scene without sprite_particles created GL objects";
     game::detachWorldGpu(world);
   }
@@ -73,7 +73,7 @@ TEST_F(SpriteGl, ASceneWithoutSpritesCreatesNoGlParticleResources) {
     game::attachWorldGpu(world, kShaders, game::contentDir());
     game::stepWorld(world, nullptr);
     EXPECT_EQ(countGlObjects(), before);
-    EXPECT_EQ(game::liveSprites(*world.sprite_particles), 0u);
+    EXPECT_EQ(game::liveSprites(*game::findState<game::SpriteParticles>(world)), 0u);
   }
   // The positive control: the same count sees the sprites' textures, FBOs and programs, and
   // detaching frees every one of them.
@@ -82,10 +82,11 @@ TEST_F(SpriteGl, ASceneWithoutSpritesCreatesNoGlParticleResources) {
                                game::contentDir(), world, error))
       << error;
   game::attachWorldGpu(world, kShaders, game::contentDir());
-  ASSERT_TRUE(world.sprite_particles->gpu.ready) << world.sprite_particles->gpu_error;
+  ASSERT_TRUE(game::findState<game::SpriteParticles>(world)->gpu.ready)
+      << game::findState<game::SpriteParticles>(world)->gpu_error;
   for (int i = 0; i < 3; ++i) game::stepWorld(world, nullptr);
   EXPECT_GT(countGlObjects(), before + 10);
-  EXPECT_GT(game::liveSprites(*world.sprite_particles), 0u);
+  EXPECT_GT(game::liveSprites(*game::findState<game::SpriteParticles>(world)), 0u);
   game::detachWorldGpu(world);
   EXPECT_EQ(countGlObjects(), before) << "detachWorldGpu left GL objects behind";
 }
@@ -99,7 +100,7 @@ TEST_F(SpriteGl, BudgetHoldsAndLiveCountFollowsBirthsAndDeaths) {
       game::contentDir(), world, error))
       << error;
   game::attachWorldGpu(world, kShaders, game::contentDir());
-  game::SpriteParticles& s = *world.sprite_particles;
+  game::SpriteParticles& s = *game::findState<game::SpriteParticles>(world);
   ASSERT_TRUE(s.gpu.ready) << s.gpu_error;
   s.readback_every = 1;
   std::uint32_t most = 0;
@@ -143,10 +144,11 @@ TEST(RunSceneSprites, FountainSpritesAreAliveFiniteOutsideAndDrawn) {
   float lowest = 1e9f, highest = -1e9f;
   bool finite = true;
   options.hooks.before_steps = [](game::FrameInput& input) {
-    if (input.world.sprite_particles) input.world.sprite_particles->readback_every = 1;
+    if (game::findState<game::SpriteParticles>(input.world))
+      game::findState<game::SpriteParticles>(input.world)->readback_every = 1;
   };
   options.hooks.after_frame = [&](const game::FrameResult& frame) {
-    const game::SpriteParticles& s = *frame.world.sprite_particles;
+    const game::SpriteParticles& s = *game::findState<game::SpriteParticles>(frame.world);
     live = game::liveSprites(s);
     samples = static_cast<std::uint32_t>(s.sample_positions.size());
     spray = s.born_spray;

@@ -53,9 +53,11 @@ TEST(SpriteReadBack, NonFiniteValuesAreNamed) {
   std::string error;
   ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sprite_particles": {}}})"), game::contentDir(), world, error))
       << error;
-  world.sprite_particles->sample_positions = {glm::vec4(0.0f, 1.0f, 0.0f, 1.0f)};
-  world.sprite_particles->sample_velocities = {glm::vec4(0.0f), glm::vec4(0.0f, INFINITY, 0.0f, 1.0f)};
-  EXPECT_EQ(game::findNonFiniteSprite(*world.sprite_particles), "sprite_particles: live sprite 1 velocity.y = inf");
+  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(0.0f, 1.0f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->sample_velocities = {glm::vec4(0.0f),
+                                                                      glm::vec4(0.0f, INFINITY, 0.0f, 1.0f)};
+  EXPECT_EQ(game::findNonFiniteSprite(*game::findState<game::SpriteParticles>(world)),
+            "sprite_particles: live sprite 1 velocity.y = inf");
   game::stepWorld(world, nullptr);
   EXPECT_EQ(world.nonfinite_state, "sprite_particles: live sprite 1 velocity.y = inf at step 1");
 }
@@ -74,7 +76,7 @@ class SprayFromSph : public ::testing::Test {
   std::size_t emit(const game::SpriteParticleParams& p, std::uint64_t seed, engine::BirthBatch& batch) {
     double debt = 0.0;
     batch.clear();
-    return game::emitSprayFromSph(*world.sph_fluid, p, 1.0f / 60.0f, seed, debt, batch);
+    return game::emitSprayFromSph(*game::findState<game::SphFluid>(world), p, 1.0f / 60.0f, seed, debt, batch);
   }
   game::World world;
   game::SpriteParticleParams params;
@@ -85,7 +87,7 @@ TEST_F(SprayFromSph, FastSurfaceParticlesEmitAndSpritesInheritTheFluidVelocity) 
   const std::size_t n = emit(params, 5, batch);
   ASSERT_GT(n, 0u);
   ASSERT_EQ(batch.size(), n);
-  const fluid::SphWorld& w = world.sph_fluid->world;
+  const fluid::SphWorld& w = game::findState<game::SphFluid>(world)->world;
   const float dt = 1.0f / 60.0f, r = w.params.particle_radius;
   for (std::size_t k = 0; k < n; ++k) {
     EXPECT_EQ(batch.types[k], game::kSprayType);

@@ -218,9 +218,10 @@ class SoakMonitorOnFountain : public ::testing::Test {
       game::soakBeforeStep(monitor, world, world.steps);
       game::stepWorld(world, nullptr);
     }
-    ASSERT_GT(world.sph_fluid->world.particles.size(), 0u);
+    ASSERT_GT(game::findState<game::SphFluid>(world)->world.particles.size(), 0u);
     // No GL here: the sprites' colliders are baked on the CPU, their read-back is set by hand.
-    ASSERT_TRUE(game::bakeSpriteColliders(*world.sprite_particles, game::contentDir(), error)) << error;
+    ASSERT_TRUE(game::bakeSpriteColliders(*game::findState<game::SpriteParticles>(world), game::contentDir(), error))
+        << error;
   }
   game::World world;
   game::SoakMonitor monitor;
@@ -236,25 +237,27 @@ TEST_F(SoakMonitorOnFountain, AHealthyWorldPasses) {
 
 TEST_F(SoakMonitorOnFountain, AnSphParticleInTheBasinWallFails) {
   const game::FountainGeometry& g = world.fountain.geometry();
-  world.sph_fluid->world.particles.position[0] = {0.5f * (g.basin_inner_radius + g.basin_outer_radius), 0.4f, 0.0f};
+  game::findState<game::SphFluid>(world)->world.particles.position[0] = {
+      0.5f * (g.basin_inner_radius + g.basin_outer_radius), 0.4f, 0.0f};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("step 40: sph particle id"), std::string::npos) << monitor.failure;
 }
 
 TEST_F(SoakMonitorOnFountain, ASpriteUnderTheGroundFails) {
   // A read-back sprite 2.8 radii under the ground (the fountain's sprites are 0.018 m).
-  world.sprite_particles->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f), glm::vec4(5.0f, -0.05f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f),
+                                                                     glm::vec4(5.0f, -0.05f, 0.0f, 1.0f)};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("live sprite 1 (ground.obj)"), std::string::npos) << monitor.failure;
 }
 
 TEST_F(SoakMonitorOnFountain, ASpriteInTheAirPasses) {
-  world.sprite_particles->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f)};
   EXPECT_TRUE(game::soakAfterFrame(monitor, world)) << monitor.failure;
 }
 
 TEST_F(SoakMonitorOnFountain, ASunkCrateFails) {
-  world.rigid_bodies->current[2].position = {6.0f, -0.1f, 0.0f};  // centre under the ground
+  game::findState<game::RigidBodies>(world)->current[2].position = {6.0f, -0.1f, 0.0f};  // centre under the ground
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("crate 2"), std::string::npos) << monitor.failure;
 }
@@ -269,21 +272,21 @@ TEST_F(SoakMonitorOnFountain, ARecordedNonFiniteStateFails) {
 // A system that refuses content at run time does not end the game: the world counts the failure
 // (not as a NaN), the next frame meshes again, and the soak reports it.
 TEST_F(SoakMonitorOnFountain, AMesherFailureIsCountedTheGameGoesOnAndTheSoakFails) {
-  ASSERT_NE(world.fluid_surface, nullptr);
-  const float threshold = world.fluid_surface->params.threshold;
-  world.fluid_surface->params.threshold = -1.0f;  // refused by fluid::validateSurface
+  ASSERT_NE(game::findState<game::FluidSurface>(world), nullptr);
+  const float threshold = game::findState<game::FluidSurface>(world)->params.threshold;
+  game::findState<game::FluidSurface>(world)->params.threshold = -1.0f;  // refused by fluid::validateSurface
   game::meshWorld(world, nullptr);
   EXPECT_EQ(world.failures.count, 1u);
   EXPECT_NE(world.failures.first.find("fluid_surface: surface params: threshold"), std::string::npos)
       << world.failures.first;
   EXPECT_NE(world.failures.first.find("at step 40"), std::string::npos) << world.failures.first;
   EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
-  EXPECT_TRUE(world.fluid_surface->mesh.indices.empty());
-  world.fluid_surface->params.threshold = threshold;
+  EXPECT_TRUE(game::findState<game::FluidSurface>(world)->mesh.indices.empty());
+  game::findState<game::FluidSurface>(world)->params.threshold = threshold;
   game::stepWorld(world, nullptr);
   game::meshWorld(world, nullptr);
   EXPECT_EQ(world.failures.count, 1u);
-  EXPECT_GT(world.fluid_surface->mesh.indices.size(), 0u);  // meshed again the next frame
+  EXPECT_GT(game::findState<game::FluidSurface>(world)->mesh.indices.size(), 0u);  // meshed again the next frame
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("run-time failure: fluid_surface: surface params"), std::string::npos)
       << monitor.failure;

@@ -1,0 +1,88 @@
+#pragma once
+// The engine owns the frame. The game describes what to draw as batches (FrameBatches) and calls
+// renderFrame; it never calls GL. Passes, in order, all into the renderer's scene FBO:
+//   1. shadow map, opaque meshes, sky    renderScene (renderer.hpp)
+//   2. water, one pass per WaterBatch    the opaque colour + depth are copied into the water
+//      renderer's own targets (its background), then the water is drawn back into the scene FBO:
+//      the marching-slices mesh blended in the order it was emitted (back-to-front), or the
+//      particles straight (screen-space splats, ray-cast metaballs) (engine/fluid_render)
+//   3. sprites, one pass per system      a few odd-even merge-sort passes for the eye (Kolb 2004
+//      §3.3.3), then point sprites depth-tested against the scene, not written
+// Every pass keeps the scene's alpha at 1 (PNG screenshots would otherwise turn see-through).
+// The UI (engine/ui) is drawn over the window after presentToWindow.
+
+#include "engine/fluid_render/fluid_render.hpp"
+#include "engine/fluid_render/particle_pass.hpp"
+#include "engine/fluid_render/raycast.hpp"
+#include "engine/fluid_render/screen_space.hpp"
+#include "engine/gpu_particles/gpu_particles.hpp"
+#include "engine/render/renderer.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <vector>
+
+namespace engine {
+
+// The ray-cast renderer's fragment-list use in its last frame (RaycastRenderer used/dropped/
+// pool_records/max_pool_records).
+struct RaycastCounts {
+  std::uint64_t records = 0, dropped = 0, pool = 0, pool_bound = 0;
+};
+
+// One body of water. The spans must stay valid until renderFrame returns.
+struct WaterBatch {
+  FluidMethod method = FluidMethod::mesh;
+  FluidStyle style = FluidStyle::water;  // mesh: refractive water, or opaque goo (depth-tested)
+  glm::vec3 goo_colour{0.35f, 0.8f, 0.2f};
+  bool visible = true;  // false: not drawn, but its renderer's GL objects are kept for later frames
+  // method mesh: the surface, triangles in draw order (back-to-front for blending).
+  std::span<const glm::vec3> positions, normals;
+  std::span<const std::uint32_t> indices;
+  // methods screen_space and raycast: the particle centres.
+  std::span<const glm::vec3> particles;
+  float rc = 0.1f;         // field cutoff (m): the same field for all three methods
+  float threshold = 0.2f;  // iso level of that field (raycast)
+  float refraction = 0.08f, opacity = 0.85f;
+  glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre, RGB
+  RaycastCounts* raycast_counts = nullptr;   // method raycast: filled after the draw (may be null)
+};
+
+struct FrameBatches {
+  std::vector<DrawItem> opaque;        // pass 1, in draw order
+  std::vector<WaterBatch> water;       // pass 2
+  std::vector<GpuParticles*> sprites;  // pass 3: ready systems only
+  void clear() {
+    opaque.clear();
+    water.clear();
+    sprites.clear();
+  }
+};
+
+// The water renderers of one water slot: created on first need, recreated when the frame size or
+// the method changes; only the chosen method's renderer holds GL objects. A renderer whose
+// shaders failed stays unready: the frame goes on without that water (the error printed once).
+struct WaterRenderers {
+  FluidRenderer mesh;
+  ScreenSpaceRenderer screen_space;
+  RaycastRenderer raycast;
+  FluidMethod method = FluidMethod::mesh;
+  bool created = false;
+  int width = 0, height = 0;
+};
+
+struct FramePasses {
+  std::filesystem::path shader_dir;   // fluid/*.vert, *.frag live below it
+  std::vector<WaterRenderers> water;  // slot i draws FrameBatches::water[i]
+};
+
+// Draws the whole frame into renderer.scene_fbo. Needs the GL context current. Water slots
+// beyond this frame's batches are released.
+void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view, const Lighting& lighting,
+                 const FrameBatches& batches);
+
+// Frees every water renderer (context current).
+void releaseFramePasses(FramePasses& passes);
+
+}  // namespace engine

@@ -1,0 +1,143 @@
+#pragma once
+// A game effect is one unit: an EffectDesc (name, doc, parameter table, what it needs) and the
+// Effect object it builds. World holds the built effects in registry order and loops over them;
+// nothing outside game/effects/ names a particular effect to build, step, tune or draw it.
+//
+// Life of an effect (World, game/world/world.cpp):
+//   desc.build(section, ctx)    the scene lists it: parse its table, build its state, publish
+//                               what it offers the others into EffectLinks
+//   attachGpu / detachGpu       GL context current (runScene only; `replay --no-render` never does)
+//   step                        one fixed step, in registry order (a later effect sees this step's
+//                               state of an earlier one: sprites spray from this step's water)
+//   prepareFrame                once per rendered frame, after the steps (CPU meshing)
+//   submit                      what the renderer draws this frame (engine::FrameBatches)
+//   applyLive                   the overlay edited its section: re-parse the table and re-derive the
+//                               dependent values by the same code `build` uses
+// Effects talk to each other only through EffectLinks (one slot per capability, filled at build).
+//
+// Adding an effect: one file game/effects/<name>.cpp defining `const EffectDesc& <name>Effect()`,
+// one line in game/effects/registry.cpp, and the file in game/effects/sources.cmake.
+
+#include "engine/profile/profiler.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace engine {
+struct FrameBatches;
+}  // namespace engine
+
+namespace game {
+
+struct RigidBodies;
+struct SphFluid;
+
+// What effects offer each other. An effect publishes into its slot when it is built and reads
+// the slots of effects built before it (registry order); a slot stays null when no listed effect
+// offers it.
+struct EffectLinks {
+  // The particles' gravity: rigid_bodies publishes its own; (0, -9.81, 0) m/s^2 without it.
+  glm::vec3 gravity{0.0f, -9.81f, 0.0f};
+  FountainGeometry level;           // the level's shape: the nozzle, the basin
+  RigidBodies* bodies = nullptr;    // rigid_bodies: Bullet world + crates (the water pushes them)
+  const SphFluid* fluid = nullptr;  // sph_fluid: the particles (surface meshes, spray sprites)
+};
+
+struct BuildContext {
+  const SceneConfig& scene;
+  const std::filesystem::path& content_dir;
+  std::uint32_t seed = 0;  // scene.seed
+  EffectLinks& links;
+};
+
+struct StepContext {
+  double step_seconds = 1.0 / 60.0;
+  int substeps = 1;
+  engine::Profiler* profiler = nullptr;  // may be null
+  EffectLinks& links;
+};
+
+// An effect's step may fail on content without ending the game: `failure` is counted by World
+// (RuntimeFailures) and the frame goes on.
+struct StepOutcome {
+  std::string failure;  // "<effect>: <error>", empty when fine
+};
+
+struct FrameContext {
+  glm::vec3 eye{0.0f};
+  glm::vec3 view_dir{0.0f, 0.0f, -1.0f};
+  engine::Profiler* profiler = nullptr;  // may be null
+};
+
+struct LevelAssets;
+
+// What an effect hands the renderer for one frame.
+struct SubmitContext {
+  const LevelAssets& assets;  // the level's GPU meshes and textures (the crate model)
+  float alpha = 1.0f;         // interpolation between the last two steps
+};
+
+struct GpuContext {
+  const std::filesystem::path& shader_dir;
+  const std::filesystem::path& content_dir;
+  double step_seconds = 1.0 / 60.0;
+};
+
+class Effect {
+ public:
+  virtual ~Effect() = default;
+  virtual std::string_view name() const = 0;
+  virtual void applyLive(const SectionConfig& section, EffectLinks& links) = 0;
+  virtual StepOutcome step(const StepContext& ctx) = 0;
+  // Empty when every value is finite; otherwise names the first NaN/inf.
+  virtual std::string findNonFinite() const { return {}; }
+  virtual void attachGpu(const GpuContext&) {}
+  virtual void detachGpu() {}
+  // CPU work for the frame about to be drawn; false + error when the effect refused its input
+  // (the frame goes on without it).
+  virtual bool prepareFrame(const FrameContext&, std::string& /*error*/) { return true; }
+  virtual void submit(engine::FrameBatches& /*frame*/, const SubmitContext&) {}
+  virtual void drawStatus() const {}  // the overlay's status lines (ImGui text)
+};
+
+// An effect whose state other code may read (tests, soak checks, state hashes): findState<State>.
+template <class State>
+class EffectOf : public Effect {
+ public:
+  State state;
+};
+
+struct EffectDesc {
+  std::string_view name;
+  std::string_view doc;
+  std::span<const ParamSpec> params;        // the effect's parameter table as schema rows
+  std::span<const std::string_view> needs;  // effects that must be listed too
+  // Builds the effect for a listed section. False + error naming the effect, key and value.
+  std::unique_ptr<Effect> (*build)(const SectionConfig& section, BuildContext& ctx, std::string& error);
+};
+
+// Every effect the game knows, in build and step order (game/effects/registry.cpp).
+std::span<const EffectDesc* const> effectRegistry();
+const EffectDesc* findEffectDesc(std::string_view name);
+
+// A profiler phase for this scope when `profiler` is set (steps run without one in tests).
+class PhaseScope {
+ public:
+  PhaseScope(engine::Profiler* profiler, engine::Phase phase) {
+    if (profiler != nullptr) scope_.emplace(*profiler, phase);
+  }
+
+ private:
+  std::optional<engine::ScopedPhase> scope_;
+};
+
+}  // namespace game

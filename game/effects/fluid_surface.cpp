@@ -1,0 +1,136 @@
+// The `fluid_surface` effect: each frame the sph_fluid particles become the water surface,
+// meshed by marching slices (fluid/surface) or drawn straight from the particles (screen space,
+// ray casting). State and mesher glue: game/world/fluid_surface.hpp.
+#include "game/world/fluid_surface.hpp"
+#include "engine/render/frame.hpp"
+#include "game/effects/effect.hpp"
+#include "game/effects/params.hpp"
+
+#include <imgui.h>
+
+namespace game {
+namespace {
+
+constexpr std::string_view kMethodNames[] = {"mesh", "screen_space", "raycast"};
+constexpr SurfaceMethodChoice kMethodValues[] = {SurfaceMethodChoice::mesh, SurfaceMethodChoice::screen_space,
+                                                 SurfaceMethodChoice::raycast};
+constexpr std::string_view kOrderNames[] = {"sorted", "unsorted", "exact"};
+constexpr SurfaceOrderChoice kOrderValues[] = {SurfaceOrderChoice::sorted, SurfaceOrderChoice::unsorted,
+                                               SurfaceOrderChoice::exact};
+constexpr std::string_view kNeeds[] = {"sph_fluid"};
+
+engine::FluidMethod methodOf(SurfaceMethodChoice method) {
+  switch (method) {
+    case SurfaceMethodChoice::screen_space:
+      return engine::FluidMethod::screen_space;
+    case SurfaceMethodChoice::raycast:
+      return engine::FluidMethod::raycast;
+    case SurfaceMethodChoice::mesh:
+      break;
+  }
+  return engine::FluidMethod::mesh;
+}
+
+const ParamTable<FluidSurfaceParams>& table() {
+  using P = FluidSurfaceParams;
+  static const ParamTable<P> rows{
+      choice<&P::method>("method", kMethodNames, kMethodValues,
+                         "how the water is drawn: mesh (marching slices, CPU), screen_space (splat depth, bilateral "
+                         "smoothing; Janisz 3.1) or raycast (metaball fragment lists; Szecsi & Illes 2012); live"),
+      choice<&P::order>("order", kOrderNames, kOrderValues,
+                        "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)"),
+      param<&P::smoothing>("smoothing", 1.0, 4.0, "field cutoff Rc in particle spacings"),
+      param<&P::cube>("cube", 0.2, 2.0, "marching cube edge in particle spacings"),
+      param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the particle field"),
+      param<&P::refraction>("refraction", 0.0, 1.0, "screen offset per metre of water; 0 = off"),
+      param<&P::opacity>("opacity", 0.0, 1.0, "blend alpha of one water layer"),
+      param<&P::absorption>("absorption", 0.0, 50.0, "Beer-Lambert sigma per metre, RGB"),
+      param<&P::visible>("visible",
+                         "false: the water is not drawn (the same frame without it; docs/render.md's water masks); "
+                         "live"),
+  };
+  return rows;
+}
+
+class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
+ public:
+  explicit FluidSurfaceEffect(const SphFluid& fluid) : fluid_(fluid) {}
+
+  std::string_view name() const override { return "fluid_surface"; }
+
+  void applyLive(const SectionConfig& section, EffectLinks&) override { state.params = table().parse(section); }
+
+  StepOutcome step(const StepContext&) override { return {}; }  // meshes per frame, not per step
+
+  bool prepareFrame(const FrameContext& frame, std::string& error) override {
+    const PhaseScope phase(frame.profiler, engine::Phase::meshing);
+    if (meshFluidSurface(state, fluid_, frame.eye, frame.view_dir)) return true;
+    error = state.error;
+    return false;
+  }
+
+  // The mesh (back-to-front) or the particles, with the optics; the engine's water pass draws it.
+  void submit(engine::FrameBatches& frame, const SubmitContext&) override {
+    const FluidSurfaceParams& p = state.params;
+    engine::WaterBatch water;
+    water.method = methodOf(p.method);
+    water.visible = p.visible;
+    water.positions = state.mesh.positions;
+    water.normals = state.mesh.normals;
+    water.indices = state.mesh.indices;
+    water.particles = fluid_.world.particles.position;
+    // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
+    water.rc = p.smoothing * fluid::sphSpacing(fluid_.world.params);
+    water.threshold = p.threshold;
+    water.refraction = p.refraction;
+    water.opacity = p.opacity;
+    water.absorption = p.absorption;
+    water.raycast_counts = &state.raycast;
+    frame.water.push_back(water);
+  }
+
+  // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases
+  // summed over blocks).
+  void drawStatus() const override {
+    const fluid::SurfaceStats& surface = state.mesh.stats;
+    ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(surface.triangles),
+                surface.blocks);
+    ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
+                surface.marchMs, surface.prepareMs + surface.gatherMs);
+    if (state.params.method == SurfaceMethodChoice::raycast) {
+      ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
+                  static_cast<unsigned long long>(state.raycast.records),
+                  static_cast<unsigned long long>(state.raycast.dropped),
+                  static_cast<double>(state.raycast.pool) * 16.0 / (1024.0 * 1024.0));
+    }
+  }
+
+ private:
+  const SphFluid& fluid_;
+};
+
+std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
+  if (ctx.links.fluid == nullptr) {  // World checks `needs` first; this guards a direct call
+    error = "fluid_surface: needs sph_fluid";
+    return nullptr;
+  }
+  auto effect = std::make_unique<FluidSurfaceEffect>(*ctx.links.fluid);
+  effect->state.params = table().parse(section);
+  return effect;
+}
+
+}  // namespace
+
+bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& /*error*/) {
+  out = table().parse(section);  // the schema admits only the listed methods and orders
+  return true;
+}
+
+const EffectDesc& fluidSurfaceEffect() {
+  static const EffectDesc desc{"fluid_surface",
+                               "marching-slices mesh of sph_fluid drawn as refractive water (needs sph_fluid)",
+                               table().specs, kNeeds, &build};
+  return desc;
+}
+
+}  // namespace game

@@ -1,0 +1,30 @@
+// Every effect the game knows, in build and step order: an effect may read what the effects
+// above it publish (EffectLinks), and steps after them. One line per effect.
+#include "game/effects/effect.hpp"
+
+#include <array>
+
+namespace game {
+
+const EffectDesc& rigidBodiesEffect();
+const EffectDesc& sphFluidEffect();
+const EffectDesc& spriteParticlesEffect();
+const EffectDesc& fluidSurfaceEffect();
+
+std::span<const EffectDesc* const> effectRegistry() {
+  static const std::array kEffects = {
+      &rigidBodiesEffect(),      // publishes gravity and the crates
+      &sphFluidEffect(),         // couples to the crates; publishes the particles
+      &spriteParticlesEffect(),  // sprays from this step's particles
+      &fluidSurfaceEffect(),     // meshes the particles per frame
+  };
+  return kEffects;
+}
+
+const EffectDesc* findEffectDesc(std::string_view name) {
+  for (const EffectDesc* desc : effectRegistry())
+    if (desc->name == name) return desc;
+  return nullptr;
+}
+
+}  // namespace game

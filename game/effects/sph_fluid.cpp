@@ -1,0 +1,122 @@
+// The `sph_fluid` effect: the fountain's water as a CPU SPH fluid (fluid/sph), coupled two-way to
+// the crates when rigid_bodies is listed. State and setup: game/world/sph_fluid.hpp.
+#include "game/world/sph_fluid.hpp"
+#include "game/effects/effect.hpp"
+#include "game/effects/params.hpp"
+#include "game/world/fountain.hpp"
+#include "game/world/rigid_bodies.hpp"
+
+namespace game {
+namespace {
+
+constexpr std::string_view kSolverNames[] = {"dfsph", "wcsph"};
+constexpr fluid::SphSolverKind kSolverValues[] = {fluid::SphSolverKind::dfsph, fluid::SphSolverKind::wcsph};
+
+const ParamTable<SphFluidParams>& table() {
+  using P = SphFluidParams;
+  static const ParamTable<P> rows{
+      choice<&P::solver>("solver", kSolverNames, kSolverValues,
+                         "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)"),
+      param<&P::max_particles>("max_particles", 1, 50000,
+                               "particle budget (fixed at construction; the jet pauses at it)"),
+      param<&P::particle_radius>("particle_radius", 0.01, 0.2, "r (m); spacing 2r (fixed at construction)"),
+      param<&P::jet_speed>("jet_speed", 0.1, 20.0,
+                           "speed of the jet at the nozzle (m/s); live, with the speed cap, sound speed and top sink"),
+      param<&P::nozzle_radius>("nozzle_radius", 0.0, 0.5,
+                               "radius of the nozzle disc (m); particles per layer = lattice points inside"),
+      param<&P::rate>("rate", 0.0, 50000.0, "particles emitted per second (capped: layers never overlap)"),
+      param<&P::viscosity>("viscosity", 0.0, 1.0, "kinematic viscosity nu (m^2/s)"),
+      param<&P::drain>("drain", "four drains at the basin wall recycle the water"),
+      param<&P::cfl>("cfl", 0.05, 1.0, "CFL number: a step moves no particle more than cfl * 2r"),
+      param<&P::max_time_step>("max_time_step", 0.0005, 0.05, "upper bound of one adaptive SPH step (s)"),
+      param<&P::density_error>("density_error", 0.00001, 0.05,
+                               "dfsph: mean density error tolerance of the pressure solve (0.0005 = 0.05 %)"),
+      param<&P::force_bound>(
+          "force_bound", 0.0, 1.0,
+          "dfsph: force condition |g| dt^2 <= force_bound * cfl * 2r (keeps resting water still); 0 = off"),
+      param<&P::warm_start>("warm_start",
+                            "dfsph: start the density solve from 0.4 x the previous step's stiffness (Bender & "
+                            "Koschier 2017 sec. 4.3; fluid::SphParams::warm_start); false = from zero"),
+      param<&P::couple_bodies>("couple_bodies",
+                               "crates and water push each other, two-way (only when rigid_bodies is listed too; "
+                               "fixed at construction)"),
+  };
+  return rows;
+}
+
+class SphFluidEffect final : public EffectOf<SphFluid> {
+ public:
+  SphFluidEffect(RigidBodies* bodies, const FountainGeometry& level) : bodies_(bodies), level_(level) {}
+
+  std::string_view name() const override { return "sph_fluid"; }
+
+  // Everything but the construction-time fields, re-derived by initSphFluid's own code.
+  void applyLive(const SectionConfig& section, EffectLinks& links) override {
+    SphFluidParams fresh = table().parse(section);
+    const SphFluidParams& built = state.params;
+    fresh.solver = built.solver;
+    fresh.max_particles = built.max_particles;
+    fresh.particle_radius = built.particle_radius;
+    fresh.nozzle_radius = built.nozzle_radius;
+    fresh.drain = built.drain;
+    fresh.couple_bodies = built.couple_bodies;
+    state.params = fresh;
+    deriveSphFluid(fresh, level_, links.gravity, state.world);
+  }
+
+  StepOutcome step(const StepContext& ctx) override {
+    const PhaseScope phase(ctx.profiler, engine::Phase::fluid);
+    // Staggered two-way coupling: the crates as they are after this physics step push the water;
+    // the water's push on them acts during the next physics step.
+    BodyFluidCoupling* coupling = state.coupling.get();
+    if (coupling) collidersFromBodies(*coupling, *bodies_->physics, bodies_->crates, state.world);
+    StepOutcome outcome;
+    const bool was_running = state.error.empty();
+    if (!stepSphFluid(state, ctx.step_seconds) && was_running)
+      outcome.failure = "sph_fluid: " + state.error + " (the fluid stops stepping)";
+    if (coupling) coupling_error_ = forcesToBodies(*coupling, state.world, *bodies_->physics);
+    return outcome;
+  }
+
+  std::string findNonFinite() const override {
+    std::string bad = findNonFiniteSph(state);
+    return bad.empty() ? coupling_error_ : bad;
+  }
+
+ private:
+  RigidBodies* bodies_;
+  FountainGeometry level_;
+  std::string coupling_error_;  // a non-finite force of the last step's coupling
+};
+
+std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
+  auto effect = std::make_unique<SphFluidEffect>(ctx.links.bodies, ctx.links.level);
+  const SphFluidParams params = table().parse(section);
+  if (!initSphFluid(effect->state, params, ctx.links.level, ctx.links.gravity, error)) return nullptr;
+  if (ctx.links.bodies != nullptr && params.couple_bodies) {
+    // Crates couple while their centre is within a crate's reach of the fluid's grid domain.
+    const fluid::SphWorld& sph = effect->state.world;
+    const glm::vec3 half(0.5f * ctx.links.bodies->params.crate_size);
+    const glm::vec3 reach(glm::length(half));
+    effect->state.coupling = std::make_shared<BodyFluidCoupling>();
+    initBodyFluidCoupling(*effect->state.coupling, sph, half, sph.params.domain_min - reach,
+                          sph.params.domain_max + reach);
+  }
+  ctx.links.fluid = &effect->state;
+  return effect;
+}
+
+}  // namespace
+
+bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::string& /*error*/) {
+  out = table().parse(section);  // the schema admits only the listed solvers
+  return true;
+}
+
+const EffectDesc& sphFluidEffect() {
+  static const EffectDesc desc{
+      "sph_fluid", "SPH water (CPU): nozzle jet, fountain colliders, drains", table().specs, {}, &build};
+  return desc;
+}
+
+}  // namespace game

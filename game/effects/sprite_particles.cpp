@@ -1,0 +1,125 @@
+// The `sprite_particles` effect: mist from the nozzle and spray from the SPH water as GPU
+// state-preserving particles (Kolb et al. 2004). State and GPU code: game/world/sprite_particles.hpp.
+#include "game/world/sprite_particles.hpp"
+#include "engine/render/frame.hpp"
+#include "game/effects/effect.hpp"
+#include "game/effects/params.hpp"
+#include "game/world/fountain.hpp"
+
+#include <imgui.h>
+
+#include <cstdio>
+
+namespace game {
+namespace {
+
+const ParamTable<SpriteParticleParams>& table() {
+  using P = SpriteParticleParams;
+  static const ParamTable<P> rows{
+      param<&P::rate>("rate", 0.0, 100000.0, "mist sprites emitted per second at the nozzle"),
+      param<&P::speed>("speed", 0.0, 50.0, "mist speed at the nozzle (m/s, +-20%)"),
+      param<&P::spread_degrees>("spread_degrees", 0.0, 90.0, "half-angle of the mist cone"),
+      param<&P::lifetime>("lifetime", 0.1, 60.0, "mist sprite lifetime (s, +-25%)"),
+      param<&P::max_particles>("max_particles", 0, 1000000,
+                               "GPU sprite budget, mist and spray (fixed at construction; 0 = no GPU resources)"),
+      param<&P::size>("size", 0.005, 1.0, "sprite radius (m)"),
+      param<&P::restitution>("restitution", 0.0, 1.0,
+                             "Kolb 2004 resilience: bounce off the baked ground/basin/statue depth maps"),
+      param<&P::friction>("friction", 0.0, 1.0, "Kolb 2004 friction on the baked colliders"),
+      param<&P::spray_rate>("spray_rate", 0.0, 10000.0,
+                            "Ihmsen 2012 k: spray sprites per second from a surface particle with I_k = 1 (0 = no "
+                            "spray)"),
+      param<&P::spray_energy_min>("spray_energy_min", 0.0, 1000.0,
+                                  "Ihmsen 2012 tau_k,min: specific kinetic energy |v|^2/2 (J/kg) where spray starts"),
+      param<&P::spray_energy_max>("spray_energy_max", 0.0, 1000.0,
+                                  "Ihmsen 2012 tau_k,max: |v|^2/2 (J/kg) of full spray"),
+      param<&P::spray_surface_density>("spray_surface_density", 0.0, 2.0,
+                                       "rho/rho0 at or below which an SPH particle counts as at the free surface"),
+      param<&P::spray_lifetime>("spray_lifetime", 0.1, 60.0, "spray sprite lifetime (s, +-25%)"),
+      param<&P::spray_max_per_step>("spray_max_per_step", 0, 100000, "cap on spray births per step"),
+  };
+  return rows;
+}
+
+class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
+ public:
+  explicit SpriteParticlesEffect(const SphFluid* fluid) : fluid_(fluid) {}
+
+  std::string_view name() const override { return "sprite_particles"; }
+
+  void applyLive(const SectionConfig& section, EffectLinks& links) override {
+    state.params = spriteParamsFrom(section, links.gravity, links.level.nozzle);
+  }
+
+  // After the water (registry order): spray is born from this step's SPH state. GPU work; a
+  // no-op without a GL context (attachGpu), so it only enters the phase when attached.
+  StepOutcome step(const StepContext& ctx) override {
+    if (!state.attached) return {};
+    const PhaseScope phase(ctx.profiler, engine::Phase::fluid);
+    stepSpriteParticles(state, fluid_, static_cast<float>(ctx.step_seconds));
+    return {};
+  }
+
+  std::string findNonFinite() const override { return findNonFiniteSprite(state); }
+
+  void attachGpu(const GpuContext& gpu) override {
+    if (!attachSpriteGpu(state, gpu.shader_dir, gpu.content_dir, static_cast<float>(gpu.step_seconds)))
+      std::fprintf(stderr, "fluiddemo: sprite_particles off: %s\n", state.gpu_error.c_str());
+  }
+  void detachGpu() override { detachSpriteGpu(state); }
+
+  void submit(engine::FrameBatches& frame, const SubmitContext&) override {
+    if (state.attached && state.gpu.ready) frame.sprites.push_back(&state.gpu);
+  }
+
+  // The CPU index allocator (Kolb §3.3.1) knows every live sprite without a read-back.
+  void drawStatus() const override {
+    const SpriteParticles& s = state;
+    if (!s.gpu_error.empty()) {
+      ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "sprites off: %s", s.gpu_error.c_str());
+      return;
+    }
+    if (!s.attached) {
+      ImGui::Text("sprites: no GL context (not simulated)");
+      return;
+    }
+    const engine::IndexAllocator& a = s.gpu.allocator;
+    ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
+                s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
+    ImGui::Text("  born: mist %llu, spray %llu (%u this step), dropped (budget full) %llu",
+                static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
+                s.spray_last_step, static_cast<unsigned long long>(s.dropped));
+    ImGui::Text("  sort pass %u of %u, colliders baked in %.0f ms", s.gpu.sort_step,
+                engine::sortPassCount(s.gpu.capacity), s.bake_ms);
+  }
+
+ private:
+  const SphFluid* fluid_;  // spray source (null without sph_fluid)
+};
+
+std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& /*error*/) {
+  auto effect = std::make_unique<SpriteParticlesEffect>(ctx.links.fluid);
+  const SpriteParticleParams params = spriteParamsFrom(section, ctx.links.gravity, ctx.links.level.nozzle);
+  initSpriteParticles(effect->state, params, params.max_particles, ctx.seed ^ 0x9e3779b9u);
+  return effect;
+}
+
+}  // namespace
+
+SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gravity, glm::vec3 nozzle) {
+  SpriteParticleParams p = table().parse(section);
+  p.gravity = gravity;
+  p.nozzle = nozzle;
+  return p;
+}
+
+const EffectDesc& spriteParticlesEffect() {
+  static const EffectDesc desc{"sprite_particles",
+                               "GPU sprites (Kolb 2004): nozzle mist and SPH spray, depth-map collisions",
+                               table().specs,
+                               {},
+                               &build};
+  return desc;
+}
+
+}  // namespace game
