@@ -88,8 +88,8 @@ struct SphParams {
   // [--set warm_start=1], 2,000 particles, v_rms over the second second) it raises v_rms from
   // 10.5 to 22.4 mm/s (0.05 x: 18.2, 0.1 x: 19.5), above the 1 % of sqrt(g h) = 14 mm/s that the
   // at-rest test of tests/sph allows, for 5.8 instead of 7.4 iterations per step. The divergence
-  // solve is not warm-started (it added energy to a jet hitting a collider in the randomised
-  // stability test).
+  // solve is never warm-started: the pushes it repeats are never taken back, which adds energy to
+  // a jet hitting a collider.
   bool warm_start = false;
 
   // Neighbour grid extent (the grid clamps stray particles into its border cells).
@@ -135,7 +135,7 @@ struct SphCollider {
 // Whether the collider moves during a step (integrate_pose with a non-zero velocity). The
 // end-of-step collision passes project particles out of moving colliders first and out of still
 // ones last, so where a moving collider overlaps a still one (no position outside both) the
-// particle ends outside the still one: still colliders win (see stepSph, section 7).
+// particle ends outside the still one: still colliders win (collisions.cpp, resolveCollisions).
 inline bool sphColliderMoves(const SphCollider& c) {
   return c.integrate_pose && (glm::dot(c.pose.linear_velocity, c.pose.linear_velocity) > 0.0f ||
                               glm::dot(c.pose.angular_velocity, c.pose.angular_velocity) > 0.0f);
@@ -204,7 +204,7 @@ struct SphScratch {
   // counts[i]) (DFSPH: a fresh search, so that is up to offsets[i + 1]; WCSPH: the front of i's
   // Verlet range, filtered by the density pass).
   NeighborLists neighbors;
-  // WCSPH Verlet list (radius H + skin) and the positions it was built at (see stepSph).
+  // WCSPH Verlet list (radius H + skin) and the positions it was built at (neighbor_step.cpp).
   NeighborLists verlet;
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;

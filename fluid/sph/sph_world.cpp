@@ -1,5 +1,5 @@
 // World management for fluid/sph: parameters, particle insertion/removal, emitters, sinks,
-// diagnostics and the substepping driver. The solvers are in sph_solver.cpp.
+// diagnostics and the substepping driver. The step is in sph_step.cpp.
 #include "fluid/sph/sph.hpp"
 
 #include "fluid/core/parallel.hpp"
@@ -228,7 +228,7 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     if (steps++ >= max_steps) return {"advanceSph: more than max_steps steps needed"};
     SphStepStats stats;
     // The remaining time is spread over equal steps (stepSphWithin): a step cut to land on the
-    // target could be a sliver, which DFSPH turns into a velocity kick (sph_solver.cpp, chooseDt).
+    // target could be a sliver, which DFSPH turns into a velocity kick (time_step.cpp).
     SphStatus status = stepSphWithin(world, target - world.time, &stats);
     if (!status.ok()) return status;
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
