@@ -110,8 +110,11 @@ void finishStep(StepContext& context, float requested) {
   stats.divergence_iterations = context.divergence_iterations;
   stats.particles = context.count;
   stats.dt_limited_by_request = requested < params.max_time_step && dt >= requested;
-  // The speed cap and the kinetic energy in one pass (the energy of the capped velocities).
-  std::vector<glm::vec3>& velocities = context.particles.velocity;
+  // The speed cap, the kinetic energy (of the capped velocities) and the SoA position arrays the
+  // surface mesher reads (sphPositionArrays) in one pass.
+  ParticleStore& store = context.particles;
+  std::vector<glm::vec3>& velocities = store.velocity;
+  for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(context.count);
   const double sum_v2 = reduce(
       context.count, 0.0,
       [&](std::size_t i, double& acc) {
@@ -120,6 +123,10 @@ void finishStep(StepContext& context, float requested) {
           if (speed > params.max_speed) velocities[i] *= params.max_speed / speed;
         }
         acc += glm::dot(velocities[i], velocities[i]);
+        const glm::vec3 x = store.position[i];
+        store.position_x[i] = x.x;
+        store.position_y[i] = x.y;
+        store.position_z[i] = x.z;
       },
       [](double a, double b) { return a + b; });
   stats.kinetic_energy = static_cast<float>(0.5 * context.mass * sum_v2);
