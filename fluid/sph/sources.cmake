@@ -14,5 +14,6 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/wcsph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/dfsph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collisions.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/blast.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_scenes.cpp
 )
