@@ -78,7 +78,7 @@ struct SphParams {
   // pairs) while the mean density error stays within the tolerance: docs/sph.md, dambreak_box
   // rows with and without "min 2 iterations" (scene key min_iterations).
   int min_iterations = 1;
-  int max_iterations = 100;             // per solve, >= 1
+  int max_iterations = 100;  // per solve, >= 1
   bool divergence_solver = true;
   // Warm start (2017 §4.3) of the constant-density solve: it starts from 0.2 x the previous
   // step's summed stiffness (kappa/rho; scaled down when dt grew), applied only to particles that
@@ -230,10 +230,10 @@ struct SphScratch {
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp;
-  std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
-  std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
-  std::vector<glm::vec3> emitter_crowd;    // applyEmitters: the particles near the layer being placed
-  std::vector<float> emitter_crowd_density;  // applyEmitters: their SPH density (kg/m^3) with the layer so far
+  std::vector<std::uint32_t> sorted_keys;     // the grid's cell keys in re-sorted order (swapped into the grid)
+  std::vector<std::uint32_t> keep;            // per particle: 0 when inside a sink at the start of the step
+  std::vector<glm::vec3> emitter_crowd;       // applyEmitters: the particles near the layer being placed
+  std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions

@@ -128,8 +128,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   s.id.reserve(capacity);
   for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->reserve(capacity);
   SphScratch& w = world.scratch;
-  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel})
-    v->reserve(capacity);
+  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel}) v->reserve(capacity);
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
                   &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
