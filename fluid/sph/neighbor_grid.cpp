@@ -193,7 +193,7 @@ std::uint32_t* scanRows(const RowScan& a, std::uint32_t self, glm::vec3 p, std::
 // does not enable it, so nothing is contracted): the lists are identical to the SSE2 scan's.
 // Bit l set: candidate t + l (< e) lies within the radius, |p - x|^2 < r^2 (the SSE2 scan's test).
 __attribute__((target("avx2"))) inline unsigned inRange8(const RowScan& a, std::uint32_t t, std::uint32_t e, __m256 px,
-                                                          __m256 py, __m256 pz, __m256 rr) {
+                                                         __m256 py, __m256 pz, __m256 rr) {
   const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(a.sx + t));
   const __m256 dy = _mm256_sub_ps(py, _mm256_loadu_ps(a.sy + t));
   const __m256 dz = _mm256_sub_ps(pz, _mm256_loadu_ps(a.sz + t));
@@ -205,8 +205,7 @@ __attribute__((target("avx2"))) inline unsigned inRange8(const RowScan& a, std::
 
 __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2(const RowScan& a, std::uint32_t self, glm::vec3 p,
                                                             std::uint32_t* out) {
-  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z),
-               rr = _mm256_set1_ps(a.r2);
+  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z), rr = _mm256_set1_ps(a.r2);
   for (std::size_t k = 0; k < a.rows; ++k) {
     const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
     for (std::uint32_t t = b; t < e; t += 8) {
@@ -248,8 +247,7 @@ constexpr PackTable kPack = makePackTable();
 
 __attribute__((target("avx2"))) std::uint32_t* scanRowsAvx2Packed(const RowScan& a, std::uint32_t self, glm::vec3 p,
                                                                   std::uint32_t* out) {
-  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z),
-               rr = _mm256_set1_ps(a.r2);
+  const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z), rr = _mm256_set1_ps(a.r2);
   for (std::size_t k = 0; k < a.rows; ++k) {
     const std::uint32_t b = a.runs[2 * k], e = a.runs[2 * k + 1];
     for (std::uint32_t t = b; t < e; t += 8) {
@@ -350,13 +348,15 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
         while (group_end < end && grid.particle_key[identity ? group_end : order[group_end]] == key) ++group_end;
         // The cell's coordinates from its key (row-major, x fastest).
         const int cx = static_cast<int>(key % static_cast<std::uint32_t>(grid.dims.x));
-        const int cy = static_cast<int>((key / static_cast<std::uint32_t>(grid.dims.x)) % static_cast<std::uint32_t>(grid.dims.y));
+        const int cy =
+            static_cast<int>((key / static_cast<std::uint32_t>(grid.dims.x)) % static_cast<std::uint32_t>(grid.dims.y));
         const int cz = static_cast<int>(key / static_cast<std::uint32_t>(grid.dims.x * grid.dims.y));
         const int x0 = std::max(cx - reach, 0), x1 = std::min(cx + reach, grid.dims.x - 1);
         std::size_t rows = 0, candidates = 0;
         for (int z = std::max(cz - reach, 0); z <= std::min(cz + reach, grid.dims.z - 1); ++z)
           for (int y = std::max(cy - reach, 0); y <= std::min(cy + reach, grid.dims.y - 1); ++y) {
-            const std::uint32_t b = grid.cell_start[grid.keyOf({x0, y, z})], e = grid.cell_start[grid.keyOf({x1, y, z}) + 1];
+            const std::uint32_t b = grid.cell_start[grid.keyOf({x0, y, z})],
+                                e = grid.cell_start[grid.keyOf({x1, y, z}) + 1];
             if (b == e) continue;
             runs[2 * rows] = b;
             runs[2 * rows + 1] = e;

@@ -34,6 +34,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -77,7 +78,7 @@ struct SphParams {
   // pairs) while the mean density error stays within the tolerance: docs/sph.md, dambreak_box
   // rows with and without "min 2 iterations" (scene key min_iterations).
   int min_iterations = 1;
-  int max_iterations = 100;             // per solve, >= 1
+  int max_iterations = 100;  // per solve, >= 1
   bool divergence_solver = true;
   // Warm start (2017 §4.3) of the constant-density solve: it starts from 0.2 x the previous
   // step's summed stiffness (kappa/rho; scaled down when dt grew), applied only to particles that
@@ -88,8 +89,8 @@ struct SphParams {
   // [--set warm_start=1], 2,000 particles, v_rms over the second second) it raises v_rms from
   // 10.5 to 22.4 mm/s (0.05 x: 18.2, 0.1 x: 19.5), above the 1 % of sqrt(g h) = 14 mm/s that the
   // at-rest test of tests/sph allows, for 5.8 instead of 7.4 iterations per step. The divergence
-  // solve is not warm-started (it added energy to a jet hitting a collider in the randomised
-  // stability test).
+  // solve is never warm-started: the pushes it repeats are never taken back, which adds energy to
+  // a jet hitting a collider.
   bool warm_start = false;
 
   // Neighbour grid extent (the grid clamps stray particles into its border cells).
@@ -108,6 +109,11 @@ struct ParticleStore {
       pressure;  // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
                  // over the step's solver iterations (a per-step impulse: average it over steps)
   std::vector<std::uint32_t> id;
+  // The positions again as three float arrays (SoA): the layout fluid/surface reads
+  // (SurfaceInput::x/y/z take sphPositionArrays' spans as they are, no copy). stepSph writes them
+  // in its last pass over the particles and addSphParticle appends to them; code that writes
+  // `position` directly calls refreshSphPositionArrays before they are read.
+  std::vector<float> position_x, position_y, position_z;
 
   std::size_t size() const { return position.size(); }
 };
@@ -135,7 +141,7 @@ struct SphCollider {
 // Whether the collider moves during a step (integrate_pose with a non-zero velocity). The
 // end-of-step collision passes project particles out of moving colliders first and out of still
 // ones last, so where a moving collider overlaps a still one (no position outside both) the
-// particle ends outside the still one: still colliders win (see stepSph, section 7).
+// particle ends outside the still one: still colliders win (collisions.cpp, resolveCollisions).
 inline bool sphColliderMoves(const SphCollider& c) {
   return c.integrate_pose && (glm::dot(c.pose.linear_velocity, c.pose.linear_velocity) > 0.0f ||
                               glm::dot(c.pose.angular_velocity, c.pose.angular_velocity) > 0.0f);
@@ -204,7 +210,7 @@ struct SphScratch {
   // counts[i]) (DFSPH: a fresh search, so that is up to offsets[i + 1]; WCSPH: the front of i's
   // Verlet range, filtered by the density pass).
   NeighborLists neighbors;
-  // WCSPH Verlet list (radius H + skin) and the positions it was built at (see stepSph).
+  // WCSPH Verlet list (radius H + skin) and the positions it was built at (neighbor_step.cpp).
   NeighborLists verlet;
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;
@@ -224,10 +230,10 @@ struct SphScratch {
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp;
-  std::vector<std::uint32_t> sorted_keys;  // the grid's cell keys in re-sorted order (swapped into the grid)
-  std::vector<std::uint32_t> keep;         // per particle: 0 when inside a sink at the start of the step
-  std::vector<glm::vec3> emitter_crowd;    // applyEmitters: the particles near the layer being placed
-  std::vector<float> emitter_crowd_density;  // applyEmitters: their SPH density (kg/m^3) with the layer so far
+  std::vector<std::uint32_t> sorted_keys;     // the grid's cell keys in re-sorted order (swapped into the grid)
+  std::vector<std::uint32_t> keep;            // per particle: 0 when inside a sink at the start of the step
+  std::vector<glm::vec3> emitter_crowd;       // applyEmitters: the particles near the layer being placed
+  std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
   std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
@@ -311,6 +317,17 @@ SphStatus advanceSphUntil(SphWorld& world, double until, F&& per_step, std::size
   }
   return {};
 }
+
+// The end-of-step positions as SoA spans over particles.position_x/y/z, in storage order.
+// Current after stepSph, advanceSph and addSphParticle; after a direct write to
+// particles.position, call refreshSphPositionArrays first. Spans of size 0 when the arrays'
+// size disagrees with the store's (they were not kept current), never stale data of another size.
+struct SphPositionArrays {
+  std::span<const float> x, y, z;
+};
+SphPositionArrays sphPositionArrays(const SphWorld& world);
+// Rewrites particles.position_x/y/z from particles.position (one parallel copy).
+void refreshSphPositionArrays(SphWorld& world);
 
 // Particle positions at time t in storage order: linear between the start and the end of the last
 // step, the path the advection x += dt v takes (collision projections aside). t is clamped to

@@ -1,5 +1,5 @@
 // World management for fluid/sph: parameters, particle insertion/removal, emitters, sinks,
-// diagnostics and the substepping driver. The solvers are in sph_solver.cpp.
+// diagnostics and the substepping driver. The step is in sph_step.cpp.
 #include "fluid/sph/sph.hpp"
 
 #include "fluid/core/parallel.hpp"
@@ -95,6 +95,9 @@ bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity) {
   ParticleStore& s = world.particles;
   if (s.size() >= world.params.max_particles) return false;
   s.position.push_back(position);
+  s.position_x.push_back(position.x);
+  s.position_y.push_back(position.y);
+  s.position_z.push_back(position.z);
   s.velocity.push_back(velocity);
   s.density.push_back(world.params.rest_density);
   s.pressure.push_back(0.0f);
@@ -123,9 +126,9 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   s.density.reserve(capacity);
   s.pressure.reserve(capacity);
   s.id.reserve(capacity);
+  for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->reserve(capacity);
   SphScratch& w = world.scratch;
-  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel})
-    v->reserve(capacity);
+  for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel}) v->reserve(capacity);
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
                   &w.boundary_flux, &w.float_tmp})
     v->reserve(capacity);
@@ -228,7 +231,7 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     if (steps++ >= max_steps) return {"advanceSph: more than max_steps steps needed"};
     SphStepStats stats;
     // The remaining time is spread over equal steps (stepSphWithin): a step cut to land on the
-    // target could be a sliver, which DFSPH turns into a velocity kick (sph_solver.cpp, chooseDt).
+    // target could be a sliver, which DFSPH turns into a velocity kick (time_step.cpp).
     SphStatus status = stepSphWithin(world, target - world.time, &stats);
     if (!status.ok()) return status;
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
@@ -245,6 +248,26 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     }
   }
   return {};
+}
+
+SphPositionArrays sphPositionArrays(const SphWorld& world) {
+  const ParticleStore& s = world.particles;
+  const std::size_t n = s.size();
+  if (s.position_x.size() != n || s.position_y.size() != n || s.position_z.size() != n) return {};
+  return {s.position_x, s.position_y, s.position_z};
+}
+
+void refreshSphPositionArrays(SphWorld& world) {
+  ParticleStore& s = world.particles;
+  const std::size_t n = s.size();
+  for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->resize(n);
+  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      s.position_x[i] = s.position[i].x;
+      s.position_y[i] = s.position[i].y;
+      s.position_z[i] = s.position[i].z;
+    }
+  });
 }
 
 void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out) {

@@ -53,8 +53,8 @@ inline bool inside(const SphScene& s, float tol = 1e-5f) {
 // fountain and the dambreak_box bench run it at 0.9), and for DFSPH a longest step of 5..16.7 ms,
 // a tolerance of 0.02..0.5 % and every other run without the force condition; emitter speed
 // 0.5..4 m/s, rate 200..3000 /s, static sphere/box colliders of 3..10 cm inside a 0.5 m box. The
-// DFSPH-only knobs come from the second stream, so the WCSPH runs draw what they drew before
-// DFSPH's ranges were widened.
+// DFSPH-only knobs come from the second stream, so widening them leaves the WCSPH runs' draws
+// unchanged.
 inline SphScene drawRun(int run, std::mt19937& rng, std::mt19937& dfsph_rng) {
   auto uni = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
   auto dfsphUni = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(dfsph_rng); };

@@ -1,7 +1,6 @@
-// The end-of-step collision passes (stepSph, section 7) with two colliders that leave a particle
+// The end-of-step collision passes (fluid/sph/collisions.cpp) with two colliders that leave a particle
 // no position outside both: a moving box whose end-of-step pose reaches into a still floor, with a
-// particle between them, as a thrown crate pressed water into the fountain's basin wall (soak,
-// seed 1). Still colliders win: the particle ends on the floor, inside the box only where the box
+// particle between them, as where a thrown crate presses water into a basin wall. Still colliders win: the particle ends on the floor, inside the box only where the box
 // overlaps the floor, and the box feels the push it gave the particle. Where a free position is
 // near (a narrow wedge between the two faces) the particle ends there.
 #include "fluid/sph/analytic_colliders.hpp"

@@ -1,0 +1,104 @@
+#pragma once
+// Internal to fluid/sph: colliders as a continuous SPH boundary. The collider side of a
+// particle's kernel support is treated as a filled half-space at the sampled signed distance
+// (Koschier & Bender 2017, "Density maps for improved SPH boundary handling", with the collider
+// locally approximated by its tangent plane); the volume V and its gradient enter the density and
+// pressure terms like Akinci et al. 2012 boundary particles.
+#include "fluid/sph/step_context.hpp"
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <vector>
+
+namespace fluid::sph_step {
+
+constexpr int kWallTable = 1024;
+// Boundary pressure mirroring: the wall takes the particle's pressure (p_b = p_i, rho_b = rho_i),
+// so its term in the symmetric pressure force has weight 2.
+constexpr float kMirror = 2.0f;
+
+// (Re)builds the kernel, the particle mass and the calibrated wall tables when the particle
+// radius or the rest density changed (once per world otherwise).
+void ensureStepTables(SphWorld& world);
+
+// Linear lookup of a wall table (V or A) at signed distance s in [-H, H].
+inline float lookupWallTable(const std::vector<float>& table, float s, float support) {
+  const float t = (s + support) / (2.0f * support) * kWallTable;
+  if (!(t > 0.0f)) return table.front();
+  if (t >= static_cast<float>(kWallTable)) return table.back();
+  const int i = static_cast<int>(t);
+  const float f = t - static_cast<float>(i);
+  return table[i] + f * (table[i + 1] - table[i]);
+}
+
+// 1 - V_c: the part of a particle's support that collider c leaves to fluid (V_c = its boundary
+// volume from the wall table at that distance; 1 when c does not push back or is out of reach).
+// Several colliders combine by the union rule of sampleBoundary: the product over colliders.
+inline float openFraction(const SphScratch& scratch, const SphCollider& collider, const ColliderSample& sample) {
+  const float support = scratch.kernel.support;
+  if (!collider.boundary_pressure || !sample.valid || sample.distance >= support) return 1.0f;
+  return 1.0f - lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
+}
+
+// Collider c's share of grad V at a particle (the union rule of sampleBoundary);
+// product = prod_c (1 - V_c).
+inline glm::vec3 boundaryShare(const SphScratch& scratch, const ColliderSample& sample, float product) {
+  const float support = scratch.kernel.support;
+  if (!sample.valid || sample.distance >= support) return glm::vec3(0.0f);
+  const float vc = lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
+  const float others = product / std::max(1.0f - vc, 1e-6f);
+  return (-lookupWallTable(scratch.wall_area, sample.distance + scratch.wall_shift, support) * others) *
+         sample.normal;  // grad V_c = -A(s) n
+}
+
+// Queries one collider at chosen particles, in chunks: which[0 .. q) are particle indices whose
+// world points are transformed to collider space, queried as one batch and written (normals back in
+// world space, a non-finite distance marked invalid) to out[which[k]]. At most kGrain points.
+struct ColliderQuery {
+  const SphCollider& collider;
+  ColliderPose pose;
+  glm::quat inverse_rotation;
+  bool rotated;
+  ColliderQuery(const SphCollider& c, const ColliderPose& p)
+      : collider(c),
+        pose(p),
+        inverse_rotation(glm::inverse(p.rotation)),
+        rotated(!(p.rotation.w == 1.0f && p.rotation.x == 0.0f && p.rotation.y == 0.0f && p.rotation.z == 0.0f)) {}
+  void run(const std::vector<glm::vec3>& points, const std::uint32_t* which, std::uint32_t q,
+           std::vector<ColliderSample>& out) const {
+    if (q == 0) return;
+    glm::vec3 local[kGrain];
+    ColliderSample samples[kGrain];
+    for (std::uint32_t k = 0; k < q; ++k)
+      local[k] =
+          rotated ? inverse_rotation * (points[which[k]] - pose.translation) : points[which[k]] - pose.translation;
+    collider.shape->query(std::span<const glm::vec3>(local, q), std::span<ColliderSample>(samples, q));
+    for (std::uint32_t k = 0; k < q; ++k) {
+      if (rotated) samples[k].normal = pose.rotation * samples[k].normal;
+      if (!std::isfinite(samples[k].distance)) samples[k].valid = false;  // never let a bad shape spread NaN
+      out[which[k]] = samples[k];
+    }
+  }
+};
+
+// Collider samples at the step-start positions; per particle the boundary volume, its gradient,
+// its flux (wall velocity . grad V) and prod_c (1 - V_c); sets context.collider_speed.
+void sampleBoundary(StepContext& context);
+
+// Boundary-pressure coupling of collider c with particle i, F_c = -m dv_ic / dt where the
+// boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0 grad V_ic over the step
+// (scratch.kappa holds the impulse kappa_i; old_position the step-start positions).
+inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size_t i, ForceTorque& acc) {
+  const SphScratch& scratch = context.scratch;
+  const ColliderSample& sample = scratch.start_samples[c][i];
+  if (!sample.valid || sample.distance >= context.support) return;
+  const glm::vec3 grad = boundaryShare(scratch, sample, scratch.boundary_product[i]);
+  const glm::vec3 f = (2.0f * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
+  acc.force += f;
+  acc.torque += glm::cross(scratch.old_position[i] - context.world.colliders[c].pose.translation, f);
+}
+
+}  // namespace fluid::sph_step

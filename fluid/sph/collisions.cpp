@@ -1,0 +1,202 @@
+// End-of-step collisions (collisions.hpp).
+#include "fluid/sph/collisions.hpp"
+
+#include "fluid/sph/boundary.hpp"
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace fluid::sph_step {
+
+ColliderPose advancedPose(const ColliderPose& pose, float dt) {
+  ColliderPose out = pose;
+  out.translation += pose.linear_velocity * dt;
+  const float angular_speed = glm::length(pose.angular_velocity);
+  if (angular_speed > 0.0f)
+    out.rotation =
+        glm::normalize(glm::angleAxis(angular_speed * dt, pose.angular_velocity / angular_speed) * pose.rotation);
+  return out;
+}
+
+namespace {
+
+// Where a still collider pushes a particle out (outward normal ns, by `need` along it) that a
+// moving collider pushed out earlier in the same step (its face as the plane
+// dot(plane.xyz, x) >= plane.w), the position nearest to p outside both tangent planes: the two
+// projections one after the other only converge slowly in a narrow wedge (a tilted crate edge
+// on the basin floor) and end wherever the last one put the particle. The planes' intersection,
+// when the still projection alone would violate the moving face: x = p + l1 ns + l2 nm with both
+// constraints active (a 2x2 system). `still_only` (the still projection) is kept where the faces
+// are nearly parallel or the wedge's free side is more than `reach` away: there the moving
+// collider overlaps the still one, no free position is near, and the still collider wins.
+glm::vec3 wedgePosition(glm::vec3 p, glm::vec3 ns, float need, glm::vec4 plane, float reach, glm::vec3 still_only) {
+  const glm::vec3 nm(plane);
+  const float c = glm::dot(ns, nm);
+  const float r1 = need, r2 = plane.w - glm::dot(nm, p);  // displacements required along ns and nm
+  if (c * r1 >= r2) return still_only;                    // the still projection keeps the moving face
+  const float det = 1.0f - c * c;
+  if (det < 1e-3f) return still_only;
+  const float l1 = (r1 - c * r2) / det, l2 = (r2 - c * r1) / det;
+  if (l1 < 0.0f || l2 < 0.0f) return still_only;
+  const glm::vec3 x = p + l1 * ns + l2 * nm;
+  return glm::length(x - p) <= reach ? x : still_only;
+}
+
+struct Hits {
+  std::size_t count = 0;
+  ForceTorque reaction{};
+};
+
+// One collision pass of collider c (the k-th in collide_order): query, reaction and the
+// reaction force/torque sums in one parallel region.
+Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
+  SphScratch& scratch = context.scratch;
+  std::vector<glm::vec3>& positions = context.particles.position;
+  std::vector<glm::vec3>& velocities = context.particles.velocity;
+  const std::size_t n = context.count, collider_count = context.collider_count;
+  const float dt = context.dt, support = context.support, spacing = context.spacing, mass = context.mass;
+  const float skin =
+      context.params.collision_skin > 0.0f ? context.params.collision_skin : 0.01f * context.params.particle_radius;
+  const bool track_stale = collider_count <= 32;
+  const std::uint32_t all_colliders = collider_count >= 32 ? ~0u : (1u << collider_count) - 1u;
+  const SphCollider& collider = context.world.colliders[c];
+  const ColliderPose pose = collider.integrate_pose ? advancedPose(collider.pose, dt) : collider.pose;
+  // Does not move during the step: the end pose is the start pose, so are the samples' distances.
+  const bool still = !sphColliderMoves(collider);
+  const bool skip_far = still && collider.lipschitz_distance;
+  const std::uint32_t bit = track_stale ? 1u << c : 0u;
+  const ColliderQuery query(collider, pose);
+  std::vector<ColliderSample>& end_samples = scratch.end_samples[c];
+  end_samples.resize(n);
+  const std::vector<ColliderSample>& start_samples = scratch.start_samples[c];
+  return reduceChunks(
+      n, Hits{},
+      [&](std::size_t b, std::size_t e, Hits& acc) {
+        std::uint32_t which[kGrain];
+        std::uint32_t q = 0;
+        for (std::size_t i = b; i < e; ++i) {
+          if (pass == 0 && k == 0) {
+            scratch.collide_stale[i] = all_colliders;
+            scratch.push_plane[i] = glm::vec4(0.0f);
+          }
+          if (track_stale && pass > 0 && !(scratch.collide_stale[i] & bit)) continue;  // unchanged: same sample
+          scratch.collide_stale[i] &= ~bit;
+          const ColliderSample& s0 = start_samples[i];
+          if (skip_far && s0.valid) {
+            const glm::vec3 p = positions[i], p0 = scratch.old_position[i];
+            // Float slack of the distance evaluation, far above its rounding at these coordinates.
+            const float slack = 1e-6f * (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), std::abs(p0.x),
+                                                   std::abs(p0.y), std::abs(p0.z)}) +
+                                         support);
+            if (s0.distance > glm::length(p - p0) + skin + slack) {
+              end_samples[i].valid = false;  // cannot have reached the surface: no reaction
+              continue;
+            }
+          }
+          which[q++] = static_cast<std::uint32_t>(i);
+        }
+        query.run(positions, which, q, end_samples);
+        for (std::size_t i = b; i < e; ++i) {
+          const ColliderSample& s = end_samples[i];
+          const ColliderSample& s0 = start_samples[i];
+          // Tunnelling through a thin part: outside at both ends of the step but on opposite
+          // sides (the outward normal flipped), e.g. a thin fast wall that moved past the particle.
+          // The particle stays on its side: carried along by the collider, then the §3.3.2
+          // reaction against the side it came from.
+          const bool crossed = s.valid && s0.valid && s.distance >= 0.0f && s0.distance >= 0.0f &&
+                               s.distance < support && s0.distance < support && glm::dot(s.normal, s0.normal) < 0.0f;
+          if (!crossed && (!s.valid || s.distance >= 0.0f)) continue;
+          ++acc.count;
+          CollisionResult res;
+          if (crossed) {
+            const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
+            res.position = scratch.old_position[i] + vc * dt + s0.normal * skin;
+            res.velocity = collisionResponse(velocities[i] - vc, s0.normal, collider.material) + vc;
+          } else {
+            res = resolveCollision(scratch.old_position[i], s0, positions[i], velocities[i], s,
+                                   colliderVelocityAt(pose, positions[i]), dt, skin, collider.material);
+          }
+          if (!still) {
+            // The moving face the particle now rests on: n . x >= n . x_now (it sits skin outside).
+            const glm::vec3 nm = crossed ? s0.normal : s.normal;
+            scratch.push_plane[i] = glm::vec4(nm, glm::dot(nm, res.position));
+          } else if (!crossed && scratch.push_plane[i] != glm::vec4(0.0f)) {
+            res.position =
+                wedgePosition(positions[i], s.normal, skin - s.distance, scratch.push_plane[i], spacing, res.position);
+          }
+          const glm::vec3 reaction = -mass * (res.velocity - velocities[i]) / dt;  // on the collider
+          positions[i] = res.position;
+          velocities[i] = res.velocity;
+          scratch.collide_stale[i] = all_colliders;  // moved: every collider's sample is out of date
+          // Particles without a reaction add exact zeros in a separate sum (an accumulator
+          // starting at +0 never becomes -0), so skipping them gives the same sums.
+          acc.reaction.force += reaction;
+          acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+        }
+      },
+      [](Hits a, const Hits& b) {
+        a.count += b.count;
+        a.reaction.force += b.reaction.force;
+        a.reaction.torque += b.reaction.torque;
+        return a;
+      });
+}
+
+}  // namespace
+
+// Kolb et al. 2004 §3.3.2 double check against the collider at its end-of-step pose, with the
+// step-start sample as "previous". Repeated (up to 4 passes) while a later collider pushed a
+// particle into an earlier one (corners), so no particle ends the step inside a collider where a
+// position outside all of them exists nearby.
+// Queries that cannot change the outcome are skipped (bit-identical results):
+//  - in passes after the first, a particle that has not moved since collider c last queried it
+//    gets the same sample, so the same (no) reaction: only particles moved since are queried;
+//  - for a static collider with a 1-Lipschitz distance (SphCollider::lipschitz_distance), a
+//    particle that started at s0 and moved less than s0 (minus a margin) stayed outside along
+//    its whole step (every point of the segment is at least s0 - |displacement| > 0 away): no
+//    reaction and nothing tunnelled, so no query is needed. (The tunnelling test could only fire
+//    there on a normal flip across a medial axis, e.g. between a spire and a dish wall, which is
+//    not a crossing for a collider that does not move.)
+// Order within a pass: the colliders that move during the step first, the still ones
+// (sphColliderMoves false) last, so a pass ends with the still colliders' projections. Where a
+// moving collider's end-of-step pose overlaps a still one (a crate, advanced by its velocities
+// through the step, reaching into a basin wall, which the rigid-body solver stops only
+// afterwards), a particle between them has no position outside both, and alternating projections
+// would leave it wherever the last collider put it: inside the wall, carried further by the crate
+// every step. Still colliders win: the particle ends outside them, inside the moving collider only
+// where that overlaps a still one, and the moving collider gets the reactions of its own
+// projections (its push on the particle) like any other contact.
+void resolveCollisions(StepContext& context) {
+  SphScratch& scratch = context.scratch;
+  const std::size_t n = context.count, collider_count = context.collider_count;
+  scratch.collide_order.resize(collider_count);
+  scratch.push_plane.resize(n);
+  {
+    std::size_t k = 0;
+    for (const bool moving_first : {true, false})
+      for (std::size_t c = 0; c < collider_count; ++c)
+        if (sphColliderMoves(context.world.colliders[c]) == moving_first)
+          scratch.collide_order[k++] = static_cast<std::uint32_t>(c);
+  }
+  scratch.end_samples.resize(collider_count);
+  scratch.collide_stale.resize(n);
+  for (int pass = 0; pass < 4 && collider_count > 0; ++pass) {
+    std::size_t inside_total = 0;
+    for (std::size_t k = 0; k < collider_count; ++k) {
+      const std::size_t c = scratch.collide_order[k];
+      const Hits hits = collidePass(context, pass, k, c);
+      inside_total += hits.count;
+      context.stats.collisions += hits.count;
+      if (hits.count > 0) {
+        SphCollider& collider = context.world.colliders[c];
+        collider.force += hits.reaction.force;
+        collider.torque += hits.reaction.torque;
+      }
+    }
+    if (inside_total == 0) break;
+  }
+}
+
+}  // namespace fluid::sph_step

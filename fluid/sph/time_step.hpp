@@ -1,0 +1,16 @@
+#pragma once
+// Internal to fluid/sph: the adaptive time step of one SPH step.
+#include "fluid/sph/step_context.hpp"
+
+namespace fluid::sph_step {
+
+// The step length for a fastest particle speed `max_speed` (m/s; colliders' speeds near the fluid
+// are added from context.collider_speed) and the largest total acceleration `max_acceleration`
+// (m/s^2, read only with wcsph_bounds): the minimum of context.max_dt, the CFL condition, the
+// force condition, the viscosity condition and (wcsph_bounds) Becker & Teschner 2007 §4; never
+// below min_time_step unless the caller asked for less. `spread`: stepSphWithin's equal split of
+// context.span (see the definition).
+float chooseTimeStep(const StepContext& context, float max_speed, float max_acceleration, bool wcsph_bounds,
+                     bool spread = true);
+
+}  // namespace fluid::sph_step
