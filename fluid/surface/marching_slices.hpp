@@ -46,19 +46,6 @@ enum class SurfaceOrder : std::uint8_t {
   frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
-// How a corner's field is summed. Both routes give the same bits (each corner sums exactly the
-// particles within Rc_i, in (z, index) order, with the same float expressions) and so the same mesh.
-enum class SurfaceFieldRoute : std::uint8_t {
-  // Default: per active slice, each row the sweep touches is splatted once from the z-sorted block
-  // particles that meet it (a vectorised loop along the row); see detail/block_slice_rows.inl.
-  // Policies with per-particle data (extractWithPolicy with kHasUser, SurfaceInput::user) use the
-  // §6 cache.
-  sliceRows,
-  // The paper's 2D-projection 1D-lookup particle cache (§6), walked per corner: the Figure 7
-  // reproduction (bench_surface) times this route.
-  columnCache,
-};
-
 struct SurfaceParams {
   float rc = 3.0f;         // cutoff radius Rc, world units, > 0
   float threshold = 0.2f;  // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
@@ -83,7 +70,6 @@ struct SurfaceParams {
   // (with BMI1/BMI2/POPCNT): particle-cache fill, triangle index writes and vertex interpolation.
   // Both copies give the same bits (a test checks it); the AVX2 one does fewer instructions.
   bool portableKernels = false;
-  SurfaceFieldRoute fieldRoute = SurfaceFieldRoute::sliceRows;
 };
 
 // Index range [first, first + count) into SurfaceMesh::indices.

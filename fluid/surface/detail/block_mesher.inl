@@ -17,8 +17,6 @@ class BlockMesher {
         ny_(setup.n[1]),
         nz_(setup.n[2]),
         stride_(setup.n[0] + 1),
-        rowLen_((setup.n[0] + 1 + 7) & ~7),
-        rows_(setup.sliceRows && !Policy::kHasUser),
         append_(append) {
     assert(!(append && setup.exact));
   }
@@ -41,10 +39,7 @@ class BlockMesher {
     nIndices_ = indexBase_;
     const PhaseClock::time_point start = PhaseClock::now();
     begin(block);
-    if (rows_)
-      buildBlockParticles(particles);
-    else
-      buildParticleCache(particles);
+    buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
     seed(particles);
     seedFromNeighbours();
@@ -65,11 +60,10 @@ class BlockMesher {
     out_.runCount = std::uint32_t(out_.runs.size() - runBase_);
     out_.stats.triangles = out_.indexCount / 3;
     out_.stats.vertices = out_.vertexCount;
-    out_.particleBytes = rows_ ? std::uint64_t(w_.local.size()) * sizeof(CacheParticle)
-                               : std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
-                                     std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
-                                     std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
-                                     std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
+    out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
+                         std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
+                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
+                         std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
     w_.peakBytes = std::max(w_.peakBytes, out_.particleBytes + out_.cornerBytes);
   }
@@ -94,8 +88,6 @@ class BlockMesher {
   const Policy& pol_;
   BlockOut& out_;
   const int nx_, ny_, nz_, stride_;
-  const int rowLen_;  // floats per array of a splatted slice row: nx + 1 rounded up to 8
-  const bool rows_;   // the slice-row field route (block_slice_rows.inl) rather than the §6 cache
   std::int64_t g0_[3] = {0, 0, 0};
   // The block's position in the block grid.
   int bc_[3] = {0, 0, 0};
@@ -168,32 +160,6 @@ class BlockMesher {
     y0 = std::max(1, iceil((p.y - rc) * inv - double(g0_[1]) - 1e-6));
     y1 = std::min(ny_ - 1, ifloor((p.y + rc) * inv - double(g0_[1]) + 1e-6));
   }
-
-  // The block's particles as the field sums read them (CacheParticle) and the offsets table, without
-  // the §6 column lists: what the slice-row route needs.
-  void buildBlockParticles(std::span<const Particle> particles) {
-    offsetRange_ = su_.m + 2;
-    w_.offsets.resize(std::size_t(2 * offsetRange_ + 1));
-    for (int d = -offsetRange_; d <= offsetRange_; ++d)
-      w_.offsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
-    w_.local.resize(particles.size());
-    for (std::size_t li = 0; li < particles.size(); ++li) {
-      const Particle& p = particles[li];
-      CacheParticle& cp = w_.local[li];
-      for (int a = 0; a < 3; ++a) {
-        cp.rest[a] = p.rest[a];
-        assert(p.anchor[a] - g0_[a] >= 0 && p.anchor[a] - g0_[a] <= su_.n[a]);  // see buildParticleCache
-        cp.na[a] = std::int16_t(g0_[a] - p.anchor[a]);
-      }
-      cp.k = p.k;
-      cp.s = p.strength;
-      cp.s4 = 4.0f * p.strength;
-    }
-    off0_ = w_.offsets.data() + offsetRange_;
-    parts_ = w_.local.data();
-  }
-
-#include "fluid/surface/detail/block_slice_rows.inl"
 
   void buildParticleCache(std::span<const Particle> particles) {
     const std::size_t cols = w_.columns();
@@ -697,7 +663,6 @@ class BlockMesher {
 
   // Seeding only asks whether a corner is inside (§4).
   bool insideAt(int x, int y, int z) {
-    if (rows_) return insideFromRows(x, y, z);
     std::uint64_t looked = 0;
     ++out_.stats.seedEvaluations;
     return sumUntilAbove<false>(x, y, z, nullptr, looked) > su_.threshold;
@@ -738,10 +703,8 @@ class BlockMesher {
       const int y = iround(p.y * inv - double(g0_[1]));
       const int z0 = iround(p.z * inv - double(g0_[2]));
       if (x < 1 || x > nx_ - 1 || y < 1 || y > ny_ - 1 || z0 < 1 || z0 > nz_ - 1) continue;
-      if (rows_) seedRowsAdvance(z0);
       seedWalk(p, x, y, z0);
     }
-    if (rows_) seedRowsDone();
   }
 
   // One §4 descent from corner (x, y, z0) of the expanded block (1 <= x, y, z0 <= n - 1): pushes the
@@ -857,10 +820,7 @@ class BlockMesher {
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {
       w_.active[z] = w_.acquireSlice();
-      if (rows_)
-        buildSliceRows(*w_.active[z], z);
-      else
-        fillSliceDz(*w_.active[z], z);
+      fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
       activeLo_ = std::min(activeLo_, z);
       activeHi_ = std::max(activeHi_, z);
@@ -890,10 +850,7 @@ class BlockMesher {
     for (int i = activeLo_; i <= activeHi_; ++i)  // (every active slice lies in that range)
       if (w_.active[i])
         bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
-                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz) +
-                 (w_.active[i]->rowStart.size() + w_.active[i]->rowField.size() + w_.active[i]->rowItems.size()) *
-                     sizeof(std::uint32_t) +
-                 w_.active[i]->field.size() * sizeof(float);
+                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
     (void)z;
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
@@ -915,7 +872,7 @@ class BlockMesher {
     if (id) [[likely]]
       return id - 1;
     if constexpr (!Policy::kHasUser) {
-      if (!rows_ && !cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
+      if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
         return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
     }
     return evaluateInto(lo, cellLo, x, y, z, interior) - 1;
@@ -993,10 +950,7 @@ class BlockMesher {
   [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z,
                                                bool interior) {
     Corner<Policy> c;
-    if (rows_) {
-      c.user = {};
-      evaluateFromRow(slice, x, y, z, c);
-    } else if (interior || interiorCorner(x, y, z))
+    if (interior || interiorCorner(x, y, z))
       evaluate<true>(x, y, z, slice.dz.data(), c);
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)

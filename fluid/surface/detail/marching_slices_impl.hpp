@@ -171,11 +171,6 @@ struct Slice {
   std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
   std::vector<Corner<Policy>> corners;
   std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
-  // Slice-row route (block_slice_rows.inl): block particles meeting each row (CSR, local indices in
-  // (z, index) order), and the splatted rows (rowField[y] = offset into field, or -1).
-  std::vector<std::uint32_t> rowStart, rowItems;
-  std::vector<std::int32_t> rowField;
-  std::vector<float> field;
 };
 
 struct BlockDesc {
@@ -237,7 +232,6 @@ struct Setup {
   SweepFrame frame;
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
-  bool sliceRows = true;         // SurfaceParams::fieldRoute == sliceRows
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -251,8 +245,7 @@ struct Worker {
   std::vector<std::int16_t> runMax;  // cache build: running max_z per column
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
-  std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row (slice rows: y0, y1)
-  std::vector<std::uint32_t> rowCursor;               // slice-row lists: fill cursor per row
+  std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
   std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
@@ -338,9 +331,9 @@ inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0
 // outermost corners are held at field 0 (so every surface closes), so that corner must lie strictly
 // inside the expanded block for every particle that reaches the interior: such a particle is less
 // than Rc/S cubes from an interior corner, its nearest corner less than Rc/S + 1/2. With
-// ceil(Rc/S), a particle just over m - 1/2 cubes outside the interior (Rc/S a whole number, or just
-// under one) would snap to a boundary corner, which never seeds, and the part of its surface inside
-// the block would be left open at the seam.
+// ceil(Rc/S) a particle just over m - 1/2 cubes outside the interior (Rc/S a whole number, or just
+// under one) seeded from a boundary corner, never, and the part of its surface inside the block
+// was missing: a hole at the seam.
 inline int marginCubes(double rcMax, double s) { return std::max(1, int(std::ceil(rcMax / s + 0.5))); }
 
 // Block membership (§3), per axis, in lattice integers. A particle influences corner c only if
@@ -571,7 +564,7 @@ void runParallelLargestFirst(ExtractorState& st, std::vector<std::unique_ptr<W>>
 // Which worker meets which block depends on timing, so a worker can meet a larger block than
 // it has seen before in any frame. After a frame every worker's scratch is grown to the largest
 // capacity any worker needed: once every block has been met by some worker, no worker allocates
-// again, whatever the schedule (no allocation per frame after warm-up, for any thread count).
+// again, whatever the schedule (issue 3: no allocation per frame after warm-up, for N threads).
 // Only capacities are touched; contents are rebuilt per block anyway.
 template <class Policy>
 void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
@@ -585,18 +578,14 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::rowSpans);
   grow(&Worker<Policy>::offsets);
   grow(&Worker<Policy>::chainTouched);
-  grow(&Worker<Policy>::rowCursor);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
-  std::size_t slices = 0, corners = 0, dzs = 0, slabs = 0, rowStarts = 0, rowItems = 0, fields = 0;
+  std::size_t slices = 0, corners = 0, dzs = 0, slabs = 0;
   for (const auto& w : workers) {
     slices = std::max(slices, w->slicePool.size());
     for (const auto& slice : w->slicePool) {
       corners = std::max(corners, slice->corners.capacity());
       dzs = std::max(dzs, slice->dz.capacity());
-      rowStarts = std::max(rowStarts, slice->rowStart.capacity());
-      rowItems = std::max(rowItems, slice->rowItems.capacity());
-      fields = std::max(fields, slice->field.capacity());
     }
     slabs = std::max(slabs, w->todo.size());
   }
@@ -605,10 +594,6 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
     for (auto& slice : w->slicePool) {
       slice->corners.reserve(corners);
       slice->dz.reserve(dzs);
-      slice->rowStart.reserve(rowStarts);
-      slice->rowField.reserve(rowStarts);
-      slice->rowItems.reserve(rowItems);
-      slice->field.reserve(fields);
     }
     w->freeSlices.reserve(slices);
   }
@@ -821,7 +806,6 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
                   su.frame.sign[1] == 1 && su.frame.sign[2] == 1;
   su.flip = su.frame.flipsWinding();
   su.avx2 = detectFillAvx2(params);
-  su.sliceRows = params.fieldRoute == SurfaceFieldRoute::sliceRows;
   su.exact = params.order != SurfaceOrder::none && params.exactSlabOrder;
   su.origin[0] = params.originX;
   su.origin[1] = params.originY;
