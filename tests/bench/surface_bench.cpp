@@ -565,7 +565,8 @@ int main(int argc, char** argv) {
     prev << old.rdbuf();
     const std::string doc = prev.str(), begin = "<!-- bench_surface_peers -->", end = "<!-- /bench_surface_peers -->";
     const std::size_t b = doc.find(begin), e = doc.find(end);
-    if (b != std::string::npos && e != std::string::npos && e > b) text += "\n" + doc.substr(b, e + end.size() - b) + "\n";
+    if (b != std::string::npos && e != std::string::npos && e > b)
+      text += "\n" + doc.substr(b, e + end.size() - b) + "\n";
   }
   if (outPath.empty()) {
     std::fwrite(text.data(), 1, text.size(), stdout);
