@@ -1,5 +1,6 @@
-// Internal: vertex and triangle output (§2 default vertex routine, §5 slab order). Part of BlockMesher's class body, included by block_mesher.inl
-// (twice, see there): no include guard and no includes on purpose.
+// Internal: vertex and triangle output (§2 default vertex routine, §5 slab order). Part of
+// BlockMesher's class body, included by block_mesher.inl (twice, see there): no include guard and no
+// includes on purpose.
 
 #if defined(FLUID_SURFACE_IN_AVX2_COPY)
   // makeVertexAt (marching_slices_impl.hpp) for the plain frame, in vector registers: a corner's

@@ -1,5 +1,5 @@
-// Internal: the 2D-projection 1D-lookup particle cache (paper §6): its build, the exact lookup and the
-// corner field sums that walk it. Part of BlockMesher's class body, included by block_mesher.inl
+// Internal: the 2D-projection 1D-lookup particle cache (paper §6): its build, the exact lookup and
+// the corner field sums that walk it. Part of BlockMesher's class body, included by block_mesher.inl
 // (twice, see there): no include guard and no includes on purpose.
 
   // §6: particles arrive sorted by (z, index); insert one element per column of the projection

@@ -1,5 +1,5 @@
-// Internal: §4 seeding and the seam propagation between blocks (§3). Part of BlockMesher's class body, included by block_mesher.inl
-// (twice, see there): no include guard and no includes on purpose.
+// Internal: §4 seeding and the seam propagation between blocks (§3). Part of BlockMesher's class
+// body, included by block_mesher.inl (twice, see there): no include guard and no includes on purpose.
 
   // Seeding only asks whether a corner is inside (§4).
   bool insideAt(int x, int y, int z) {
