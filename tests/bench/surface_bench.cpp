@@ -566,7 +566,7 @@ int main(int argc, char** argv) {
     const std::string doc = prev.str(), begin = "<!-- bench_surface_peers -->", end = "<!-- /bench_surface_peers -->";
     const std::size_t b = doc.find(begin), e = doc.find(end);
     if (b != std::string::npos && e != std::string::npos && e > b)
-      text += "\n" + doc.substr(b, e + end.size() - b) + "\n";
+      text.append("\n").append(doc, b, e + end.size() - b).append("\n");
   }
   if (outPath.empty()) {
     std::fwrite(text.data(), 1, text.size(), stdout);
