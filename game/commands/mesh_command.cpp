@@ -1,7 +1,10 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
-//                  [--block N] [--stats] [--force]
+//                  [--block N] [--reps N] [--stats] [--force]
 // Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
+// --reps N times N more extractions with the same extractor after the first (warm: scratch and
+// output capacity kept, as in a game meshing every frame) and prints their median and min, the first
+// (cold) one separately.
 #include "game/commands.hpp"
 #include "game/commands/cli_parse.hpp"
 
@@ -20,6 +23,7 @@
 #include <filesystem>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 namespace game {
 namespace {
@@ -64,6 +68,7 @@ int meshCommand(const Args& args) {
   std::string in, out;
   fluid::SurfaceParams params;
   bool stats = false, force = false;
+  int reps = 0;
   app.add_option("--in", in, "particle file: .xyz (x y z per line), .csv or .ply")->required();
   app.add_option("--out", out, "mesh file to write: .obj or .ply (with normals)")->required();
   app.add_option("--rc", params.rc, "cutoff radius Rc of each particle's field (world units)")
@@ -81,6 +86,9 @@ int meshCommand(const Args& args) {
   app.add_option("--block", params.blockCubes, "largest block edge in cubes, 0 = auto")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
+  app.add_option("--reps", reps, "time N warm extractions after the first and print their median and min")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000));
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
@@ -132,12 +140,26 @@ int meshCommand(const Args& args) {
 
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
-  const auto t0 = std::chrono::steady_clock::now();
-  const fluid::SurfaceStatus st = extractor.extract({particles.x, particles.y, particles.z, {}, {}, {}}, params, mesh);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (!st.ok()) {
+  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  auto timedExtract = [&](double& ms) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const fluid::SurfaceStatus st = extractor.extract(input, params, mesh);
+    ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return st;
+  };
+  double ms = 0;
+  if (const fluid::SurfaceStatus st = timedExtract(ms); !st.ok()) {
     std::fprintf(stderr, "fluiddemo mesh: %s: %s\n", in.c_str(), st.error.c_str());
     return 1;
+  }
+  if (reps > 0) {
+    std::vector<double> warm(static_cast<std::size_t>(reps));
+    for (double& w : warm) (void)timedExtract(w);  // same input and params: cannot fail where the first did not
+    std::sort(warm.begin(), warm.end());
+    const std::size_t n = warm.size();
+    const double med = n % 2 ? warm[n / 2] : 0.5 * (warm[n / 2 - 1] + warm[n / 2]);
+    std::printf("first (cold)         %.3f ms\n", ms);
+    std::printf("warm, %d reps         median %.3f ms, min %.3f ms\n", reps, med, warm.front());
   }
   fluid::MeshWriteOptions options;
   options.overwrite = force ? fluid::OverwritePolicy::replace : fluid::OverwritePolicy::refuse;

@@ -14,3 +14,20 @@ add_executable(bench_surface_seeds ${CMAKE_CURRENT_LIST_DIR}/surface_seeds.cpp)
 target_link_libraries(bench_surface_seeds PRIVATE fluid fluiddemo_options)
 target_include_directories(bench_surface_seeds PRIVATE ${PROJECT_SOURCE_DIR}/tests/surface)
 target_compile_definitions(bench_surface_seeds PRIVATE FLUIDDEMO_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data")
+
+# Ours against the dense-lattice peer (dense splat + VTK vtkFlyingEdges3D), interleaved in one run
+# (header of surface_peers.cpp). Optional: only when VTK 9 is installed (Debian libvtk9-dev); nothing
+# else depends on it.
+find_package(VTK 9 QUIET COMPONENTS CommonCore CommonDataModel CommonExecutionModel FiltersCore)
+if(VTK_FOUND)
+  # VTK 9.1's headers do not parse as C++20: the VTK calls sit in their own C++17 library.
+  add_library(bench_surface_peers_vtk STATIC ${CMAKE_CURRENT_LIST_DIR}/surface_peers_vtk.cpp)
+  set_target_properties(bench_surface_peers_vtk PROPERTIES CXX_STANDARD 17)
+  target_link_libraries(bench_surface_peers_vtk PRIVATE ${VTK_LIBRARIES})
+  add_executable(bench_surface_peers ${CMAKE_CURRENT_LIST_DIR}/surface_peers.cpp)
+  target_link_libraries(bench_surface_peers PRIVATE fluid bench_surface_peers_vtk fluiddemo_options TBB::tbb)
+  target_compile_definitions(bench_surface_peers PRIVATE FLUIDDEMO_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data")
+  message(STATUS "bench_surface_peers: VTK ${VTK_VERSION} found")
+else()
+  message(STATUS "bench_surface_peers: VTK 9 not found (optional; apt-get install libvtk9-dev)")
+endif()

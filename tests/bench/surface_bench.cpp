@@ -295,7 +295,8 @@ int main(int argc, char** argv) {
         "approach 2 and 3.5x faster than approach 3; working memory on spray under 24.6/10 MB. The peer was timed "
         "by others, not in this run: the last column compares approach 1 with this project's own dense "
         "brute-force route (slice splat + marching cubes, same field) timed in the same run, a load-independent "
-        "reference (above 1 = approach 1 faster).\n\n"
+        "reference (above 1 = approach 1 faster). The peer measured in one run next to approach 1, interleaved, is "
+        "the last section of this page (bench_surface_peers).\n\n"
      << "| set | approach 1 ms (1 thr) | peer ms | time bar | triangles vs README | speed-up " << hw
      << " thr | a2 / a1 | a3 / a1 | working MB, all workers (" << hw << " thr) | dense oracle / a1 (same run) |\n"
      << "|---|---|---|---|---|---|---|---|---|---|\n"
@@ -547,7 +548,17 @@ int main(int argc, char** argv) {
 
   md << "\nLoad average (1, 5, 15 min) from /proc/loadavg: " << loadBefore << " at the start, " << loadAverage()
      << " at the end of the run, on " << hw << " hardware threads.\n";
-  const std::string text = md.str();
+  std::string text = md.str();
+  if (!outPath.empty()) {
+    // Keep bench_surface_peers' section (its own run, optional VTK target) when rewriting the page.
+    std::ifstream old(outPath, std::ios::binary);
+    std::stringstream prev;
+    prev << old.rdbuf();
+    const std::string doc = prev.str(), begin = "<!-- bench_surface_peers -->", end = "<!-- /bench_surface_peers -->";
+    const std::size_t b = doc.find(begin), e = doc.find(end);
+    if (b != std::string::npos && e != std::string::npos && e > b)
+      text.append("\n").append(doc, b, e + end.size() - b).append("\n");
+  }
   if (outPath.empty()) {
     std::fwrite(text.data(), 1, text.size(), stdout);
   } else {

@@ -1,5 +1,5 @@
 # ctest script for `fluiddemo mesh` (run with -DEXE=<fluiddemo> -DDATA=<tests/data> -DWORK=<dir>).
-# Checks: a good run writes a mesh with the README's triangle count; an existing output is not
+# Checks: a good run writes a mesh with the README's triangle count; --reps prints warm timings; an existing output is not
 # replaced without --force; NaN and malformed lines are reported with file and line; unknown
 # output formats are refused.
 file(REMOVE_RECURSE "${WORK}")
@@ -38,6 +38,19 @@ if(NOT err MATCHES "exists")
   message(FATAL_ERROR "expected a refusal to overwrite, got: ${err}")
 endif()
 run_mesh(0 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob.obj" --cube 0.3 --force)
+
+# --reps: warm timings (median, min) after the cold first one; the mesh is the same as without.
+run_mesh(0 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob_reps.obj" --cube 0.3 --threads 1 --reps 3 --stats)
+if(NOT out MATCHES "first \\(cold\\) +[0-9]+\\.[0-9]+ ms" OR NOT out MATCHES "warm, 3 reps +median [0-9]+\\.[0-9]+ ms, min [0-9]+\\.[0-9]+ ms")
+  message(FATAL_ERROR "--reps 3 should print the cold time and the warm median and min, got:\n${out}")
+endif()
+if(NOT out MATCHES "triangles +8288")
+  message(FATAL_ERROR "--reps changed the mesh: expected 8288 triangles, got:\n${out}")
+endif()
+run_mesh(2 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob_bad_reps.obj" --reps -1)
+if(NOT err MATCHES "reps")
+  message(FATAL_ERROR "a negative --reps should be refused naming the option, got: ${err}")
+endif()
 
 # Binary PLY output.
 run_mesh(0 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob.ply" --cube 0.3)

@@ -3,20 +3,15 @@
 // marching_slices.cpp and fluid/surface/marching_slices_policy.hpp. Not a stable API; include
 // marching_slices_policy.hpp instead.
 
-#include "fluid/surface/detail/field.hpp"
-#include "fluid/surface/marching_slices.hpp"
-#include "fluid/surface/mc_tables.hpp"
+#include "fluid/surface/detail/mesher_types.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cassert>
-#include <chrono>
-#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <limits>
@@ -27,409 +22,7 @@
 #include <unordered_map>
 #include <vector>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-// The particle-cache fill has a 4-wide AVX2 twin of its SSE2 path, chosen at run time
-// (Setup::avx2): the same double operations lane by lane (no FMA), so the same bits.
-#if defined(__x86_64__) && defined(__SSE2__)
-#define FLUID_SURFACE_AVX2_FILL 1
-#include <immintrin.h>
-#endif
-
 namespace fluid::detail {
-
-// ---------------------------------------------------------------------------------------------
-// Policies: compile-time field/vertex routines (paper §2 "custom user-defined isosurface field and
-// vertex calculation routines"). No virtual call per corner.
-struct PlainPolicy {
-  struct CornerData {};
-  static constexpr bool kHasUser = false;
-  void add(CornerData&, std::uint32_t, float) const {}
-  glm::vec4 vertex(const CornerData&, const CornerData&, float) const { return {}; }
-};
-
-// Per-particle vec4 weighted by each particle's field contribution, normalised at the corner,
-// then interpolated linearly along the edge like positions and normals (the paper's tentacle
-// texturing: per-particle data interpolated onto the surface). Used when SurfaceInput::user is set.
-struct Vec4Policy {
-  struct CornerData {
-    float v[4] = {0, 0, 0, 0};
-    float weight = 0;
-  };
-  static constexpr bool kHasUser = true;
-  const glm::vec4* user = nullptr;
-  void add(CornerData& c, std::uint32_t particle, float w) const {
-    const glm::vec4 u = user[particle];
-    c.v[0] += w * u.x;
-    c.v[1] += w * u.y;
-    c.v[2] += w * u.z;
-    c.v[3] += w * u.w;
-    c.weight += w;
-  }
-  glm::vec4 vertex(const CornerData& a, const CornerData& b, float t) const {
-    auto norm = [](const CornerData& c) { return glm::vec4(c.v[0], c.v[1], c.v[2], c.v[3]) / c.weight; };
-    // A corner with no particle (weight 0) takes the other end's value.
-    if (!(a.weight > 0)) return b.weight > 0 ? norm(b) : glm::vec4(0.0f);
-    if (!(b.weight > 0)) return norm(a);
-    const glm::vec4 va = norm(a), vb = norm(b);
-    return va + t * (vb - va);
-  }
-};
-
-// ---------------------------------------------------------------------------------------------
-// Data structures of Figure 3 and §6.
-
-// One element of a column list of the projection slice (§6): the particle influences corners
-// min_z..max_z of this column. Lists are stored as contiguous z-sorted arrays (CSR) instead of
-// doubly linked lists: the same walk, better locality. 12 bytes, so a block's cache is smaller
-// than the paper's 16-byte elements (§6: "If each of these is 16 bytes"); everything else the
-// field sum needs (the paper's "pointer to the particle", mid_z included) lives once per particle
-// in CacheParticle, read in z order along the walk.
-//
-// Lookup bounds: reachMax is the largest max_z of this and every earlier element of the column,
-// reachMin the smallest min_z of this and every later one (empty ranges left out). Both are
-// non-decreasing along the list, so the walk for corner z can start at the first element with
-// reachMax >= z and stop at the first with reachMin > z: exactly the elements the §6 window walk
-// (mid_z within z -/+ ceil(Rc/S)) would return, in the same order, without stepping over the
-// window's misses at either end.
-//
-// The range min_z..max_z is packed into one word (zKey, see columnKey) so that the walk's test
-// "min_z <= z <= max_z" is one add and one mask test (coversCorner) instead of two loads, two
-// subtractions and a compare per element passed.
-struct ColumnEntry {
-  std::uint32_t zKey;  // columnKey(min_z, max_z); 0 for an empty range (no corner falls in it)
-  std::int16_t reachMax;
-  std::uint16_t reachMinB;  // 0x8000 - reachMin (the stop test reachMin > z is reachMinB < 0x8000 - z)
-  std::uint32_t particle8;  // 8 x (index into Worker::local): the byte offset into a slice's dz
-                            // table, and a quarter of the one into Worker::local (atParticle8)
-};
-static_assert(sizeof(ColumnEntry) == 12);
-
-// zKey = (max_z << 16) | (0x8000 - min_z) for 0 <= min_z <= max_z <= 31999 (the fill gives
-// min_z >= 1); cornerKey(z) = ((0x8000 - z) << 16) + z for 0 <= z <= 31999. Their sum has
-// (0x8000 + z - min_z) in the low half and (0x8000 + max_z - z) in the high half, each in
-// [1, 0xffff] (no carry between them), so bit 15 is set iff z >= min_z and bit 31 iff z <= max_z.
-// An empty key (0) leaves bit 15 clear (z < 0x8000).
-inline std::uint32_t columnKey(int lo, int hi) { return (std::uint32_t(hi) << 16) | std::uint32_t(0x8000 - lo); }
-inline std::uint32_t cornerKey(int z) { return (std::uint32_t(0x8000 - z) << 16) + std::uint32_t(z); }
-inline bool coversCorner(std::uint32_t zKey, std::uint32_t cKey) {
-  return ((zKey + cKey) & 0x80008000u) == 0x80008000u;
-}
-
-// A block's particle as the field sum reads it: the offset from the particle to local corner c
-// along an axis is off[c + na] - rest with off[d] = float(d S), i.e. latticeOffset() of field.hpp
-// (bit for bit), from a small table instead of a multiply and two conversions per use. The anchor
-// is stored negated so the index is one add; 16 bits suffice (0 <= anchor - corner 0 <= n < 32000),
-// which makes the record 32 bytes, so one never straddles two cache lines.
-// The input index (user data) is read from the block's Particle records instead (same local
-// index), which leaves room for 4 s, a factor of the gradient term formed once per particle.
-struct CacheParticle {
-  float rest[3];       // Particle::rest
-  float k, s;          // 1 / (2 Rc_i^2), strength
-  float s4;            // 4.0f * s (exact; the first product of accumulate()'s gradient factor)
-  std::int16_t na[3];  // minus (anchor - the block's local corner 0); -mid_z for z (§6)
-};
-static_assert(sizeof(CacheParticle) == 32);
-
-template <class Policy>
-struct Corner {
-  float value;
-  float g[3];             // field gradient (normals are -g)
-  std::uint32_t vert[3];  // Ix, Iy, Iz: vertex index + 1 on the edge to +x, +y, +z (0 = none)
-  std::uint32_t cell;     // y (Nx + 1) + x: for clearing the index array when the slice is returned (§4)
-  [[no_unique_address]] typename Policy::CornerData user;
-};
-
-struct SliceCell {
-  std::uint32_t corner = 0;  // corner index + 1 (0 = not evaluated)
-  std::uint8_t doneAbove = 0, doneBelow = 0;
-  // Cube (x, y) of the slab above (below) this slice is already in a todo list. Not in Alg. 1:
-  // it only keeps a cube from being pushed again before it is popped (the done flags still
-  // decide at the pop). Every queued cube is popped before its slice can be returned, and
-  // popping evaluates this cell's corner, so returning the slice clears the flag too.
-  std::uint8_t queuedAbove = 0, queuedBelow = 0;
-};
-
-// Offset along z from a block particle to this slice's corners, and its square: the same for every
-// column, so the field sums read them from the slice instead of working them out per lookup.
-struct SliceDz {
-  float dz, dz2;  // latticeOffset() along z, and dz * dz (the float product accumulate() forms)
-};
-static_assert(sizeof(SliceDz) == 8);
-
-// Element i of a per-particle array of 8- or 32-byte records from p8 = 8 i: one scaled-index
-// address instead of a multiply and an add per array (ColumnEntry::particle8).
-template <class T>
-inline const T& atParticle8(const T* base, std::uint32_t p8) {
-  static_assert(sizeof(T) == 8 || sizeof(T) == 32);
-  return *reinterpret_cast<const T*>(reinterpret_cast<const char*>(base) + std::size_t(p8) * (sizeof(T) / 8));
-}
-
-template <class Policy>
-struct Slice {
-  std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
-  std::vector<Corner<Policy>> corners;
-  std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
-};
-
-struct BlockDesc {
-  std::int32_t bx, by, bz;
-  std::uint32_t first, count;  // into ExtractorState::blockParticles
-  double sortKey;
-};
-
-// One block's output. Normally each block has its own (blocks run concurrently, then
-// extractImpl concatenates them). On one thread with several blocks the blocks instead append,
-// in emission order, to one shared BlockOut holding the SurfaceMesh's own arrays (see
-// runBlocks: no copy), and the block's own BlockOut keeps only its counts and statistics.
-struct BlockOut {
-  std::vector<glm::vec3> positions, normals;
-  std::vector<glm::vec4> attributes;
-  std::vector<std::uint64_t> keys;
-  std::vector<std::uint32_t> indices;
-  std::vector<std::int32_t> triSlab;  // slab of each triangle (for runs / exact order)
-  std::vector<std::uint32_t> sortScratch;
-  std::vector<std::pair<float, std::uint32_t>> depthScratch;
-  std::vector<SurfaceSlabRun> runs;
-  SurfaceStats stats;
-  std::uint64_t cornerBytes = 0, particleBytes = 0;
-  // This block's vertices, indices and slab runs (also when they went to a shared BlockOut).
-  std::uint32_t vertexCount = 0, indexCount = 0, runCount = 0;
-  void reset() {
-    positions.clear();
-    normals.clear();
-    attributes.clear();
-    keys.clear();
-    indices.clear();
-    triSlab.clear();
-    runs.clear();
-    stats = {};
-    cornerBytes = particleBytes = 0;
-    vertexCount = indexCount = runCount = 0;
-  }
-};
-
-// SurfaceStats' phase times: a steady clock read a few times per block (tens of ns each).
-using PhaseClock = std::chrono::steady_clock;
-inline double phaseMs(PhaseClock::time_point from, PhaseClock::time_point to) {
-  return std::chrono::duration<double, std::milli>(to - from).count();
-}
-
-// Block grid and everything else fixed for one extract() call.
-struct Setup {
-  double s = 1;
-  float threshold = 0.2f;
-  double rcMax = 3;
-  int m = 3;                             // margin cubes, marginCubes() (§3)
-  int b[3] = {32, 32, 32};               // interior cubes per block, per axis
-  int n[3] = {38, 38, 38};               // expanded cubes per block, b + 2m
-  int nb[3] = {1, 1, 1};                 // blocks per axis
-  std::int64_t lattice0[3] = {0, 0, 0};  // lattice index where block 0's interior starts
-  int octant = 0;
-  bool exact = false;
-  bool flip = false;
-  SweepFrame frame;
-  bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
-  bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
-  double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
-  double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
-  double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
-};
-
-// Per-worker scratch, reused across blocks and frames.
-template <class Policy>
-struct Worker {
-  int nx = -1, ny = -1, nz = -1;  // expanded cubes per axis; corners 0..n
-  std::vector<std::uint32_t> colStart, cursor;
-  std::vector<std::int16_t> runMax;  // cache build: running max_z per column
-  std::vector<ColumnEntry> entries;
-  std::vector<CacheParticle> local;
-  std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
-  std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
-  std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
-  std::vector<std::uint64_t> kx, ky, kz;              // edgeKey() parts of local indices
-  std::vector<std::int16_t> chainLo, chainHi;         // seeding memo per column
-  std::vector<std::uint32_t> chainTouched;
-  std::vector<std::uint8_t> seamX, seamY, seamZ;  // seam face bits per local cube index (BlockMesher::begin)
-  std::vector<std::unique_ptr<Slice<Policy>>> slicePool;
-  std::vector<Slice<Policy>*> freeSlices;
-  std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
-  std::vector<std::vector<std::uint32_t>> todo;  // per slab z (0..nz-1)
-  std::vector<std::uint32_t> slabCount;
-  std::uint64_t peakBytes = 0;
-
-  std::size_t columns() const { return std::size_t(nx + 1) * std::size_t(ny + 1); }
-  void resize(const int dims[3]) {
-    if (dims[0] == nx && dims[1] == ny && dims[2] == nz) return;
-    nx = dims[0], ny = dims[1], nz = dims[2];
-    const std::size_t cols = columns();
-    colStart.assign(cols + 1, 0);
-    cursor.assign(cols, 0);
-    runMax.assign(cols, 0);
-    cx.assign(nx + 4, 0);  // 3 past the last corner: the 4-wide fill loads cx[x .. x + 3]
-    kx.assign(nx + 1, 0);
-    ky.assign(ny + 1, 0);
-    kz.assign(nz + 1, 0);
-    cy.assign(ny + 1, 0);
-    cz.assign(nz + 1, 0);
-    chainLo.assign(cols, 0);
-    chainHi.assign(cols, -1);
-    chainTouched.clear();
-    seamX.assign(nx + 1, 0);
-    seamY.assign(ny + 1, 0);
-    seamZ.assign(nz + 1, 0);
-    slicePool.clear();
-    freeSlices.clear();
-    active.assign(nz + 1, nullptr);
-    todo.resize(nz);
-    for (auto& t : todo) t.clear();
-    slabCount.assign(nz + 1, 0);
-  }
-
-  Slice<Policy>* acquireSlice() {
-    if (freeSlices.empty()) return acquireSliceFromNewStorage();
-    Slice<Policy>* s = freeSlices.back();
-    freeSlices.pop_back();
-    return s;
-  }
-  // A fresh slice, added to the pool (its cells cleared).
-  Slice<Policy>* acquireSliceFromNewStorage() {
-    slicePool.push_back(std::make_unique<Slice<Policy>>());
-    slicePool.back()->cells.assign(columns(), SliceCell{});
-    return slicePool.back().get();
-  }
-  // Returns a slice to the pool, clearing only the entries it touched (§4).
-  void releaseSlice(Slice<Policy>* s) {
-    for (const Corner<Policy>& c : s->corners) s->cells[c.cell] = SliceCell{};
-    s->corners.clear();
-    freeSlices.push_back(s);
-  }
-};
-
-// Whether the particle-cache fill takes its AVX2 path (Setup::avx2).
-inline bool detectFillAvx2(const SurfaceParams& params) {
-#if defined(FLUID_SURFACE_AVX2_FILL)
-  // The AVX2 mesher copy is also compiled with BMI1/BMI2/POPCNT (non-destructive shifts and bit
-  // operations; integer only, so the same results), which every AVX2 CPU so far also has.
-  return !params.portableKernels && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
-         __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt");
-#else
-  (void)params;
-  return false;
-#endif
-}
-
-// Lattice origin of a block's expanded region (local corner 0).
-inline void blockOrigin(const Setup& su, const BlockDesc& block, std::int64_t g0[3]) {
-  const int bc[3] = {block.bx, block.by, block.bz};
-  for (int a = 0; a < 3; ++a) g0[a] = su.lattice0[a] + std::int64_t(bc[a]) * su.b[a] - su.m;
-}
-
-// Margin cubes on each side of a block's interior (§3): ceil(Rc/S + 1/2), not the paper's
-// ceil(Rc/S). Seeding (§4) starts from each particle's nearest corner, and the expanded block's
-// outermost corners are held at field 0 (so every surface closes), so that corner must lie strictly
-// inside the expanded block for every particle that reaches the interior: such a particle is less
-// than Rc/S cubes from an interior corner, its nearest corner less than Rc/S + 1/2. With
-// ceil(Rc/S) a particle just over m - 1/2 cubes outside the interior (Rc/S a whole number, or just
-// under one) seeded from a boundary corner, never, and the part of its surface inside the block
-// was missing: a hole at the seam.
-inline int marginCubes(double rcMax, double s) { return std::max(1, int(std::ceil(rcMax / s + 0.5))); }
-
-// Block membership (§3), per axis, in lattice integers. A particle influences corner c only if
-// |c S - p| < Rc_i, so c lies in [anchor - reach, anchor + reach] with reach = ceil(Rc_i / S)
-// (anchor = floor(p / S)). The blocks along axis `a` whose interior corners [b0, b0 + b] meet that
-// range are [first, last] (callers clip it to their grid: outside it there is no corner).
-// Deciding this on the same integers the particle cache uses (rather than on (p -+ Rc_i) / S,
-// rounded separately) makes its invariant hold by construction: with reach <= m, every block
-// particle's anchor lies in the block's expanded region, 0 <= anchor - g0 <= n (reach <= m).
-// The range is exact for float input: p / S and Rc_i / S are either whole numbers or at least
-// ~2^-25 (resp. 2^-48 (Rc_i / S)) away from one, far more than double rounding, so the floor,
-// the ceil and the exact predicate (influences()) agree with real arithmetic at its ends.
-inline std::int64_t floorDivInt(std::int64_t v, std::int64_t d) { return v / d - (v % d != 0 && (v < 0) != (d < 0)); }
-inline int particleReach(const Particle& p, double s) { return int(std::ceil(std::sqrt(p.rc2) / s)); }
-inline void blockSpan(const Setup& su, int a, std::int64_t anchor, int reach, int& first, int& last) {
-  const std::int64_t t = anchor - su.lattice0[a], b = su.b[a];
-  // (first + 1) b >= t - reach  and  last b <= t + reach.
-  first = int(floorDivInt(t - reach - 1, b));
-  last = int(floorDivInt(t + reach, b));
-}
-
-// Vertex on the edge from corner A (lattice index gi, value va, gradient ga) along `axis` to B.
-// The default vertex routine of §2: linear interpolation of position and normal. Positions in
-// double from the global lattice index, so every block computes the same bits.
-struct VertexOut {
-  glm::vec3 position, normal;
-};
-// `local` = corner A's coordinates, double(gi) * S per axis (any caller computes them that way).
-inline VertexOut makeVertexAt(const Setup& su, double local[3], int axis, float va, const float ga[3], float vb,
-                              const float gb[3]) {
-  const double tt = (double(su.threshold) - double(va)) / (double(vb) - double(va));
-  local[axis] += tt * su.s;
-  const float tf = float(tt);
-  float g[3];
-  for (int i = 0; i < 3; ++i) g[i] = ga[i] + tf * (gb[i] - ga[i]);
-  const float len2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-  float nl[3] = {0, 0, 0};
-  if (len2 > 1e-30f && std::isfinite(len2)) {
-#if defined(__SSE2__)
-    // The IEEE square root without std::sqrt's errno branch (len2 > 0 here).
-    const float inv = -1.0f / _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(len2)));
-#else
-    const float inv = -1.0f / std::sqrt(len2);
-#endif
-    for (int i = 0; i < 3; ++i) nl[i] = g[i] * inv;
-  } else {
-    // Flat gradient (symmetric cancellation): point along the edge, inside -> outside.
-    nl[axis] = va > su.threshold ? 1.0f : -1.0f;
-  }
-  if (su.plainFrame)  // the general form below with axis[a] = a, sign[a] = +1 (same bits)
-    return {glm::vec3(float(local[0] - su.origin[0]), float(local[1] - su.origin[1]), float(local[2] - su.origin[2])),
-            glm::vec3(nl[0], nl[1], nl[2])};
-  float pos[3], nrm[3];
-  for (int a = 0; a < 3; ++a) {
-    const int wa = su.frame.axis[a];
-    pos[wa] = float(su.frame.sign[a] * local[a] - su.origin[wa]);
-    nrm[wa] = float(su.frame.sign[a]) * nl[a];
-  }
-  return {glm::vec3(pos[0], pos[1], pos[2]), glm::vec3(nrm[0], nrm[1], nrm[2])};
-}
-inline VertexOut makeVertex(const Setup& su, const std::int64_t gi[3], int axis, float va, const float ga[3], float vb,
-                            const float gb[3]) {
-  double local[3] = {double(gi[0]) * su.s, double(gi[1]) * su.s, double(gi[2]) * su.s};
-  return makeVertexAt(su, local, axis, va, ga, vb, gb);
-}
-
-inline void buildRuns(BlockOut& out) {
-  for (std::size_t i = 0; i < out.triSlab.size(); ++i) {
-    const std::int32_t s = out.triSlab[i];
-    if (out.runs.empty() || out.runs.back().slab != s)
-      out.runs.push_back(SurfaceSlabRun{s, IndexRange{std::uint32_t(3 * i), 0}});
-    out.runs.back().indices.count += 3;
-  }
-}
-
-// A unit square of a seam plane (the plane between two blocks' interiors, §3): g = its lowest
-// lattice corner, `axis` = the plane's normal. For seam propagation (BlockMesher::seedFromNeighbours).
-struct SeamSquare {
-  std::int64_t g[3];
-  std::int32_t axis;
-  friend bool operator==(const SeamSquare& a, const SeamSquare& b) {
-    return a.axis == b.axis && a.g[0] == b.g[0] && a.g[1] == b.g[1] && a.g[2] == b.g[2];
-  }
-  friend bool operator<(const SeamSquare& a, const SeamSquare& b) {
-    if (a.axis != b.axis) return a.axis < b.axis;
-    for (int i = 0; i < 3; ++i)
-      if (a.g[i] != b.g[i]) return a.g[i] < b.g[i];
-    return false;
-  }
-};
-
-// One block's seam propagation state for one extract() call.
-struct BlockSeams {
-  std::vector<SeamSquare> seeds;   // squares its neighbours' marches crossed and its own did not (sorted)
-  std::vector<SeamSquare> visits;  // seam squares its last run's march crossed (BlockMesher::noteSeamFaces)
-};
 
 // ---------------------------------------------------------------------------------------------
 // The per-block algorithm, BlockMesher<Policy> (block_mesher.inl). A second copy in namespace
@@ -564,7 +157,7 @@ void runParallelLargestFirst(ExtractorState& st, std::vector<std::unique_ptr<W>>
 // Which worker meets which block depends on timing, so a worker can meet a larger block than
 // it has seen before in any frame. After a frame every worker's scratch is grown to the largest
 // capacity any worker needed: once every block has been met by some worker, no worker allocates
-// again, whatever the schedule (issue 3: no allocation per frame after warm-up, for N threads).
+// again, whatever the schedule (no allocation per frame after warm-up, for any thread count).
 // Only capacities are touched; contents are rebuilt per block anyway.
 template <class Policy>
 void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
@@ -790,14 +383,9 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
 void runFollow(ExtractorState& st, const Setup& su);
 std::uint64_t followPeakBytes(const ExtractorState& st);
 
-template <class Policy>
-SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const SurfaceParams& params,
-                          const Policy& policy, SurfaceMesh& out) {
-  const PhaseClock::time_point start = PhaseClock::now();
-  out.clear();
-  SurfaceStatus status = validateSurface(input, params);
-  if (!status.ok()) return status;
-
+// The sweep frame, flags, origin and view of one extract() call (the rest of Setup is filled by
+// extractImpl from the particles: rcMax, margin, block grid, octant).
+inline Setup setupFromParams(const SurfaceParams& params) {
   Setup su;
   su.s = params.cube;
   su.threshold = params.threshold;
@@ -818,26 +406,21 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
       su.view[a] = params.order == SurfaceOrder::frontToBack ? -double(d[a]) : double(d[a]);
     }
   }
-  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
-  if (st.particles.empty()) return {};
-  su.m = marginCubes(su.rcMax, su.s);
-  // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
-  // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
-  // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
-  // cube of the block edge; 128 would make it a strawman).
-  planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
-  if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
-    return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
-  {
-    // View octant in the sweep frame, for the in-cube order tables (§5).
-    const float d[3] = {params.viewDir.x, params.viewDir.y, params.viewDir.z};
-    double ld[3];
-    for (int a = 0; a < 3; ++a) ld[a] = su.frame.sign[a] * double(d[su.frame.axis[a]]);
-    if (params.order == SurfaceOrder::frontToBack)
-      for (double& v : ld) v = -v;
-    su.octant = params.order == SurfaceOrder::none ? 0 : (ld[0] < 0) | ((ld[1] < 0) << 1) | ((ld[2] < 0) << 2);
-  }
+  return su;
+}
 
+// View octant in the sweep frame, for the in-cube order tables (§5).
+inline int viewOctant(const SurfaceParams& params, const SweepFrame& frame) {
+  const float d[3] = {params.viewDir.x, params.viewDir.y, params.viewDir.z};
+  double ld[3];
+  for (int a = 0; a < 3; ++a) ld[a] = frame.sign[a] * double(d[frame.axis[a]]);
+  if (params.order == SurfaceOrder::frontToBack)
+    for (double& v : ld) v = -v;
+  return params.order == SurfaceOrder::none ? 0 : (ld[0] < 0) | ((ld[1] < 0) << 1) | ((ld[2] < 0) << 2);
+}
+
+// Block lists (§3) and the blocks' emission order (§5), into st.blocks / st.blockParticles.
+inline void buildBlockLists(ExtractorState& st, const Setup& su, const SurfaceParams& params) {
   // Block lists (§3): each particle goes to every block with an interior corner within its reach
   // (blockSpan). Sorting (block, rank) pairs keeps each block's particles in (z, index) order. The
   // pairs are made in rank order, so a stable counting sort by block gives that order in one pass
@@ -909,22 +492,12 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     std::stable_sort(st.blocks.begin(), st.blocks.end(),
                      [](const BlockDesc& a, const BlockDesc& b) { return a.sortKey < b.sortKey; });
   }
-  if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());
+}
 
-  const int threads = params.threads > 0 ? params.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  if (!st.arena || st.arenaThreads != threads) {
-    st.arena = std::make_unique<tbb::task_arena>(threads);
-    st.arenaThreads = threads;
-  }
-  st.firstInPlace = false;
-  const PhaseClock::time_point prepared = PhaseClock::now();
-  if (st.method == 2)
-    runFollow(st, su);
-  else
-    runBlocks(st, su, policy, st.workersFor<Policy>(), out);
-  const PhaseClock::time_point meshed = PhaseClock::now();
-  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);  // block 0's vertices and indices, at base 0
-
+// Joins the block outputs into `out` in emission order and fills the block ranges and the summed
+// statistics (not the triangle, vertex and memory totals, which extractImpl sets).
+// `user`: the policy has per-vertex attributes (Policy::kHasUser, method 1).
+inline SurfaceStatus gatherBlocks(ExtractorState& st, const Setup& su, bool user, SurfaceMesh& out) {
   // Concatenate block outputs in emission order (prefix sums, then a parallel copy; one block's
   // buffers are swapped in whole, and one worker appends the blocks in turn, which spares the
   // zero-fill of resize()). When the blocks appended to the mesh's arrays themselves
@@ -968,7 +541,6 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     stats.cornerCacheBytesPeakBlock = std::max(stats.cornerCacheBytesPeakBlock, o.cornerBytes);
     stats.particleCacheBytesPeakBlock = std::max(stats.particleCacheBytesPeakBlock, o.particleBytes);
   }
-  const bool user = Policy::kHasUser && st.method == 1;
   // 0: parallel copy into resized arrays; 1: one block, swapped; 2: appended block by block;
   // 3: the blocks wrote into the mesh's arrays (appendBlocks); 4: block 0 wrote into them
   // (firstInPlace), the others are appended after it as in 2.
@@ -1044,6 +616,51 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
     br.firstSlabRun = rb;
     br.slabRunCount = st.runBase[i + 1] - rb;
   });
+  return {};
+}
+
+template <class Policy>
+SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const SurfaceParams& params,
+                          const Policy& policy, SurfaceMesh& out) {
+  const PhaseClock::time_point start = PhaseClock::now();
+  out.clear();
+  SurfaceStatus status = validateSurface(input, params);
+  if (!status.ok()) return status;
+
+  Setup su = setupFromParams(params);
+  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
+  if (st.particles.empty()) return {};
+  su.m = marginCubes(su.rcMax, su.s);
+  // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
+  // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
+  // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
+  // cube of the block edge; 128 would make it a strawman).
+  planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
+  if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
+    return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
+  su.octant = viewOctant(params, su.frame);
+
+  buildBlockLists(st, su, params);
+  if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());
+
+  const int threads = params.threads > 0 ? params.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  if (!st.arena || st.arenaThreads != threads) {
+    st.arena = std::make_unique<tbb::task_arena>(threads);
+    st.arenaThreads = threads;
+  }
+  st.firstInPlace = false;
+  const PhaseClock::time_point prepared = PhaseClock::now();
+  if (st.method == 2)
+    runFollow(st, su);
+  else
+    runBlocks(st, su, policy, st.workersFor<Policy>(), out);
+  const PhaseClock::time_point meshed = PhaseClock::now();
+  if (st.firstInPlace) swapMeshArrays(st.outs[0], out);  // block 0's vertices and indices, at base 0
+
+  const bool user = Policy::kHasUser && st.method == 1;
+  if (SurfaceStatus gathered = gatherBlocks(st, su, user, out); !gathered.ok()) return gathered;
+  SurfaceStats& stats = out.stats;
+  const std::size_t nb = st.blocks.size();
   stats.triangles = out.indices.size() / 3;
   stats.vertices = out.positions.size();
   stats.blocks = std::uint32_t(nb);
