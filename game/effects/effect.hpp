@@ -19,6 +19,7 @@
 // one line in game/effects/registry.cpp, and the file in game/effects/sources.cmake.
 
 #include "engine/profile/profiler.hpp"
+#include "fluid/core/blast.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 
@@ -38,6 +39,7 @@ struct FrameBatches;
 
 namespace game {
 
+struct Explosives;
 struct RigidBodies;
 struct SphFluid;
 
@@ -50,6 +52,11 @@ struct EffectLinks {
   FountainGeometry level;           // the level's shape: the nozzle, the basin
   RigidBodies* bodies = nullptr;    // rigid_bodies: Bullet world + crates (the water pushes them)
   const SphFluid* fluid = nullptr;  // sph_fluid: the particles (surface meshes, spray sprites)
+  Explosives* explosives = nullptr;  // explosives: the player's charges (playerThrowExplosive)
+  // This step's detonations (explosives publishes them in its step; empty otherwise). Effects after
+  // it in registry order push their own matter with each blast by the shared law of
+  // fluid/core/blast.hpp in the same step: the water, the blob, the sprites.
+  std::span<const fluid::Blast> blasts;
 };
 
 struct BuildContext {

@@ -8,15 +8,14 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
     s.error.clear();
     return true;
   }
-  const fluid::ParticleStore& particles = fluid.world.particles;
-  const std::size_t n = particles.size();
-  s.xs.resize(n);
-  s.ys.resize(n);
-  s.zs.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    s.xs[i] = particles.position[i].x;
-    s.ys[i] = particles.position[i].y;
-    s.zs[i] = particles.position[i].z;
+  // The SPH store's own SoA arrays (fluid/sph: one particle layout), read without a copy.
+  const fluid::SphPositionArrays positions = fluid::sphPositionArrays(fluid.world);
+  const std::size_t n = fluid.world.particles.size();
+  if (positions.x.size() != n) {
+    s.mesh.clear();
+    s.error = "fluid_surface: the SPH position arrays hold " + std::to_string(positions.x.size()) + " of " +
+              std::to_string(n) + " particles (positions written outside a step without refreshSphPositionArrays)";
+    return false;
   }
   ++s.meshes;
   if (n == 0) {
@@ -36,9 +35,9 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   sp.eye = eye;
   sp.viewDir = view_dir;
   fluid::SurfaceInput input;
-  input.x = s.xs;
-  input.y = s.ys;
-  input.z = s.zs;
+  input.x = positions.x;
+  input.y = positions.y;
+  input.z = positions.z;
   const fluid::SurfaceStatus st = s.extractor.extract(input, sp, s.mesh);
   if (!st.ok()) {
     s.error = "fluid_surface: " + st.error;

@@ -43,7 +43,6 @@ struct FluidSurface {
   FluidSurfaceParams params;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
-  std::vector<float> xs, ys, zs;  // SoA copy of the particle positions, reused every frame
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
   // Method raycast, last frame (written by the engine's water pass): fragment-list records asked
