@@ -41,12 +41,14 @@ std::string_view playerActionName(PlayerAction action) {
   switch (action) {
     case PlayerAction::throw_crate:
       return "throw_crate";
+    case PlayerAction::throw_explosive:
+      return "throw_explosive";
   }
   return "?";
 }
 
 bool parsePlayerAction(std::string_view name, PlayerAction& out) {
-  for (PlayerAction action : {PlayerAction::throw_crate}) {
+  for (PlayerAction action : {PlayerAction::throw_crate, PlayerAction::throw_explosive}) {
     if (name == playerActionName(action)) {
       out = action;
       return true;
@@ -59,6 +61,9 @@ void applyPlayerAction(World& world, PlayerAction action) {
   switch (action) {
     case PlayerAction::throw_crate:
       playerThrow(world);
+      break;
+    case PlayerAction::throw_explosive:
+      playerThrowExplosive(world);
       break;
   }
 }

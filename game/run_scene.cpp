@@ -76,6 +76,7 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   engine::updateCamera(s.world.camera, camera_input, static_cast<float>(frame_dt));
   s.actions.clear();
   if (input.left_click) s.actions.push_back(PlayerAction::throw_crate);
+  if (input.throw_explosive) s.actions.push_back(PlayerAction::throw_explosive);
   FrameInput frame_input{s.world, frame, s.actions, {}};
   if (s.options.hooks.before_steps) s.options.hooks.before_steps(frame_input);
   for (PlayerAction action : s.actions) applyPlayerAction(s.world, action);

@@ -21,7 +21,7 @@ struct World;
 
 // What a player can do to the simulation besides moving the camera. Replay files name them
 // (playerActionName); later effects add theirs here (throw_explosive, blob triggers).
-enum class PlayerAction : std::uint8_t { throw_crate };
+enum class PlayerAction : std::uint8_t { throw_crate, throw_explosive };
 std::string_view playerActionName(PlayerAction action);
 bool parsePlayerAction(std::string_view name, PlayerAction& out);  // false for an unknown name
 void applyPlayerAction(World& world, PlayerAction action);

@@ -97,7 +97,7 @@ void destroyPlatform(Platform& platform) {
 void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool ui_wants_keyboard,
                bool (*event_hook)(const SDL_Event*)) {
   input.mouse_dx = input.mouse_dy = 0.0f;
-  input.left_click = input.toggle_ui = input.screenshot = input.resized = false;
+  input.left_click = input.throw_explosive = input.toggle_ui = input.screenshot = input.resized = false;
   SDL_Event event;
   while (SDL_PollEvent(&event)) {
     if (event_hook != nullptr) event_hook(&event);
@@ -125,6 +125,7 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
               input.quit = true;
           }
           if (key == SDLK_TAB && !ui_wants_keyboard) input.mouse_look = !input.mouse_look;
+          if (key == SDLK_g && !ui_wants_keyboard) input.throw_explosive = true;
         }
         if (ui_wants_keyboard && down) break;
         if (key == SDLK_w || key == SDLK_UP) input.forward = down;
@@ -139,6 +140,7 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
       case SDL_MOUSEBUTTONDOWN:
         if (ui_wants_mouse && !input.mouse_look) break;
         if (event.button.button == SDL_BUTTON_LEFT) input.left_click = true;
+        if (event.button.button == SDL_BUTTON_MIDDLE) input.throw_explosive = true;
         if (event.button.button == SDL_BUTTON_RIGHT) input.mouse_look = true;
         break;
       case SDL_MOUSEBUTTONUP:

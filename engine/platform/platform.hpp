@@ -37,6 +37,7 @@ struct InputState {
   float mouse_dx = 0.0f, mouse_dy = 0.0f;  // pixels since the last poll (relative mode)
   bool mouse_look = false;                 // right button held, or relative mode toggled with Tab/M
   bool left_click = false;                 // a left press happened this frame
+  bool throw_explosive = false;            // G or the middle button pressed this frame
   bool toggle_ui = false;                  // F1 pressed this frame
   bool screenshot = false;                 // F12 pressed this frame
   bool resized = false;

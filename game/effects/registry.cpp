@@ -7,6 +7,7 @@
 namespace game {
 
 const EffectDesc& rigidBodiesEffect();
+const EffectDesc& explosivesEffect();
 const EffectDesc& sphFluidEffect();
 const EffectDesc& spriteParticlesEffect();
 const EffectDesc& fluidSurfaceEffect();
@@ -14,6 +15,7 @@ const EffectDesc& fluidSurfaceEffect();
 std::span<const EffectDesc* const> effectRegistry() {
   static const std::array kEffects = {
       &rigidBodiesEffect(),      // publishes gravity and the crates
+      &explosivesEffect(),       // fuses after the physics step; publishes this step's blasts
       &sphFluidEffect(),         // couples to the crates; publishes the particles
       &spriteParticlesEffect(),  // sprays from this step's particles
       &fluidSurfaceEffect(),     // meshes the particles per frame

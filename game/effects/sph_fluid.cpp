@@ -1,6 +1,7 @@
 // The `sph_fluid` effect: the fountain's water as a CPU SPH fluid (fluid/sph), coupled two-way to
 // the crates when rigid_bodies is listed. State and setup: game/world/sph_fluid.hpp.
 #include "game/world/sph_fluid.hpp"
+#include "fluid/sph/blast.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
 #include "game/world/fountain.hpp"
@@ -72,6 +73,15 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     if (coupling) collidersFromBodies(*coupling, *bodies_->physics, bodies_->crates, state.world);
     StepOutcome outcome;
     const bool was_running = state.error.empty();
+    // This step's explosions push the water before it steps, so the step's CFL bound sees the new
+    // speeds (fluid/sph/blast.hpp). The push is capped at the fluid's own speed cap.
+    for (const fluid::Blast& blast : ctx.links.blasts) {
+      const float cap = state.world.params.max_speed > 0.0f ? state.world.params.max_speed : 30.0f;
+      fluid::SphBlastStats blast_stats;
+      const fluid::SphStatus pushed = fluid::applyBlast(state.world, blast, cap, &blast_stats);
+      if (!pushed.ok() && outcome.failure.empty()) outcome.failure = "sph_fluid: blast refused: " + pushed.error;
+      state.blasted_particles += blast_stats.particles;
+    }
     if (!stepSphFluid(state, ctx.step_seconds) && was_running)
       outcome.failure = "sph_fluid: " + state.error + " (the fluid stops stepping)";
     if (coupling) coupling_error_ = forcesToBodies(*coupling, state.world, *bodies_->physics);

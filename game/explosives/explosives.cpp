@@ -10,15 +10,25 @@ std::string validateExplosiveParams(const ExplosiveParams& p) {
   if (!positive(p.fuse_seconds)) return "explosives.fuse_seconds = " + std::to_string(p.fuse_seconds) + " (need > 0)";
   if (!(std::isfinite(p.throw_speed) && p.throw_speed >= 0.0f))
     return "explosives.throw_speed = " + std::to_string(p.throw_speed) + " (need >= 0)";
+  if (!(std::isfinite(p.lob_degrees) && std::abs(p.lob_degrees) <= 80.0f))
+    return "explosives.lob_degrees = " + std::to_string(p.lob_degrees) + " (need a value in [-80, 80])";
   if (!positive(p.radius)) return "explosives.radius = " + std::to_string(p.radius) + " (need > 0)";
   if (!positive(p.mass)) return "explosives.mass = " + std::to_string(p.mass) + " (need > 0)";
   if (!(std::isfinite(p.impact_speed_change) && p.impact_speed_change >= 0.0f))
     return "explosives.impact_speed_change = " + std::to_string(p.impact_speed_change) + " (need >= 0)";
   if (p.max_live < 1) return "explosives.max_live = " + std::to_string(p.max_live) + " (need >= 1)";
-  fluid::Blast blast = p.blast;
-  blast.centre = glm::vec3(0.0f);  // set at detonation
-  if (std::string error = fluid::validateBlast(blast); !error.empty()) return "explosives: " + error;
+  if (std::string error = fluid::validateBlast(blastOf(p, glm::vec3(0.0f))); !error.empty())
+    return "explosives: " + error;
   return {};
+}
+
+fluid::Blast blastOf(const ExplosiveParams& params, glm::vec3 centre) {
+  fluid::Blast blast;
+  blast.centre = centre;
+  blast.impulse_at_1m = params.impulse_at_1m;
+  blast.core_radius = params.core_radius;
+  blast.reach = params.reach;
+  return blast;
 }
 
 namespace {
@@ -48,7 +58,14 @@ Charge& chargeForThrow(Explosives& e, engine::PhysicsWorld& physics) {
 void throwExplosive(Explosives& e, engine::PhysicsWorld& physics, glm::vec3 origin, glm::vec3 direction,
                     glm::vec3 initial_velocity) {
   const float length = glm::length(direction);
-  const glm::vec3 along = length > 1e-6f && std::isfinite(length) ? direction / length : glm::vec3(0, 0, -1);
+  glm::vec3 along = length > 1e-6f && std::isfinite(length) ? direction / length : glm::vec3(0, 0, -1);
+  // Raise the aim by the lob angle in the vertical plane of the throw (straight up stays up).
+  const float horizontal = std::sqrt(along.x * along.x + along.z * along.z);
+  if (horizontal > 1e-4f) {
+    const float pitch = std::atan2(along.y, horizontal) + glm::radians(e.params.lob_degrees);
+    const float clamped = std::clamp(pitch, -1.55f, 1.55f);
+    along = glm::vec3(along.x / horizontal * std::cos(clamped), std::sin(clamped), along.z / horizontal * std::cos(clamped));
+  }
   Charge& charge = chargeForThrow(e, physics);
   engine::BodyState state;
   state.position = origin;
@@ -72,8 +89,7 @@ void stepExplosives(Explosives& e, engine::PhysicsWorld& physics, double dt) {
     charge.last_velocity = state.linear_velocity;
     const bool impact = e.params.impact_speed_change > 0.0f && change > e.params.impact_speed_change;
     if (e.time + 1e-9 < charge.detonates_at && !impact) continue;
-    fluid::Blast blast = e.params.blast;
-    blast.centre = state.position;
+    const fluid::Blast blast = blastOf(e.params, state.position);
     charge.live = false;
     engine::setBodyEnabled(physics, charge.body, false);
     if (!fluid::validateBlast(blast).empty()) continue;  // a non-finite charge position: no blast

@@ -21,12 +21,19 @@ namespace game {
 struct ExplosiveParams {
   float fuse_seconds = 2.5f;      // from the throw to the detonation
   float throw_speed = 9.0f;       // m/s
+  float lob_degrees = 20.0f;      // the throw leaves this much above the aimed direction (a lob, not a line drive)
   float radius = 0.1f;            // m, the charge's sphere
   float mass = 1.2f;              // kg
   float impact_speed_change = 0;  // m/s: detonate early when one step changes its velocity by more; 0 = fuse only
-  fluid::Blast blast;             // impulse_at_1m, core_radius, reach; the centre is the charge at detonation
-  int max_live = 6;               // charges in flight at once; a throw beyond recycles the oldest
+  // The blast (fluid/core/blast.hpp); its centre is the charge at detonation.
+  float impulse_at_1m = 60.0f;  // Pa s: specific impulse 1 m from the charge
+  float core_radius = 0.25f;    // m
+  float reach = 4.0f;           // m
+  int max_live = 6;             // charges in flight at once; a throw beyond recycles the oldest
 };
+
+// The blast of a charge detonating at `centre`.
+fluid::Blast blastOf(const ExplosiveParams& params, glm::vec3 centre);
 
 // Empty when usable; otherwise names the bad field and value.
 std::string validateExplosiveParams(const ExplosiveParams& params);
@@ -47,9 +54,9 @@ struct Explosives {
   std::uint64_t bodies_pushed = 0;  // crates and charges moved by blasts so far
 };
 
-// Throws a charge from `origin` along `direction` (normalised here; zero = forward -z) at
-// params.throw_speed, adding to `initial_velocity` (the thrower's own). Creates its Bullet body
-// on first use.
+// Throws a charge from `origin` along `direction` (normalised here; zero = forward -z) raised by
+// params.lob_degrees, at params.throw_speed, adding to `initial_velocity` (the thrower's own).
+// Creates its Bullet body on first use.
 void throwExplosive(Explosives& explosives, engine::PhysicsWorld& physics, glm::vec3 origin, glm::vec3 direction,
                     glm::vec3 initial_velocity = glm::vec3(0.0f));
 

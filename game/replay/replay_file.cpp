@@ -181,7 +181,7 @@ bool parseEvent(LineParser& p, const std::vector<std::string_view>& tokens, Repl
     if (!expectCount(p, "action", tokens, 3, "action STEP NAME")) return false;
     if (!parseStep(p, "action.step", tokens[1], event.step)) return false;
     if (!parsePlayerAction(tokens[2], event.action))
-      return p.fail("action.name", "unknown action " + quoted(tokens[2]) + " (known: throw_crate)");
+      return p.fail("action.name", "unknown action " + quoted(tokens[2]) + " (known: throw_crate, throw_explosive)");
     return true;
   }
   if (key == "checkpoint") return parseCheckpoint(p, tokens, event);

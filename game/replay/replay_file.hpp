@@ -9,7 +9,7 @@
 //   step_hz 60                               must equal the scene's scene.step_hz
 //   seed 7                                   must equal the scene's scene.seed
 //   camera 0 0.5 2.6 9.5 -93 -11             STEP x y z yaw pitch: camera keyframe
-//   action 120 throw_crate                   STEP NAME: a player action
+//   action 120 throw_crate                   STEP NAME: a player action (throw_crate, throw_explosive)
 //   checkpoint 600 0123456789abcdef rigid_bodies=... sph_fluid=...   expected state hashes
 //   end 1200                                 last step (required: a file without it is truncated)
 //

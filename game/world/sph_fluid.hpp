@@ -45,6 +45,7 @@ struct SphFluid {
   fluid::SphWorld world;
   std::uint64_t steps = 0;         // game steps taken
   std::uint64_t solver_steps = 0;  // adaptive SPH steps taken
+  std::uint64_t blasted_particles = 0;  // particle pushes by explosions so far (fluid/sph/blast.hpp)
   std::string error;               // first solver error; the system stops stepping after one
   // Crates <-> water, two-way: only with rigid_bodies listed and couple_bodies on. Shared so a
   // SphFluid stays copyable (the fountain benchmark snapshots one); a copy shares the coupling.

@@ -34,7 +34,7 @@ float clampPotential(float value, float lo, float hi) {
 }
 
 std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& p) {
-  std::vector<engine::ParticleTypeDesc> types(2);
+  std::vector<engine::ParticleTypeDesc> types(4);
   const float d = 2.0f * p.size;  // key-frame sizes are diameters
   // Mist: pale, grows a little as it disperses, fades out.
   types[kMistType].keys = {{{glm::vec4(0.86f, 0.91f, 0.96f, 0.55f), d},
@@ -46,7 +46,44 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
                              {glm::vec4(0.74f, 0.85f, 0.96f, 0.75f), 0.8f * d},
                              {glm::vec4(0.80f, 0.89f, 0.98f, 0.45f), 0.7f * d},
                              {glm::vec4(0.85f, 0.92f, 1.00f, 0.0f), 0.6f * d}}};
+  // Explosion debris: small dark grit, thrown hard, keeps its size.
+  types[kDebrisType].keys = {{{glm::vec4(0.22f, 0.19f, 0.16f, 1.0f), 0.7f * d},
+                              {glm::vec4(0.25f, 0.22f, 0.18f, 1.0f), 0.7f * d},
+                              {glm::vec4(0.28f, 0.25f, 0.21f, 0.8f), 0.6f * d},
+                              {glm::vec4(0.30f, 0.27f, 0.23f, 0.0f), 0.5f * d}}};
+  // Explosion smoke: starts as a hot orange flash, turns grey, billows out and fades.
+  types[kSmokeType].keys = {{{glm::vec4(1.00f, 0.62f, 0.22f, 0.9f), 2.0f * d},
+                             {glm::vec4(0.45f, 0.42f, 0.40f, 0.6f), 5.0f * d},
+                             {glm::vec4(0.55f, 0.54f, 0.53f, 0.35f), 8.0f * d},
+                             {glm::vec4(0.62f, 0.62f, 0.62f, 0.0f), 10.0f * d}}};
   return types;
+}
+
+// Debris and smoke at each blast's centre (engine emitters, seeded by the step and the blast).
+void emitBlastSprites(SpriteParticles& s, std::span<const fluid::Blast> blasts) {
+  for (std::size_t k = 0; k < blasts.size(); ++k) {
+    const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
+    engine::EmitterDesc debris;
+    debris.kind = engine::EmitterKind::debris;
+    debris.position = blasts[k].centre;
+    debris.speed = 9.0f;
+    debris.radius = 0.15f;
+    debris.count = 160;
+    debris.lifetime = 1.6f;
+    debris.type = kDebrisType;
+    debris.seed = seed;
+    engine::emit(debris, s.births);
+    engine::EmitterDesc smoke;
+    smoke.kind = engine::EmitterKind::mist;
+    smoke.position = blasts[k].centre + glm::vec3(0.0f, 0.1f, 0.0f);
+    smoke.speed = 2.5f;
+    smoke.radius = 0.3f;
+    smoke.count = 60;
+    smoke.lifetime = 2.5f;
+    smoke.type = kSmokeType;
+    smoke.seed = seed ^ 0x5bd1e995ull;
+    engine::emit(smoke, s.births);
+  }
 }
 
 engine::GpuStepParams stepParams(const SpriteParticleParams& p) {
@@ -240,7 +277,7 @@ std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& p,
   return added;
 }
 
-void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt) {
+void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts) {
   if (!s.attached || !s.gpu.ready) return;
   s.births.clear();
   emitMist(s, dt);
@@ -250,12 +287,20 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt) {
     s.spray_last_step = static_cast<std::uint32_t>(
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
+  const std::size_t before_blasts = s.births.size();
+  emitBlastSprites(s, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
+  // spawn takes the batch in order until the budget is full: mist, then spray, then blast sprites.
   const std::size_t mist_born = std::min(born, mist);
+  const std::size_t spray_born = std::min(born, before_blasts) - mist_born;
   s.born_mist += mist_born;
-  s.born_spray += born - mist_born;
+  s.born_spray += spray_born;
+  s.born_blast += born - mist_born - spray_born;
   s.dropped += s.births.size() - born;
-  engine::step(s.gpu, stepParams(s.params));
+  engine::GpuStepParams params = stepParams(s.params);
+  params.blast_count = static_cast<int>(std::min<std::size_t>(blasts.size(), engine::kMaxBlasts));
+  for (int k = 0; k < params.blast_count; ++k) params.blasts[static_cast<std::size_t>(k)] = blasts[static_cast<std::size_t>(k)];
+  engine::step(s.gpu, params);
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
 }

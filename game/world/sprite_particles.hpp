@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <span>
 #include <vector>
 
 namespace game {
@@ -65,6 +66,8 @@ SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gr
 // Particle types in the GPU system's key-frame table.
 inline constexpr std::uint32_t kMistType = 0;
 inline constexpr std::uint32_t kSprayType = 1;
+inline constexpr std::uint32_t kDebrisType = 2;  // explosion debris: dark grit thrown out, falls
+inline constexpr std::uint32_t kSmokeType = 3;   // explosion smoke: grows, rises slowly, fades
 
 struct SpriteParticles {
   SpriteParticleParams params;
@@ -83,7 +86,7 @@ struct SpriteParticles {
   std::vector<std::string> collider_names;
   double bake_ms = 0.0;
   // Counters for the overlay and tests.
-  std::uint64_t born_mist = 0, born_spray = 0;
+  std::uint64_t born_mist = 0, born_spray = 0, born_blast = 0;
   std::uint64_t dropped = 0;  // births refused because the budget was full
   std::uint32_t spray_last_step = 0;
   // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the live
@@ -112,7 +115,9 @@ void detachSpriteGpu(SpriteParticles& s);
 
 // One fixed step (GPU; no-op when not attached): retire, emit mist and spray (from `sph` when
 // given), integrate and collide (Kolb §3.3.1–3.3.2), read back when due.
-void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt);
+// `blasts`: this step's explosions (EffectLinks::blasts): each throws debris and smoke sprites at
+// its centre, and every live sprite is pushed by it (fluid/core/blast.hpp, in the update shader).
+void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts = {});
 
 // Drawing: the effect submits `gpu` to the frame (engine::FrameBatches::sprites); the engine's
 // sprite pass sorts it for the eye (Kolb §3.3.3) and draws it.

@@ -1,5 +1,7 @@
 #include "game/world/world.hpp"
 
+#include "game/explosives/explosives.hpp"
+
 namespace game {
 namespace {
 
@@ -105,6 +107,12 @@ void meshWorld(World& world, engine::Profiler* profiler) {
 void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha) {
   const SubmitContext context{assets, alpha};
   for (const std::unique_ptr<Effect>& effect : world.effects) effect->submit(frame, context);
+}
+
+void playerThrowExplosive(World& world) {
+  if (world.links.explosives == nullptr || world.links.bodies == nullptr) return;
+  throwExplosive(*world.links.explosives, *world.links.bodies->physics, world.camera.position,
+                 engine::cameraForward(world.camera));
 }
 
 void playerThrow(World& world) {

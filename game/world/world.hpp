@@ -105,5 +105,7 @@ void recordFailure(World& world, const std::string& what);
 
 // Throws a crate from the camera along its view (no-op without rigid_bodies).
 void playerThrow(World& world);
+// Throws a fused charge from the camera along its view (no-op without the explosives effect).
+void playerThrowExplosive(World& world);
 
 }  // namespace game

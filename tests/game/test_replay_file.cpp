@@ -143,8 +143,8 @@ TEST(ReplayFile, UnknownVersionRecordAndActionAreNamed) {
                         "1: field 'fluiddemo_replay'", "unknown format version '2'"));
   EXPECT_TRUE(
       failsWith(replaceLine(validText(), "action 20 throw_crate", "jump 20"), "12: field 'jump'", "unknown record"));
-  EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "action 20 throw_explosive"),
-                        "12: field 'action.name'", "unknown action 'throw_explosive'"));
+  EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "action 20 throw_grenade"),
+                        "12: field 'action.name'", "unknown action 'throw_grenade' (known: throw_crate, throw_explosive)"));
 }
 
 TEST(ReplayFile, StepsGoingBackwardsAreNamed) {

@@ -1,0 +1,110 @@
+// The `explosives` effect: the player's fused charges (game/explosives). It steps after the
+// Bullet world and before everything a blast pushes, and publishes this step's detonations in
+// EffectLinks::blasts: the water, the blob and the sprites apply them in their own steps with the
+// shared law of fluid/core/blast.hpp; the crates were already pushed by stepExplosives.
+#include "game/explosives/explosives.hpp"
+
+#include "engine/render/frame.hpp"
+#include "game/effects/effect.hpp"
+#include "game/effects/params.hpp"
+#include "game/world/level_assets.hpp"
+#include "game/world/rigid_bodies.hpp"
+
+#include <imgui.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace game {
+namespace {
+
+const ParamTable<ExplosiveParams>& table() {
+  static const ParamTable<ExplosiveParams> rows{
+      param<&ExplosiveParams::fuse_seconds>("fuse_seconds", 0.05, 60.0, "time from the throw to the detonation (s)"),
+      param<&ExplosiveParams::throw_speed>("throw_speed", 0.0, 60.0, "speed of a thrown charge, G or middle click (m/s)"),
+      param<&ExplosiveParams::lob_degrees>("lob_degrees", -80.0, 80.0, "the throw leaves this far above the aim (deg)"),
+      param<&ExplosiveParams::radius>("radius", 0.02, 1.0, "radius of the charge's Bullet sphere (m)"),
+      param<&ExplosiveParams::mass>("mass", 0.05, 100.0, "mass of a charge (kg)"),
+      param<&ExplosiveParams::impact_speed_change>(
+          "impact_speed_change", 0.0, 100.0, "detonate early when one step changes its speed by more (m/s); 0 = fuse only"),
+      param<&ExplosiveParams::impulse_at_1m>("impulse_at_1m", 0.0, 10000.0,
+                                             "specific impulse 1 m from the blast (Pa s); falls as 1/r^2"),
+      param<&ExplosiveParams::core_radius>("core_radius", 0.01, 5.0, "the impulse is capped at its value here (m)"),
+      param<&ExplosiveParams::reach>("reach", 0.05, 50.0, "no push beyond this distance (m)"),
+      param<&ExplosiveParams::max_live>("max_live", 1, 64, "charges in flight at once; more recycle the oldest"),
+  };
+  return rows;
+}
+
+class ExplosivesEffect final : public EffectOf<Explosives> {
+ public:
+  explicit ExplosivesEffect(RigidBodies* bodies) : bodies_(bodies) {}
+  std::string_view name() const override { return "explosives"; }
+
+  void applyLive(const SectionConfig& section, EffectLinks&) override {
+    const ExplosiveParams fresh = table().parse(section);
+    if (validateExplosiveParams(fresh).empty()) state.params = fresh;
+  }
+
+  StepOutcome step(const StepContext& ctx) override {
+    const PhaseScope phase(ctx.profiler, engine::Phase::physics);
+    stepExplosives(state, *bodies_->physics, ctx.step_seconds);
+    ctx.links.blasts = state.detonations;
+    return {};
+  }
+
+  std::string findNonFinite() const override {
+    for (const Charge& charge : state.charges) {
+      if (!charge.live) continue;
+      const engine::BodyState body = engine::bodyState(*bodies_->physics, charge.body);
+      if (!std::isfinite(body.position.x) || !std::isfinite(body.position.y) || !std::isfinite(body.position.z))
+        return "explosives: charge body " + std::to_string(charge.body) + " position is not finite";
+    }
+    return {};
+  }
+
+  // A live charge is drawn as a small dark stone block of the sphere's diameter (the level has no
+  // sphere model); it turns as Bullet rolls it.
+  void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
+    for (const Charge& charge : state.charges) {
+      if (!charge.live) continue;
+      const engine::BodyState body = engine::bodyState(*bodies_->physics, charge.body);
+      engine::DrawItem item;
+      item.mesh = &ctx.assets.crate;
+      item.texture = &ctx.assets.stone;
+      item.specular = 0.3f;
+      item.model = glm::translate(glm::mat4(1.0f), body.position) * glm::mat4_cast(body.rotation) *
+                   glm::scale(glm::mat4(1.0f), glm::vec3(1.6f * state.params.radius));
+      frame.opaque.push_back(item);
+    }
+  }
+
+  void drawStatus() const override {
+    ImGui::Text("explosives: %d live, %llu thrown, %llu detonated (G or middle click throws)", liveCharges(state),
+                static_cast<unsigned long long>(state.thrown), static_cast<unsigned long long>(state.detonated));
+  }
+
+ private:
+  RigidBodies* bodies_;
+};
+
+std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
+  auto effect = std::make_unique<ExplosivesEffect>(ctx.links.bodies);
+  effect->state.params = table().parse(section);
+  if (std::string bad = validateExplosiveParams(effect->state.params); !bad.empty()) {
+    error = bad;
+    return nullptr;
+  }
+  ctx.links.explosives = &effect->state;
+  return effect;
+}
+
+constexpr std::string_view kNeeds[] = {"rigid_bodies"};
+
+}  // namespace
+
+const EffectDesc& explosivesEffect() {
+  static const EffectDesc desc{"explosives", "fused charges the player throws; their blasts push water, crates, sprites",
+                               table().specs, kNeeds, &build};
+  return desc;
+}
+
+}  // namespace game
