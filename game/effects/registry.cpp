@@ -10,6 +10,7 @@ const EffectDesc& rigidBodiesEffect();
 const EffectDesc& sphFluidEffect();
 const EffectDesc& spriteParticlesEffect();
 const EffectDesc& fluidSurfaceEffect();
+const EffectDesc& blobEffect();
 
 std::span<const EffectDesc* const> effectRegistry() {
   static const std::array kEffects = {
@@ -17,6 +18,7 @@ std::span<const EffectDesc* const> effectRegistry() {
       &sphFluidEffect(),         // couples to the crates; publishes the particles
       &spriteParticlesEffect(),  // sprays from this step's particles
       &fluidSurfaceEffect(),     // meshes the particles per frame
+      &blobEffect(),             // the blob monster: crates both ways, this step's blasts, chases the player
   };
   return kEffects;
 }
