@@ -248,8 +248,7 @@ void collidersFromCrates(BlobMonster& s, const RigidBodies& bodies) {
   if (!s.crate_shape) s.crate_shape = std::make_shared<fluid::BoxShape>(glm::vec3(half));
   for (std::size_t k = 0; k < bodies.crates.size(); ++k) {
     const engine::BodyState& b = bodies.current[k];
-    if (glm::any(glm::lessThan(b.position, lo - reach)) || glm::any(glm::greaterThan(b.position, hi + reach)))
-      continue;
+    if (glm::any(glm::lessThan(b.position, lo - reach)) || glm::any(glm::greaterThan(b.position, hi + reach))) continue;
     fluid::BlobCollider c;
     c.shape = s.crate_shape;
     c.pose.rotation = b.rotation;
@@ -363,8 +362,7 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     const BlobMonster& s = state;
     const char* current = s.machine.state >= 0 ? s.program.states[s.machine.state].name.c_str() : "(not started)";
     ImGui::Text("blob: state %s (%s) %.1f s, %zu particles, caught %d, step %.2f ms, %llu triangles", current,
-                s.machine.state >= 0 ? fluid::blobBehaviourName(s.program.states[s.machine.state].behaviour.kind)
-                                     : "-",
+                s.machine.state >= 0 ? fluid::blobBehaviourName(s.program.states[s.machine.state].behaviour.kind) : "-",
                 s.machine.time_in_state, s.world.particles.size(), s.catches, s.stats.step_ms,
                 static_cast<unsigned long long>(s.mesh.stats.triangles));
     // Trigger any state of the program now (as if one of its triggers fired).
@@ -410,8 +408,8 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   // The level's depth-map colliders, baked from the models the renderer draws (re-baked when stale).
   const std::string level = ctx.scene.scene.text("level");
   std::vector<fluid::CachedCollider> parts;
-  const fluid::CacheStatus cache = fluid::loadLevelColliders(ctx.content_dir, level, colliderModelLoader(),
-                                                             fluid::CachePolicy::load_or_bake, parts);
+  const fluid::CacheStatus cache =
+      fluid::loadLevelColliders(ctx.content_dir, level, colliderModelLoader(), fluid::CachePolicy::load_or_bake, parts);
   if (!cache.ok()) {
     error = "blob: level " + level + ": " + cache.error;
     return nullptr;
@@ -429,8 +427,8 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
     error = "blob: " + st.error;
     return nullptr;
   }
-  s.start_column = fluid::blobColumn(s.world.params, s.params.grate - glm::vec3(0.0f, s.params.spacing, 0.0f),
-                                     s.params.pipe_radius);
+  s.start_column =
+      fluid::blobColumn(s.world.params, s.params.grate - glm::vec3(0.0f, s.params.spacing, 0.0f), s.params.pipe_radius);
   startRound(s);
   return effect;
 }
@@ -441,7 +439,9 @@ const EffectDesc& blobEffect() {
   static const EffectDesc desc{"blob",
                                "the blob monster (marching slices paper §7): a particle body run by a behaviour "
                                "program, colliding with the level's baked colliders and the crates, meshed as goo",
-                               table().specs, {}, &build};
+                               table().specs,
+                               {},
+                               &build};
   return desc;
 }
 

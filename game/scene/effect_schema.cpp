@@ -23,7 +23,11 @@ const std::array kSceneParams = {
     ParamSpec{"substeps", ParamType::integer, 1, 16, integer(1), "physics substeps per simulation step"},
     ParamSpec{"max_steps_per_frame", ParamType::integer, 1, 20, integer(5), "backlog cap after a hitch"},
     ParamSpec{"seed", ParamType::integer, 0, 2147483647, integer(1), "seed of every random choice in the scene"},
-    ParamSpec{"level", ParamType::text, 0.0, 0.0, {ParamType::text, 0.0, false, {}, "fountain"},
+    ParamSpec{"level",
+              ParamType::text,
+              0.0,
+              0.0,
+              {ParamType::text, 0.0, false, {}, "fountain"},
               "the level: the models drawn (game/world/level_assets.cpp) and the colliders the blob bakes "
               "(content/colliders/LEVEL.colliders)",
               kLevels},

@@ -17,13 +17,13 @@
 namespace game {
 
 struct BlobMonsterParams {
-  int particles = 1000;     // fluid::BlobParams::particle_count
-  float spacing = 0.08f;    // d (m)
-  float cohesion = 4.0f;    // Akinci 2013 cohesion peak (m/s^2)
+  int particles = 1000;   // fluid::BlobParams::particle_count
+  float spacing = 0.08f;  // d (m)
+  float cohesion = 4.0f;  // Akinci 2013 cohesion peak (m/s^2)
   float goal_stiffness = 500.0f;
   int substeps = 4;
-  glm::vec3 grate{0.0f, 0.0f, 0.0f};  // top of the sewer pipe (m): the column starts below it
-  float pipe_radius = 0.3f;           // m: radius of the particle column in the pipe
+  glm::vec3 grate{0.0f, 0.0f, 0.0f};                  // top of the sewer pipe (m): the column starts below it
+  float pipe_radius = 0.3f;                           // m: radius of the particle column in the pipe
   std::string program = "blob/monster.program.json";  // behaviour program, relative to content/
   float caught_seconds = 1.5f;                        // the caught effect lasts this long, then the round resets
   // Surface (marching slices, paper §7): field cutoff and cube edge in spacings, iso level.
@@ -42,9 +42,9 @@ struct BlobMonster {
   std::vector<glm::vec3> start_column;  // where each round starts: the column in the pipe
   std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
   std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
-  std::vector<int> crate_of_collider;   // per collider after the level: index into RigidBodies::crates
-  glm::vec3 target{0.0f};               // what the behaviours aim at this step (the player)
-  float caught_timer = 0.0f;            // > 0 while the caught effect plays
+  std::vector<int> crate_of_collider;  // per collider after the level: index into RigidBodies::crates
+  glm::vec3 target{0.0f};              // what the behaviours aim at this step (the player)
+  float caught_timer = 0.0f;           // > 0 while the caught effect plays
   int catches = 0;
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;

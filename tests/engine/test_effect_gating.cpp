@@ -347,7 +347,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
       << error;
   ASSERT_NE(game::findState<game::SphFluid>(world)->coupling, nullptr);
   engine::Profiler profiler;
-  runFrames(world, profiler, 40);                      // the jet is up
+  runFrames(world, profiler, 40);                                                   // the jet is up
   EXPECT_EQ(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);  // no crate yet
   const glm::vec3 nozzle = world.fountain.geometry().nozzle;
   game::throwCrate(*game::findState<game::RigidBodies>(world), nozzle + glm::vec3(0.0f, 1.2f, 0.0f),
@@ -384,13 +384,14 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
 TEST(EffectGating, TheBlobIsBuiltOnlyWhenListed) {
   game::World without;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 2}}})"), game::contentDir(), without,
-                               error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 2}}})"), game::contentDir(), without, error))
       << error;
   EXPECT_EQ(game::findState<game::BlobMonster>(without), nullptr);
   game::World with;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"scene": {"level": "blob_monster"}, "effects": {"blob": {"particles": 300}}})"),
-                               game::contentDir(), with, error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"scene": {"level": "blob_monster"}, "effects": {"blob": {"particles": 300}}})"),
+                       game::contentDir(), with, error))
       << error;
   EXPECT_EQ(with.systems, std::vector<std::string>{"blob"});
   ASSERT_NE(game::findState<game::BlobMonster>(with), nullptr);

@@ -101,7 +101,7 @@ TEST(BlobEffect, CatchingThePlayerFlashesThenResetsTheRound) {
   steps(world, static_cast<int>(blob->params.caught_seconds * 60.0f) + 2);
   EXPECT_EQ(blob->caught_timer, 0.0f);
   EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // back in the pipe
-  EXPECT_EQ(world.camera.position, start_eye);                            // the player back at the start
+  EXPECT_EQ(world.camera.position, start_eye);                             // the player back at the start
   EXPECT_EQ(stateName(*blob), "emerge");
 }
 
