@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,9 +43,11 @@ struct BlobMonster {
   std::vector<glm::vec3> start_column;  // where each round starts: the column in the pipe
   std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
   std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
-  std::vector<int> crate_of_collider;  // per collider after the level: index into RigidBodies::crates
-  glm::vec3 target{0.0f};              // what the behaviours aim at this step (the player)
-  float caught_timer = 0.0f;           // > 0 while the caught effect plays
+  std::vector<int> crate_of_collider;
+  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)  // per
+                                          // collider after the level: index into RigidBodies::crates
+  glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
+  float caught_timer = 0.0f;              // > 0 while the caught effect plays
   int catches = 0;
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;

@@ -3,6 +3,7 @@
 // reassemble, catching the player resets the round, and bad programs are errors naming file, key, value.
 #include "game/paths.hpp"
 #include "game/world/blob_monster.hpp"
+#include "game/world/rigid_bodies.hpp"
 #include "game/world/world.hpp"
 
 #include <gtest/gtest.h>
@@ -103,6 +104,39 @@ TEST(BlobEffect, CatchingThePlayerFlashesThenResetsTheRound) {
   EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // back in the pipe
   EXPECT_EQ(world.camera.position, start_eye);                             // the player back at the start
   EXPECT_EQ(stateName(*blob), "emerge");
+}
+
+TEST(BlobEffect, ACrateDroppedOnItAndTheBlobPushEachOther) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  game::RigidBodies* bodies = game::findState<game::RigidBodies>(world);
+  ASSERT_NE(blob, nullptr);
+  ASSERT_NE(bodies, nullptr);
+  steps(world, 4 * 60);  // out of the pipe
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  game::throwCrate(*bodies, c + glm::vec3(0.0f, 2.5f, 0.0f), glm::vec3(0.0f, -1.0f, 0.0f));
+  const engine::BodyId crate = bodies->crates.back();
+  float upward = 0.0f;  // momentum the particles gave the thrown crate (N s, +y)
+  int coupled = 0;
+  for (int i = 0; i < 60; ++i) {
+    steps(world, 1);
+    for (std::size_t k = 0; k < blob->crate_of_collider.size(); ++k) {
+      if (bodies->crates[static_cast<std::size_t>(blob->crate_of_collider[k])] != crate) continue;
+      ++coupled;
+      upward += blob->world.colliders[blob->level_colliders + k].impulse.y;  // what the particles lost to it
+    }
+  }
+  const engine::BodyState after = engine::bodyState(*bodies->physics, crate);
+  std::printf(
+      "[blob] game: a crate dropped on the blob: coupled %d of 60 steps, the goo lost %.2f N s upward to it (before "
+      "the cap; capped %llu times), crate speed %.2f m/s after 1 s\n",
+      coupled, upward, static_cast<unsigned long long>(blob->crate_forces_capped), glm::length(after.linear_velocity));
+  EXPECT_LT(glm::length(after.linear_velocity), 5.0f) << "the goo does not fire the crate away";
+  EXPECT_GT(coupled, 10);
+  EXPECT_GT(upward, 0.0f) << "the goo pushes the crate up";
+  EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, c.y + 0.5f);
+  EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
+  EXPECT_EQ(blob->world.particles.size(), 1000u);
 }
 
 TEST(BlobEffect, BadProgramsNameFileKeyAndValue) {
