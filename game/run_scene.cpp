@@ -275,7 +275,8 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
     const int shadow_size = options.headless ? 1024 : 2048;
     if (engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) &&
-        loadLevelAssets(content_dir, assets, error) && engine::createOverlay(platform, overlay, error)) {
+        loadLevelAssets(content_dir, world.scene.scene.text("level"), assets, error) &&
+        engine::createOverlay(platform, overlay, error)) {
       attachWorldGpu(world, shaderDirectory(), content_dir);
       overlay.visible = options.show_ui;
       Session session{options, report, world, platform, renderer, overlay, assets};

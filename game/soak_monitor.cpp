@@ -106,7 +106,10 @@ void checkPenetration(SoakMonitor& m, const World& world) {
       }
     }
   }
-  if (const RigidBodies* bodies_state = findState<RigidBodies>(world)) {
+  // The crates against the fountain's analytic shape: only the fountain level has it (the blob
+  // monster's street has no basin for a crate to be inside).
+  const RigidBodies* bodies_state = findState<RigidBodies>(world);
+  if (bodies_state != nullptr && world.scene.scene.text("level") == "fountain") {
     const RigidBodies& bodies = *bodies_state;
     m.points.clear();
     for (const engine::BodyState& state : bodies.current) m.points.push_back(state.position);

@@ -33,6 +33,7 @@ BLOB_SEWER_DEPTH = 2.5        # block from y = 0 down to -2.5 m
 BLOB_PIPE_RADIUS = 0.45       # vertical bore the monster rises through (fluid/blob emerge)
 BLOB_PIPE_DEPTH = 2.3         # bore floor at y = -2.3 m
 BLOB_WALL_SIZE = (8.0, 3.5, 0.5)  # the wall to coat: length (x), height above ground, thickness (z)
+BLOB_WALL_CENTRE_Z = 4.0  # the wall stands 4 m from the sewer (level models are in world coordinates)
 
 
 # ----------------------------------------------------------------------------- OBJ writing
@@ -319,9 +320,10 @@ def blob_grate(bars=5, width=0.05, height=0.04):
 
 def blob_wall():
     """The wall the monster coats: a closed slab standing on the ground (founded 0.2 m below it),
-    centred on x and z = 0, its coatable face toward -z."""
+    centred on x = 0 and z = BLOB_WALL_CENTRE_Z, its coatable face toward -z (the sewer)."""
     length, height, thickness = BLOB_WALL_SIZE
-    return box(Mesh(), [-0.5 * length, -0.2, -0.5 * thickness], [0.5 * length, height, 0.5 * thickness])
+    z = BLOB_WALL_CENTRE_Z
+    return box(Mesh(), [-0.5 * length, -0.2, z - 0.5 * thickness], [0.5 * length, height, z + 0.5 * thickness])
 
 
 # ----------------------------------------------------------------------------- PNG writing
@@ -495,7 +497,7 @@ def main():
     blob_sewer().write(os.path.join(MODELS, "blob_sewer.obj"),
                        "blob sewer: 1.6 m square block, 2.5 m deep, with a 0.45 m radius bore 2.3 m deep")
     blob_grate().write(os.path.join(MODELS, "blob_grate.obj"), "blob sewer grate: five bars over the bore (visual)")
-    blob_wall().write(os.path.join(MODELS, "blob_wall.obj"), "blob wall to coat: 8 m long, 3.5 m high, 0.5 m thick")
+    blob_wall().write(os.path.join(MODELS, "blob_wall.obj"), "blob wall to coat: 8 m long, 3.5 m high, 0.5 m thick, 4 m from the sewer (z)")
     for name, make in (("paving.png", paving_texture), ("stone.png", stone_texture), ("crate.png", crate_texture),
                        ("blob_tentacle.png", blob_tentacle_texture)):
         write_png(os.path.join(TEXTURES, name), 256, 256, make())

@@ -513,14 +513,17 @@ bool blobGoalReached(const BlobWorld& world, const BlobBehaviour& b, glm::vec3 t
   return false;
 }
 
+void enterBlobState(const BlobProgram& program, BlobMachine& machine, BlobWorld& world, int index, glm::vec3 target) {
+  if (index < 0 || index >= static_cast<int>(program.states.size())) return;
+  machine.state = index;
+  machine.time_in_state = 0.0f;
+  ++machine.transitions;
+  startBlobBehaviour(world, program.states[index].behaviour, target);
+}
+
 void stepBlobMachine(const BlobProgram& program, BlobMachine& machine, BlobWorld& world, const BlobInputs& inputs) {
   const float dt = world.params.step;
-  auto enter = [&](int s) {
-    machine.state = s;
-    machine.time_in_state = 0.0f;
-    ++machine.transitions;
-    startBlobBehaviour(world, program.states[s].behaviour, inputs.target);
-  };
+  auto enter = [&](int s) { enterBlobState(program, machine, world, s, inputs.target); };
   if (machine.state < 0) enter(std::max(program.initial_index, 0));
   const BlobState& st = program.states[machine.state];
   const glm::vec3 c = blobCentroid(world.particles.position);

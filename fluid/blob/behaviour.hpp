@@ -111,6 +111,9 @@ bool blobGoalReached(const BlobWorld& world, const BlobBehaviour& b, glm::vec3 t
 // the next state), then updateBlobBehaviour. Call before stepBlob. `program` must be validated.
 void stepBlobMachine(const BlobProgram& program, BlobMachine& machine, BlobWorld& world, const BlobInputs& inputs);
 
+// Enters state `index` now (the F1 overlay's "trigger this behaviour"): as a trigger firing into it.
+void enterBlobState(const BlobProgram& program, BlobMachine& machine, BlobWorld& world, int index, glm::vec3 target);
+
 // ---- Measures ----------------------------------------------------------------------------------
 
 // Distance from the base of tentacle k (its first particle's goal base on the core) to its tip

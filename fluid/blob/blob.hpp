@@ -37,6 +37,7 @@
 // and the rest shape are by index).
 
 #include "fluid/collide/collide.hpp"
+#include "fluid/core/blast.hpp"
 #include "fluid/core/collider.hpp"
 #include "fluid/sph/neighbor_grid.hpp"
 
@@ -193,6 +194,11 @@ BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats = nullptr);
 // speed (1 - r/radius)^2 away from the centre (a particle exactly at the centre: a seeded random
 // direction). Returns how many particles it reached. Non-finite or non-positive inputs do nothing.
 std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float radius);
+// The game's blast (fluid/core/blast.hpp), by the law the water, crates and sprites obey: particle i
+// gains fluid::blastVelocityChange with its cross-section over mass pi r^2 / (rho d^3), the change
+// capped at max_speed (and the speed clamped to it). Returns how many particles it reached; a blast
+// validateBlast rejects does nothing.
+std::size_t blastBlob(BlobWorld& world, const Blast& blast);
 
 // ---- Measurements (the behaviour tests and the game's overlay) --------------------------------
 

@@ -443,6 +443,25 @@ std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float rad
   return reached;
 }
 
+std::size_t blastBlob(BlobWorld& world, const Blast& blast) {
+  if (!validateBlast(blast).empty()) return 0;
+  BlobParticles& parts = world.particles;
+  const float r = blobParticleRadius(world.params);
+  const float area_over_mass = 3.14159265f * r * r / blobParticleMass(world.params);
+  const float max_speed = world.params.max_speed;
+  std::size_t reached = 0;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const glm::vec3 dv = blastVelocityChange(blast, parts.position[i], area_over_mass, max_speed);
+    if (dv == glm::vec3(0.0f)) continue;
+    glm::vec3 v = parts.velocity[i] + dv;
+    const float len = glm::length(v);
+    if (len > max_speed) v *= max_speed / len;
+    parts.velocity[i] = v;
+    ++reached;
+  }
+  return reached;
+}
+
 glm::vec3 blobCentroid(std::span<const glm::vec3> positions) {
   glm::dvec3 sum(0.0);
   for (const glm::vec3& x : positions) sum += glm::dvec3(x);

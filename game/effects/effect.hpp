@@ -57,6 +57,11 @@ struct EffectLinks {
   // it in registry order push their own matter with each blast by the shared law of
   // fluid/core/blast.hpp in the same step: the water, the blob, the sprites.
   std::span<const fluid::Blast> blasts;
+  // The player: World writes the camera position before each step; an effect that catches the
+  // player (blob) sets reset_player and World puts the camera back at the scene's start pose after
+  // the step (the round restarts).
+  glm::vec3 player{0.0f};
+  bool reset_player = false;
 };
 
 struct BuildContext {

@@ -18,6 +18,7 @@
 #include <functional>
 #include <initializer_list>
 #include <span>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -104,6 +105,20 @@ ParamField<detail::ClassOf<Member>> choice(std::string_view key, std::span<const
     for (std::size_t i = 0; i < names.size(); ++i)
       if (names[i] == text) p.*Member = values[i];
   };
+  return field;
+}
+
+// A free-text row (any value; e.g. a file name) bound to a std::string member.
+template <auto Member>
+ParamField<detail::ClassOf<Member>> text(std::string_view key, std::string_view doc) {
+  using P = detail::ClassOf<Member>;
+  static_assert(std::is_same_v<detail::TypeOf<Member>, std::string>, "text<>: bind a std::string member");
+  ParamField<P> field;
+  field.spec.key = key;
+  field.spec.type = ParamType::text;
+  field.spec.doc = doc;
+  field.spec.default_value = {ParamType::text, 0.0, false, {}, P{}.*Member};
+  field.read = [key](const SectionConfig& s, P& p) { p.*Member = s.text(key); };
   return field;
 }
 

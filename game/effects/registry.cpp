@@ -11,6 +11,7 @@ const EffectDesc& explosivesEffect();
 const EffectDesc& sphFluidEffect();
 const EffectDesc& spriteParticlesEffect();
 const EffectDesc& fluidSurfaceEffect();
+const EffectDesc& blobEffect();
 
 std::span<const EffectDesc* const> effectRegistry() {
   static const std::array kEffects = {
@@ -19,6 +20,7 @@ std::span<const EffectDesc* const> effectRegistry() {
       &sphFluidEffect(),         // couples to the crates; publishes the particles
       &spriteParticlesEffect(),  // sprays from this step's particles
       &fluidSurfaceEffect(),     // meshes the particles per frame
+      &blobEffect(),             // the blob monster: crates both ways, this step's blasts, chases the player
   };
   return kEffects;
 }

@@ -72,7 +72,9 @@ class RigidBodiesEffect final : public EffectOf<RigidBodies> {
 
 std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
   auto effect = std::make_unique<RigidBodiesEffect>();
-  if (!buildRigidBodies(table().parse(section), ctx.content_dir, ctx.seed, effect->state, error)) {
+  RigidBodyParams params = table().parse(section);
+  params.level = ctx.scene.scene.text("level");
+  if (!buildRigidBodies(params, ctx.content_dir, ctx.seed, effect->state, error)) {
     error = "rigid_bodies: " + error;
     return nullptr;
   }

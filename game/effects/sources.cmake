@@ -6,4 +6,5 @@ target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sph_fluid.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sprite_particles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/fluid_surface.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/blob.cpp
 )

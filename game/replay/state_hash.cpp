@@ -1,6 +1,7 @@
 // State hashes of a World (contract and coverage: state_hash.hpp).
 #include "game/replay/state_hash.hpp"
 
+#include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
 #include <algorithm>
@@ -74,6 +75,23 @@ std::uint64_t hashSph(const SphFluid& fluid, StateHashScratch& scratch) {
   return h.value;
 }
 
+// The blob monster (game/world/blob_monster.hpp): particles in index order (their order never
+// changes), the behaviour machine, the round.
+std::uint64_t hashBlob(const BlobMonster& blob) {
+  Fnv1a64 h;
+  const fluid::BlobParticles& p = blob.world.particles;
+  h.add(static_cast<std::uint64_t>(p.size()));
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    addVec3(h, p.position[i]);
+    addVec3(h, p.velocity[i]);
+  }
+  h.add(static_cast<std::int64_t>(blob.machine.state));
+  h.add(blob.machine.time_in_state);
+  h.add(static_cast<std::int64_t>(blob.catches));
+  h.add(blob.caught_timer);
+  return h.value;
+}
+
 }  // namespace
 
 void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& out) {
@@ -81,6 +99,7 @@ void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& ou
   if (const RigidBodies* bodies = findState<RigidBodies>(world))
     out.parts.push_back({"rigid_bodies", hashRigidBodies(*bodies)});
   if (const SphFluid* fluid = findState<SphFluid>(world)) out.parts.push_back({"sph_fluid", hashSph(*fluid, scratch)});
+  if (const BlobMonster* blob = findState<BlobMonster>(world)) out.parts.push_back({"blob", hashBlob(*blob)});
   Fnv1a64 h;
   h.add(world.steps);
   for (const SubsystemHash& part : out.parts) {

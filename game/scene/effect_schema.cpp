@@ -15,11 +15,22 @@ ParamValue num(double value) { return {ParamType::number, value, false, {}, {}};
 ParamValue integer(int value) { return {ParamType::integer, static_cast<double>(value), false, {}, {}}; }
 ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false, {x, y, z}, {}}; }
 
+// The levels game/world/level_assets.cpp knows: their models drawn and content/colliders/LEVEL.colliders.
+constexpr std::string_view kLevels[] = {"fountain", "blob_monster"};
+
 const std::array kSceneParams = {
     ParamSpec{"step_hz", ParamType::number, 30.0, 240.0, num(60.0), "fixed simulation steps per second"},
     ParamSpec{"substeps", ParamType::integer, 1, 16, integer(1), "physics substeps per simulation step"},
     ParamSpec{"max_steps_per_frame", ParamType::integer, 1, 20, integer(5), "backlog cap after a hitch"},
     ParamSpec{"seed", ParamType::integer, 0, 2147483647, integer(1), "seed of every random choice in the scene"},
+    ParamSpec{"level",
+              ParamType::text,
+              0.0,
+              0.0,
+              {ParamType::text, 0.0, false, {}, "fountain"},
+              "the level: the models drawn (game/world/level_assets.cpp) and the colliders the blob bakes "
+              "(content/colliders/LEVEL.colliders)",
+              kLevels},
 };
 
 const std::array kCameraParams = {

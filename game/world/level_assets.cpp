@@ -1,20 +1,18 @@
 #include "game/world/level_assets.hpp"
 
 #include "engine/assets/assets.hpp"
+#include "game/world/level.hpp"
+
+#include <utility>
 
 namespace game {
 
-bool loadLevelAssets(const std::filesystem::path& content_dir, LevelAssets& out, std::string& error) {
-  struct MeshJob {
-    const char* file;
-    engine::GpuMesh* target;
-  };
-  const MeshJob meshes[] = {
-      {"ground.obj", &out.ground}, {"basin.obj", &out.basin}, {"statue.obj", &out.statue}, {"crate.obj", &out.crate}};
-  for (const MeshJob& job : meshes) {
-    engine::MeshData data;
-    if (!engine::loadMesh(content_dir / "models" / job.file, data, error)) return false;
-    *job.target = engine::uploadMesh(data);
+bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view level, LevelAssets& out,
+                     std::string& error) {
+  const std::span<const LevelModelDesc> rows = levelModels(level);
+  if (rows.empty()) {
+    error = "scene.level = \"" + std::string(level) + "\": no such level (fountain, blob_monster)";
+    return false;
   }
   struct TextureJob {
     const char* file;
@@ -26,25 +24,35 @@ bool loadLevelAssets(const std::filesystem::path& content_dir, LevelAssets& out,
     if (!engine::loadImage(content_dir / "textures" / job.file, image, error)) return false;
     *job.target = engine::uploadTexture(image);
   }
+  out.models.clear();
+  out.models.reserve(rows.size());
+  for (const LevelModelDesc& row : rows) {
+    engine::MeshData data;
+    if (!engine::loadMesh(content_dir / "models" / row.file, data, error)) return false;
+    LevelModel model;
+    model.mesh = engine::uploadMesh(data);
+    model.texture = row.skin == LevelSkin::paving ? &out.paving : &out.stone;
+    model.tint = row.tint;
+    model.specular = row.specular;
+    model.casts_shadow = row.casts_shadow;
+    out.models.push_back(std::move(model));
+  }
+  engine::MeshData crate;
+  if (!engine::loadMesh(content_dir / "models" / "crate.obj", crate, error)) return false;
+  out.crate = engine::uploadMesh(crate);
   return true;
 }
 
 void submitLevel(const LevelAssets& assets, engine::FrameBatches& frame) {
-  engine::DrawItem ground;
-  ground.mesh = &assets.ground;
-  ground.texture = &assets.paving;
-  ground.specular = 0.05f;
-  ground.casts_shadow = false;
-  frame.opaque.push_back(ground);
-  engine::DrawItem basin;
-  basin.mesh = &assets.basin;
-  basin.texture = &assets.stone;
-  basin.specular = 0.2f;
-  frame.opaque.push_back(basin);
-  engine::DrawItem statue = basin;
-  statue.mesh = &assets.statue;
-  statue.tint = glm::vec3(0.95f, 0.97f, 1.0f);
-  frame.opaque.push_back(statue);
+  for (const LevelModel& model : assets.models) {
+    engine::DrawItem item;
+    item.mesh = &model.mesh;
+    item.texture = model.texture;
+    item.tint = model.tint;
+    item.specular = model.specular;
+    item.casts_shadow = model.casts_shadow;
+    frame.opaque.push_back(item);
+  }
 }
 
 }  // namespace game

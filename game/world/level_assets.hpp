@@ -1,23 +1,39 @@
 #pragma once
-// The GPU copies of the level's models and textures (content/models, content/textures): the
-// fountain's ground, basin and statue, drawn in every scene, and the crate model the
-// rigid_bodies effect draws its bodies with. Loaded by runScene with the GL context current.
+// The GPU copies of the level's models and textures (content/models, content/textures): the models
+// of the scene's level (scene.level: the fountain's ground, basin and statue; the blob monster's
+// street, sewer, grate and wall), drawn in every frame, and the crate model the rigid_bodies effect
+// draws its bodies with. Loaded by runScene with the GL context current.
 
 #include "engine/render/frame.hpp"
 #include "engine/render/renderer.hpp"
 
 #include <filesystem>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace game {
 
+// One model of the level as drawn: its mesh, texture and material (the model's own coordinates are
+// world coordinates, as the colliders baked from the same file).
+struct LevelModel {
+  engine::GpuMesh mesh;
+  const engine::GpuTexture* texture = nullptr;
+  glm::vec3 tint{1.0f};
+  float specular = 0.15f;
+  bool casts_shadow = true;
+};
+
 struct LevelAssets {
-  engine::GpuMesh ground, basin, statue, crate;
+  std::vector<LevelModel> models;  // the level's models, in draw order
+  engine::GpuMesh crate;
   engine::GpuTexture paving, stone, wood;
 };
 
-// False + error naming the missing or broken file.
-bool loadLevelAssets(const std::filesystem::path& content_dir, LevelAssets& out, std::string& error);
+// Loads the models of `level` (a scene.level choice) and the shared textures and crate. False +
+// error naming the missing or broken file, or the unknown level.
+bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view level, LevelAssets& out,
+                     std::string& error);
 
 // The level's static meshes, first in the frame's opaque list.
 void submitLevel(const LevelAssets& assets, engine::FrameBatches& frame);

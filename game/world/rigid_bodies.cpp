@@ -1,5 +1,7 @@
 #include "game/world/rigid_bodies.hpp"
 
+#include "game/world/level.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -18,19 +20,24 @@ bool buildRigidBodies(const RigidBodyParams& params, const std::filesystem::path
                       RigidBodies& out, std::string& error) {
   out = RigidBodies{};
   out.params = params;
-  engine::MeshData basin, statue;
-  if (!engine::loadMesh(content_dir / "models" / "basin.obj", basin, error)) return false;
-  if (!engine::loadMesh(content_dir / "models" / "statue.obj", statue, error)) return false;
-
+  const std::span<const LevelModelDesc> models = levelModels(params.level);
+  if (models.empty()) {
+    error = "scene.level = \"" + params.level + "\": no such level";
+    return false;
+  }
   out.physics = engine::createPhysicsWorld({params.gravity});
   engine::PhysicsWorld& world = *out.physics;
   engine::addStaticPlane(world, {0.0f, 1.0f, 0.0f}, 0.0f);
   engine::BodyDesc stone;
   stone.friction = 0.7f;
-  if (engine::addStaticTriangleMesh(world, stone, basin, error) < 0 ||
-      engine::addStaticTriangleMesh(world, stone, statue, error) < 0) {
-    error = "fountain collision mesh: " + error;
-    return false;
+  for (const LevelModelDesc& model : models) {  // the level's solid models (the fountain: basin, statue)
+    if (!model.solid) continue;
+    engine::MeshData mesh;
+    if (!engine::loadMesh(content_dir / "models" / model.file, mesh, error)) return false;
+    if (engine::addStaticTriangleMesh(world, stone, mesh, error) < 0) {
+      error = params.level + " collision mesh " + model.file + ": " + error;
+      return false;
+    }
   }
 
   // Stacks of up to three crates on a ring outside the basin, placed by the scene's seed.

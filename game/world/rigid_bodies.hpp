@@ -19,6 +19,7 @@ struct RigidBodyParams {
   int crates = 6;
   float crate_size = 0.6f;    // edge, m
   float throw_speed = 14.0f;  // m/s
+  std::string level = "fountain";  // scene.level: its solid models are static Bullet meshes (game/world/level.hpp)
 };
 
 // Reads a validated "rigid_bodies" section through the effect's parameter table

@@ -7,6 +7,7 @@ target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/fluid_surface.cpp
   ${CMAKE_CURRENT_LIST_DIR}/body_fluid_coupling.cpp
   ${CMAKE_CURRENT_LIST_DIR}/world.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/level.cpp
   ${CMAKE_CURRENT_LIST_DIR}/level_assets.cpp
   ${CMAKE_CURRENT_LIST_DIR}/../run_scene.cpp
 )

@@ -83,10 +83,13 @@ void recordFailure(World& world, const std::string& what) {
 
 void stepWorld(World& world, engine::Profiler* profiler) {
   const StepContext context{world.step_seconds, world.substeps, profiler, world.links};
+  world.links.player = world.camera.position;
   for (const std::unique_ptr<Effect>& effect : world.effects) {
     const StepOutcome outcome = effect->step(context);
     if (!outcome.failure.empty()) recordFailure(world, outcome.failure);
   }
+  if (world.links.reset_player) applyCamera(world.scene.camera, world.camera, true);  // caught: a new round
+  world.links.reset_player = false;
   ++world.steps;
   if (!world.nonfinite_state.empty()) return;
   for (const std::unique_ptr<Effect>& effect : world.effects) {

@@ -56,6 +56,33 @@ TEST(BlobBody, BlastExactlyAtAParticleStaysFinite) {
   expectSane(w, n);
 }
 
+// The game's blasts (fluid/core/blast.hpp) push the blob by the same law as the water and the crates:
+// each particle gains exactly blastVelocityChange with its cross-section over mass; a bad blast does nothing.
+TEST(BlobBody, GameBlastFollowsTheSharedLaw) {
+  fluid::BlobWorld w = blobtest::restingBlob();
+  const fluid::Blast blast{glm::vec3(0.5f, 0.4f, 0.0f), 60.0f, 0.25f, 4.0f};
+  const float r = fluid::blobParticleRadius(w.params);
+  const float area_over_mass = 3.14159265f * r * r / fluid::blobParticleMass(w.params);
+  const std::vector<glm::vec3> x = w.particles.position;
+  EXPECT_EQ(fluid::blastBlob(w, blast), w.particles.size());  // all within reach
+  for (std::size_t i = 0; i < x.size(); i += 97) {
+    const glm::vec3 dv = fluid::blastVelocityChange(blast, x[i], area_over_mass, w.params.max_speed);
+    EXPECT_NEAR(glm::length(w.particles.velocity[i] - dv), 0.0f, 1e-5f) << i;
+  }
+  // Nearer particles are pushed harder (the 1/r^2 falloff outside the core).
+  EXPECT_GT(glm::length(w.particles.velocity[0]), 0.0f);
+  fluid::Blast bad = blast;
+  bad.reach = 0.1f;  // below core_radius: validateBlast rejects it
+  const std::vector<glm::vec3> v = w.particles.velocity;
+  EXPECT_EQ(fluid::blastBlob(w, bad), 0u);
+  EXPECT_EQ(w.particles.velocity, v);
+  fluid::Blast at_particle = blast;
+  at_particle.centre = w.particles.position[10];  // exactly at a particle: up, capped, finite
+  fluid::blastBlob(w, at_particle);
+  EXPECT_TRUE(fluid::blobAllFinite(w.particles));
+  EXPECT_LE(fluid::blobMaxSpeed(w.particles.velocity), w.params.max_speed * 1.0001f);
+}
+
 TEST(BlobBody, TenBlastsInOneStepStayBounded) {
   fluid::BlobWorld w = blobtest::restingBlob();
   w.colliders.push_back(blobtest::ground());

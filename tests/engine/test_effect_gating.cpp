@@ -4,6 +4,7 @@
 // global operator new (without sph_fluid/fluid_surface, stepping and meshing allocate nothing).
 #include "engine/fluid_render/fluid_render.hpp"
 #include "game/paths.hpp"
+#include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
 #include <LinearMath/btAlignedAllocator.h>
@@ -346,7 +347,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
       << error;
   ASSERT_NE(game::findState<game::SphFluid>(world)->coupling, nullptr);
   engine::Profiler profiler;
-  runFrames(world, profiler, 40);                      // the jet is up
+  runFrames(world, profiler, 40);                                                   // the jet is up
   EXPECT_EQ(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);  // no crate yet
   const glm::vec3 nozzle = world.fountain.geometry().nozzle;
   game::throwCrate(*game::findState<game::RigidBodies>(world), nozzle + glm::vec3(0.0f, 1.2f, 0.0f),
@@ -378,4 +379,25 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
       "[ metric ] crate on the jet: coupled %d of 40 steps, upward impulse %.2f N s, forces capped %llu times\n",
       coupled_steps, upward_impulse,
       static_cast<unsigned long long>(game::findState<game::SphFluid>(world)->coupling->clamped));
+}
+
+TEST(EffectGating, TheBlobIsBuiltOnlyWhenListed) {
+  game::World without;
+  std::string error;
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 2}}})"), game::contentDir(), without, error))
+      << error;
+  EXPECT_EQ(game::findState<game::BlobMonster>(without), nullptr);
+  game::World with;
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"scene": {"level": "blob_monster"}, "effects": {"blob": {"particles": 300}}})"),
+                       game::contentDir(), with, error))
+      << error;
+  EXPECT_EQ(with.systems, std::vector<std::string>{"blob"});
+  ASSERT_NE(game::findState<game::BlobMonster>(with), nullptr);
+  EXPECT_EQ(game::findState<game::BlobMonster>(with)->world.particles.size(), 300u);
+  engine::Profiler profiler;
+  runSteps(with, profiler, 5);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 5u);
+  EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::physics)].frames, 0u);
 }

@@ -1,0 +1,61 @@
+#pragma once
+// The `blob` effect's state (game/effects/blob.cpp): the monster's particle body and behaviour
+// machine (fluid/blob), the level's depth-map colliders it slides on, its per-frame surface, and
+// the round (catching the player resets it). Readable without a World through findState<BlobMonster>.
+
+#include "fluid/blob/behaviour.hpp"
+#include "fluid/blob/blob.hpp"
+#include "fluid/surface/marching_slices.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace game {
+
+struct BlobMonsterParams {
+  int particles = 1000;   // fluid::BlobParams::particle_count
+  float spacing = 0.08f;  // d (m)
+  float cohesion = 4.0f;  // Akinci 2013 cohesion peak (m/s^2)
+  float goal_stiffness = 500.0f;
+  int substeps = 4;
+  glm::vec3 grate{0.0f, 0.0f, 0.0f};                  // top of the sewer pipe (m): the column starts below it
+  float pipe_radius = 0.3f;                           // m: radius of the particle column in the pipe
+  std::string program = "blob/monster.program.json";  // behaviour program, relative to content/
+  float caught_seconds = 1.5f;                        // the caught effect lasts this long, then the round resets
+  // Surface (marching slices, paper §7): field cutoff and cube edge in spacings, iso level.
+  float smoothing = 2.0f;
+  float cube = 0.5f;
+  float threshold = 0.2f;
+  glm::vec3 colour{0.35f, 0.8f, 0.2f};
+  bool visible = true;
+};
+
+struct BlobMonster {
+  BlobMonsterParams params;
+  fluid::BlobWorld world;
+  fluid::BlobProgram program;
+  fluid::BlobMachine machine;
+  std::vector<glm::vec3> start_column;  // where each round starts: the column in the pipe
+  std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
+  std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
+  std::vector<int> crate_of_collider;
+  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)  // per
+                                          // collider after the level: index into RigidBodies::crates
+  glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
+  float caught_timer = 0.0f;              // > 0 while the caught effect plays
+  int catches = 0;
+  std::size_t blasted_particles = 0;  // reached by this step's blasts
+  fluid::BlobStepStats stats;
+  // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy).
+  fluid::SurfaceExtractor extractor;
+  fluid::SurfaceMesh mesh;
+  std::vector<float> xs, ys, zs;
+  std::string error;  // a refused step or mesh (the effect stops stepping on a refused step)
+};
+
+}  // namespace game

@@ -1,0 +1,169 @@
+// The `blob` effect in a World (no GL): the blob_monster scene builds the monster from its section
+// and program, it rises out of the sewer onto the street (baked colliders), a blast sends it to
+// reassemble, catching the player resets the round, and bad programs are errors naming file, key, value.
+#include "game/paths.hpp"
+#include "game/world/blob_monster.hpp"
+#include "game/world/rigid_bodies.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+game::World blobWorld(const std::string& program = {}) {
+  game::SceneConfig scene;
+  game::SceneStatus st = game::loadSceneFile(game::scenesDir() / "blob_monster.json", scene);
+  EXPECT_TRUE(st.ok()) << st.error;
+  if (!program.empty()) {
+    st = game::applyOverride(scene, "blob.program=" + program);
+    EXPECT_TRUE(st.ok()) << st.error;
+  }
+  game::World world;
+  std::string error;
+  EXPECT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  return world;
+}
+
+std::string buildError(const std::string& program_text) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "fluiddemo_bad.program.json";
+  std::ofstream(file) << program_text;
+  game::SceneConfig scene;
+  EXPECT_TRUE(game::loadSceneFile(game::scenesDir() / "blob_monster.json", scene).ok());
+  EXPECT_TRUE(game::applyOverride(scene, "blob.program=" + file.string()).ok());
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(scene, game::contentDir(), world, error));
+  EXPECT_NE(error.find(file.string()), std::string::npos) << error;
+  return error;
+}
+
+const std::string& stateName(const game::BlobMonster& blob) { return blob.program.states[blob.machine.state].name; }
+
+void steps(game::World& world, int n) {
+  for (int i = 0; i < n; ++i) game::stepWorld(world, nullptr);
+}
+
+TEST(BlobEffect, RisesOutOfTheSewerOntoTheStreet) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  ASSERT_NE(blob, nullptr);
+  EXPECT_EQ(blob->world.particles.size(), 1000u);
+  EXPECT_EQ(blob->level_colliders, 3u);  // street, sewer, wall baked from the level's models
+  EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // starts in the pipe
+  steps(world, 60);
+  EXPECT_EQ(stateName(*blob), "emerge");
+  steps(world, 8 * 60);  // the program leaves emerge on its goal, at the latest after 8 s
+  EXPECT_NE(stateName(*blob), "emerge");
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  std::printf("[blob] game: after 9 s state %s, centroid (%.2f, %.2f, %.2f)\n", stateName(*blob).c_str(), c.x, c.y,
+              c.z);
+  EXPECT_GT(c.y, 0.2f);  // out of the pipe, on the street
+  EXPECT_EQ(blob->world.particles.size(), 1000u);
+  EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
+  EXPECT_EQ(world.failures.count, 0u) << world.failures.first;
+}
+
+TEST(BlobEffect, ABlastThrowsParticlesAndStartsReassembly) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  ASSERT_NE(blob, nullptr);
+  steps(world, 6 * 60);
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  const fluid::Blast blasts[] = {fluid::Blast{c + glm::vec3(0.3f, 0.0f, 0.0f), 60.0f, 0.25f, 4.0f}};
+  world.links.blasts = blasts;
+  steps(world, 1);
+  world.links.blasts = {};
+  EXPECT_GT(blob->blasted_particles, 500u);
+  EXPECT_EQ(stateName(*blob), "reassemble");
+  EXPECT_GT(fluid::blobMaxSpeed(blob->world.particles.velocity), 2.0f);
+  steps(world, 60);
+  EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
+}
+
+TEST(BlobEffect, CatchingThePlayerFlashesThenResetsTheRound) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  ASSERT_NE(blob, nullptr);
+  steps(world, 4 * 60);
+  int chase = -1;
+  for (std::size_t k = 0; k < blob->program.states.size(); ++k)
+    if (blob->program.states[k].behaviour.kind == fluid::BlobBehaviourKind::chase) chase = static_cast<int>(k);
+  ASSERT_GE(chase, 0);
+  fluid::enterBlobState(blob->program, blob->machine, blob->world, chase, blob->target);
+  const glm::vec3 start_eye = world.camera.position;
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  world.camera.position = glm::vec3(c.x + 0.3f, 1.7f, c.z);  // the player walks into it
+  steps(world, 2);
+  EXPECT_EQ(blob->catches, 1);
+  EXPECT_GT(blob->caught_timer, 0.0f);
+  steps(world, static_cast<int>(blob->params.caught_seconds * 60.0f) + 2);
+  EXPECT_EQ(blob->caught_timer, 0.0f);
+  EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // back in the pipe
+  EXPECT_EQ(world.camera.position, start_eye);                             // the player back at the start
+  EXPECT_EQ(stateName(*blob), "emerge");
+}
+
+TEST(BlobEffect, ACrateDroppedOnItAndTheBlobPushEachOther) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  game::RigidBodies* bodies = game::findState<game::RigidBodies>(world);
+  ASSERT_NE(blob, nullptr);
+  ASSERT_NE(bodies, nullptr);
+  steps(world, 4 * 60);  // out of the pipe
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  game::throwCrate(*bodies, c + glm::vec3(0.0f, 2.5f, 0.0f), glm::vec3(0.0f, -1.0f, 0.0f));
+  const engine::BodyId crate = bodies->crates.back();
+  float upward = 0.0f;  // momentum the particles gave the thrown crate (N s, +y)
+  int coupled = 0;
+  for (int i = 0; i < 60; ++i) {
+    steps(world, 1);
+    for (std::size_t k = 0; k < blob->crate_of_collider.size(); ++k) {
+      if (bodies->crates[static_cast<std::size_t>(blob->crate_of_collider[k])] != crate) continue;
+      ++coupled;
+      upward += blob->world.colliders[blob->level_colliders + k].impulse.y;  // what the particles lost to it
+    }
+  }
+  const engine::BodyState after = engine::bodyState(*bodies->physics, crate);
+  std::printf(
+      "[blob] game: a crate dropped on the blob: coupled %d of 60 steps, the goo lost %.2f N s upward to it (before "
+      "the cap; capped %llu times), crate speed %.2f m/s after 1 s\n",
+      coupled, upward, static_cast<unsigned long long>(blob->crate_forces_capped), glm::length(after.linear_velocity));
+  EXPECT_LT(glm::length(after.linear_velocity), 5.0f) << "the goo does not fire the crate away";
+  EXPECT_GT(coupled, 10);
+  EXPECT_GT(upward, 0.0f) << "the goo pushes the crate up";
+  EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, c.y + 0.5f);
+  EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
+  EXPECT_EQ(blob->world.particles.size(), 1000u);
+}
+
+TEST(BlobEffect, BadProgramsNameFileKeyAndValue) {
+  std::string e = buildError(R"({"states": [{"name": "a", "behaviour": "dance"}]})");
+  EXPECT_NE(e.find("states[0].behaviour = \"dance\""), std::string::npos) << e;
+  e = buildError(R"({"states": [{"name": "a", "behaviour": "ball", "triggers": [{"when": "after_seconds",
+                 "value": 1, "next": "b"}]}]})");
+  EXPECT_NE(e.find("next = 'b' names no state"), std::string::npos) << e;
+  e = buildError(R"({"states": [{"name": "a", "behaviour": "ball", "speed": -3}]})");
+  EXPECT_NE(e.find("speed"), std::string::npos) << e;
+  EXPECT_NE(e.find("-3"), std::string::npos) << e;
+  e = buildError(R"({"states": [{"name": "a", "behaviour": "coat_wall", "wall": "nowall"}]})");
+  EXPECT_NE(e.find("states[0].wall = \"nowall\""), std::string::npos) << e;
+  e = buildError(R"({"states": [{"name": "a", "behaviour": "ball", "colour": 1}]})");
+  EXPECT_NE(e.find("states[0].colour = 1: unknown key"), std::string::npos) << e;
+  e = buildError("{not json");
+  EXPECT_NE(e.find("invalid JSON"), std::string::npos) << e;
+}
+
+TEST(BlobEffect, AMissingProgramFileIsNamed) {
+  game::SceneConfig scene;
+  ASSERT_TRUE(game::loadSceneFile(game::scenesDir() / "blob_monster.json", scene).ok());
+  ASSERT_TRUE(game::applyOverride(scene, "blob.program=blob/no_such.program.json").ok());
+  game::World world;
+  std::string error;
+  EXPECT_FALSE(game::buildWorld(scene, game::contentDir(), world, error));
+  EXPECT_NE(error.find("no_such.program.json"), std::string::npos) << error;
+}
+
+}  // namespace
