@@ -211,3 +211,42 @@ TEST(ExplosivesInTheFountain, TenChargesOnTheNozzleInOneStepStayFiniteAndBounded
 }
 
 }  // namespace
+
+// ---- the same explosives in the blob monster's street ------------------------------------------
+
+#include "game/world/blob_monster.hpp"
+
+namespace {
+
+// A charge lobbed from the scene's start view lands by the monster and blows it apart: its
+// particles are pushed by the shared law, the program switches to reassemble, and the body
+// stays finite with every particle kept.
+TEST(ExplosivesInTheBlobLevel, AChargeBlowsTheMonsterApartAndItReassembles) {
+  game::SceneConfig scene;
+  ASSERT_TRUE(game::loadSceneFile(game::contentDir() / "scenes" / "blob_monster.json", scene).ok());
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  for (int s = 0; s < 400; ++s) game::stepWorld(world, nullptr);  // it emerges and balls up
+  game::BlobMonster& blob = *game::findState<game::BlobMonster>(world);
+  const std::size_t particles = blob.world.particles.position.size();
+  game::playerThrowExplosive(world);
+  std::size_t pushed = 0;
+  bool reassembling = false;
+  for (int s = 0; s < 240; ++s) {
+    game::stepWorld(world, nullptr);
+    ASSERT_EQ(world.nonfinite_state, "") << "step " << s;
+    pushed += blob.blasted_particles;
+    if (blob.machine.state >= 0 &&
+        blob.program.states[static_cast<std::size_t>(blob.machine.state)].name.find("reassemble") != std::string::npos)
+      reassembling = true;
+  }
+  std::printf("[ metric ] blob particles pushed by the blast: %zu of %zu\n", pushed, particles);
+  EXPECT_EQ(game::findState<game::Explosives>(world)->detonated, 1u);
+  EXPECT_GT(pushed, particles / 4);
+  EXPECT_TRUE(reassembling);
+  EXPECT_EQ(blob.world.particles.position.size(), particles);
+  EXPECT_EQ(blob.error, "");
+}
+
+}  // namespace
