@@ -346,7 +346,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
       << error;
   ASSERT_NE(game::findState<game::SphFluid>(world)->coupling, nullptr);
   engine::Profiler profiler;
-  runFrames(world, profiler, 40);                      // the jet is up
+  runFrames(world, profiler, 40);                                                   // the jet is up
   EXPECT_EQ(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);  // no crate yet
   const glm::vec3 nozzle = world.links.level.nozzle;
   game::throwCrate(*game::findState<game::RigidBodies>(world), nozzle + glm::vec3(0.0f, 1.2f, 0.0f),
