@@ -1,5 +1,6 @@
 #include "game/soak_monitor.hpp"
 
+#include "game/paths.hpp"
 #include "game/world/world.hpp"
 
 #include <unistd.h>
@@ -92,9 +93,10 @@ void checkPenetration(SoakMonitor& m, const World& world) {
     const SpriteParticles& sp = *sp_state;
     m.points.clear();
     for (const glm::vec4& p : sp.sample_positions) m.points.emplace_back(p);
-    for (std::size_t c = 0; c < sp.colliders.size(); ++c) {
-      const Penetration p =
-          worstPenetration(m.points, sp.colliders[c], fluid::ColliderPose{}, sp.params.size, 0.0f, m.scratch);
+    const std::size_t parts = sp.level_colliders ? sp.level_colliders->parts.size() : 0;
+    for (std::size_t c = 0; c < parts; ++c) {
+      const Penetration p = worstPenetration(m.points, sp.level_colliders->parts[c].collider, fluid::ColliderPose{},
+                                             sp.params.size, 0.0f, m.scratch);
       if (p.ratio > s.worst_sprite) {
         s.worst_sprite = p.ratio;
         s.worst_sprite_step = step;
@@ -114,16 +116,25 @@ void checkPenetration(SoakMonitor& m, const World& world) {
     m.points.clear();
     for (const engine::BodyState& state : bodies.current) m.points.push_back(state.position);
     const float size = bodies.params.crate_size;
-    const Penetration p =
-        worstPenetration(m.points, world.fountain, fluid::ColliderPose{}, size, 0.5f * size, m.scratch);
-    if (p.ratio > s.worst_crate) {
-      s.worst_crate = p.ratio;
-      s.worst_crate_step = step;
-    }
-    if (p.ratio > m.desc.crate_tolerance) {
-      fail(m, step,
-           describe(("crate " + std::to_string(p.index) + " (edge " + std::to_string(size) + " m)").c_str(), p,
-                    m.desc.crate_tolerance));
+    if (!m.level) m.level = world.links.colliders;
+    std::string error;
+    if (!ensureFountainColliders(contentDir(), m.level, error)) return fail(m, step, "level colliders: " + error);
+    // Crate centres against every part with the half edge as offset. The depth maps answer
+    // "beyond reach" farther than their margin from a part: a centre that far is no penetration.
+    for (std::size_t c = 0; c < m.level->parts.size(); ++c) {
+      const Penetration p =
+          worstPenetration(m.points, m.level->parts[c].collider, fluid::ColliderPose{}, size, 0.5f * size, m.scratch);
+      if (p.ratio > s.worst_crate) {
+        s.worst_crate = p.ratio;
+        s.worst_crate_step = step;
+      }
+      if (p.ratio > m.desc.crate_tolerance) {
+        fail(m, step,
+             describe(("crate " + std::to_string(p.index) + " (edge " + std::to_string(size) + " m, " +
+                       m.level->parts[c].name + ")")
+                          .c_str(),
+                      p, m.desc.crate_tolerance));
+      }
     }
   }
 }

@@ -4,8 +4,10 @@
 // checks (game/soak_checks.hpp) and keeps the run's statistics. The first failure stops the run.
 
 #include "game/soak_checks.hpp"
+#include "game/world/fountain.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -70,6 +72,9 @@ struct SoakMonitor {
   PenetrationScratch scratch;
   std::vector<glm::vec3> points;   // crate centres
   std::vector<PlacedShape> still;  // the SPH colliders that do not move this frame
+  // The level's baked colliders the crates are checked against: the world's (EffectLinks::
+  // colliders) or, in a scene without particles, loaded at the first check.
+  std::shared_ptr<const LevelColliders> level;
   bool have_counts = false;
   std::string failure;  // the first failure, naming the step and what
 };

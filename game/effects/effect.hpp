@@ -50,6 +50,9 @@ struct EffectLinks {
   // The particles' gravity: rigid_bodies publishes its own; (0, -9.81, 0) m/s^2 without it.
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};
   FountainGeometry level;           // the level's shape: the nozzle, the basin
+  // The level's baked colliders (content/colliders), loaded by the first effect that needs them
+  // (ensureFountainColliders): the SPH boundary and the sprites share them.
+  std::shared_ptr<const LevelColliders> colliders;
   RigidBodies* bodies = nullptr;    // rigid_bodies: Bullet world + crates (the water pushes them)
   const SphFluid* fluid = nullptr;  // sph_fluid: the particles (surface meshes, spray sprites)
   Explosives* explosives = nullptr;  // explosives: the player's charges (playerThrowExplosive)

@@ -19,6 +19,9 @@ const ParamTable<RigidBodyParams>& table() {
       param<&RigidBodyParams::gravity>("gravity", -100.0, 100.0, "m/s^2"),
       param<&RigidBodyParams::crates>("crates", 0, 200, "crates stacked around the fountain"),
       param<&RigidBodyParams::crate_size>("crate_size", 0.1, 5.0, "crate edge length (m)"),
+      param<&RigidBodyParams::density>(
+          "density", 10.0, 10000.0,
+          "crate density (kg/m^3; fixed at construction): in water (1000) a crate below it floats, above it sinks"),
       param<&RigidBodyParams::throw_speed>("throw_speed", 0.0, 100.0, "speed of a crate thrown with left click (m/s)"),
   };
   return rows;
@@ -35,11 +38,12 @@ class RigidBodiesEffect final : public EffectOf<RigidBodies> {
  public:
   std::string_view name() const override { return "rigid_bodies"; }
 
-  // Live: gravity and throw speed. The crates (count, size) are placed at construction.
+  // Live: gravity and throw speed. The crates (count, size, density) are placed at construction.
   void applyLive(const SectionConfig& section, EffectLinks& links) override {
     RigidBodyParams fresh = table().parse(section);
     fresh.crates = state.params.crates;
     fresh.crate_size = state.params.crate_size;
+    fresh.density = state.params.density;
     if (fresh.gravity != state.params.gravity) engine::setGravity(*state.physics, fresh.gravity);
     state.params = fresh;
     links.gravity = fresh.gravity;

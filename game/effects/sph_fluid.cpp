@@ -102,7 +102,9 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
 std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
   auto effect = std::make_unique<SphFluidEffect>(ctx.links.bodies, ctx.links.level);
   const SphFluidParams params = table().parse(section);
-  if (!initSphFluid(effect->state, params, ctx.links.level, ctx.links.gravity, error)) return nullptr;
+  if (!ensureFountainColliders(ctx.content_dir, ctx.links.colliders, error) ||
+      !initSphFluid(effect->state, params, ctx.links.level, ctx.links.colliders, ctx.links.gravity, error))
+    return nullptr;
   if (ctx.links.bodies != nullptr && params.couple_bodies) {
     // Crates couple while their centre is within a crate's reach of the fluid's grid domain.
     const fluid::SphWorld& sph = effect->state.world;
@@ -125,7 +127,7 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
 
 const EffectDesc& sphFluidEffect() {
   static const EffectDesc desc{
-      "sph_fluid", "SPH water (CPU): nozzle jet, fountain colliders, drains", table().specs, {}, &build};
+      "sph_fluid", "SPH water (CPU): nozzle jet, baked fountain colliders, drains", table().specs, {}, &build};
   return desc;
 }
 

@@ -89,7 +89,7 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
     ImGui::Text("  born: mist %llu, spray %llu (%u this step), dropped (budget full) %llu",
                 static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
                 s.spray_last_step, static_cast<unsigned long long>(s.dropped));
-    ImGui::Text("  sort pass %u of %u, colliders baked in %.0f ms", s.gpu.sort_step,
+    ImGui::Text("  sort pass %u of %u, colliders loaded in %.0f ms", s.gpu.sort_step,
                 engine::sortPassCount(s.gpu.capacity), s.bake_ms);
   }
 
@@ -101,6 +101,7 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   auto effect = std::make_unique<SpriteParticlesEffect>(ctx.links.fluid);
   const SpriteParticleParams params = spriteParamsFrom(section, ctx.links.gravity, ctx.links.level.nozzle);
   initSpriteParticles(effect->state, params, params.max_particles, ctx.seed ^ 0x9e3779b9u);
+  effect->state.level_colliders = ctx.links.colliders;  // null without sph_fluid: loaded at attach
   return effect;
 }
 

@@ -1,13 +1,21 @@
 #pragma once
-// The fountain assembly's dimensions and the collision shape the sprite particles bounce on.
-// The same numbers drive scripts/generate_content.py (basin.obj, statue.obj): keep them in sync.
+// The fountain level: its dimensions (nozzle, drains, the SPH domain) and its baked depth-map
+// colliders (content/colliders/fountain.colliders: ground, basin and statue baked from the models
+// the renderer draws, Kolb et al. 2004 §4; fluid/collide/collider_cache.hpp). The SPH boundary,
+// the GPU sprites and the soak checks all use that one baked data.
+// The numbers below drive scripts/generate_content.py (basin.obj, statue.obj): keep them in sync.
 // Units: metres, y up, fountain centred on the origin.
 
+#include "fluid/collide/collider_cache.hpp"
 #include "fluid/core/collider.hpp"
 
 #include <glm/glm.hpp>
 
+#include <filesystem>
+#include <memory>
 #include <span>
+#include <string>
+#include <vector>
 
 namespace game {
 
@@ -31,23 +39,46 @@ struct FountainGeometry {
   glm::vec3 nozzle{0.0f, 2.5f, 0.0f};  // where the jet leaves the spire
 };
 
-// Signed distance to ground (y = 0 half-space) ∪ basin ∪ statue. Exact inside each primitive,
-// a bound across the CSG joins; normals are the deciding primitive's analytic gradient.
-// The shape is static: collider space = world space.
-class FountainShape final : public fluid::SignedDistanceShape {
+// A level's baked colliders, static (collider space = world space), in manifest order.
+struct LevelColliders {
+  std::vector<fluid::CachedCollider> parts;
+  // Per part: the box (world space) outside which the part is farther than its bake margin
+  // from any point of its model: the intersection of its ortho maps' view volumes, which
+  // recipeMapSpecs grows by the margin beyond the model's bounds.
+  std::vector<fluid::Bounds> reach_boxes;
+  std::vector<float> margins;  // per part: the recipe's margin (m)
+  double load_ms = 0.0;
+};
+
+// Loads CONTENT/colliders/LEVEL.colliders (re-baking a stale or missing file, CachePolicy::
+// load_or_bake). False + error naming the file on failure.
+bool loadLevelColliders(const std::filesystem::path& content_dir, const std::string& level, LevelColliders& out,
+                        std::string& error);
+// The fountain's colliders, loaded once into `slot` (EffectLinks::colliders): a no-op when it
+// is already set.
+bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shared_ptr<const LevelColliders>& slot,
+                             std::string& error);
+
+// A static shape queried only within `reach` of `box` (the part's reach box, grown by what the
+// caller's support needs beyond the bake margin). Points outside answer {valid = false,
+// distance = FLT_MAX}, "beyond reach", without touching the maps: the SPH solver treats that as no
+// boundary volume and no collision, which is what a point farther than its support from the
+// surface gets anyway. So a particle far from the statue never pays for the statue's maps.
+class ReachCulledShape final : public fluid::SignedDistanceShape {
  public:
-  FountainShape() = default;
-  explicit FountainShape(const FountainGeometry& geometry) : g_(geometry) {}
+  ReachCulledShape(std::shared_ptr<const fluid::SignedDistanceShape> inner, fluid::Bounds box)
+      : inner_(std::move(inner)), box_(box) {}
   void query(std::span<const glm::vec3> local_points, std::span<fluid::ColliderSample> out) const override;
-  float distance(glm::vec3 p) const;
-  const FountainGeometry& geometry() const { return g_; }
-  // Testing aid: answer queries with the scalar code even where the CPU has AVX2 (the eight-wide
-  // path gives bit-identical samples).
-  void setPortable(bool portable) { portable_ = portable; }
+  const fluid::Bounds& box() const { return box_; }
 
  private:
-  FountainGeometry g_;
-  bool portable_ = false;
+  std::shared_ptr<const fluid::SignedDistanceShape> inner_;
+  fluid::Bounds box_;
 };
+
+// Part `k` of `level` as a shape that answers within `support` of the surface (its reach box
+// grown by max(0, support - margin)); shares the collider with `level`.
+std::shared_ptr<const fluid::SignedDistanceShape> culledPart(const std::shared_ptr<const LevelColliders>& level,
+                                                             std::size_t k, float support);
 
 }  // namespace game

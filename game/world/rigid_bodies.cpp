@@ -12,8 +12,6 @@ namespace {
 
 float uniform01(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 16777216.0f); }
 
-constexpr float kCrateDensity = 250.0f;  // kg/m^3, light wood
-
 }  // namespace
 
 bool buildRigidBodies(const RigidBodyParams& params, const std::filesystem::path& content_dir, std::uint32_t seed,
@@ -43,7 +41,7 @@ bool buildRigidBodies(const RigidBodyParams& params, const std::filesystem::path
   // Stacks of up to three crates on a ring outside the basin, placed by the scene's seed.
   std::mt19937 rng(seed);
   const float size = params.crate_size;
-  const float mass = kCrateDensity * size * size * size;
+  const float mass = params.density * size * size * size;
   const int stacks = (params.crates + 2) / 3;
   const float base_angle = 2.0f * std::numbers::pi_v<float> * uniform01(rng);
   for (int i = 0; i < params.crates; ++i) {
@@ -91,7 +89,7 @@ void throwCrate(RigidBodies& bodies, glm::vec3 origin, glm::vec3 direction) {
   if (bodies.thrown < RigidBodies::kMaxThrown) {
     const float size = bodies.params.crate_size;
     engine::BodyDesc desc;
-    desc.mass = kCrateDensity * size * size * size;
+    desc.mass = bodies.params.density * size * size * size;
     desc.position = state.position;
     desc.rotation = state.rotation;
     desc.linear_velocity = state.linear_velocity;

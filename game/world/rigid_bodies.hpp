@@ -18,6 +18,7 @@ struct RigidBodyParams {
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};
   int crates = 6;
   float crate_size = 0.6f;    // edge, m
+  float density = 250.0f;     // crate density, kg/m^3 (light wood; water is 1000: above floats, below sinks)
   float throw_speed = 14.0f;  // m/s
   std::string level = "fountain";  // scene.level: its solid models are static Bullet meshes (game/world/level.hpp)
 };

@@ -54,8 +54,8 @@ void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& g, glm
   world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}});
 }
 
-bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,
-                  std::string& error) {
+bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g,
+                  const std::shared_ptr<const LevelColliders>& colliders, glm::vec3 gravity, std::string& error) {
   out = SphFluid{};
   out.params = params;
   fluid::SphParams& sp = out.world.params;
@@ -76,14 +76,22 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
     error = "sph_fluid: " + st.error;
     return false;
   }
-  fluid::SphCollider collider;
-  collider.shape = std::make_shared<FountainShape>(g);  // static: collider space = world space
-  collider.integrate_pose = false;
-  // Min/max of exact cylinder and plane distances (FountainShape): 1-Lipschitz, so the solver may
-  // skip end-of-step queries of particles that cannot have reached it (same results).
-  collider.lipschitz_distance = true;
-  collider.material.resilience = 0.0f;  // water does not bounce (Kolb 2004 §3.3.2 ε)
-  out.world.colliders.push_back(collider);
+  if (!colliders || colliders->parts.empty()) {
+    error = "sph_fluid: the level has no colliders (content/colliders/fountain.colliders)";
+    return false;
+  }
+  // The level's baked depth-map colliders (Kolb et al. 2004 §4), one SPH collider per part, each
+  // queried only by particles within the support of its reach box. Static: collider space =
+  // world space. Depth-map distances are measured along the map axes (not 1-Lipschitz), so the
+  // end-of-step check queries every particle in reach (SphCollider::lipschitz_distance off).
+  for (std::size_t k = 0; k < colliders->parts.size(); ++k) {
+    fluid::SphCollider collider;
+    collider.shape = culledPart(colliders, k, fluid::sphSupport(sp));
+    collider.integrate_pose = false;
+    collider.lipschitz_distance = false;
+    collider.material.resilience = 0.0f;  // water does not bounce (Kolb 2004 §3.3.2 ε)
+    out.world.colliders.push_back(collider);
+  }
   fluid::reserveSph(out.world, params.max_particles);
   return true;
 }

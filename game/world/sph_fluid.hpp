@@ -1,8 +1,8 @@
 #pragma once
 // The `sph_fluid` effect: the fountain's water as a CPU SPH fluid (fluid/sph: DFSPH by default,
 // WCSPH selectable). A nozzle emitter on the spire shoots a jet upward; the water falls into the
-// dish and the basin, colliding with the analytic FountainShape (ground ∪ basin ∪ statue)
-// through fluid::SignedDistanceShape; four drains at the basin wall remove it again, so the
+// dish and the basin, colliding with the level's baked depth-map colliders (ground, basin and
+// statue from content/colliders, game/world/fountain.hpp); four drains at the basin wall remove it again, so the
 // particle budget (max_particles, fixed at construction) is recycled. Stepped once per game
 // fixed step (the SPH solver sub-steps adaptively inside it, CFL-limited).
 
@@ -65,11 +65,12 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
 void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
                     fluid::SphWorld& world);
 
-// Builds the SPH world: parameters, the fountain collider, the nozzle emitter at `nozzle`
+// Builds the SPH world: parameters, one collider per part of `colliders` (the level's baked
+// colliders, shared; ensureFountainColliders), the nozzle emitter at `nozzle`
 // (pointing up), the drains; reserves every buffer for max_particles. False + error (naming
 // the field and value) on invalid parameters.
-bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
-                  std::string& error);
+bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry,
+                  const std::shared_ptr<const LevelColliders>& colliders, glm::vec3 gravity, std::string& error);
 
 // Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step),
 // calling `on_step` (when given) with each sub-step's statistics. Returns false and sets

@@ -1,7 +1,6 @@
 #include "game/world/sprite_particles.hpp"
 
 #include "fluid/core/finite.hpp"
-#include "game/commands/collider_model.hpp"
 #include "game/world/sph_fluid.hpp"
 
 #include <glm/gtc/constants.hpp>
@@ -14,11 +13,6 @@
 
 namespace game {
 namespace {
-
-// Depth-map resolution of the baked colliders: texels per side of each front-back pair. The
-// basin (6.4 m) gets 2.5 cm texels, the statue (2.1 m) 0.8 cm; the ground is a flat slab whose
-// top is exact at any resolution.
-constexpr int kColliderResolution = 256;
 
 // Smallest power-of-two texture (w, h with w = h or w = 2h) holding `capacity` texels.
 void textureSize(std::uint32_t capacity, std::uint32_t& w, std::uint32_t& h) {
@@ -140,42 +134,11 @@ void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params,
   s.seed = seed;
 }
 
-bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error) {
-  if (!s.colliders.empty()) return true;
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<fluid::DepthMapCollider> colliders;
-  std::vector<std::string> names;
-  for (const char* model : {"ground.obj", "basin.obj", "statue.obj"}) {
-    const std::filesystem::path path = content_dir / "models" / model;
-    ColliderModel mesh;
-    if (!loadColliderModel(path.string(), mesh, error)) return false;
-    const fluid::MeshView view{mesh.positions, mesh.indices};
-    const fluid::Bounds bounds = fluid::meshBounds(view);
-    // The ground is an 80 m slab seen only from above: its y pair decides alone (the x and z
-    // pairs would only add lookups to every particle's collision). The basin and the statue get
-    // all three axis pairs.
-    std::vector<fluid::MapSpec> specs;
-    if (std::string(model) == "ground.obj") {
-      if (!fluid::parseMapSpec("y", bounds, kColliderResolution, fluid::DepthMapFormat::front_back16, specs, error)) {
-        error = path.string() + ": " + error;
-        return false;
-      }
-    } else {
-      specs = fluid::defaultMapSpecs(bounds, kColliderResolution);
-    }
-    fluid::DepthMapCollider collider;
-    fluid::BakeDesc desc;
-    desc.normal_resolution = 128;
-    if (const fluid::BakeStatus status = fluid::bakeDepthMaps(view, specs, desc, collider); !status.ok()) {
-      error = path.string() + ": " + status.error;
-      return false;
-    }
-    colliders.push_back(std::move(collider));
-    names.emplace_back(model);
-  }
-  s.colliders = std::move(colliders);
-  s.collider_names = std::move(names);
-  s.bake_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+bool loadSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error) {
+  if (!ensureFountainColliders(content_dir, s.level_colliders, error)) return false;
+  s.collider_names.clear();
+  for (const fluid::CachedCollider& part : s.level_colliders->parts) s.collider_names.push_back(part.name);
+  s.bake_ms = s.level_colliders->load_ms;
   return true;
 }
 
@@ -185,7 +148,7 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
   s.gpu_error.clear();
   if (s.capacity == 0) return true;  // nothing to simulate: no GL object at all
   std::string error;
-  if (!bakeSpriteColliders(s, content_dir, error)) {
+  if (!loadSpriteColliders(s, content_dir, error)) {
     s.gpu_error = "sprite colliders: " + error;
     return false;
   }
@@ -206,11 +169,19 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
                                                  [&](std::uint32_t i) { return i >= s.capacity; }),
                                   s.gpu.allocator.free_heap.end());
   std::make_heap(s.gpu.allocator.free_heap.begin(), s.gpu.allocator.free_heap.end(), std::greater<>());
-  std::vector<std::vector<engine::GpuDepthMapView>> views(s.colliders.size());
-  std::vector<std::vector<float>> normals(s.colliders.size());
-  std::vector<engine::GpuColliderDesc> descs(s.colliders.size());
-  for (std::size_t c = 0; c < s.colliders.size(); ++c)
-    engine::describeCollider(s.colliders[c], fluid::ColliderPose{}, views[c], normals[c], descs[c]);
+  // The maps as baked, margin rings included: the shader does not read the ring flag, so a ring
+  // texel's pair of equal depths votes like any other (fluid::DepthMap::margin_ring). Ring texels
+  // lie outside the model's conservative cover, so their vote is never "inside": where the CPU
+  // lets a ring vote decide (no other map sees the point outside) both say "outside", and where
+  // another map says outside the shader may take the ring's shorter distance. The shader reacts
+  // only to negative distances (collide.glsl collideAll), so it collides exactly where the CPU
+  // lookup says inside.
+  const std::vector<fluid::CachedCollider>& parts = s.level_colliders->parts;
+  std::vector<std::vector<engine::GpuDepthMapView>> views(parts.size());
+  std::vector<std::vector<float>> normals(parts.size());
+  std::vector<engine::GpuColliderDesc> descs(parts.size());
+  for (std::size_t c = 0; c < parts.size(); ++c)
+    engine::describeCollider(parts[c].collider, fluid::ColliderPose{}, views[c], normals[c], descs[c]);
   // The collider variant of the update shader is compiled here, not in the first step's frame.
   if (!engine::setColliders(s.gpu, descs, error) || !engine::prepareStep(s.gpu, stepParams(s.params))) {
     s.gpu_error = error.empty() ? s.gpu.error : error;

@@ -9,7 +9,7 @@
 //
 // Two stages, so a world can exist without a GL context:
 //   initSpriteParticles   no GL: parameters, seed, budget. buildWorld calls it.
-//   attachSpriteGpu       needs the GL context current: bakes the colliders (once), creates the
+//   attachSpriteGpu       needs the GL context current: loads the colliders (once), creates the
 //                         textures/FBOs/shaders. runScene calls it; `replay --no-render` and
 //                         the unit tests without GL never do, and then stepping is a no-op (no
 //                         births, no cost: the effect simply is not simulated there).
@@ -21,11 +21,13 @@
 #include "engine/gpu_particles/gpu_particles.hpp"
 #include "fluid/collide/collide.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <span>
 #include <vector>
@@ -81,10 +83,11 @@ struct SpriteParticles {
   bool attached = false;
   engine::GpuParticles gpu;
   std::string gpu_error;  // why the effect is off (shader or collider failure); empty while fine
-  // Depth-map colliders baked from content/models (ground, basin, statue), collider space = world.
-  std::vector<fluid::DepthMapCollider> colliders;
+  // The level's baked colliders (content/colliders: ground, basin, statue; collider space =
+  // world), shared with the SPH fluid (EffectLinks::colliders) or loaded at attach.
+  std::shared_ptr<const LevelColliders> level_colliders;
   std::vector<std::string> collider_names;
-  double bake_ms = 0.0;
+  double bake_ms = 0.0;  // loading them (a stale file is re-baked)
   // Counters for the overlay and tests.
   std::uint64_t born_mist = 0, born_spray = 0, born_blast = 0;
   std::uint64_t dropped = 0;  // births refused because the budget was full
@@ -101,12 +104,11 @@ struct SpriteParticles {
 void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
                          std::uint64_t seed);
 
-// Bakes ground.obj, basin.obj and statue.obj of `content_dir`/models into depth-map colliders
-// (basin, statue: three front-back16 pairs along x, y, z, fluid::defaultMapSpecs, Kolb §5.2; the ground slab: its y
-// pair). No GL. Done once; false + error naming the model on failure.
-bool bakeSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error);
+// The fountain's baked colliders (ensureFountainColliders) into s.level_colliders unless set;
+// no GL. False + error naming the file on failure.
+bool loadSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error);
 
-// Needs the GL context current. Bakes the colliders if not done yet, creates the GPU system for
+// Needs the GL context current. Loads the colliders if not done yet, creates the GPU system for
 // `capacity` sprites and uploads the colliders. A failure leaves the effect off (gpu_error says
 // why) and returns false; the game goes on. A zero budget creates nothing and returns true.
 bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir,

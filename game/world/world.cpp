@@ -44,7 +44,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
   out.scene = scene;
   out.step_seconds = 1.0 / scene.scene.number("step_hz");
   out.substeps = scene.scene.integer("substeps");
-  out.links.level = out.fountain.geometry();
+  out.links.level = FountainGeometry{};
   applyCamera(scene.camera, out.camera, true);
   if (!checkNeeds(scene, error)) return false;
   // Effects are built in registry order; anything not listed is simply never touched.

@@ -38,7 +38,6 @@ struct World {
   std::vector<std::string> systems;              // effect names constructed, registry order
   std::vector<std::unique_ptr<Effect>> effects;  // the listed effects, registry order
   EffectLinks links;                             // what the effects offer each other
-  FountainShape fountain;                        // analytic collision shape for particles
   engine::FpsCamera camera;
   double step_seconds = 1.0 / 60.0;
   int substeps = 1;

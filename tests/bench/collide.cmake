@@ -11,6 +11,6 @@ endforeach()
 # meshes and the analytic FountainShape, and the SPH step cost of switching (needs the game).
 if(TARGET fluiddemo_game)
   add_executable(bench_collide_fountain ${CMAKE_CURRENT_LIST_DIR}/collide_fountain.cpp)
-  target_link_libraries(bench_collide_fountain PRIVATE fluiddemo_game bench_csv TBB::tbb fluiddemo_options)
+  target_link_libraries(bench_collide_fountain PRIVATE fluiddemo_game fountain_reference bench_csv TBB::tbb fluiddemo_options)
   target_compile_definitions(bench_collide_fountain PRIVATE FLUIDDEMO_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 endif()

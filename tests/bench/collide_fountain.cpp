@@ -4,18 +4,19 @@
 //      (fluid::MeshDistance): the default six axis maps as sprite_particles bakes them today,
 //      and the recipe of content/colliders;
 //   2. the whole fountain (ground ∪ basin ∪ statue, baked) against the analytic FountainShape
-//      (game/world/fountain.hpp), the game's collider today, and the exact meshes against it
+//      (tests/support/fountain_shape.hpp, the reference), and the exact meshes against it
 //      (how far the OBJ models themselves are from the CSG cylinders);
-//   3. the cost of the switch: the game's SPH fountain (game::initSphFluid) stepped with
-//      FountainShape, then with the three baked colliders, from the same filled state.
+//   3. the SPH step cost of the boundary: the game's SPH fountain (game::initSphFluid: the baked
+//      colliders, each culled to its reach box), the same colliders queried by every particle,
+//      and the analytic FountainShape, from the same filled state.
 // Usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2]
 #include "fluid/collide/collider_cache.hpp"
 #include "game/commands/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
-#include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
 #include "load_average.hpp"
+#include "tests/support/fountain_shape.hpp"
 
 #include <tbb/global_control.h>
 
@@ -164,7 +165,7 @@ int perModelTable(const std::vector<fluid::LevelColliderEntry>& entries, const s
 
 int fountainTable(const std::vector<fluid::CachedCollider>& baked, const std::vector<Model>& models,
                   std::size_t count) {
-  const game::FountainShape analytic;
+  const fountainref::FountainShape analytic;
   const std::vector<glm::vec3> points =
       uniformPoints(glm::vec3(-3.6f, -0.3f, -3.6f), glm::vec3(3.6f, 2.8f, 3.6f), count, 7);
   std::vector<fluid::ColliderSample> reference(count), got;
@@ -195,8 +196,9 @@ bool buildFountain(game::SphFluid& out, std::string& error) {
     return false;
   }
   game::SphFluidParams params;
-  return game::sphParamsFrom(*section, params, error) &&
-         game::initSphFluid(out, params, game::FountainGeometry{}, game::sceneGravity(scene), error);
+  std::shared_ptr<const game::LevelColliders> colliders;
+  return game::sphParamsFrom(*section, params, error) && game::ensureFountainColliders(kContent, colliders, error) &&
+         game::initSphFluid(out, params, game::FountainGeometry{}, colliders, game::sceneGravity(scene), error);
 }
 
 int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, const std::vector<int>& threads) {
@@ -206,58 +208,63 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
     std::fprintf(stderr, "bench_collide_fountain: %s\n", error.c_str());
     return 1;
   }
-  // Fill with FountainShape (as the game does) until the budget is nearly reached.
+  // Fill with the game's colliders until the budget is nearly reached.
   const double target = 0.9 * static_cast<double>(filled.world.params.max_particles);
   while (static_cast<double>(filled.world.particles.size()) < target && filled.world.time < 60.0)
     if (!game::stepSphFluid(filled, 1.0 / 60.0)) {
       std::fprintf(stderr, "bench_collide_fountain: %s\n", filled.error.c_str());
       return 1;
     }
-  // The fountain collider is the first of the world's colliders (game::initSphFluid).
-  const fluid::SphCollider analytic = filled.world.colliders.front();
-  std::vector<fluid::SphCollider> with_baked;
+  // The level's colliders are the first `parts` of the world's (game::initSphFluid): the game's
+  // (baked, each culled to its reach box), the same baked colliders queried by every particle,
+  // and the analytic FountainShape (1-Lipschitz: end-of-step queries of far particles skipped).
+  const std::size_t parts = baked.size();
+  const fluid::SphCollider level = filled.world.colliders.front();
+  std::vector<fluid::SphCollider> unculled, analytic(1, level);
   for (const fluid::CachedCollider& c : baked) {
-    fluid::SphCollider s = analytic;
+    fluid::SphCollider s = level;
     s.shape = std::make_shared<fluid::DepthMapCollider>(c.collider);
-    s.lipschitz_distance = false;  // depth-map distances are measured along the map axes
-    with_baked.push_back(s);
+    unculled.push_back(s);
   }
+  analytic[0].shape = std::make_shared<fountainref::FountainShape>();
+  analytic[0].lipschitz_distance = true;
+  const char* names[] = {"baked, culled to each part's reach box (the game)", "baked, every particle queries all 3",
+                         "analytic FountainShape (1 collider, Lipschitz skip)"};
   std::printf(
       "| SPH boundary (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
       "collisions per step | emitted | removed (drains) |\n|---|---|---|---|---|---|---|---|\n");
-  for (int variant = 0; variant < 4; ++variant) {
-    const int t = threads[static_cast<std::size_t>(variant / 2) % threads.size()];
-    if (variant >= 2 && threads.size() < 2) break;
+  for (const int t : threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(t));
-    game::SphFluid f = filled;
-    if (variant % 2 == 1) {
-      f.world.colliders.erase(f.world.colliders.begin());
-      f.world.colliders.insert(f.world.colliders.begin(), with_baked.begin(), with_baked.end());
-    }
-    std::vector<double> ms;
-    double steps = 0.0, collisions = 0.0;
-    std::size_t emitted = 0, removed = 0;
-    for (int frame = 0; frame < frames; ++frame) {
-      double frame_ms = 0.0;
-      if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
-            frame_ms += x.step_ms;
-            steps += 1.0;
-            collisions += static_cast<double>(x.collisions);
-            emitted += x.emitted;
-            removed += x.removed;
-          })) {
-        std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
-        return 1;
+    for (int variant = 0; variant < 3; ++variant) {
+      game::SphFluid f = filled;
+      if (variant > 0) {
+        const std::vector<fluid::SphCollider>& with = variant == 1 ? unculled : analytic;
+        f.world.colliders.erase(f.world.colliders.begin(), f.world.colliders.begin() + static_cast<long>(parts));
+        f.world.colliders.insert(f.world.colliders.begin(), with.begin(), with.end());
       }
-      ms.push_back(frame_ms);
+      std::vector<double> ms;
+      double steps = 0.0, collisions = 0.0;
+      std::size_t emitted = 0, removed = 0;
+      for (int frame = 0; frame < frames; ++frame) {
+        double frame_ms = 0.0;
+        if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
+              frame_ms += x.step_ms;
+              steps += 1.0;
+              collisions += static_cast<double>(x.collisions);
+              emitted += x.emitted;
+              removed += x.removed;
+            })) {
+          std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
+          return 1;
+        }
+        ms.push_back(frame_ms);
+      }
+      std::vector<double> sorted = ms;
+      std::sort(sorted.begin(), sorted.end());
+      std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.0f | %zu | %zu |\n", names[variant], t,
+                  f.world.particles.size(), sorted[sorted.size() / 2], sorted.back(), steps / frames,
+                  collisions / std::max(steps, 1.0), emitted, removed);
     }
-    std::vector<double> sorted = ms;
-    std::sort(sorted.begin(), sorted.end());
-    std::printf(
-        "| %s (%d) | %zu | %.2f | %.2f | %.1f | %.0f | %zu | %zu |\n",
-        variant % 2 == 0 ? "FountainShape (analytic, 1 collider)" : "baked content/colliders (3 depth-map colliders)",
-        t, f.world.particles.size(), sorted[sorted.size() / 2], sorted.back(), steps / frames,
-        collisions / std::max(steps, 1.0), emitted, removed);
   }
   return 0;
 }

@@ -66,8 +66,10 @@ bool buildFluid(const std::string& scene_file, const std::vector<std::string>& a
   }
   game::SphFluidParams params;
   std::string error;
+  std::shared_ptr<const game::LevelColliders> colliders;
   if (!game::sphParamsFrom(*section, params, error) ||
-      !game::initSphFluid(fluid, params, game::FountainGeometry{}, game::sceneGravity(scene), error)) {
+      !game::ensureFountainColliders(std::string(FLUIDDEMO_SOURCE_DIR) + "/content", colliders, error) ||
+      !game::initSphFluid(fluid, params, game::FountainGeometry{}, colliders, game::sceneGravity(scene), error)) {
     std::fprintf(stderr, "bench_game_fountain: %s\n", error.c_str());
     return false;
   }

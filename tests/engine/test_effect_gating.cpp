@@ -227,7 +227,7 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
   // The jet rises from the nozzle: the highest particle is above the spire top.
   float top = 0.0f;
   for (const glm::vec3& p : game::findState<game::SphFluid>(world)->world.particles.position) top = std::max(top, p.y);
-  EXPECT_GT(top, world.fountain.geometry().spire_top);
+  EXPECT_GT(top, world.links.level.spire_top);
 }
 
 TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
@@ -349,7 +349,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
   engine::Profiler profiler;
   runFrames(world, profiler, 40);                                                   // the jet is up
   EXPECT_EQ(game::findState<game::SphFluid>(world)->coupling->forces_applied, 0u);  // no crate yet
-  const glm::vec3 nozzle = world.fountain.geometry().nozzle;
+  const glm::vec3 nozzle = world.links.level.nozzle;
   game::throwCrate(*game::findState<game::RigidBodies>(world), nozzle + glm::vec3(0.0f, 1.2f, 0.0f),
                    glm::vec3(0.0f, -1.0f, 0.0f));
   double upward_impulse = 0.0;

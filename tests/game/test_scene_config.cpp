@@ -173,7 +173,10 @@ TEST(SceneConfig, SphFluidWarmStartReachesTheSolver) {
     ASSERT_TRUE(game::sphParamsFrom(*scene.effect("sph_fluid"), params, error)) << error;
     EXPECT_EQ(params.warm_start, on);
     game::SphFluid fluid;
-    ASSERT_TRUE(game::initSphFluid(fluid, params, game::FountainGeometry{}, glm::vec3(0, -9.81f, 0), error)) << error;
+    std::shared_ptr<const game::LevelColliders> colliders;
+    ASSERT_TRUE(game::ensureFountainColliders(game::contentDir(), colliders, error)) << error;
+    ASSERT_TRUE(game::initSphFluid(fluid, params, game::FountainGeometry{}, colliders, glm::vec3(0, -9.81f, 0), error))
+        << error;
     EXPECT_EQ(fluid.world.params.warm_start, on);
   }
 }

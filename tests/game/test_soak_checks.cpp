@@ -2,6 +2,7 @@
 // passes a healthy case and fires on a bad one, so none of them is a check that cannot fail.
 #include "game/soak_checks.hpp"
 #include "game/soak_monitor.hpp"
+#include "tests/support/fountain_shape.hpp"
 
 #include "fluid/sph/analytic_colliders.hpp"
 #include "game/paths.hpp"
@@ -78,7 +79,7 @@ TEST(SoakMemory, ResidentSetIsReadAndSeesAnAllocation) {
 }
 
 TEST(SoakPenetration, PointsOutsideTheFountainAreNotInside) {
-  const game::FountainShape shape;
+  const fountainref::FountainShape shape;
   game::PenetrationScratch scratch;
   const std::vector<glm::vec3> outside = {{0.0f, 3.0f, 0.0f}, {5.0f, 0.5f, 0.0f}, {2.0f, 0.5f, 0.0f}};
   const game::Penetration p = game::worstPenetration(outside, shape, {}, 0.04f, 0.0f, scratch);
@@ -87,7 +88,7 @@ TEST(SoakPenetration, PointsOutsideTheFountainAreNotInside) {
 }
 
 TEST(SoakPenetration, APointInTheBasinWallIsFoundWithItsDepth) {
-  const game::FountainShape shape;
+  const fountainref::FountainShape shape;
   const game::FountainGeometry& g = shape.geometry();
   game::PenetrationScratch scratch;
   // The middle of the basin wall (0.3 m thick, top at 0.7): 0.15 m from both sides, 0.3 from the top.
@@ -117,7 +118,7 @@ TEST(SoakPenetration, AMovedColliderIsQueriedAtItsPose) {
 }
 
 TEST(SoakPenetration, ACrateCentreNearerThanItsHalfEdgeCountsAsSunk) {
-  const game::FountainShape shape;
+  const fountainref::FountainShape shape;
   game::PenetrationScratch scratch;
   const float size = 0.7f;
   // Resting on the ground: centre at half the edge, nothing inside.
@@ -142,7 +143,7 @@ TEST(SoakPenetration, ACrateCentreNearerThanItsHalfEdgeCountsAsSunk) {
 TEST(SoakPenetration, InsideACrateCountsOnlyWhereTheCrateDoesNotReachIntoAStillCollider) {
   const fluid::BoxShape crate(glm::vec3(0.3f));
   const fluid::ColliderPose pose{.translation = glm::vec3(6.0f, 0.28f, 0.0f)};
-  const game::FountainShape fountain;
+  const fountainref::FountainShape fountain;
   const std::vector<game::PlacedShape> still = {{&fountain, {}}};
   game::PenetrationScratch scratch;
   std::size_t squeezed = 0;
@@ -220,7 +221,7 @@ class SoakMonitorOnFountain : public ::testing::Test {
     }
     ASSERT_GT(game::findState<game::SphFluid>(world)->world.particles.size(), 0u);
     // No GL here: the sprites' colliders are baked on the CPU, their read-back is set by hand.
-    ASSERT_TRUE(game::bakeSpriteColliders(*game::findState<game::SpriteParticles>(world), game::contentDir(), error))
+    ASSERT_TRUE(game::loadSpriteColliders(*game::findState<game::SpriteParticles>(world), game::contentDir(), error))
         << error;
   }
   game::World world;
@@ -236,7 +237,7 @@ TEST_F(SoakMonitorOnFountain, AHealthyWorldPasses) {
 }
 
 TEST_F(SoakMonitorOnFountain, AnSphParticleInTheBasinWallFails) {
-  const game::FountainGeometry& g = world.fountain.geometry();
+  const game::FountainGeometry& g = world.links.level;
   game::findState<game::SphFluid>(world)->world.particles.position[0] = {
       0.5f * (g.basin_inner_radius + g.basin_outer_radius), 0.4f, 0.0f};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
@@ -248,7 +249,7 @@ TEST_F(SoakMonitorOnFountain, ASpriteUnderTheGroundFails) {
   game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f),
                                                                      glm::vec4(5.0f, -0.05f, 0.0f, 1.0f)};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
-  EXPECT_NE(monitor.failure.find("live sprite 1 (ground.obj)"), std::string::npos) << monitor.failure;
+  EXPECT_NE(monitor.failure.find("live sprite 1 (ground)"), std::string::npos) << monitor.failure;
 }
 
 TEST_F(SoakMonitorOnFountain, ASpriteInTheAirPasses) {
@@ -265,8 +266,7 @@ TEST_F(SoakMonitorOnFountain, ASunkCrateFails) {
 TEST_F(SoakMonitorOnFountain, ARecordedNonFiniteStateFails) {
   world.nonfinite_state = "sph_fluid particle id 3 position at step 40";
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
-  EXPECT_NE(monitor.failure.find("non-finite state: sph_fluid particle id 3"), std::string::npos)
-      << monitor.failure;
+  EXPECT_NE(monitor.failure.find("non-finite state: sph_fluid particle id 3"), std::string::npos) << monitor.failure;
 }
 
 // A system that refuses content at run time does not end the game: the world counts the failure
