@@ -1,6 +1,7 @@
 // What runScene reports and the player's actions: the run summary `play` and `replay` print,
 // the display check, and the actions replay files name (contract: run_scene.hpp).
 #include "game/run_scene.hpp"
+#include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
 
 #include <cstdlib>
@@ -34,6 +35,25 @@ void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions&
     std::fprintf(out, "run-time failures: %llu (the frames went on); first: %s; last: %s\n",
                  static_cast<unsigned long long>(report.runtime_failures), report.first_failure.c_str(),
                  report.last_failure.c_str());
+  }
+  if (report.has_sph) {
+    const fluid::SphStepTotals& t = report.sph_totals;
+    const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
+    std::fprintf(out,
+                 "sph health: %llu sub-steps, density error mean %.4f %% max %.3f %%, pushed out of colliders %llu "
+                 "(deepest %.2f mm), speed clamps %llu, dt held at min %llu, dt cut to the step's end %llu, "
+                 "NaN/inf %llu; frames warned %llu\n",
+                 ull(t.steps), 100.0 * t.meanDensityError(), 100.0 * t.max_density_error, ull(t.pushed_out),
+                 1000.0 * t.max_push_depth, ull(t.speed_clamps), ull(t.dt_min_clamps), ull(t.dt_request_cuts),
+                 ull(t.nonfinite), static_cast<unsigned long long>(report.warned_frames));
+  }
+}
+
+void fillSphHealth(const World& world, const engine::Profiler& profiler, RunReport& report) {
+  report.warned_frames = profiler.flagged_frames;
+  if (const SphFluid* fluid = findState<SphFluid>(world)) {
+    report.has_sph = true;
+    report.sph_totals = fluid->run_totals;
   }
 }
 

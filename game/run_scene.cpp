@@ -169,6 +169,7 @@ void fillReport(const Session& s, std::uint64_t steps_done, RunReport& report) {
   report.first_failure = s.world.failures.first;
   report.last_failure = s.world.failures.last;
   report.mean_frame_ms = engine::frameMeanMs(s.profiler);
+  fillSphHealth(s.world, s.profiler, report);
   for (int p = 0; p < engine::kPhaseCount; ++p) {
     const auto phase = static_cast<engine::Phase>(p);
     PhaseTiming timing;

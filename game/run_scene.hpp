@@ -4,6 +4,7 @@
 // engine loop with a window or headless, and reports what happened.
 
 #include "engine/profile/profiler.hpp"
+#include "fluid/sph/sph.hpp"
 #include "game/scene/scene_config.hpp"
 
 #include <array>
@@ -89,7 +90,17 @@ struct RunReport {
   std::vector<std::uint8_t> last_frame_rgba;
   std::vector<std::uint8_t> blank_frame_rgba;  // the same camera and passes with nothing drawn but the clear
   bool stopped_by_hook = false;                // FrameHooks::after_frame ended the run
+  // The SPH solver's health counters over the whole run (has_sph: an sph_fluid effect ran), and
+  // the frames the profiler flagged (the overlay's red markers).
+  bool has_sph = false;
+  fluid::SphStepTotals sph_totals;
+  std::uint64_t warned_frames = 0;
 };
+
+struct World;
+// Copies the sph_fluid effect's run totals (when it is built) and the flagged frame count into
+// `report` (run_report.cpp).
+void fillSphHealth(const World& world, const engine::Profiler& profiler, RunReport& report);
 
 // True when a window can be opened (DISPLAY or WAYLAND_DISPLAY set, SDL_VIDEODRIVER not offscreen/dummy).
 bool displayAvailable();

@@ -54,12 +54,27 @@ void endFrame(Profiler& profiler) {
     }
   }
   profiler.frame_history[profiler.head] = static_cast<float>(frame_ms);
+  profiler.flag_history[profiler.head] = profiler.flagged ? 1 : 0;
+  profiler.flagged_frames += profiler.flagged ? 1 : 0;
+  profiler.flagged = false;
   profiler.head = (profiler.head + 1) % Profiler::kHistory;
   profiler.filled = std::min(profiler.filled + 1, Profiler::kHistory);
   profiler.frame_sum_ms += frame_ms;
   profiler.frame_max_ms = std::max(profiler.frame_max_ms, frame_ms);
   ++profiler.frames;
   profiler.in_frame = false;
+}
+
+void flagFrame(Profiler& profiler) {
+  if (profiler.in_frame) profiler.flagged = true;
+}
+
+void flaggedFramesAgo(const Profiler& profiler, std::vector<int>& out) {
+  out.clear();
+  for (int frames_ago = profiler.filled - 1; frames_ago >= 0; --frames_ago) {
+    const int slot = (profiler.head - 1 - frames_ago + 2 * Profiler::kHistory) % Profiler::kHistory;
+    if (profiler.flag_history[slot]) out.push_back(frames_ago);
+  }
 }
 
 double phaseMeanMs(const Profiler& profiler, Phase phase) {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string_view>
+#include <vector>
 
 namespace engine {
 
@@ -30,8 +31,13 @@ struct Profiler {
   // history[phase][i]: ms of frame (head - kHistory + i); frame_ms likewise for whole frames.
   std::array<std::array<float, kHistory>, kPhaseCount> history{};
   std::array<float, kHistory> frame_history{};
-  int head = 0;    // next slot to write
-  int filled = 0;  // valid entries in the rings, <= kHistory
+  // Warning flags: flagFrame marks the frame in progress (a system saw a clamp, a NaN/inf, ...);
+  // flag_history rings with the others, the overlay draws a red marker over each flagged frame.
+  std::array<std::uint8_t, kHistory> flag_history{};
+  bool flagged = false;              // this frame, so far
+  std::uint64_t flagged_frames = 0;  // finished frames that were flagged
+  int head = 0;                      // next slot to write
+  int filled = 0;                    // valid entries in the rings, <= kHistory
   std::array<PhaseStats, kPhaseCount> stats{};
   double frame_sum_ms = 0.0;
   double frame_max_ms = 0.0;
@@ -43,12 +49,17 @@ struct Profiler {
 void beginFrame(Profiler& profiler);
 void endFrame(Profiler& profiler);
 void addPhaseTime(Profiler& profiler, Phase phase, double ms);
+// Marks the frame in progress as one where a warning counter fired (no-op outside a frame).
+void flagFrame(Profiler& profiler);
 
 // Mean over the frames in which the phase ran (0 if it never ran).
 double phaseMeanMs(const Profiler& profiler, Phase phase);
 double frameMeanMs(const Profiler& profiler);
 // Value of the ring `i` entries ago (0 = the last finished frame).
 float historyAt(const Profiler& profiler, Phase phase, int frames_ago);
+// The flagged frames among the ring's, as frames_ago (0 = the last finished frame), oldest first:
+// where the overlay's plot draws its red markers. `out` is cleared and refilled.
+void flaggedFramesAgo(const Profiler& profiler, std::vector<int>& out);
 
 class ScopedPhase {
  public:

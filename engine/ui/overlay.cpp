@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <vector>
 
 namespace engine {
 
@@ -119,8 +120,20 @@ void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> s
     draw->AddRectFilled(ImVec2(x0, origin.y + size.y - total - 1.0f),
                         ImVec2(x0 + std::max(bar, 1.0f), origin.y + size.y - total), IM_COL32(255, 255, 255, 200));
   }
+  // Red markers over the frames where a system flagged a warning (engine::flagFrame): a tick
+  // above the bars and a faint band down the plot, so a spike can be matched with its cause.
+  std::vector<int> flagged;  // allocates only while the ring holds flagged frames
+  flaggedFramesAgo(profiler, flagged);
+  for (const int frames_ago : flagged) {
+    const float x0 = origin.x + size.x - static_cast<float>(frames_ago + 1) * bar;
+    const float x1 = x0 + std::max(bar, 2.0f);
+    draw->AddRectFilled(ImVec2(x0, origin.y), ImVec2(x1, origin.y + size.y), IM_COL32(255, 40, 40, 70));
+    draw->AddRectFilled(ImVec2(x0, origin.y), ImVec2(x1, origin.y + 6.0f), IM_COL32(255, 40, 40, 255));
+  }
   ImGui::Dummy(size);
   ImGui::Text("0 .. %.1f ms, last %d frames; white = whole frame", scale, count);
+  ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "red: %zu of these frames warned (%llu in the run)",
+                     flagged.size(), static_cast<unsigned long long>(profiler.flagged_frames));
   for (int p = 0; p < kPhaseCount; ++p) {
     if (p > 0) ImGui::SameLine();
     ImGui::ColorButton(phaseName(static_cast<Phase>(p)).data(), ImGui::ColorConvertU32ToFloat4(kColours[p]),

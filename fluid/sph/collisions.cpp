@@ -45,7 +45,9 @@ glm::vec3 wedgePosition(glm::vec3 p, glm::vec3 ns, float need, glm::vec4 plane, 
 }
 
 struct Hits {
-  std::size_t count = 0;
+  std::size_t count = 0;      // reactions
+  std::size_t particles = 0;  // particles reacting for the first time this step
+  float depth = 0.0f;         // deepest end-of-step penetration (m)
   ForceTorque reaction{};
 };
 
@@ -80,6 +82,7 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           if (pass == 0 && k == 0) {
             scratch.collide_stale[i] = all_colliders;
             scratch.push_plane[i] = glm::vec4(0.0f);
+            scratch.pushed[i] = 0;
           }
           if (track_stale && pass > 0 && !(scratch.collide_stale[i] & bit)) continue;  // unchanged: same sample
           scratch.collide_stale[i] &= ~bit;
@@ -109,6 +112,11 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
                                s.distance < support && s0.distance < support && glm::dot(s.normal, s0.normal) < 0.0f;
           if (!crossed && (!s.valid || s.distance >= 0.0f)) continue;
           ++acc.count;
+          if (!scratch.pushed[i]) {
+            scratch.pushed[i] = 1;
+            ++acc.particles;
+          }
+          if (!crossed && s.valid) acc.depth = std::max(acc.depth, -s.distance);
           CollisionResult res;
           if (crossed) {
             const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
@@ -138,6 +146,8 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
       },
       [](Hits a, const Hits& b) {
         a.count += b.count;
+        a.particles += b.particles;
+        a.depth = std::max(a.depth, b.depth);
         a.reaction.force += b.reaction.force;
         a.reaction.torque += b.reaction.torque;
         return a;
@@ -173,6 +183,7 @@ void resolveCollisions(StepContext& context) {
   const std::size_t n = context.count, collider_count = context.collider_count;
   scratch.collide_order.resize(collider_count);
   scratch.push_plane.resize(n);
+  scratch.pushed.resize(n);
   {
     std::size_t k = 0;
     for (const bool moving_first : {true, false})
@@ -189,6 +200,8 @@ void resolveCollisions(StepContext& context) {
       const Hits hits = collidePass(context, pass, k, c);
       inside_total += hits.count;
       context.stats.collisions += hits.count;
+      context.stats.pushed_out += hits.particles;
+      context.stats.max_push_depth = std::max(context.stats.max_push_depth, hits.depth);
       if (hits.count > 0) {
         SphCollider& collider = context.world.colliders[c];
         collider.force += hits.reaction.force;

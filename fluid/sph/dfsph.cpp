@@ -249,7 +249,8 @@ void DfsphStep::predictVelocities() {
       },
       maxOf);
   context_.stats.max_acceleration = max_non_pressure_acceleration_;
-  const float dt = chooseTimeStep(context_, vmax, max_non_pressure_acceleration_, false);
+  const float dt =
+      chooseTimeStep(context_, vmax, max_non_pressure_acceleration_, false, true, &context_.dt_held_at_min);
   context_.dt = dt;
   forEach(n_, [&](std::size_t i) {
     velocities[i] += dt * scratch_.accel[i];

@@ -15,7 +15,7 @@ namespace fluid::sph_step {
 // particle with a non-finite position or velocity (the world is left untouched), otherwise
 // marks scratch.keep[i] = 0 for the particles inside a sink box and returns their count in
 // `in_sinks` (applySinks removes them).
-SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks) {
+SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_t& nonfinite) {
   const auto& x = world.particles.position;
   const auto& v = world.particles.velocity;
   auto& keep = world.scratch.keep;
@@ -24,6 +24,7 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks) {
   struct Scan {
     std::size_t bad;
     std::size_t inside = 0;
+    std::size_t nonfinite = 0;
   };
   const Scan scan = reduce(
       x.size(), Scan{none},
@@ -32,6 +33,7 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks) {
         const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v[i].x) &&
                         std::isfinite(v[i].y) && std::isfinite(v[i].z);
         if (!ok && i < acc.bad) acc.bad = i;
+        acc.nonfinite += ok ? 0 : 1;
         bool inside = false;
         for (const SphSink& k : world.sinks)
           inside = inside || (p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x && p.y <= k.max.y &&
@@ -42,9 +44,11 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks) {
       [](Scan a, const Scan& b) {
         a.bad = std::min(a.bad, b.bad);
         a.inside += b.inside;
+        a.nonfinite += b.nonfinite;
         return a;
       });
   in_sinks = scan.inside;
+  nonfinite = scan.nonfinite;
   const std::size_t bad = scan.bad;
   if (bad == none) return {};
   char buf[320];

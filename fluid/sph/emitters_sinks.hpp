@@ -11,8 +11,8 @@ namespace fluid::sph_step {
 // Validation and the sink test in one parallel pass. Returns the refusal naming the first
 // particle with a non-finite position or velocity (the world is left untouched), otherwise
 // marks scratch.keep[i] = 0 for the particles inside a sink box and returns their count in
-// `in_sinks` (applySinks removes them).
-SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks);
+// `in_sinks` (applySinks removes them). `nonfinite`: how many particles are non-finite.
+SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_t& nonfinite);
 
 // Removes the particles checkFiniteAndSinks marked (`in_sinks` of them), keeping the survivors'
 // order; returns the count removed.

@@ -186,9 +186,44 @@ struct SphStepStats {
   std::size_t particles = 0;       // after the step
   std::size_t emitted = 0;
   std::size_t removed = 0;
-  std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step
+  std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step, every pass
   bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
+  // Health counters (they observe the step, never change it). The overlay, the replay CSV and
+  // the run summaries show them per frame (docs/replay.md).
+  // Particles the end-of-step collision passes moved (each counted once however many passes or
+  // colliders pushed it): ended inside a collider, or tunnelled through a thin part, although the
+  // boundary pressure should have held them outside.
+  std::size_t pushed_out = 0;
+  float max_push_depth = 0.0f;   // m, deepest end-of-step penetration among them (0 when none)
+  std::size_t speed_clamps = 0;  // particles whose speed was cut to params.max_speed
+  // The CFL/force/viscosity bounds asked for a step shorter than params.min_time_step; dt was held
+  // at it (the fluid moves further per step than the CFL number allows).
+  bool dt_held_at_min = false;
+  // Particles with a non-finite position, velocity or density: at the start of a step (the step
+  // is refused, stepSph still writes the stats with this count and dt = 0) or after it.
+  std::size_t nonfinite = 0;
 };
+
+// A run of steps summed for display (the overlay, the replay's frame CSV, run summaries).
+struct SphStepTotals {
+  std::size_t steps = 0;
+  double density_error_sum = 0.0;  // sum over steps of avg_density_error (mean = sum / steps)
+  float max_density_error = 0.0f;  // max over steps of max_density_error
+  std::size_t pushed_out = 0;
+  float max_push_depth = 0.0f;  // m
+  std::size_t speed_clamps = 0;
+  std::size_t dt_min_clamps = 0;    // steps with dt_held_at_min
+  std::size_t dt_request_cuts = 0;  // steps with dt_limited_by_request (informational: landing on a frame's end)
+  std::size_t nonfinite = 0;
+  float meanDensityError() const { return steps > 0 ? static_cast<float>(density_error_sum / steps) : 0.0f; }
+};
+void addStepTotals(SphStepTotals& totals, const SphStepStats& step);
+void addStepTotals(SphStepTotals& totals, const SphStepTotals& more);
+// Whether the totals hold a warning: any speed or min-dt clamp, any non-finite value, or a
+// particle pushed out from deeper than `deep_push` metres inside a collider (the boundary
+// pressure keeps resting and flowing water about one particle radius off a wall, so a particle
+// that ends a step that deep inside got there through a failure of the boundary, not a graze).
+bool sphTotalsWarn(const SphStepTotals& totals, float deep_push);
 
 // Empty error == success.
 struct SphStatus {
@@ -242,6 +277,7 @@ struct SphScratch {
   std::vector<std::uint32_t> collide_stale;
   std::vector<std::uint32_t> collide_order;  // collision passes: moving colliders first, still ones last
   std::vector<glm::vec4> push_plane;  // per particle: the moving face that pushed it this step (xyz normal, w offset)
+  std::vector<std::uint8_t> pushed;   // per particle: 1 once a collision pass moved it this step (stats.pushed_out)
   std::vector<glm::vec3> reduce_force, reduce_torque;
   bool initialised = false;
   // Testing aid: run the pair loops' portable code even where the CPU has AVX2. Both give
@@ -279,7 +315,8 @@ SphStatus validateSphParams(const SphParams& params);
 
 // One adaptive step of at most max_dt seconds (max_dt <= 0: params.max_time_step). Order:
 // validate input (a non-finite position/velocity is reported with particle id/index and step,
-// and the world is left untouched), sinks, emitters, neighbour grid + re-sort, solver, collisions.
+// and the world is left untouched; stats->nonfinite counts them), sinks, emitters, neighbour grid + re-sort, solver,
+// collisions.
 SphStatus stepSph(SphWorld& world, float max_dt, SphStepStats* stats = nullptr);
 
 // One step of an even split of `remaining` seconds (> 0): with t the step stepSph would take
@@ -290,7 +327,8 @@ SphStatus stepSphWithin(SphWorld& world, double remaining, SphStepStats* stats =
 // Steps until `duration` seconds have passed, with stepSphWithin (the remaining time is spread
 // evenly over the last steps; none is cut to land exactly). Collider force/torque become the time
 // average over the substeps. `per_step` (optional) is called with the stats of every step;
-// max_steps bounds the work (error if exceeded).
+// max_steps bounds the work (error if exceeded). A step refused for non-finite input is passed
+// to `per_step` too (dt = 0, nonfinite > 0) before the error returns.
 template <typename F>
 SphStatus advanceSph(SphWorld& world, double duration, F&& per_step, std::size_t max_steps = 1000000);
 

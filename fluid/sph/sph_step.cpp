@@ -110,26 +110,43 @@ void finishStep(StepContext& context, float requested) {
   stats.divergence_iterations = context.divergence_iterations;
   stats.particles = context.count;
   stats.dt_limited_by_request = requested < params.max_time_step && dt >= requested;
-  // The speed cap, the kinetic energy (of the capped velocities) and the SoA position arrays the
-  // surface mesher reads (sphPositionArrays) in one pass.
+  // The speed cap, the kinetic energy (of the capped velocities), the SoA position arrays the
+  // surface mesher reads (sphPositionArrays) and the health counts in one pass. The energy sum
+  // is added in the same order as without the counts (same blocks, same joins).
   ParticleStore& store = context.particles;
   std::vector<glm::vec3>& velocities = store.velocity;
   for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(context.count);
-  const double sum_v2 = reduce(
-      context.count, 0.0,
-      [&](std::size_t i, double& acc) {
+  struct Pass {
+    double sum_v2 = 0.0;
+    std::size_t clamps = 0, nonfinite = 0;
+  };
+  const Pass pass = reduce(
+      context.count, Pass{},
+      [&](std::size_t i, Pass& acc) {
         if (params.max_speed > 0.0f) {
           const float speed = glm::length(velocities[i]);
-          if (speed > params.max_speed) velocities[i] *= params.max_speed / speed;
+          if (speed > params.max_speed) {
+            velocities[i] *= params.max_speed / speed;
+            ++acc.clamps;
+          }
         }
-        acc += glm::dot(velocities[i], velocities[i]);
+        acc.sum_v2 += glm::dot(velocities[i], velocities[i]);
         const glm::vec3 x = store.position[i];
         store.position_x[i] = x.x;
         store.position_y[i] = x.y;
         store.position_z[i] = x.z;
+        acc.nonfinite += isFinite(x) && isFinite(velocities[i]) && std::isfinite(store.density[i]) ? 0 : 1;
       },
-      [](double a, double b) { return a + b; });
-  stats.kinetic_energy = static_cast<float>(0.5 * context.mass * sum_v2);
+      [](Pass a, const Pass& b) {
+        a.sum_v2 += b.sum_v2;
+        a.clamps += b.clamps;
+        a.nonfinite += b.nonfinite;
+        return a;
+      });
+  stats.kinetic_energy = static_cast<float>(0.5 * context.mass * pass.sum_v2);
+  stats.speed_clamps = pass.clamps;
+  stats.nonfinite = pass.nonfinite;
+  stats.dt_held_at_min = context.dt_held_at_min;
 }
 
 SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* stats_out) {
@@ -137,7 +154,10 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   SphStepStats stats;
   if (SphStatus status = validateStepInput(world); !status.ok()) return status;
   std::size_t in_sinks = 0;
-  if (SphStatus status = checkFiniteAndSinks(world, in_sinks); !status.ok()) return status;
+  if (SphStatus status = checkFiniteAndSinks(world, in_sinks, stats.nonfinite); !status.ok()) {
+    if (stats_out) *stats_out = stats;  // dt = 0: no step; nonfinite says how many particles were refused
+    return status;
+  }
   ensureStepTables(world);
   const SphParams& params = world.params;
   SphScratch& scratch = world.scratch;

@@ -233,7 +233,10 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     // The remaining time is spread over equal steps (stepSphWithin): a step cut to land on the
     // target could be a sliver, which DFSPH turns into a velocity kick (time_step.cpp).
     SphStatus status = stepSphWithin(world, target - world.time, &stats);
-    if (!status.ok()) return status;
+    if (!status.ok()) {
+      if (cb && stats.nonfinite > 0) cb(ctx, stats);  // the refused step's count (sph.hpp)
+      return status;
+    }
     for (std::size_t c = 0; c < nc && c < world.colliders.size(); ++c) {
       force[c] += world.colliders[c].force * stats.dt;
       torque[c] += world.colliders[c].torque * stats.dt;
@@ -285,6 +288,37 @@ void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
                     });
+}
+
+void addStepTotals(SphStepTotals& totals, const SphStepStats& step) {
+  totals.steps += step.dt > 0.0f ? 1 : 0;  // a refused step (dt = 0) adds only its non-finite count
+  if (step.dt > 0.0f) {
+    totals.density_error_sum += step.avg_density_error;
+    totals.max_density_error = std::max(totals.max_density_error, step.max_density_error);
+  }
+  totals.pushed_out += step.pushed_out;
+  totals.max_push_depth = std::max(totals.max_push_depth, step.max_push_depth);
+  totals.speed_clamps += step.speed_clamps;
+  totals.dt_min_clamps += step.dt_held_at_min ? 1 : 0;
+  totals.dt_request_cuts += step.dt_limited_by_request ? 1 : 0;
+  totals.nonfinite += step.nonfinite;
+}
+
+void addStepTotals(SphStepTotals& totals, const SphStepTotals& more) {
+  totals.steps += more.steps;
+  totals.density_error_sum += more.density_error_sum;
+  totals.max_density_error = std::max(totals.max_density_error, more.max_density_error);
+  totals.pushed_out += more.pushed_out;
+  totals.max_push_depth = std::max(totals.max_push_depth, more.max_push_depth);
+  totals.speed_clamps += more.speed_clamps;
+  totals.dt_min_clamps += more.dt_min_clamps;
+  totals.dt_request_cuts += more.dt_request_cuts;
+  totals.nonfinite += more.nonfinite;
+}
+
+bool sphTotalsWarn(const SphStepTotals& totals, float deep_push) {
+  return totals.speed_clamps > 0 || totals.dt_min_clamps > 0 || totals.nonfinite > 0 ||
+         totals.max_push_depth > deep_push;
 }
 
 }  // namespace fluid

@@ -112,6 +112,7 @@ struct StepContext {
   float collider_speed = 0.0f;
   // Solver (wcsph.cpp / dfsph.cpp) outputs.
   float dt = 0.0f;
+  bool dt_held_at_min = false;  // chooseTimeStep raised dt to min_time_step
   int density_iterations = 0;
   int divergence_iterations = 0;
   bool advected = false;  // DFSPH without XSPH advects in its last per-particle pass

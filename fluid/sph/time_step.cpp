@@ -7,7 +7,7 @@
 namespace fluid::sph_step {
 
 float chooseTimeStep(const StepContext& context, float max_speed, float max_acceleration, bool wcsph_bounds,
-                     bool spread) {
+                     bool spread, bool* held_at_min) {
   const SphParams& params = context.params;
   const float d = context.spacing;
   const float max_dt = context.max_dt;
@@ -30,7 +30,9 @@ float chooseTimeStep(const StepContext& context, float max_speed, float max_acce
     t = std::min(t, 0.4f * h / (params.sound_speed * (1.0f + 0.6f * params.artificial_viscosity)));
     if (max_acceleration > 0.0f) t = std::min(t, 0.25f * std::sqrt(h / max_acceleration));
   }
-  t = std::max(t, std::min(params.min_time_step, max_dt));  // the caller's bound wins over min_time_step
+  const float floor_dt = std::min(params.min_time_step, max_dt);  // the caller's bound wins over min_time_step
+  if (held_at_min) *held_at_min = t < floor_dt;
+  t = std::max(t, floor_dt);
   // stepSphWithin: the time left to the caller's target is split into equal steps no longer
   // than t, and this step is one of them, so the last step of a frame is never a sliver. DFSPH's
   // constant-density solve removes the whole predicted compression within one step (Bender &

@@ -176,7 +176,7 @@ void stepWcsph(StepContext& context) {
   const float max_acceleration = reduce(
       n, 0.0f, [&](std::size_t i, float& acc) { acc = std::max(acc, glm::length(scratch.accel[i])); }, maxOf);
   context.stats.max_acceleration = max_acceleration;
-  const float dt = chooseTimeStep(context, max_speed, max_acceleration, true);
+  const float dt = chooseTimeStep(context, max_speed, max_acceleration, true, true, &context.dt_held_at_min);
   context.dt = dt;
   forEach(n, [&](std::size_t i) {
     velocities[i] += dt * scratch.accel[i];

@@ -7,6 +7,8 @@
 #include "game/world/fountain.hpp"
 #include "game/world/rigid_bodies.hpp"
 
+#include <imgui.h>
+
 namespace game {
 namespace {
 
@@ -85,7 +87,31 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     if (!stepSphFluid(state, ctx.step_seconds) && was_running)
       outcome.failure = "sph_fluid: " + state.error + " (the fluid stops stepping)";
     if (coupling) coupling_error_ = forcesToBodies(*coupling, state.world, *bodies_->physics);
+    if (ctx.profiler && sphFluidWarns(state, state.last_totals)) engine::flagFrame(*ctx.profiler);
     return outcome;
+  }
+
+  // The solver's own health counters for the last game step (fluid::SphStepStats): red lines
+  // are the ones that flag the frame-time plot (sphFluidWarns).
+  void drawStatus() const override {
+    const fluid::SphStepTotals& t = state.last_totals;
+    const fluid::SphStepTotals& run = state.run_totals;
+    const ImVec4 red(1.0f, 0.35f, 0.35f, 1.0f), plain = ImGui::GetStyleColorVec4(ImGuiCol_Text);
+    const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
+    ImGui::Text("sph fluid: %zu particles, %llu sub-steps this step", state.world.particles.size(), ull(t.steps));
+    ImGui::Text("  density error: mean %.3f %%  max %.2f %%", 100.0 * t.meanDensityError(),
+                100.0 * t.max_density_error);
+    const float deep = sphDeepPush(state);
+    ImGui::TextColored(t.max_push_depth > deep ? red : plain,
+                       "  pushed out of colliders: %llu (deepest %.1f mm; warns beyond %.1f mm)  run %llu",
+                       ull(t.pushed_out), 1000.0 * t.max_push_depth, 1000.0 * deep, ull(run.pushed_out));
+    ImGui::TextColored(t.speed_clamps > 0 ? red : plain, "  speed clamps: %llu  run %llu", ull(t.speed_clamps),
+                       ull(run.speed_clamps));
+    ImGui::TextColored(t.dt_min_clamps > 0 ? red : plain, "  dt held at min_time_step: %llu  run %llu",
+                       ull(t.dt_min_clamps), ull(run.dt_min_clamps));
+    ImGui::Text("  dt cut to land on the step's end: %llu  run %llu", ull(t.dt_request_cuts), ull(run.dt_request_cuts));
+    ImGui::TextColored(t.nonfinite > 0 ? red : plain, "  NaN/inf particles: %llu  run %llu", ull(t.nonfinite),
+                       ull(run.nonfinite));
   }
 
   std::string findNonFinite() const override {

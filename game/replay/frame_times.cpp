@@ -22,7 +22,9 @@ std::string frameCsvHeader() {
     line += columnName(p);
     line += "_ms";
   }
-  line += ",particles,sprites,triangles,state_hash";
+  line +=
+      ",particles,sprites,triangles,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,"
+      "dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash";
   return line;
 }
 
@@ -33,11 +35,22 @@ std::string frameCsvRow(const FrameRow& row) {
     std::snprintf(number, sizeof number, ",%.4f", p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
     line += number;
   }
-  for (std::uint64_t count : {row.particles, row.sprites, row.triangles}) {
+  for (std::uint64_t count : {row.particles, row.sprites, row.triangles, row.truth.sph_steps}) {
     line += ',';
     line += std::to_string(count);
   }
-  line += ',';
+  const FrameTruth& t = row.truth;
+  // %.9g: a float's value survives the text round trip.
+  std::snprintf(number, sizeof number, ",%.9g,%.9g", t.density_err_mean, t.density_err_max);
+  line += number;
+  line += ',' + std::to_string(t.pushed_out);
+  std::snprintf(number, sizeof number, ",%.6g", t.push_depth_mm);
+  line += number;
+  for (std::uint64_t count : {t.speed_clamps, t.dt_min_clamps, t.dt_request_cuts, t.nonfinite}) {
+    line += ',';
+    line += std::to_string(count);
+  }
+  line += t.warned ? ",1," : ",0,";
   if (row.has_hash) line += hashHex(row.state_hash);
   return line;
 }
@@ -128,6 +141,18 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
     if (ok)
       ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.sprites) &&
            parseCell(cells[++c], row.triangles);
+    FrameTruth& t = row.truth;
+    if (ok)
+      ok = parseCell(cells[++c], t.sph_steps) && parseCell(cells[++c], t.density_err_mean) &&
+           parseCell(cells[++c], t.density_err_max) && parseCell(cells[++c], t.pushed_out) &&
+           parseCell(cells[++c], t.push_depth_mm) && parseCell(cells[++c], t.speed_clamps) &&
+           parseCell(cells[++c], t.dt_min_clamps) && parseCell(cells[++c], t.dt_request_cuts) &&
+           parseCell(cells[++c], t.nonfinite);
+    if (ok) {
+      int warned = 0;
+      ok = parseCell(cells[++c], warned) && (warned == 0 || warned == 1);
+      t.warned = warned == 1;
+    }
     if (ok && !cells[++c].empty()) ok = row.has_hash = parseCell(cells[c], row.state_hash, 16);
     if (!ok) {
       error = where(c) + "bad value '" + std::string(cells[c].substr(0, 40)) + "'";

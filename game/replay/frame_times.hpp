@@ -3,9 +3,13 @@
 // scripts/plot_frame_times.py draws), percentiles per phase, and the B/A comparison of two runs.
 //
 // CSV columns, one row per rendered frame:
-//   frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,state_hash
+//   frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,
+//   sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,
+//   dt_request_cuts,nonfinite,warned,state_hash
 // step is the simulation step count after the frame; particles the SPH particles, sprites the CPU
-// sprite particles, triangles the fluid surface's; state_hash is empty except on checkpoint steps.
+// sprite particles, triangles the fluid surface's; sph_steps .. nonfinite the SPH solver's health
+// counters over the frame's sub-steps (FrameTruth); warned is 1 where the overlay's plot draws a
+// red marker; state_hash is empty except on checkpoint steps.
 
 #include "engine/profile/profiler.hpp"
 
@@ -18,6 +22,20 @@
 
 namespace game {
 
+// The SPH solver's health over one frame (fluid::SphStepTotals of its steps), as the CSV has it.
+struct FrameTruth {
+  std::uint64_t sph_steps = 0;
+  double density_err_mean = 0.0;  // mean over the sub-steps of the mean max(0, rho/rho_0 - 1)
+  double density_err_max = 0.0;
+  std::uint64_t pushed_out = 0;  // particles pushed out of colliders
+  double push_depth_mm = 0.0;    // the deepest of them (mm)
+  std::uint64_t speed_clamps = 0;
+  std::uint64_t dt_min_clamps = 0;
+  std::uint64_t dt_request_cuts = 0;
+  std::uint64_t nonfinite = 0;
+  bool warned = false;  // a warning counter fired (the overlay's red marker)
+};
+
 struct FrameRow {
   int frame = 0;
   std::uint64_t step = 0;
@@ -26,6 +44,7 @@ struct FrameRow {
   std::uint64_t particles = 0;
   std::uint64_t sprites = 0;
   std::uint64_t triangles = 0;
+  FrameTruth truth;
   bool has_hash = false;
   std::uint64_t state_hash = 0;
 };

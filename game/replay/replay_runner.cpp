@@ -51,8 +51,8 @@ int finish(ReplayResult& result, std::string& error) {
   }
   // A replay is a check: a system that refused content fails it, though the frames went on.
   if (result.report.runtime_failures > 0) {
-    error = std::to_string(result.report.runtime_failures) +
-            " run-time failures, first: " + result.report.first_failure;
+    error =
+        std::to_string(result.report.runtime_failures) + " run-time failures, first: " + result.report.first_failure;
     return 1;
   }
   return 0;
@@ -90,6 +90,7 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
   result.report.first_failure = world.failures.first;
   result.report.last_failure = world.failures.last;
   result.report.mean_frame_ms = engine::frameMeanMs(profiler);
+  fillSphHealth(world, profiler, result.report);
   for (int p = 0; p < engine::kPhaseCount; ++p) {
     const auto phase = static_cast<engine::Phase>(p);
     result.report.phases.push_back({std::string(engine::phaseName(phase)), engine::phaseMeanMs(profiler, phase),
@@ -124,7 +125,12 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
   const ReplayFile& replay = *player.replay;
   row.step = world.steps;
   const FluidSurface* surface = findState<FluidSurface>(world);
-  if (const SphFluid* fluid = findState<SphFluid>(world)) row.particles = fluid->world.particles.size();
+  if (const SphFluid* fluid = findState<SphFluid>(world)) {
+    row.particles = fluid->world.particles.size();
+    const auto& t = fluid->last_totals;  // the frame's one game step (the variable hides namespace fluid)
+    row.truth = {t.steps,        t.meanDensityError(), t.max_density_error, t.pushed_out, 1000.0 * t.max_push_depth,
+                 t.speed_clamps, t.dt_min_clamps,      t.dt_request_cuts,   t.nonfinite,  sphFluidWarns(*fluid, t)};
+  }
   if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
   if (surface) row.triangles = surface->mesh.indices.size() / 3;
   if (surface && surface->params.method == SurfaceMethodChoice::raycast && surface->raycast.pool > 0) {

@@ -99,13 +99,16 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
 bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step) {
   if (!f.error.empty()) return false;
   std::uint64_t sub = 0;
+  f.last_totals = {};
   const fluid::SphStatus st = fluid::advanceSph(
       f.world, dt,
       [&](const fluid::SphStepStats& stats) {
-        ++sub;
+        sub += stats.dt > 0.0f ? 1 : 0;
+        fluid::addStepTotals(f.last_totals, stats);
         if (on_step) on_step(stats);
       },
       10000);
+  fluid::addStepTotals(f.run_totals, f.last_totals);
   f.solver_steps += sub;
   ++f.steps;
   if (!st.ok()) {
@@ -113,6 +116,12 @@ bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::
     return false;
   }
   return true;
+}
+
+float sphDeepPush(const SphFluid& f) { return f.world.params.particle_radius; }
+
+bool sphFluidWarns(const SphFluid& f, const fluid::SphStepTotals& totals) {
+  return fluid::sphTotalsWarn(totals, sphDeepPush(f));
 }
 
 std::string findNonFiniteSph(const SphFluid& f) {

@@ -47,6 +47,10 @@ struct SphFluid {
   std::uint64_t solver_steps = 0;  // adaptive SPH steps taken
   std::uint64_t blasted_particles = 0;  // particle pushes by explosions so far (fluid/sph/blast.hpp)
   std::string error;               // first solver error; the system stops stepping after one
+  // The solver's health counters (fluid::SphStepStats) summed over the last stepSphFluid call's
+  // sub-steps, and over the whole run: the overlay, the replay CSV and the run summaries read them.
+  fluid::SphStepTotals last_totals;
+  fluid::SphStepTotals run_totals;
   // Crates <-> water, two-way: only with rigid_bodies listed and couple_bodies on. Shared so a
   // SphFluid stays copyable (the fountain benchmark snapshots one); a copy shares the coupling.
   std::shared_ptr<BodyFluidCoupling> coupling;
@@ -76,6 +80,15 @@ bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainG
 // calling `on_step` (when given) with each sub-step's statistics. Returns false and sets
 // fluid.error when the solver refuses a step.
 bool stepSphFluid(SphFluid& fluid, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step = {});
+
+// The push-out depth (m) beyond which a collision push-out is a warning: one particle radius.
+// The boundary pressure (sph.hpp, density-map boundary) holds water about a radius off a wall, so
+// the end-of-step collision check normally finds particles only grazing it (a skin deep); a
+// centre more than r inside means the whole particle passed the surface within one step: the
+// boundary failed to stop it (a blast, a fast crate, a too-long step).
+float sphDeepPush(const SphFluid& fluid);
+// Whether `totals` (e.g. fluid.last_totals) hold a warning: fluid::sphTotalsWarn at sphDeepPush.
+bool sphFluidWarns(const SphFluid& fluid, const fluid::SphStepTotals& totals);
 
 // Empty when every position/velocity/density is finite; otherwise names the first bad value
 // (a solver error is not a value: the world records it as a run-time failure).

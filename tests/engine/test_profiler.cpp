@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -52,3 +53,38 @@ TEST(Profiler, StatisticsAndHistoryRingWrap) {
 }
 
 }  // namespace
+
+// The overlay's red markers (engine/ui/overlay.cpp draws one per entry of flaggedFramesAgo): the
+// list holds exactly the flagged frames, as frames ago, oldest first, also after the ring wraps.
+TEST(Profiler, FlaggedFramesAreExactlyTheMarkedOnes) {
+  engine::Profiler p;
+  engine::flagFrame(p);  // outside a frame: ignored
+  const int frames = engine::Profiler::kHistory + 10;
+  const auto marked = [](int f) { return f % 7 == 3 || f == 0; };
+  for (int f = 0; f < frames; ++f) {
+    engine::beginFrame(p);
+    if (marked(f)) {
+      engine::flagFrame(p);
+      engine::flagFrame(p);  // twice in a frame: still one marker
+    }
+    engine::endFrame(p);
+  }
+  std::vector<int> want;
+  std::uint64_t total = 0;
+  for (int f = 0; f < frames; ++f) {
+    total += marked(f) ? 1 : 0;
+    const int ago = frames - 1 - f;
+    if (marked(f) && ago < engine::Profiler::kHistory) want.push_back(ago);
+  }
+  std::vector<int> got{12345};  // refilled, not appended to
+  engine::flaggedFramesAgo(p, got);
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(p.flagged_frames, total);
+  // Frame 0 was flagged but has left the ring; an unflagged frame after clears nothing.
+  engine::beginFrame(p);
+  engine::endFrame(p);
+  engine::flaggedFramesAgo(p, got);
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(got.back(), want.back() + 1);
+  EXPECT_EQ(p.flagged_frames, total);
+}

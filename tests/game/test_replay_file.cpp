@@ -288,11 +288,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
     rows[i].particles = 100u * static_cast<unsigned>(i);
     rows[i].triangles = 7;
   }
+  rows[1].truth = {17, 0.000412345f, 0.0213f, 42, 3.125, 5, 1, 2, 0, true};
+  rows[2].truth.nonfinite = 9;
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
   EXPECT_EQ(game::frameCsvHeader(),
             "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,"
-            "state_hash");
+            "sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
+            "dt_request_cuts,nonfinite,warned,state_hash");
   const auto path = std::filesystem::temp_directory_path() / ("replay_csv_" + std::to_string(::getpid()) + ".csv");
   std::string error;
   ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
@@ -302,16 +305,37 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   EXPECT_EQ(back[2].frame_ms, 14.0);
   EXPECT_EQ(back[1].phase_ms[4], 4.5);
   EXPECT_EQ(back[2].particles, 200u);
+  // The SPH health columns come back as written (a float density error survives %.9g).
+  const game::FrameTruth& t = back[1].truth;
+  EXPECT_EQ(t.sph_steps, 17u);
+  EXPECT_EQ(static_cast<float>(t.density_err_mean), 0.000412345f);
+  EXPECT_EQ(static_cast<float>(t.density_err_max), 0.0213f);
+  EXPECT_EQ(t.pushed_out, 42u);
+  EXPECT_EQ(t.push_depth_mm, 3.125);
+  EXPECT_EQ(t.speed_clamps, 5u);
+  EXPECT_EQ(t.dt_min_clamps, 1u);
+  EXPECT_EQ(t.dt_request_cuts, 2u);
+  EXPECT_EQ(t.nonfinite, 0u);
+  EXPECT_TRUE(t.warned);
+  EXPECT_FALSE(back[0].truth.warned);
+  EXPECT_EQ(back[2].truth.nonfinite, 9u);
   EXPECT_FALSE(back[1].has_hash);
   EXPECT_TRUE(back[2].has_hash);
   EXPECT_EQ(back[2].state_hash, 0xabcdef0123456789ull);
   // A bad cell is named by file, line and column.
   {
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,\n";
+    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0,0,0,0,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'fluid_ms': bad value 'x'"), std::string::npos) << error;
+  {  // and so is a bad health cell (warned is 0 or 1)
+    ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
+    std::ofstream out(path, std::ios::app);
+    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0,0,0,2,\n";
+  }
+  EXPECT_FALSE(game::readFrameCsv(path, back, error));
+  EXPECT_NE(error.find(":5: column 'warned': bad value '2'"), std::string::npos) << error;
   std::filesystem::remove(path);
 }
 
