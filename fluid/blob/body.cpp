@@ -73,7 +73,7 @@ void computeGoals(BlobWorld& world, glm::vec3& goal_velocity) {
     t.rotation = blobBestRotation(x, t.offset, t.rotation, 4);
     rot = glm::mat3_cast(t.rotation);
   }
-  par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+  par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) goal[i] = centre + rot * (t.offset[i] - offset_mean);
   });
 }
@@ -89,7 +89,7 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   const float h2 = h * h;
   s.accel.resize(n);
   // Goal springs (Müller 2005), applied as forces.
-  par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+  par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const float w = t.weight[i];
       glm::vec3 delta = s.goal[i] - parts.position[i];
@@ -116,7 +116,7 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   // per neighbour and array (the pair loop is ~70 % of a step, bench_blob under perf).
   s.pos4.resize(n);
   s.vel4.resize(n);
-  par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+  par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       s.pos4[i] = glm::vec4(parts.position[i], parts.radius_scale[i]);
       s.vel4[i] = glm::vec4(parts.velocity[i], 0.0f);
@@ -130,7 +130,7 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   const float c_offset = h6 / 64.0f;
   const float half_d = 0.5f * d;
   const float eps2 = 1e-12f * d * d;
-  par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+  par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const glm::vec4 xi = s.pos4[i];
       const glm::vec4 vi = s.vel4[i];
@@ -198,7 +198,7 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
     if (!c.shape) continue;
     const CollisionMaterial& material = c.use_blob_material ? p.material : c.material;
     s.before.assign(v.begin(), v.end());
-    par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+    par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         s.outcome[i] = 0;
         const glm::vec3 from = s.previous[i];
@@ -396,7 +396,7 @@ BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats_out) {
     computeGoals(world, goal_velocity);
     computeAccelerations(world, goal_velocity);
     s.previous.assign(parts.position.begin(), parts.position.end());
-    par::parallel_for(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
+    par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         glm::vec3 v = parts.velocity[i] + dt * s.accel[i];
         const float speed = glm::length(v);

@@ -15,7 +15,7 @@ void blobTentacleU(SurfaceMesh& mesh, const BlobWorld& world, glm::vec3 origin, 
   if (chain_particles.empty() || mesh.attributes.size() != mesh.positions.size()) return;
   constexpr float kTwoPi = 6.28318530717958f;
   // Per vertex, independent: the result does not depend on the thread count.
-  par::parallel_for(par::Range<std::size_t>(0, mesh.positions.size(), 512), [&](const par::Range<std::size_t>& r) {
+  par::parallelFor(par::Range<std::size_t>(0, mesh.positions.size(), 512), [&](const par::Range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k != r.end(); ++k) {
       glm::vec4& attr = mesh.attributes[k];
       if (attr.z < min_share) continue;

@@ -210,7 +210,7 @@ void rasterOrtho(const MeshView& mesh, const std::vector<char>& skip, const glm:
       }
     }
   };
-  par::parallel_for(par::Range<int>(0, (n + band - 1) / band, 1), [&](const par::Range<int>& r) {
+  par::parallelFor(par::Range<int>(0, (n + band - 1) / band, 1), [&](const par::Range<int>& r) {
     for (int b = r.begin(); b != r.end(); ++b) raster_band(b);
   });
   if (!with_ring) return;
@@ -309,7 +309,7 @@ void rasterCube(const MeshView& mesh, const std::vector<char>& skip, const glm::
       }
     }
   };
-  par::parallel_for(par::Range<int>(0, kFaces * bands, 1), [&](const par::Range<int>& r) {
+  par::parallelFor(par::Range<int>(0, kFaces * bands, 1), [&](const par::Range<int>& r) {
     for (int job = r.begin(); job != r.end(); ++job) raster_job(job);
   });
 }

@@ -265,7 +265,7 @@ std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm:
   assert(points.size() == out.size());
   const std::size_t grain = std::max<std::size_t>(desc.grain, 1);
   auto run = [&] {
-    par::parallel_for(par::Range<std::size_t>(0, points.size(), grain), [&](const par::Range<std::size_t>& r) {
+    par::parallelFor(par::Range<std::size_t>(0, points.size(), grain), [&](const par::Range<std::size_t>& r) {
       shape.query(points.subspan(r.begin(), r.size()), out.subspan(r.begin(), r.size()));
     });
   };

@@ -1,6 +1,6 @@
 #pragma once
-// The data-parallel loops of the fluid library: tbb::parallel_for, tbb::parallel_reduce and
-// tbb::parallel_deterministic_reduce with their own signatures, so call sites read as oneTBB.
+// The data-parallel loops of the fluid library: parallelFor, parallelReduce and
+// parallelDeterministicReduce take the arguments of their oneTBB namesakes (tbb::parallel_for, ...).
 //
 // Why not call oneTBB directly: ThreadSanitizer cannot see the synchronisation inside the
 // uninstrumented system oneTBB and reports every hand-over between a worker and the caller as a
@@ -94,28 +94,28 @@ T reduceRange(const Range<Value>& r, const T& identity, const Body& body, const 
 }  // namespace detail
 
 template <class Value, class Body>
-void parallel_for(const Range<Value>& r, const Body& body) {
+void parallelFor(const Range<Value>& r, const Body& body) {
   if (!r.empty()) detail::forRange(r, body, detail::threadBudget());
 }
 template <class Value, class T, class Body, class Join>
-T parallel_deterministic_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
+T parallelDeterministicReduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
   return r.empty() ? identity : detail::reduceRange(r, identity, body, join, detail::threadBudget());
 }
 template <class Value, class T, class Body, class Join>
-T parallel_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
-  return parallel_deterministic_reduce(r, identity, body, join);
+T parallelReduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
+  return parallelDeterministicReduce(r, identity, body, join);
 }
 #else
 template <class Value, class Body>
-void parallel_for(const Range<Value>& r, const Body& body) {
+void parallelFor(const Range<Value>& r, const Body& body) {
   tbb::parallel_for(r, body);
 }
 template <class Value, class T, class Body, class Join>
-T parallel_deterministic_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
+T parallelDeterministicReduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
   return tbb::parallel_deterministic_reduce(r, identity, body, join);
 }
 template <class Value, class T, class Body, class Join>
-T parallel_reduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
+T parallelReduce(const Range<Value>& r, const T& identity, const Body& body, const Join& join) {
   return tbb::parallel_reduce(r, identity, body, join);
 }
 #endif

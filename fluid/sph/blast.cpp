@@ -32,7 +32,7 @@ SphStatus applyBlast(SphWorld& world, const Blast& blast, float max_speed_change
     float max_dv = 0.0f;
     double momentum = 0.0;
   };
-  const Sums sums = par::parallel_deterministic_reduce(
+  const Sums sums = par::parallelDeterministicReduce(
       tbb::blocked_range<std::size_t>(0, positions.size(), 512), Sums{},
       [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {

@@ -54,7 +54,7 @@ void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions,
   grid.identity_order = false;
 
   // Bounding box (min/max are exact and order-independent, so any reduction order is fine).
-  Bounds box = par::parallel_reduce(
+  Bounds box = par::parallelReduce(
       tbb::blocked_range<std::size_t>(0, n, kGrain), Bounds{},
       [&](const tbb::blocked_range<std::size_t>& r, Bounds b) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -101,7 +101,7 @@ void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions,
   grid.cell_start.assign(key_count + 1, 0u);
 
   // 1. keys and counts (atomic increments: the counts do not depend on the order).
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const std::uint32_t key = grid.keyOf(grid.cellOf(positions[i]));
       grid.particle_key[i] = key;
@@ -119,7 +119,7 @@ void buildNeighborGrid(NeighborGrid& grid, std::span<const glm::vec3> positions,
 
 void markGridReordered(NeighborGrid& grid) {
   const std::size_t n = grid.order.size();
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t e = r.begin(); e != r.end(); ++e) grid.order[e] = static_cast<std::uint32_t>(e);
   });
   // particle_key must follow the permutation too: entries are now in key order.
@@ -310,7 +310,7 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   lists.sy.resize(n + kPad);
   lists.sz.resize(n + kPad);
   if (!positions_copied) {
-    par::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    par::parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t t = r.begin(); t != r.end(); ++t) {
         const glm::vec3 x = positions[identity ? t : order[t]];
         lists.sx[t] = x.x;
@@ -336,7 +336,7 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   // one cell share their candidates: the cells within `reach` of it, one run of sorted entries
   // per (y, z) row (x is the fastest key), computed once per cell. The chunk's output depends
   // only on the chunk, not on which thread ran it.
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
     for (std::size_t c = cr.begin(); c != cr.end(); ++c) {
       std::vector<std::uint32_t>& buf = lists.chunk_pairs[c];
       std::uint32_t* runs = lists.runs.data() + c * 2 * max_rows;
@@ -384,7 +384,7 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   lists.offsets[0] = 0;
   for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] = lists.offsets[i] + lists.counts[i];
   lists.indices.resize(lists.offsets[n]);
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
     for (std::size_t c = cr.begin(); c != cr.end(); ++c) {
       const std::uint32_t* src = lists.chunk_pairs[c].data();
       if (identity) {

@@ -154,7 +154,7 @@ double sphKineticEnergy(const SphWorld& world) {
   const auto& v = world.particles.velocity;
   const double m = sphParticleMass(world.params);
   return 0.5 * m *
-         par::parallel_deterministic_reduce(
+         par::parallelDeterministicReduce(
              tbb::blocked_range<std::size_t>(0, v.size(), kGrain), 0.0,
              [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                for (std::size_t i = r.begin(); i != r.end(); ++i) acc += static_cast<double>(glm::dot(v[i], v[i]));
@@ -167,7 +167,7 @@ double sphPotentialEnergy(const SphWorld& world) {
   const auto& x = world.particles.position;
   const double m = sphParticleMass(world.params);
   const glm::vec3 g = world.params.gravity;
-  return m * par::parallel_deterministic_reduce(
+  return m * par::parallelDeterministicReduce(
                  tbb::blocked_range<std::size_t>(0, x.size(), kGrain), 0.0,
                  [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                    for (std::size_t i = r.begin(); i != r.end(); ++i) acc -= static_cast<double>(glm::dot(g, x[i]));
@@ -183,7 +183,7 @@ void sphDensityError(const SphWorld& world, float& mean, float& max) {
     double sum = 0.0;
     float max = 0.0f;
   };
-  const Acc a = par::parallel_deterministic_reduce(
+  const Acc a = par::parallelDeterministicReduce(
       tbb::blocked_range<std::size_t>(0, rho.size(), kGrain), Acc{},
       [&](const tbb::blocked_range<std::size_t>& r, Acc acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -206,7 +206,7 @@ double sphCompressedVolume(const SphWorld& world) {
   const auto& rho = world.particles.density;
   const double m = sphParticleMass(world.params);
   const float rho0 = world.params.rest_density;
-  return m * par::parallel_deterministic_reduce(
+  return m * par::parallelDeterministicReduce(
                  tbb::blocked_range<std::size_t>(0, rho.size(), kGrain), 0.0,
                  [&](const tbb::blocked_range<std::size_t>& r, double acc) {
                    for (std::size_t i = r.begin(); i != r.end(); ++i) acc += 1.0 / std::max(rho[i], rho0);
@@ -264,7 +264,7 @@ void refreshSphPositionArrays(SphWorld& world) {
   ParticleStore& s = world.particles;
   const std::size_t n = s.size();
   for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->resize(n);
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       s.position_x[i] = s.position[i].x;
       s.position_y[i] = s.position[i].y;
@@ -284,7 +284,7 @@ void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out
     return;
   }
   const float s = static_cast<float>(f);
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain),
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, x.size(), kGrain),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
                     });

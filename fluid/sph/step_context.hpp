@@ -12,7 +12,7 @@
 
 namespace fluid::sph_step {
 
-// Fixed grain: parallel_deterministic_reduce splits a range the same way for any thread count,
+// Fixed grain: parallelDeterministicReduce splits a range the same way for any thread count,
 // so every floating-point sum of the step is bit-identical for 1 and N threads.
 constexpr std::size_t kGrain = 256;
 
@@ -23,14 +23,14 @@ inline float msSince(Clock::time_point t0) {
 
 template <typename F>
 void forEach(std::size_t n, F&& f) {
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
   });
 }
 
 template <typename T, typename F, typename J>
 T reduce(std::size_t n, T identity, F&& body, J&& join) {
-  return par::parallel_deterministic_reduce(
+  return par::parallelDeterministicReduce(
       tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
       [&](const tbb::blocked_range<std::size_t>& r, T acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) body(i, acc);
@@ -44,13 +44,13 @@ T reduce(std::size_t n, T identity, F&& body, J&& join) {
 // bit-identical for any thread count).
 template <typename F>
 void forChunks(std::size_t n, F&& f) {
-  par::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b < r.end(); b += kGrain) f(b, std::min(r.end(), b + kGrain));
   });
 }
 template <typename T, typename F, typename J>
 T reduceChunks(std::size_t n, T identity, F&& body, J&& join) {
-  return par::parallel_deterministic_reduce(
+  return par::parallelDeterministicReduce(
       tbb::blocked_range<std::size_t>(0, n, kGrain), identity,
       [&](const tbb::blocked_range<std::size_t>& r, T acc) {
         for (std::size_t b = r.begin(); b < r.end(); b += kGrain) body(b, std::min(r.end(), b + kGrain), acc);

@@ -17,7 +17,7 @@ TEST(Parallel, LoopsHonourTheThreadCap) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cap);
     std::atomic<int> running{0}, most{0};
     std::atomic<std::size_t> visited{0};
-    fluid::par::parallel_for(fluid::par::Range<std::size_t>(0, 48, 1), [&](const fluid::par::Range<std::size_t>& r) {
+    fluid::par::parallelFor(fluid::par::Range<std::size_t>(0, 48, 1), [&](const fluid::par::Range<std::size_t>& r) {
       const int now = ++running;
       int seen = most.load();
       while (now > seen && !most.compare_exchange_weak(seen, now)) {
