@@ -1,6 +1,7 @@
 // The `blob` effect in a World (no GL): the blob_monster scene builds the monster from its section
 // and program, it rises out of the sewer onto the street (baked colliders), a blast sends it to
 // reassemble, catching the player resets the round, and bad programs are errors naming file, key, value.
+#include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
 #include "game/world/blob_monster.hpp"
 #include "game/world/rigid_bodies.hpp"
@@ -72,10 +73,18 @@ TEST(BlobEffect, ABlastThrowsParticlesAndStartsReassembly) {
   ASSERT_NE(blob, nullptr);
   steps(world, 6 * 60);
   const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
-  const fluid::Blast blasts[] = {fluid::Blast{c + glm::vec3(0.3f, 0.0f, 0.0f), 60.0f, 0.25f, 4.0f}};
-  world.links.blasts = blasts;
+  // A charge placed beside the body with a one-step fuse: the explosives effect publishes its
+  // blast (EffectLinks::blasts) in the step it goes off, and the blob applies it in the same step.
+  game::Explosives* explosives = game::findState<game::Explosives>(world);
+  ASSERT_NE(explosives, nullptr);
+  explosives->params.fuse_seconds = 1.0f / 120.0f;
+  explosives->params.throw_speed = 0.0f;
+  explosives->params.impulse_at_1m = 60.0f;
+  explosives->params.core_radius = 0.25f;
+  explosives->params.reach = 4.0f;
+  game::throwExplosive(*explosives, *world.links.bodies->physics, c + glm::vec3(0.3f, 0.0f, 0.0f), {1, 0, 0});
   steps(world, 1);
-  world.links.blasts = {};
+  ASSERT_EQ(explosives->detonated, 1u);
   EXPECT_GT(blob->blasted_particles, 500u);
   EXPECT_EQ(stateName(*blob), "reassemble");
   EXPECT_GT(fluid::blobMaxSpeed(blob->world.particles.velocity), 2.0f);
