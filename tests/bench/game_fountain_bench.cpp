@@ -21,6 +21,7 @@
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
+#include "bench_timing.hpp"
 
 #include <tbb/global_control.h>
 
@@ -40,10 +41,7 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
+using benchtiming::median;
 
 struct Config {
   std::string label;

@@ -18,6 +18,7 @@
 // All tables are printed as markdown on stdout. Timings are wall time of stepSph (steady_clock)
 // and process CPU time; on a loaded machine compare within one run only.
 #include "bench_csv.hpp"
+#include "bench_timing.hpp"
 
 #include "fluid/sph/sph_scenes.hpp"
 #include "tests/sph/randomised_runs.hpp"
@@ -37,6 +38,8 @@
 
 namespace {
 
+using benchtiming::median;
+
 using namespace fluid;
 using Overrides = std::vector<std::pair<std::string, std::string>>;
 
@@ -44,12 +47,6 @@ double cpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 SphScene makeScene(const std::string& name, SphSolverKind solver, const Overrides& o) {

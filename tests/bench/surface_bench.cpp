@@ -17,6 +17,7 @@
 #include "load_average.hpp"
 #include "order_metrics.hpp"
 #include "bench_csv.hpp"
+#include "bench_timing.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -36,27 +37,10 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using benchtiming::median;
+using benchtiming::threadCpuMs;
+using benchtiming::timeMs;
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-
-double timeMs(const std::function<void()>& f) {
-  const auto t0 = Clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-// CPU time of the calling thread. Single-threaded runs (threads = 1: oneTBB runs a one-slot
-// arena's work on the calling thread) then exclude the time the thread waited for a core on a
-// loaded machine, which wall-clock medians cannot.
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
 double timeBoth(const std::function<void()>& f, double& cpuMs) {
   const double c0 = threadCpuMs();
   const double w = timeMs(f);

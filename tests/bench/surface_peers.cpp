@@ -16,6 +16,7 @@
 #include "fluid/surface/marching_slices.hpp"
 #include "load_average.hpp"
 #include "surface_peers_vtk.hpp"
+#include "bench_timing.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -49,27 +50,12 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using benchtiming::median;
+using benchtiming::threadCpuMs;
+using benchtiming::timeMs;
+
 constexpr float kRc = 3.0f, kT = 0.2f;
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-template <class F>
-double timeMs(F&& f) {
-  const auto t0 = Clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-// CPU time of the calling thread: one-thread meshes (ours: a one-slot arena runs on the calling
-// thread; the peer: VTK capped to one thread runs there too) without the time spent waiting for a
-// core, which dominates wall-clock medians on a loaded machine.
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
 template <class F>
 double timeCpuMs(F&& f, std::vector<double>& cpu) {
   const double c0 = threadCpuMs();
