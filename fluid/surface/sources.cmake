@@ -3,6 +3,7 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/mc_tables.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/field.cpp
   ${CMAKE_CURRENT_LIST_DIR}/marching_slices.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/async_extractor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/baselines.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_io.cpp
 )

@@ -48,6 +48,9 @@ const ParamTable<FluidSurfaceParams>& table() {
       param<&P::visible>("visible",
                          "false: the water is not drawn (the same frame without it; docs/render.md's water masks); "
                          "live"),
+      param<&P::async>("async",
+                       "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
+                       "(Janisz 3.2.6); false: mesh before drawing; live"),
   };
   return rows;
 }

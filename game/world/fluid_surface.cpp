@@ -2,13 +2,42 @@
 
 namespace game {
 
+namespace {
+
+fluid::SurfaceParams surfaceParams(const FluidSurfaceParams& p, float spacing, glm::vec3 eye, glm::vec3 view_dir) {
+  fluid::SurfaceParams sp;
+  sp.rc = p.smoothing * spacing;
+  sp.cube = p.cube * spacing;
+  sp.threshold = p.threshold;
+  // Paper §5: sweep along the axis nearest the view, farthest blocks first, so blending the
+  // triangles in index order composites back-to-front.
+  sp.order = p.order == SurfaceOrderChoice::unsorted ? fluid::SurfaceOrder::none : fluid::SurfaceOrder::backToFront;
+  sp.exactSlabOrder = p.order == SurfaceOrderChoice::exact;
+  sp.eye = eye;
+  sp.viewDir = view_dir;
+  return sp;
+}
+
+bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
+  if (!st.ok()) {
+    s.error = "fluid_surface: " + st.error;
+    return false;
+  }
+  s.error.clear();
+  return true;
+}
+
+}  // namespace
+
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
   if (s.params.method != SurfaceMethodChoice::mesh) {  // the particle renderers need no mesh
+    s.async_job.reset();
     s.mesh.clear();
     s.error.clear();
     return true;
   }
-  // The SPH store's own SoA arrays (fluid/sph: one particle layout), read without a copy.
+  // The SPH store's own SoA arrays (fluid/sph: one particle layout), read without a copy (the
+  // async job copies them, as it must: the next steps move them while it meshes).
   const fluid::SphPositionArrays positions = fluid::sphPositionArrays(fluid.world);
   const std::size_t n = fluid.world.particles.size();
   if (positions.x.size() != n) {
@@ -18,33 +47,25 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
     return false;
   }
   ++s.meshes;
-  if (n == 0) {
-    s.mesh.clear();
-    return true;
-  }
-  const float spacing = fluid::sphSpacing(fluid.world.params);
-  fluid::SurfaceParams sp;
-  sp.rc = s.params.smoothing * spacing;
-  sp.cube = s.params.cube * spacing;
-  sp.threshold = s.params.threshold;
-  // Paper §5: sweep along the axis nearest the view, farthest blocks first, so blending the
-  // triangles in index order composites back-to-front.
-  sp.order =
-      s.params.order == SurfaceOrderChoice::unsorted ? fluid::SurfaceOrder::none : fluid::SurfaceOrder::backToFront;
-  sp.exactSlabOrder = s.params.order == SurfaceOrderChoice::exact;
-  sp.eye = eye;
-  sp.viewDir = view_dir;
+  const fluid::SurfaceParams sp = surfaceParams(s.params, fluid::sphSpacing(fluid.world.params), eye, view_dir);
   fluid::SurfaceInput input;
   input.x = positions.x;
   input.y = positions.y;
   input.z = positions.z;
-  const fluid::SurfaceStatus st = s.extractor.extract(input, sp, s.mesh);
-  if (!st.ok()) {
-    s.error = "fluid_surface: " + st.error;
-    return false;
+  if (!s.params.async) {
+    s.async_job.reset();
+    if (n == 0) {
+      s.mesh.clear();
+      return finish(s, {});
+    }
+    return finish(s, s.extractor.extract(input, sp, s.mesh));
   }
-  s.error.clear();
-  return true;
+  if (!s.async_job) s.async_job = std::make_unique<fluid::AsyncSurfaceExtractor>();
+  fluid::AsyncSurfaceExtractor& job = *s.async_job;
+  if (!job.pending()) job.start(input, sp);  // first frame: this frame's own surface, waited for
+  const fluid::SurfaceStatus st = job.collect(s.mesh);
+  job.start(input, sp);
+  return finish(s, st);
 }
 
 }  // namespace game

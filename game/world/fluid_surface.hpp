@@ -6,6 +6,7 @@
 // effect submits the mesh or the particles as an engine::WaterBatch and the engine draws it.
 
 #include "engine/render/frame.hpp"
+#include "fluid/surface/async_extractor.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -13,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,9 @@ struct FluidSurfaceParams {
   float opacity = 0.85f;
   glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
   bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
+  // Mesh on a worker thread while the next steps run and draw the previous frame's surface
+  // (Janisz §3.2.6); false: mesh the current particles before drawing them.
+  bool async = true;
 };
 
 // Reads a validated "fluid_surface" section through the effect's parameter table
@@ -41,8 +46,9 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
 
 struct FluidSurface {
   FluidSurfaceParams params;
-  fluid::SurfaceExtractor extractor;
-  fluid::SurfaceMesh mesh;
+  fluid::SurfaceExtractor extractor;                        // params.async false
+  std::unique_ptr<fluid::AsyncSurfaceExtractor> async_job;  // params.async true, made at first use
+  fluid::SurfaceMesh mesh;        // the surface drawn this frame (async: the previous frame's particles)
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
   // Method raycast, last frame (written by the engine's water pass): fragment-list records asked
@@ -53,7 +59,10 @@ struct FluidSurface {
 
 // Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With
 // method screen_space or raycast the mesh is left empty (those renderers draw the particles).
-// Returns false with surface.error set when extraction refuses the input.
+// With params.async, `mesh` becomes the surface of the particles handed over at the previous call
+// and the current ones start meshing on the worker; the first call (nothing handed over yet) waits
+// for its own job, so the first frame has water. Returns false with surface.error set when
+// extraction refuses the input (async: the input of the job collected).
 bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir);
 
 }  // namespace game

@@ -1,0 +1,61 @@
+// fluid_surface.async (Janisz §3.2.6): the surface drawn at frame N is the one the synchronous
+// mesher gives for frame N-1's particles, bit for bit (frame 0: its own), so the worker thread
+// changes when a surface is shown, never what it is.
+#include "game/paths.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/fluid_surface.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+game::SceneConfig fountainScene(bool async) {
+  const std::string text = std::string(R"({"effects": {"sph_fluid": {"max_particles": 900},
+                                                       "fluid_surface": {"async": )") +
+                           (async ? "true" : "false") + "}}}";
+  game::SceneConfig scene;
+  const game::SceneStatus status = game::parseSceneText(text, "async_test.json", scene);
+  EXPECT_TRUE(status.ok()) << status.error;
+  return scene;
+}
+
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+bool sameMesh(const fluid::SurfaceMesh& a, const fluid::SurfaceMesh& b) {
+  return sameBits(a.positions, b.positions) && sameBits(a.normals, b.normals) && sameBits(a.indices, b.indices);
+}
+
+TEST(FluidSurfaceAsync, DrawsThePreviousFramesSurfaceBitForBit) {
+  game::World sync_world, async_world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(fountainScene(false), game::contentDir(), sync_world, error)) << error;
+  ASSERT_TRUE(game::buildWorld(fountainScene(true), game::contentDir(), async_world, error)) << error;
+  const game::FluidSurface& sync_surface = *game::findState<game::FluidSurface>(sync_world);
+  const game::FluidSurface& async_surface = *game::findState<game::FluidSurface>(async_world);
+  fluid::SurfaceMesh previous;  // the synchronous surface of the frame before
+  int compared = 0;
+  for (int frame = 0; frame < 90; ++frame) {
+    game::stepWorld(sync_world, nullptr);
+    game::stepWorld(async_world, nullptr);
+    game::meshWorld(sync_world, nullptr);
+    game::meshWorld(async_world, nullptr);
+    ASSERT_EQ(async_surface.error, "") << "frame " << frame;
+    const fluid::SurfaceMesh& expected = frame == 0 ? sync_surface.mesh : previous;
+    ASSERT_TRUE(sameMesh(async_surface.mesh, expected)) << "frame " << frame;
+    compared += expected.indices.empty() ? 0 : 1;
+    previous = sync_surface.mesh;
+  }
+  EXPECT_GE(compared, 80) << "the jet has a surface in almost every frame";
+  EXPECT_EQ(async_surface.meshes, 90u);
+  EXPECT_EQ(async_world.failures.count, 0u);
+}
+
+}  // namespace

@@ -1,0 +1,93 @@
+// fluid::AsyncSurfaceExtractor (Janisz §3.2.6): the mesh a job returns is the one a plain
+// extractor gives for the input handed to start(), bit for bit, whatever the caller does to its
+// arrays after start(); collect() returns the jobs in order, one frame behind in a frame loop.
+#include "fluid/surface/async_extractor.hpp"
+#include "random_sets.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+namespace {
+
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+std::string compareMeshes(const fluid::SurfaceMesh& got, const fluid::SurfaceMesh& want) {
+  if (!sameBits(got.positions, want.positions)) return "positions differ";
+  if (!sameBits(got.normals, want.normals)) return "normals differ";
+  if (!sameBits(got.indices, want.indices)) return "indices differ";
+  if (!sameBits(got.edgeKeys, want.edgeKeys)) return "edge keys differ";
+  return {};
+}
+
+TEST(AsyncSurfaceExtractor, MeshesTheInputItWasHandedBitForBit) {
+  fluid::AsyncSurfaceExtractor async;
+  fluid::SurfaceExtractor plain;
+  fluid::SurfaceMesh want, got;
+  int meshed = 0;
+  for (std::uint64_t seed = 1; seed <= 24; ++seed) {
+    surface_test::RandomSet set = surface_test::drawRandomSet(seed);
+    const fluid::SurfaceStatus want_status = plain.extract(set.input(), set.params, want);
+    async.start(set.input(), set.params);
+    ASSERT_TRUE(async.pending());
+    // The caller moves on at once: its particles change while the job runs.
+    for (float& x : set.x) x += 1e3f * set.params.cube;
+    for (float& y : set.y) y = -y;
+    const fluid::SurfaceStatus got_status = async.collect(got);
+    EXPECT_FALSE(async.pending());
+    ASSERT_EQ(got_status.error, want_status.error) << "seed " << seed << " (" << set.what << ")";
+    if (!want_status.ok()) continue;
+    EXPECT_EQ(compareMeshes(got, want), "") << "seed " << seed << " (" << set.what << ")";
+    meshed += want.indices.empty() ? 0 : 1;
+  }
+  EXPECT_GE(meshed, 12) << "most seeds give a surface to compare";
+}
+
+// A frame loop: start(frame N) after collect() gave frame N-1's surface.
+TEST(AsyncSurfaceExtractor, CollectReturnsThePreviousFramesSurfaceInAFrameLoop) {
+  fluid::AsyncSurfaceExtractor async;
+  fluid::SurfaceExtractor plain;
+  std::vector<surface_test::RandomSet> frames;
+  for (std::uint64_t seed = 40; seed < 48; ++seed) frames.push_back(surface_test::drawRandomSet(seed));
+  fluid::SurfaceMesh shown, want;
+  async.start(frames[0].input(), frames[0].params);
+  for (std::size_t f = 1; f < frames.size(); ++f) {
+    const fluid::SurfaceStatus st = async.collect(shown);
+    async.start(frames[f].input(), frames[f].params);
+    const fluid::SurfaceStatus want_status = plain.extract(frames[f - 1].input(), frames[f - 1].params, want);
+    ASSERT_EQ(st.error, want_status.error) << "frame " << f;
+    EXPECT_EQ(compareMeshes(shown, want), "") << "frame " << f << " shows frame " << f - 1;
+  }
+  EXPECT_TRUE(async.pending()) << "the last job is still out; the destructor waits for it";
+}
+
+TEST(AsyncSurfaceExtractor, ErrorsComeWithCollect) {
+  fluid::AsyncSurfaceExtractor async;
+  fluid::SurfaceMesh mesh;
+  EXPECT_NE(async.collect(mesh).error.find("no extraction was started"), std::string::npos);
+  const std::vector<float> x{0.0f, std::nanf("")}, y{0.0f, 0.0f}, z{0.0f, 0.0f};
+  async.start({x, y, z, {}, {}, {}}, fluid::SurfaceParams{});
+  const fluid::SurfaceStatus st = async.collect(mesh);
+  EXPECT_FALSE(st.ok()) << "a NaN position is refused by the worker's extract";
+  EXPECT_TRUE(mesh.indices.empty());
+}
+
+// start() twice without collect(): the first job is waited for and dropped.
+TEST(AsyncSurfaceExtractor, AStartWithoutCollectDropsTheEarlierJob) {
+  fluid::AsyncSurfaceExtractor async;
+  fluid::SurfaceExtractor plain;
+  const surface_test::RandomSet a = surface_test::drawRandomSet(3), b = surface_test::drawRandomSet(11);
+  fluid::SurfaceMesh got, want;
+  async.start(a.input(), a.params);
+  async.start(b.input(), b.params);
+  const fluid::SurfaceStatus st = async.collect(got);
+  ASSERT_EQ(st.error, plain.extract(b.input(), b.params, want).error);
+  EXPECT_EQ(compareMeshes(got, want), "");
+}
+
+}  // namespace
