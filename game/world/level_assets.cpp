@@ -24,6 +24,11 @@ bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view 
     if (!engine::loadImage(content_dir / "textures" / job.file, image, error)) return false;
     *job.target = engine::uploadTexture(image);
   }
+  if (level == "blob_monster") {
+    engine::ImageData image;
+    if (!engine::loadImage(content_dir / "textures" / "blob_tentacle.png", image, error)) return false;
+    out.blob_tentacle = engine::uploadTexture(image);
+  }
   out.models.clear();
   out.models.reserve(rows.size());
   for (const LevelModelDesc& row : rows) {
