@@ -123,6 +123,12 @@ struct BlobCollider {
   ColliderPose pose;
   CollisionMaterial material;
   bool use_blob_material = true;  // use BlobParams::material instead of `material`
+  // Optional: a collider-space box outside which `shape` never reports a point inside (distance
+  // < 0). A particle whose sub-step path lies wholly outside it skips the shape's queries: the
+  // same result for less work (most particles are nowhere near most of the level's colliders).
+  // blobDepthMapBounds gives the box of a baked collider. bounded = false: query every particle.
+  bool bounded = false;
+  glm::vec3 inside_lo{0.0f}, inside_hi{0.0f};
   // Output of the last stepBlob: momentum (N s) and angular momentum about pose.translation
   // (N m s) the particles lost to this collider, i.e. what the game applies to the rigid body.
   glm::vec3 impulse{0.0f};
@@ -185,6 +191,13 @@ BlobStatus placeBlob(BlobWorld& world, std::span<const glm::vec3> positions);
 // The N points of a cubic lattice of spacing d inside a vertical cylinder of `radius` (x-z) whose
 // axis passes through `top` and that extends downward (a column in a pipe), top layer first.
 std::vector<glm::vec3> blobColumn(const BlobParams& params, glm::vec3 top, float radius);
+
+// The collider-space box that holds every point a baked depth-map collider (fluid/collide) can
+// report inside: the union of its maps' view volumes (an ortho map votes "inside" only for
+// map coordinates in [0, 1]^3, a cube map only in [-1, 1]^3, collide.hpp "Map coordinates"),
+// widened by 1 mm and 1e-4 of its size against rounding. Sets c.bounded, c.inside_lo/hi; a
+// collider without maps stays unbounded.
+void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape);
 
 // Advances params.step seconds (params.substeps sub-steps). The world is left untouched when a
 // position or velocity is not finite (the error names the particle).

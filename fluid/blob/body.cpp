@@ -171,12 +171,22 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   });
 }
 
-ColliderSample sampleAt(const BlobCollider& c, glm::vec3 world) {
-  const glm::vec3 local = toColliderSpace(c.pose, world);
+// `identity`: the pose is the identity (the level's colliders, baked in world coordinates), so
+// the point and normal need no transform.
+ColliderSample sampleAt(const BlobCollider& c, glm::vec3 world, bool identity) {
+  const glm::vec3 local = identity ? world : toColliderSpace(c.pose, world);
   ColliderSample s;
   c.shape->query({&local, 1}, {&s, 1});
-  s.normal = toWorldDirection(c.pose, s.normal);
+  if (!identity) s.normal = toWorldDirection(c.pose, s.normal);
   return s;
+}
+
+// The segment from `a` to `b` (world) misses the collider's inside box (BlobCollider::bounded).
+bool missesInsideBox(const BlobCollider& c, glm::vec3 a, glm::vec3 b, bool identity) {
+  if (!c.bounded) return false;
+  if (!identity) a = toColliderSpace(c.pose, a), b = toColliderSpace(c.pose, b);
+  const glm::vec3 lo = glm::min(a, b), hi = glm::max(a, b);
+  return glm::any(glm::lessThan(hi, c.inside_lo)) || glm::any(glm::greaterThan(lo, c.inside_hi));
 }
 
 // Collisions of the predicted positions with every collider (Kolb 2004 §3.3.2 double check) and
@@ -198,10 +208,13 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
     if (!c.shape) continue;
     const CollisionMaterial& material = c.use_blob_material ? p.material : c.material;
     s.before.assign(v.begin(), v.end());
+    const bool identity = c.pose.rotation == glm::quat(1.0f, 0.0f, 0.0f, 0.0f) && c.pose.translation == glm::vec3(0.0f);
     par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         s.outcome[i] = 0;
         const glm::vec3 from = s.previous[i];
+        // Every sample below lies on the segment: outside the box, none can be inside.
+        if (missesInsideBox(c, from, predicted[i], identity)) continue;
         const glm::vec3 step = predicted[i] - from;
         const float len = glm::length(step);
         const int samples = len > max_step ? static_cast<int>(std::min(std::ceil(len / max_step), 4096.0f)) : 1;
@@ -210,12 +223,12 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
         bool inside = false;
         for (int k = 1; k <= samples && !inside; ++k) {
           hit_point = k == samples ? predicted[i] : from + step * (static_cast<float>(k) / static_cast<float>(samples));
-          hit = sampleAt(c, hit_point);
+          hit = sampleAt(c, hit_point, identity);
           inside = hit.valid && hit.distance < 0.0f;
           if (inside && k < samples) s.outcome[i] = 2;  // found by the sweep
         }
         if (!inside) continue;
-        const CollisionResult res = resolveCollision(from, sampleAt(c, from), hit_point, v[i], hit,
+        const CollisionResult res = resolveCollision(from, sampleAt(c, from, identity), hit_point, v[i], hit,
                                                      colliderVelocityAt(c.pose, hit_point), dt, skin, material);
         predicted[i] = res.position;
         v[i] = res.velocity;
@@ -252,6 +265,25 @@ void checkRange(std::ostringstream& err, const char* name, T value, T lo, T hi) 
 }
 
 }  // namespace
+
+void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const DepthMap& map : shape.maps()) {
+    const float a = map.format == DepthMapFormat::cube8 ? -1.0f : 0.0f;
+    const glm::mat4 to_collider = glm::inverse(map.collider_to_map);
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec3 corner((k & 1) ? 1.0f : a, (k & 2) ? 1.0f : a, (k & 4) ? 1.0f : a);
+      const glm::vec4 q = to_collider * glm::vec4(corner, 1.0f);
+      const glm::vec3 x = glm::vec3(q) / q.w;
+      lo = glm::min(lo, x), hi = glm::max(hi, x);
+    }
+  }
+  c.bounded = isFinite(lo) && isFinite(hi) && glm::all(glm::lessThanEqual(lo, hi));
+  if (!c.bounded) return;
+  const glm::vec3 pad = glm::vec3(1e-3f) + 1e-4f * (hi - lo);
+  c.inside_lo = lo - pad;
+  c.inside_hi = hi + pad;
+}
 
 float blobBodyRadius(const BlobParams& p) {
   return std::cbrt(3.0f * static_cast<float>(p.particle_count) / (4.0f * kPi)) * p.spacing;

@@ -436,7 +436,9 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   std::vector<std::string> walls;
   for (fluid::CachedCollider& part : parts) {
     fluid::BlobCollider c;
-    c.shape = std::make_shared<fluid::DepthMapCollider>(std::move(part.collider));
+    auto shape = std::make_shared<fluid::DepthMapCollider>(std::move(part.collider));
+    fluid::blobDepthMapBounds(c, *shape);  // particles far from it skip its queries
+    c.shape = std::move(shape);
     s.world.colliders.push_back(std::move(c));
     walls.push_back(part.name);
   }
