@@ -193,10 +193,12 @@ BlobStatus placeBlob(BlobWorld& world, std::span<const glm::vec3> positions);
 std::vector<glm::vec3> blobColumn(const BlobParams& params, glm::vec3 top, float radius);
 
 // The collider-space box that holds every point a baked depth-map collider (fluid/collide) can
-// report inside: the union of its maps' view volumes (an ortho map votes "inside" only for
-// map coordinates in [0, 1]^3, a cube map only in [-1, 1]^3, collide.hpp "Map coordinates"),
-// widened by 1 mm and 1e-4 of its size against rounding. Sets c.bounded, c.inside_lo/hi; a
-// collider without maps stays unbounded.
+// report inside. Inside needs at least one vote and every vote negative (rule (2)), so some map
+// cast a negative vote there: the union over the maps of where each can. A front_back16 map only
+// at texels that vote (not background, not margin ring) and between their front and back depths
+// (its surfaces' bounding box, seen from that side); other ortho maps anywhere in their volume
+// [0, 1]^3, cube maps in [-1, 1]^3 (collide.hpp "Map coordinates"). Widened by 1 mm and 1e-4 of
+// its size against rounding. Sets c.bounded, c.inside_lo/hi; a collider without maps stays unbounded.
 void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape);
 
 // Advances params.step seconds (params.substeps sub-steps). The world is left untouched when a

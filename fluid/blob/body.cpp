@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 
@@ -266,20 +267,61 @@ void checkRange(std::ostringstream& err, const char* name, T value, T lo, T hi) 
 
 }  // namespace
 
+namespace {
+
+// The map-coordinate box where a front_back16 map can cast a negative ("inside") vote: over its
+// texels that vote at all (not background, not margin ring), the texel's footprint and the depths
+// between its front and back surface (to the near / far plane where one of them is background).
+// Empty (lo > hi) when no texel can. depth_map.cpp: a LESS vote is negative only for q.z in
+// (front, 1], a GREATER vote only for q.z in [0, back); margin-ring texels vote into the fallback
+// winner, which is never inside.
+void frontBackInsideBox(const DepthMap& map, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(INFINITY), hi = glm::vec3(-INFINITY);
+  const std::uint32_t n = map.resolution;
+  const float inv_n = 1.0f / static_cast<float>(n);
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint8_t* t = map.texels.data() + (static_cast<std::size_t>(j) * n + i) * 8;
+      std::uint16_t front_bits, back_bits;
+      std::memcpy(&front_bits, t + 4, 2);
+      std::memcpy(&back_bits, t + 6, 2);
+      const float front = halfToFloat(front_bits), back = halfToFloat(back_bits);
+      if (map.margin_ring && front_bits == back_bits && front >= 0.0f) continue;
+      if (front < 0.0f && back < 0.0f) continue;
+      const float z_lo = front >= 0.0f ? front : 0.0f, z_hi = back >= 0.0f ? back : 1.0f;
+      lo = glm::min(lo, glm::vec3(static_cast<float>(i) * inv_n, static_cast<float>(j) * inv_n, z_lo));
+      hi = glm::max(hi, glm::vec3(static_cast<float>(i + 1) * inv_n, static_cast<float>(j + 1) * inv_n, z_hi));
+    }
+}
+
+}  // namespace
+
 void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape) {
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (const DepthMap& map : shape.maps()) {
-    const float a = map.format == DepthMapFormat::cube8 ? -1.0f : 0.0f;
+    // Map-coordinate box of the map's possible inside votes: front_back16 from its texels, other
+    // ortho maps their whole volume [0, 1]^3, cube maps theirs [-1, 1]^3.
+    glm::vec3 q_lo(map.format == DepthMapFormat::cube8 ? -1.0f : 0.0f), q_hi(1.0f);
+    if (map.format == DepthMapFormat::front_back16 &&
+        map.texels.size() == static_cast<std::size_t>(map.resolution) * map.resolution * 8) {
+      frontBackInsideBox(map, q_lo, q_hi);
+      if (q_lo.x > q_hi.x) continue;  // this map never votes inside
+    }
     const glm::mat4 to_collider = glm::inverse(map.collider_to_map);
     for (int k = 0; k < 8; ++k) {
-      const glm::vec3 corner((k & 1) ? 1.0f : a, (k & 2) ? 1.0f : a, (k & 4) ? 1.0f : a);
+      const glm::vec3 corner((k & 1) ? q_hi.x : q_lo.x, (k & 2) ? q_hi.y : q_lo.y, (k & 4) ? q_hi.z : q_lo.z);
       const glm::vec4 q = to_collider * glm::vec4(corner, 1.0f);
       const glm::vec3 x = glm::vec3(q) / q.w;
       lo = glm::min(lo, x), hi = glm::max(hi, x);
     }
   }
   c.bounded = isFinite(lo) && isFinite(hi) && glm::all(glm::lessThanEqual(lo, hi));
-  if (!c.bounded) return;
+  if (!c.bounded) {
+    // No map can vote inside (or none at all): nothing is ever inside, an empty box.
+    c.bounded = !shape.maps().empty() && !isFinite(lo);
+    c.inside_lo = glm::vec3(INFINITY), c.inside_hi = glm::vec3(-INFINITY);
+    return;
+  }
   const glm::vec3 pad = glm::vec3(1e-3f) + 1e-4f * (hi - lo);
   c.inside_lo = lo - pad;
   c.inside_hi = hi + pad;
