@@ -30,8 +30,8 @@
 //
 // Determinism: fixed sub-steps; the per-particle passes run on oneTBB and write only their own
 // particle; every reduction (centroid, A_pq, impulses) is a serial loop in index order, so results
-// are bit-identical for any thread count. Randomness (the initial jitter, blast directions for a
-// particle exactly at the blast centre) comes from a seeded counter-based hash.
+// are bit-identical for any thread count. Randomness (the initial jitter) comes from a seeded
+// counter-based hash.
 //
 // Units: SI (m, s, kg). Gravity defaults to -y. Particle index order never changes (tentacle order
 // and the rest shape are by index).
@@ -205,10 +205,6 @@ void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape);
 // position or velocity is not finite (the error names the particle).
 BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats = nullptr);
 
-// An explosion: particle i within `radius` of `centre` gets the velocity change
-// speed (1 - r/radius)^2 away from the centre (a particle exactly at the centre: a seeded random
-// direction). Returns how many particles it reached. Non-finite or non-positive inputs do nothing.
-std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float radius);
 // The game's blast (fluid/core/blast.hpp), by the law the water, crates and sprites obey: particle i
 // gains fluid::blastVelocityChange with its cross-section over mass pi r^2 / (rho d^3), the change
 // capped at max_speed (and the speed clamped to it). Returns how many particles it reached; a blast

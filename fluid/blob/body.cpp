@@ -497,26 +497,6 @@ BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats_out) {
   return {};
 }
 
-std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float radius) {
-  if (!isFinite(centre) || !std::isfinite(speed) || !std::isfinite(radius) || speed <= 0.0f || radius <= 0.0f) return 0;
-  BlobParticles& parts = world.particles;
-  const float max_speed = world.params.max_speed;
-  std::size_t reached = 0;
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const glm::vec3 rv = parts.position[i] - centre;
-    const float r = glm::length(rv);
-    if (r >= radius) continue;
-    const float falloff = (1.0f - r / radius) * (1.0f - r / radius);
-    const glm::vec3 dir = r > 1e-6f * radius ? rv / r : randomDirection(world.params.seed ^ world.steps, i);
-    glm::vec3 v = parts.velocity[i] + speed * falloff * dir;
-    const float len = glm::length(v);
-    if (len > max_speed) v *= max_speed / len;
-    parts.velocity[i] = v;
-    ++reached;
-  }
-  return reached;
-}
-
 std::size_t blastBlob(BlobWorld& world, const Blast& blast) {
   if (!validateBlast(blast).empty()) return 0;
   BlobParticles& parts = world.particles;

@@ -45,6 +45,9 @@ bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view 
   engine::MeshData crate;
   if (!engine::loadMesh(content_dir / "models" / "crate.obj", crate, error)) return false;
   out.crate = engine::uploadMesh(crate);
+  engine::MeshData charge;
+  if (!engine::loadMesh(content_dir / "models" / "charge.obj", charge, error)) return false;
+  out.charge = engine::uploadMesh(charge);
   return true;
 }
 

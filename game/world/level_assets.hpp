@@ -2,8 +2,8 @@
 // The GPU copies of the level's models and textures (content/models, content/textures): the models
 // of the scene's level (scene.level: the fountain's ground, basin and statue; the blob monster's
 // street, sewer, grate and wall), drawn in every frame, the crate model the rigid_bodies effect
-// draws its bodies with, and the blob's tentacle skin (the blob effect hands it to the goo pass).
-// Loaded by runScene with the GL context current.
+// draws its bodies with, the sphere the explosives draw their charges with, and the blob's tentacle skin (the blob
+// effect hands it to the goo pass). Loaded by runScene with the GL context current.
 
 #include "engine/render/frame.hpp"
 #include "engine/render/renderer.hpp"
@@ -28,6 +28,7 @@ struct LevelModel {
 struct LevelAssets {
   std::vector<LevelModel> models;  // the level's models, in draw order
   engine::GpuMesh crate;
+  engine::GpuMesh charge;  // the explosives' charge: a unit-diameter sphere
   engine::GpuTexture paving, stone, wood;
   engine::GpuTexture blob_tentacle;  // loaded for the blob_monster level only
 };
