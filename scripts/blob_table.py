@@ -39,6 +39,7 @@ def percentile(values, p):
 
 
 def cost(bench, fluiddemo, readme):
+    load_before = os.getloadavg()[0]
     run = subprocess.run([bench, "--benchmark_format=json", "--benchmark_min_time=1"], capture_output=True, text=True)
     if run.returncode != 0:
         sys.exit(f"blob_table: {bench} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
@@ -47,15 +48,16 @@ def cost(bench, fluiddemo, readme):
         m = re.match(r"BM_(BlobStep|BlobStepAndMesh)/particles:(\d+)/threads:(\d+)", b["name"])
         if m:
             cases[(m.group(1), int(m.group(2)), int(m.group(3)))] = b
-    rows = ["| particles | threads | step mean ms | step p95 ms | step + mesh mean ms | step + mesh p95 ms | triangles |",
-            "|---|---|---|---|---|---|---|"]
+    rows = ["| particles | threads | step mean ms | step p95 ms | step + mesh mean ms | step + mesh p95 ms | "
+            "step + mesh CPU ms (main thread) | triangles |",
+            "|---|---|---|---|---|---|---|---|"]
     for n in (250, 1000, 4000):
         for t in (1, 2):
             step, both = cases.get(("BlobStep", n, t)), cases.get(("BlobStepAndMesh", n, t))
             if step is None or both is None:
                 sys.exit(f"blob_table: {bench} gave no case for {n} particles, {t} threads")
             rows.append(f"| {n:,} | {t} | {step['real_time']:.2f} | {step['p95_ms']:.2f} | {both['real_time']:.2f} | "
-                        f"{both['p95_ms']:.2f} | {both['triangles']:,.0f} |")
+                        f"{both['p95_ms']:.2f} | {both['cpu_time']:.2f} | {both['triangles']:,.0f} |")
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "blob.csv")
         replay = [fluiddemo, "replay", "content/replays/blob_tour.replay", "--headless", "--no-ui", "--width", "320",
@@ -67,8 +69,11 @@ def cost(bench, fluiddemo, readme):
     both = [float(f["fluid_ms"]) + float(f["meshing_ms"]) for f in frames]
     step = [float(f["fluid_ms"]) for f in frames]
     mesh = [float(f["meshing_ms"]) for f in frames]
-    lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {os.cpu_count()} cores "
-             "(a shared machine: wall times, noisy).", "",
+    load_after = os.getloadavg()[0]
+    lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {os.cpu_count()} cores, "
+             f"load average {load_before:.1f} before and {load_after:.1f} after: wall times on a shared machine, "
+             "as noisy as that load says (the CPU column, the main thread's CPU time per frame, is the steadier one "
+             "for 1 thread).", "",
              f"In the blob replay (`{' '.join(replay[1:-2])}`, {len(frames)} frames, the CSV's fluid_ms + meshing_ms): "
              f"body step + meshing p50 {percentile(both, 0.5):.2f} ms, **p95 {percentile(both, 0.95):.2f} ms** "
              f"(step p95 {percentile(step, 0.95):.2f}, meshing p95 {percentile(mesh, 0.95):.2f}).", "",
