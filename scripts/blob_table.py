@@ -1,20 +1,94 @@
 #!/usr/bin/env python3
-"""Writes the blob monster's behaviour measurements into README.md (between the blob_table markers)
-from the `[blob]` lines the unit_blob tests print (tests/blob: each behaviour reaching its goal in a
-scripted headless run, asserted there as a number).
+"""Writes the blob monster's measurements into README.md.
+
+Behaviours (between the blob_table markers): the `[blob]` lines the unit_blob tests print (tests/blob:
+each behaviour reaching its goal in a scripted headless run, asserted there as a number).
 
     python3 scripts/blob_table.py build/dev/tests/blob/unit_blob [README.md]
+
+Cost (between the blob_cost markers): body step and step + meshing per frame from bench_blob
+(250 / 1,000 / 4,000 particles, 1 and 2 threads), and step + meshing per frame in the blob replay
+(fluiddemo replay content/replays/blob_tour.replay headless, the CSV's fluid_ms + meshing_ms).
+
+    python3 scripts/blob_table.py --cost build/dev/tests/bench/bench_blob build/dev/game/fluiddemo [README.md]
 """
+import csv
+import json
+import os
 import re
 import subprocess
 import sys
+import tempfile
 
 BEGIN, END = "<!-- blob_table begin -->", "<!-- blob_table end -->"
+COST_BEGIN, COST_END = "<!-- blob_cost begin -->", "<!-- blob_cost end -->"
+
+
+def replace_section(readme, begin, end, lines):
+    text = open(readme).read()
+    if begin not in text or end not in text:
+        sys.exit(f"blob_table: {readme} has no {begin} ... {end} section")
+    head, rest = text.split(begin, 1)
+    tail = rest.split(end, 1)[1]
+    open(readme, "w").write(head + "\n".join([begin] + lines + [end]) + tail)
+
+
+def percentile(values, p):
+    values = sorted(values)
+    return values[min(len(values) - 1, int(len(values) * p))]
+
+
+def cost(bench, fluiddemo, readme):
+    load_before = os.getloadavg()[0]
+    run = subprocess.run([bench, "--benchmark_format=json", "--benchmark_min_time=1"], capture_output=True, text=True)
+    if run.returncode != 0:
+        sys.exit(f"blob_table: {bench} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
+    cases = {}
+    for b in json.loads(run.stdout)["benchmarks"]:
+        m = re.match(r"BM_(BlobStep|BlobStepAndMesh)/particles:(\d+)/threads:(\d+)", b["name"])
+        if m:
+            cases[(m.group(1), int(m.group(2)), int(m.group(3)))] = b
+    rows = ["| particles | threads | step mean ms | step p95 ms | step + mesh mean ms | step + mesh p95 ms | "
+            "step + mesh CPU ms (main thread) | triangles |",
+            "|---|---|---|---|---|---|---|---|"]
+    for n in (250, 1000, 4000):
+        for t in (1, 2):
+            step, both = cases.get(("BlobStep", n, t)), cases.get(("BlobStepAndMesh", n, t))
+            if step is None or both is None:
+                sys.exit(f"blob_table: {bench} gave no case for {n} particles, {t} threads")
+            rows.append(f"| {n:,} | {t} | {step['real_time']:.2f} | {step['p95_ms']:.2f} | {both['real_time']:.2f} | "
+                        f"{both['p95_ms']:.2f} | {both['cpu_time']:.2f} | {both['triangles']:,.0f} |")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "blob.csv")
+        replay = [fluiddemo, "replay", "content/replays/blob_tour.replay", "--headless", "--no-ui", "--width", "320",
+                  "--height", "180", "--threads", "2", "--csv", out]
+        run = subprocess.run(replay, capture_output=True, text=True, env=dict(os.environ, SDL_VIDEODRIVER="offscreen"))
+        if run.returncode != 0:
+            sys.exit(f"blob_table: {' '.join(replay)} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
+        frames = list(csv.DictReader(open(out)))
+    both = [float(f["fluid_ms"]) + float(f["meshing_ms"]) for f in frames]
+    step = [float(f["fluid_ms"]) for f in frames]
+    mesh = [float(f["meshing_ms"]) for f in frames]
+    load_after = os.getloadavg()[0]
+    lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {os.cpu_count()} cores, "
+             f"load average {load_before:.1f} before and {load_after:.1f} after: wall times on a shared machine, "
+             "as noisy as that load says (the CPU column, the main thread's CPU time per frame, is the steadier one "
+             "for 1 thread).", "",
+             f"In the blob replay (`{' '.join(replay[1:-2])}`, {len(frames)} frames, the CSV's fluid_ms + meshing_ms): "
+             f"body step + meshing p50 {percentile(both, 0.5):.2f} ms, **p95 {percentile(both, 0.95):.2f} ms** "
+             f"(step p95 {percentile(step, 0.95):.2f}, meshing p95 {percentile(mesh, 0.95):.2f}).", "",
+             "bench_blob (a body growing four tentacles on the ground; the mesh as the game makes it):", ""]
+    replace_section(readme, COST_BEGIN, COST_END, lines + rows + [""])
+    print(f"blob_table: cost table written to {readme}")
 
 
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
+    if sys.argv[1] == "--cost":
+        if len(sys.argv) < 4:
+            sys.exit(__doc__)
+        return cost(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "README.md")
     exe = sys.argv[1]
     readme = sys.argv[2] if len(sys.argv) > 2 else "README.md"
     run = subprocess.run([exe], capture_output=True, text=True)
@@ -30,13 +104,8 @@ def main():
     table = [BEGIN, "", f"Written by `python3 scripts/blob_table.py {exe}` (tests/blob, 1,000 particles unless named).", "",
              "| behaviour / check | measured |", "|---|---|"]
     table += [f"| {name} | {text} |" for name, text in rows]
-    table += ["", END]
-    text = open(readme).read()
-    if BEGIN not in text or END not in text:
-        sys.exit(f"blob_table: {readme} has no {BEGIN} ... {END} section")
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    open(readme, "w").write(head + "\n".join(table) + tail)
+    table += [""]
+    replace_section(readme, BEGIN, END, table[1:])
     print(f"blob_table: {len(rows)} rows written to {readme}")
 
 

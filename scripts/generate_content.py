@@ -209,6 +209,30 @@ def crate():
     return mesh
 
 
+def sphere(rings=12, segments=24):
+    """Unit-diameter UV sphere centred on the origin (the explosive charge; the game scales it to the
+    charge's diameter): u around +y, v from the bottom pole to the top."""
+    mesh = Mesh()
+    grid = []
+    for i in range(rings + 1):
+        theta = math.pi * i / rings
+        row = []
+        for k in range(segments + 1):
+            a = 2.0 * math.pi * k / segments
+            n = [math.sin(theta) * math.cos(a), -math.cos(theta), math.sin(theta) * math.sin(a)]
+            row.append(mesh.vertex([0.5 * x for x in n], [k / segments, i / rings], n))
+        grid.append(row)
+    for i in range(rings):
+        for k in range(segments):
+            a, b = grid[i][k], grid[i][k + 1]
+            c, d = grid[i + 1][k], grid[i + 1][k + 1]
+            if i > 0:  # row 0 is the bottom pole: (a, b, d) would be degenerate there
+                mesh.triangle(a, b, d)
+            if i + 1 < rings:  # likewise at the top pole
+                mesh.triangle(a, d, c)
+    return mesh
+
+
 def box(mesh, lo, hi, tile=2.5):
     """Appends a closed axis-aligned box [lo, hi] (outward normals, uv in metres / tile)."""
     for axis in range(3):
@@ -492,6 +516,7 @@ def main():
     statue().write(os.path.join(MODELS, "statue.obj"), "fountain statue: column, dish and spire")
     ground().write(os.path.join(MODELS, "ground.obj"), "courtyard ground, 80 m square slab, 1 m deep")
     crate().write(os.path.join(MODELS, "crate.obj"), "unit crate centred on the origin")
+    sphere().write(os.path.join(MODELS, "charge.obj"), "explosive charge: unit-diameter sphere centred on the origin")
     blob_street().write(os.path.join(MODELS, "blob_street.obj"),
                         "blob street ground: 30 m square slab, 1 m deep, with the sewer block's 1.6 m hole")
     blob_sewer().write(os.path.join(MODELS, "blob_sewer.obj"),
@@ -501,7 +526,7 @@ def main():
     for name, make in (("paving.png", paving_texture), ("stone.png", stone_texture), ("crate.png", crate_texture),
                        ("blob_tentacle.png", blob_tentacle_texture)):
         write_png(os.path.join(TEXTURES, name), 256, 256, make())
-    print("generate_content: wrote content/models/{basin,statue,ground,crate,blob_street,blob_sewer,blob_grate,"
+    print("generate_content: wrote content/models/{basin,statue,ground,crate,charge,blob_street,blob_sewer,blob_grate,"
           "blob_wall}.obj and content/textures/{paving,stone,crate,blob_tentacle}.png")
     return 0
 

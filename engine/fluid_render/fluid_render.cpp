@@ -48,6 +48,8 @@ void setShading(GLuint prog, const WaterParams& p) {
   glUniform3fv(loc(prog, "u_light"), 1, glm::value_ptr(light));
   glUniform1f(loc(prog, "u_shininess"), std::clamp(p.shininess, 1.0f, 4096.0f));
   glUniform3fv(loc(prog, "u_goo_colour"), 1, glm::value_ptr(p.goo_colour));
+  glUniform1f(loc(prog, "u_goo_density"), std::clamp(p.goo_density, 0.0f, 1000.0f));
+  glUniform1f(loc(prog, "u_goo_min_coverage"), std::clamp(p.goo_min_coverage, 0.0f, 1.0f));
 }
 
 }  // namespace
@@ -74,10 +76,10 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
                                                  {GL_FRAGMENT_SHADER, {dir / "depth.glsl", dir / "water_extent.frag"}}},
                    "", error);
   out.error += error;
-  out.goo_program =
-      buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
-                                                 {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "goo.frag"}}},
-                   "", error);
+  out.goo_program = buildProgram(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "surface.vert"}},
+                                    {GL_FRAGMENT_SHADER, {dir / "shading.glsl", dir / "depth.glsl", dir / "goo.frag"}}},
+      "", error);
   out.error += error;
   out.blit_program = buildProgram(
       std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}}, {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}},
@@ -104,6 +106,7 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   glGenVertexArrays(1, &out.vao);
   glGenBuffers(1, &out.vbo);
   glGenBuffers(1, &out.ibo);
+  glGenBuffers(1, &out.attribute_vbo);
   glBindVertexArray(out.vao);
   glBindBuffer(GL_ARRAY_BUFFER, out.vbo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, out.ibo);
@@ -111,6 +114,10 @@ void createFluidRenderer(const FluidRenderDesc& desc, FluidRenderer& out) {
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, nullptr);
   glEnableVertexAttribArray(1);
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<const void*>(12));
+  // Input 2 (the goo's u, v, skin weight) reads attribute_vbo only after an upload that has
+  // attributes; otherwise it stays disabled and reads the constant set in drawFluid (zero).
+  glBindBuffer(GL_ARRAY_BUFFER, out.attribute_vbo);
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glGenVertexArrays(1, &out.empty_vao);
@@ -130,7 +137,7 @@ void destroyFluidRenderer(FluidRenderer& r) {
     if (*f != 0) glDeleteFramebuffers(1, f);
     *f = 0;
   }
-  for (GLuint* b : {&r.vbo, &r.ibo}) {
+  for (GLuint* b : {&r.vbo, &r.ibo, &r.attribute_vbo}) {
     if (*b != 0) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -157,12 +164,30 @@ void beginOpaquePass(FluidRenderer& r, glm::vec4 clear_colour) {
 
 bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                      std::span<const std::uint32_t> indices, std::string& error) {
+  return uploadFluidMesh(r, positions, normals, indices, {}, error);
+}
+
+bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                     std::span<const std::uint32_t> indices, std::span<const glm::vec4> attributes,
+                     std::string& error) {
   error.clear();
   r.index_count = 0;
+  r.has_attributes = false;
   if (positions.size() != normals.size()) {
     error = "fluid mesh: " + std::to_string(positions.size()) + " positions but " + std::to_string(normals.size()) +
             " normals";
     return false;
+  }
+  if (!attributes.empty() && attributes.size() != positions.size()) {
+    error = "fluid mesh: " + std::to_string(positions.size()) + " positions but " + std::to_string(attributes.size()) +
+            " attributes";
+    return false;
+  }
+  for (std::size_t k = 0; k < attributes.size(); ++k) {
+    if (!fluid::isFinite(glm::vec3(attributes[k])) || !std::isfinite(attributes[k].w)) {
+      error = "fluid mesh: attribute of vertex " + std::to_string(k) + " is not finite";
+      return false;
+    }
   }
   if (indices.size() % 3 != 0) {
     error = "fluid mesh: index count " + std::to_string(indices.size()) + " is not a multiple of 3";
@@ -205,6 +230,16 @@ bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std
   glBindVertexArray(r.vao);  // the element buffer binding belongs to the VAO
   r.reallocations += ensureCapacity(GL_ELEMENT_ARRAY_BUFFER, r.ibo, ibytes, r.ibo_bytes) ? 1u : 0u;
   glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(ibytes), indices.data());
+  if (!attributes.empty()) {
+    const std::size_t abytes = attributes.size() * sizeof(glm::vec4);
+    r.reallocations += ensureCapacity(GL_ARRAY_BUFFER, r.attribute_vbo, abytes, r.attribute_bytes) ? 1u : 0u;
+    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(abytes), attributes.data());
+    glEnableVertexAttribArray(2);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    r.has_attributes = true;
+  } else {
+    glDisableVertexAttribArray(2);
+  }
   glBindVertexArray(0);
   r.index_count = static_cast<std::uint32_t>(indices.size());
   return true;
@@ -212,27 +247,12 @@ bool uploadFluidMesh(FluidRenderer& r, std::span<const glm::vec3> positions, std
 
 void drawFluid(FluidRenderer& r, GLuint target_fbo, const FluidCamera& camera, const WaterParams& params) {
   if (!r.ready) return;
-  glDisable(GL_CULL_FACE);  // both sides: back faces are seen through the water or from inside it
-  if (params.style == FluidStyle::goo && r.index_count > 0) {
-    // Opaque: into the scene with depth test and writes; the front-to-back order the
-    // extractor emits lets early depth rejection skip hidden triangles.
-    glBindFramebuffer(GL_FRAMEBUFFER, r.scene_fbo);
-    glViewport(0, 0, r.desc.width, r.desc.height);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
-    glDisable(GL_BLEND);
-    glUseProgram(r.goo_program);
-    setCamera(r.goo_program, camera, r);
-    setShading(r.goo_program, params);
-    glBindVertexArray(r.vao);
-    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.index_count), GL_UNSIGNED_INT, nullptr);
-    glBindVertexArray(0);
-    glDisable(GL_DEPTH_TEST);
-  }
-  if (params.style == FluidStyle::water && r.index_count > 0) {
-    // The water's extent along each pixel (water_extent.frag): MAX blending keeps the nearest
-    // entry (as its negative) and the farthest surface in front of the scene depth.
+  glDisable(GL_CULL_FACE);  // both sides: back faces are seen through the fluid or from inside it
+  const bool goo = params.style == FluidStyle::goo;
+  if (r.index_count > 0) {
+    // The fluid's extent along each pixel (water_extent.frag): MAX blending keeps the nearest
+    // entry (as its negative) and the farthest surface in front of the scene depth. Water absorbs
+    // through it; goo takes its coverage and glow from it.
     glBindFramebuffer(GL_FRAMEBUFFER, r.water_extent_fbo);
     glViewport(0, 0, r.desc.width, r.desc.height);
     const GLfloat no_water[4] = {-1e30f, 0.0f, 0.0f, 0.0f};  // no entry, no far surface
@@ -262,24 +282,33 @@ void drawFluid(FluidRenderer& r, GLuint target_fbo, const FluidCamera& camera, c
   glUniform1i(loc(r.blit_program, "u_colour"), 0);
   glBindVertexArray(r.empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
-  if (params.style == FluidStyle::water && r.index_count > 0) {
-    // Transparent: blended "over" in the order given (back-to-front from the extractor); the
-    // scene depth test is done in the shader (the target may have no depth buffer).
+  if (r.index_count > 0) {
+    // Blended "over" in the order given (back-to-front from the extractor); the scene depth test
+    // is done in the shader (the target may have no depth buffer).
+    const GLuint program = goo ? r.goo_program : r.water_program;
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-    glUseProgram(r.water_program);
-    setCamera(r.water_program, camera, r);
-    setShading(r.water_program, params);
+    glUseProgram(program);
+    setCamera(program, camera, r);
+    setShading(program, params);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, r.scene_colour);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, r.scene_depth);
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D, r.water_extent);
-    glUniform1i(loc(r.water_program, "u_scene_colour"), 0);
-    glUniform1i(loc(r.water_program, "u_scene_depth"), 1);
-    glUniform1i(loc(r.water_program, "u_water_extent"), 2);
+    glUniform1i(loc(program, "u_scene_colour"), 0);
+    glUniform1i(loc(program, "u_scene_depth"), 1);
+    glUniform1i(loc(program, "u_water_extent"), 2);
+    if (goo) {
+      const bool textured = r.has_attributes && params.goo_texture != 0;
+      glActiveTexture(GL_TEXTURE3);
+      glBindTexture(GL_TEXTURE_2D, textured ? params.goo_texture : 0);
+      glUniform1i(loc(program, "u_goo_texture"), 3);
+      glUniform1i(loc(program, "u_goo_textured"), textured ? 1 : 0);
+    }
     glBindVertexArray(r.vao);
+    if (!r.has_attributes) glVertexAttrib4f(2, 0.0f, 0.0f, 0.0f, 0.0f);  // no skin anywhere
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.index_count), GL_UNSIGNED_INT, nullptr);
     glDisable(GL_BLEND);
     glActiveTexture(GL_TEXTURE0);

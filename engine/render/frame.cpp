@@ -62,7 +62,7 @@ GLuint uploadWater(WaterRenderers& pass, const WaterBatch& batch) {
     uploaded = uploadRaycastParticles(pass.raycast, batch.particles, error);
   } else if (batch.method == FluidMethod::mesh && pass.mesh.ready) {
     scene_fbo = pass.mesh.scene_fbo;
-    uploaded = uploadFluidMesh(pass.mesh, batch.positions, batch.normals, batch.indices, error);
+    uploaded = uploadFluidMesh(pass.mesh, batch.positions, batch.normals, batch.indices, batch.attributes, error);
   }
   if (scene_fbo != 0 && !uploaded) {
     std::fprintf(stderr, "fluiddemo: fluid upload: %s\n", error.c_str());
@@ -99,6 +99,8 @@ void drawWater(Renderer& renderer, WaterRenderers& pass, const FrameView& view, 
   water.absorption = batch.absorption;
   water.style = batch.style;
   water.goo_colour = batch.goo_colour;
+  water.goo_density = batch.goo_density;
+  water.goo_texture = batch.goo_texture != nullptr ? batch.goo_texture->texture.id() : 0;
   // Sky reflected by the water: the scene's own sky colours, so the water matches the scene.
   water.sky_zenith = lighting.sky_zenith;
   water.sky_horizon = lighting.sky_horizon;

@@ -4,8 +4,9 @@
 //   1. shadow map, opaque meshes, sky    renderScene (renderer.hpp)
 //   2. water, one pass per WaterBatch    the opaque colour + depth are copied into the water
 //      renderer's own targets (its background), then the water is drawn back into the scene FBO:
-//      the marching-slices mesh blended in the order it was emitted (back-to-front), or the
-//      particles straight (screen-space splats, ray-cast metaballs) (engine/fluid_render)
+//      the marching-slices mesh blended in the order it was emitted (back-to-front) as water or
+//      translucent goo, or the particles straight (screen-space splats, ray-cast metaballs)
+//      (engine/fluid_render)
 //   3. sprites, one pass per system      a few odd-even merge-sort passes for the eye (Kolb 2004
 //      §3.3.3), then point sprites depth-tested against the scene, not written
 // Every pass keeps the scene's alpha at 1 (PNG screenshots would otherwise turn see-through).
@@ -34,8 +35,14 @@ struct RaycastCounts {
 // One body of water. The spans must stay valid until renderFrame returns.
 struct WaterBatch {
   FluidMethod method = FluidMethod::mesh;
-  FluidStyle style = FluidStyle::water;  // mesh: refractive water, or opaque goo (depth-tested)
+  FluidStyle style = FluidStyle::water;  // mesh: refractive water, or translucent goo
   glm::vec3 goo_colour{0.35f, 0.8f, 0.2f};
+  float goo_density = 12.0f;  // goo: extinction per metre of body (WaterParams::goo_density)
+  // Goo skin (method mesh, style goo): per vertex (u, v, skin weight, -), empty or one per
+  // position (SurfaceMesh::attributes, fluid/blob/tentacle_uv.hpp), and the texture sampled at
+  // (u, v) (null, or never uploaded: plain goo). The texture must outlive renderFrame.
+  std::span<const glm::vec4> attributes;
+  const GpuTexture* goo_texture = nullptr;
   bool visible = true;  // false: not drawn, but its renderer's GL objects are kept for later frames
   // method mesh: the surface, triangles in draw order (back-to-front for blending).
   std::span<const glm::vec3> positions, normals;

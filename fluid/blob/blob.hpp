@@ -30,8 +30,8 @@
 //
 // Determinism: fixed sub-steps; the per-particle passes run on oneTBB and write only their own
 // particle; every reduction (centroid, A_pq, impulses) is a serial loop in index order, so results
-// are bit-identical for any thread count. Randomness (the initial jitter, blast directions for a
-// particle exactly at the blast centre) comes from a seeded counter-based hash.
+// are bit-identical for any thread count. Randomness (the initial jitter) comes from a seeded
+// counter-based hash.
 //
 // Units: SI (m, s, kg). Gravity defaults to -y. Particle index order never changes (tentacle order
 // and the rest shape are by index).
@@ -123,6 +123,12 @@ struct BlobCollider {
   ColliderPose pose;
   CollisionMaterial material;
   bool use_blob_material = true;  // use BlobParams::material instead of `material`
+  // Optional: a collider-space box outside which `shape` never reports a point inside (distance
+  // < 0). A particle whose sub-step path lies wholly outside it skips the shape's queries: the
+  // same result for less work (most particles are nowhere near most of the level's colliders).
+  // blobDepthMapBounds gives the box of a baked collider. bounded = false: query every particle.
+  bool bounded = false;
+  glm::vec3 inside_lo{0.0f}, inside_hi{0.0f};
   // Output of the last stepBlob: momentum (N s) and angular momentum about pose.translation
   // (N m s) the particles lost to this collider, i.e. what the game applies to the rigid body.
   glm::vec3 impulse{0.0f};
@@ -186,14 +192,19 @@ BlobStatus placeBlob(BlobWorld& world, std::span<const glm::vec3> positions);
 // axis passes through `top` and that extends downward (a column in a pipe), top layer first.
 std::vector<glm::vec3> blobColumn(const BlobParams& params, glm::vec3 top, float radius);
 
+// The collider-space box that holds every point a baked depth-map collider (fluid/collide) can
+// report inside. Inside needs at least one vote and every vote negative (rule (2)), so some map
+// cast a negative vote there: the union over the maps of where each can. A front_back16 map only
+// at texels that vote (not background, not margin ring) and between their front and back depths
+// (its surfaces' bounding box, seen from that side); other ortho maps anywhere in their volume
+// [0, 1]^3, cube maps in [-1, 1]^3 (collide.hpp "Map coordinates"). Widened by 1 mm and 1e-4 of
+// its size against rounding. Sets c.bounded, c.inside_lo/hi; a collider without maps stays unbounded.
+void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape);
+
 // Advances params.step seconds (params.substeps sub-steps). The world is left untouched when a
 // position or velocity is not finite (the error names the particle).
 BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats = nullptr);
 
-// An explosion: particle i within `radius` of `centre` gets the velocity change
-// speed (1 - r/radius)^2 away from the centre (a particle exactly at the centre: a seeded random
-// direction). Returns how many particles it reached. Non-finite or non-positive inputs do nothing.
-std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float radius);
 // The game's blast (fluid/core/blast.hpp), by the law the water, crates and sprites obey: particle i
 // gains fluid::blastVelocityChange with its cross-section over mass pi r^2 / (rho d^3), the change
 // capped at max_speed (and the speed clamped to it). Returns how many particles it reached; a blast

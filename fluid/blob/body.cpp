@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 
@@ -171,12 +172,22 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   });
 }
 
-ColliderSample sampleAt(const BlobCollider& c, glm::vec3 world) {
-  const glm::vec3 local = toColliderSpace(c.pose, world);
+// `identity`: the pose is the identity (the level's colliders, baked in world coordinates), so
+// the point and normal need no transform.
+ColliderSample sampleAt(const BlobCollider& c, glm::vec3 world, bool identity) {
+  const glm::vec3 local = identity ? world : toColliderSpace(c.pose, world);
   ColliderSample s;
   c.shape->query({&local, 1}, {&s, 1});
-  s.normal = toWorldDirection(c.pose, s.normal);
+  if (!identity) s.normal = toWorldDirection(c.pose, s.normal);
   return s;
+}
+
+// The segment from `a` to `b` (world) misses the collider's inside box (BlobCollider::bounded).
+bool missesInsideBox(const BlobCollider& c, glm::vec3 a, glm::vec3 b, bool identity) {
+  if (!c.bounded) return false;
+  if (!identity) a = toColliderSpace(c.pose, a), b = toColliderSpace(c.pose, b);
+  const glm::vec3 lo = glm::min(a, b), hi = glm::max(a, b);
+  return glm::any(glm::lessThan(hi, c.inside_lo)) || glm::any(glm::greaterThan(lo, c.inside_hi));
 }
 
 // Collisions of the predicted positions with every collider (Kolb 2004 §3.3.2 double check) and
@@ -198,10 +209,13 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
     if (!c.shape) continue;
     const CollisionMaterial& material = c.use_blob_material ? p.material : c.material;
     s.before.assign(v.begin(), v.end());
+    const bool identity = c.pose.rotation == glm::quat(1.0f, 0.0f, 0.0f, 0.0f) && c.pose.translation == glm::vec3(0.0f);
     par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         s.outcome[i] = 0;
         const glm::vec3 from = s.previous[i];
+        // Every sample below lies on the segment: outside the box, none can be inside.
+        if (missesInsideBox(c, from, predicted[i], identity)) continue;
         const glm::vec3 step = predicted[i] - from;
         const float len = glm::length(step);
         const int samples = len > max_step ? static_cast<int>(std::min(std::ceil(len / max_step), 4096.0f)) : 1;
@@ -210,12 +224,12 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
         bool inside = false;
         for (int k = 1; k <= samples && !inside; ++k) {
           hit_point = k == samples ? predicted[i] : from + step * (static_cast<float>(k) / static_cast<float>(samples));
-          hit = sampleAt(c, hit_point);
+          hit = sampleAt(c, hit_point, identity);
           inside = hit.valid && hit.distance < 0.0f;
           if (inside && k < samples) s.outcome[i] = 2;  // found by the sweep
         }
         if (!inside) continue;
-        const CollisionResult res = resolveCollision(from, sampleAt(c, from), hit_point, v[i], hit,
+        const CollisionResult res = resolveCollision(from, sampleAt(c, from, identity), hit_point, v[i], hit,
                                                      colliderVelocityAt(c.pose, hit_point), dt, skin, material);
         predicted[i] = res.position;
         v[i] = res.velocity;
@@ -252,6 +266,66 @@ void checkRange(std::ostringstream& err, const char* name, T value, T lo, T hi) 
 }
 
 }  // namespace
+
+namespace {
+
+// The map-coordinate box where a front_back16 map can cast a negative ("inside") vote: over its
+// texels that vote at all (not background, not margin ring), the texel's footprint and the depths
+// between its front and back surface (to the near / far plane where one of them is background).
+// Empty (lo > hi) when no texel can. depth_map.cpp: a LESS vote is negative only for q.z in
+// (front, 1], a GREATER vote only for q.z in [0, back); margin-ring texels vote into the fallback
+// winner, which is never inside.
+void frontBackInsideBox(const DepthMap& map, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(INFINITY), hi = glm::vec3(-INFINITY);
+  const std::uint32_t n = map.resolution;
+  const float inv_n = 1.0f / static_cast<float>(n);
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint8_t* t = map.texels.data() + (static_cast<std::size_t>(j) * n + i) * 8;
+      std::uint16_t front_bits, back_bits;
+      std::memcpy(&front_bits, t + 4, 2);
+      std::memcpy(&back_bits, t + 6, 2);
+      const float front = halfToFloat(front_bits), back = halfToFloat(back_bits);
+      if (map.margin_ring && front_bits == back_bits && front >= 0.0f) continue;
+      if (front < 0.0f && back < 0.0f) continue;
+      const float z_lo = front >= 0.0f ? front : 0.0f, z_hi = back >= 0.0f ? back : 1.0f;
+      lo = glm::min(lo, glm::vec3(static_cast<float>(i) * inv_n, static_cast<float>(j) * inv_n, z_lo));
+      hi = glm::max(hi, glm::vec3(static_cast<float>(i + 1) * inv_n, static_cast<float>(j + 1) * inv_n, z_hi));
+    }
+}
+
+}  // namespace
+
+void blobDepthMapBounds(BlobCollider& c, const DepthMapCollider& shape) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const DepthMap& map : shape.maps()) {
+    // Map-coordinate box of the map's possible inside votes: front_back16 from its texels, other
+    // ortho maps their whole volume [0, 1]^3, cube maps theirs [-1, 1]^3.
+    glm::vec3 q_lo(map.format == DepthMapFormat::cube8 ? -1.0f : 0.0f), q_hi(1.0f);
+    if (map.format == DepthMapFormat::front_back16 &&
+        map.texels.size() == static_cast<std::size_t>(map.resolution) * map.resolution * 8) {
+      frontBackInsideBox(map, q_lo, q_hi);
+      if (q_lo.x > q_hi.x) continue;  // this map never votes inside
+    }
+    const glm::mat4 to_collider = glm::inverse(map.collider_to_map);
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec3 corner((k & 1) ? q_hi.x : q_lo.x, (k & 2) ? q_hi.y : q_lo.y, (k & 4) ? q_hi.z : q_lo.z);
+      const glm::vec4 q = to_collider * glm::vec4(corner, 1.0f);
+      const glm::vec3 x = glm::vec3(q) / q.w;
+      lo = glm::min(lo, x), hi = glm::max(hi, x);
+    }
+  }
+  c.bounded = isFinite(lo) && isFinite(hi) && glm::all(glm::lessThanEqual(lo, hi));
+  if (!c.bounded) {
+    // No map can vote inside (or none at all): nothing is ever inside, an empty box.
+    c.bounded = !shape.maps().empty() && !isFinite(lo);
+    c.inside_lo = glm::vec3(INFINITY), c.inside_hi = glm::vec3(-INFINITY);
+    return;
+  }
+  const glm::vec3 pad = glm::vec3(1e-3f) + 1e-4f * (hi - lo);
+  c.inside_lo = lo - pad;
+  c.inside_hi = hi + pad;
+}
 
 float blobBodyRadius(const BlobParams& p) {
   return std::cbrt(3.0f * static_cast<float>(p.particle_count) / (4.0f * kPi)) * p.spacing;
@@ -421,26 +495,6 @@ BlobStatus stepBlob(BlobWorld& world, BlobStepStats* stats_out) {
   stats.step_ms = std::chrono::duration<float, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (stats_out) *stats_out = stats;
   return {};
-}
-
-std::size_t blastBlob(BlobWorld& world, glm::vec3 centre, float speed, float radius) {
-  if (!isFinite(centre) || !std::isfinite(speed) || !std::isfinite(radius) || speed <= 0.0f || radius <= 0.0f) return 0;
-  BlobParticles& parts = world.particles;
-  const float max_speed = world.params.max_speed;
-  std::size_t reached = 0;
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const glm::vec3 rv = parts.position[i] - centre;
-    const float r = glm::length(rv);
-    if (r >= radius) continue;
-    const float falloff = (1.0f - r / radius) * (1.0f - r / radius);
-    const glm::vec3 dir = r > 1e-6f * radius ? rv / r : randomDirection(world.params.seed ^ world.steps, i);
-    glm::vec3 v = parts.velocity[i] + speed * falloff * dir;
-    const float len = glm::length(v);
-    if (len > max_speed) v *= max_speed / len;
-    parts.velocity[i] = v;
-    ++reached;
-  }
-  return reached;
 }
 
 std::size_t blastBlob(BlobWorld& world, const Blast& blast) {

@@ -16,6 +16,7 @@
 #include "game/commands/collider_model.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "game/world/level_assets.hpp"
 #include "game/world/rigid_bodies.hpp"
 
 #include <imgui.h>
@@ -356,7 +357,7 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     return true;
   }
 
-  void submit(engine::FrameBatches& frame, const SubmitContext&) override {
+  void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
     engine::WaterBatch goo;
     goo.method = engine::FluidMethod::mesh;
     goo.style = engine::FluidStyle::goo;
@@ -367,6 +368,9 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     goo.positions = state.mesh.positions;
     goo.normals = state.mesh.normals;
     goo.indices = state.mesh.indices;
+    // The tentacles' skin at the (u, v) the tentacle policy put on each vertex (prepareFrame).
+    goo.attributes = state.mesh.attributes;
+    goo.goo_texture = &ctx.assets.blob_tentacle;
     goo.particles = state.world.particles.position;
     goo.rc = state.params.smoothing * state.params.spacing;
     goo.threshold = state.params.threshold;
@@ -432,7 +436,9 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   std::vector<std::string> walls;
   for (fluid::CachedCollider& part : parts) {
     fluid::BlobCollider c;
-    c.shape = std::make_shared<fluid::DepthMapCollider>(std::move(part.collider));
+    auto shape = std::make_shared<fluid::DepthMapCollider>(std::move(part.collider));
+    fluid::blobDepthMapBounds(c, *shape);  // particles far from it skip its queries
+    c.shape = std::move(shape);
     s.world.colliders.push_back(std::move(c));
     walls.push_back(part.name);
   }

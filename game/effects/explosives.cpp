@@ -19,12 +19,14 @@ namespace {
 const ParamTable<ExplosiveParams>& table() {
   static const ParamTable<ExplosiveParams> rows{
       param<&ExplosiveParams::fuse_seconds>("fuse_seconds", 0.05, 60.0, "time from the throw to the detonation (s)"),
-      param<&ExplosiveParams::throw_speed>("throw_speed", 0.0, 60.0, "speed of a thrown charge, G or middle click (m/s)"),
+      param<&ExplosiveParams::throw_speed>("throw_speed", 0.0, 60.0,
+                                           "speed of a thrown charge, G or middle click (m/s)"),
       param<&ExplosiveParams::lob_degrees>("lob_degrees", -80.0, 80.0, "the throw leaves this far above the aim (deg)"),
       param<&ExplosiveParams::radius>("radius", 0.02, 1.0, "radius of the charge's Bullet sphere (m)"),
       param<&ExplosiveParams::mass>("mass", 0.05, 100.0, "mass of a charge (kg)"),
       param<&ExplosiveParams::impact_speed_change>(
-          "impact_speed_change", 0.0, 100.0, "detonate early when one step changes its speed by more (m/s); 0 = fuse only"),
+          "impact_speed_change", 0.0, 100.0,
+          "detonate early when one step changes its speed by more (m/s); 0 = fuse only"),
       param<&ExplosiveParams::impulse_at_1m>("impulse_at_1m", 0.0, 10000.0,
                                              "specific impulse 1 m from the blast (Pa s); falls as 1/r^2"),
       param<&ExplosiveParams::core_radius>("core_radius", 0.01, 5.0, "the impulse is capped at its value here (m)"),
@@ -61,18 +63,19 @@ class ExplosivesEffect final : public EffectOf<Explosives> {
     return {};
   }
 
-  // A live charge is drawn as a small dark stone block of the sphere's diameter (the level has no
-  // sphere model); it turns as Bullet rolls it.
+  // A live charge is drawn as a dark stone sphere of its collision sphere's diameter
+  // (content/models/charge.obj); it turns as Bullet rolls it.
   void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
     for (const Charge& charge : state.charges) {
       if (!charge.live) continue;
       const engine::BodyState body = engine::bodyState(*bodies_->physics, charge.body);
       engine::DrawItem item;
-      item.mesh = &ctx.assets.crate;
+      item.mesh = &ctx.assets.charge;
       item.texture = &ctx.assets.stone;
+      item.tint = glm::vec3(0.35f);  // dark, so it reads as a charge against the paving
       item.specular = 0.3f;
       item.model = glm::translate(glm::mat4(1.0f), body.position) * glm::mat4_cast(body.rotation) *
-                   glm::scale(glm::mat4(1.0f), glm::vec3(1.6f * state.params.radius));
+                   glm::scale(glm::mat4(1.0f), glm::vec3(2.0f * state.params.radius));
       frame.opaque.push_back(item);
     }
   }
@@ -102,7 +105,8 @@ constexpr std::string_view kNeeds[] = {"rigid_bodies"};
 }  // namespace
 
 const EffectDesc& explosivesEffect() {
-  static const EffectDesc desc{"explosives", "fused charges the player throws; their blasts push water, crates, sprites",
+  static const EffectDesc desc{"explosives",
+                               "fused charges the player throws; their blasts push water, crates, sprites",
                                table().specs, kNeeds, &build};
   return desc;
 }

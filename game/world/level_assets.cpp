@@ -24,6 +24,11 @@ bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view 
     if (!engine::loadImage(content_dir / "textures" / job.file, image, error)) return false;
     *job.target = engine::uploadTexture(image);
   }
+  if (level == "blob_monster") {
+    engine::ImageData image;
+    if (!engine::loadImage(content_dir / "textures" / "blob_tentacle.png", image, error)) return false;
+    out.blob_tentacle = engine::uploadTexture(image);
+  }
   out.models.clear();
   out.models.reserve(rows.size());
   for (const LevelModelDesc& row : rows) {
@@ -40,6 +45,9 @@ bool loadLevelAssets(const std::filesystem::path& content_dir, std::string_view 
   engine::MeshData crate;
   if (!engine::loadMesh(content_dir / "models" / "crate.obj", crate, error)) return false;
   out.crate = engine::uploadMesh(crate);
+  engine::MeshData charge;
+  if (!engine::loadMesh(content_dir / "models" / "charge.obj", charge, error)) return false;
+  out.charge = engine::uploadMesh(charge);
   return true;
 }
 

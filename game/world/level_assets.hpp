@@ -1,8 +1,9 @@
 #pragma once
 // The GPU copies of the level's models and textures (content/models, content/textures): the models
 // of the scene's level (scene.level: the fountain's ground, basin and statue; the blob monster's
-// street, sewer, grate and wall), drawn in every frame, and the crate model the rigid_bodies effect
-// draws its bodies with. Loaded by runScene with the GL context current.
+// street, sewer, grate and wall), drawn in every frame, the crate model the rigid_bodies effect
+// draws its bodies with, the sphere the explosives draw their charges with, and the blob's tentacle skin (the blob
+// effect hands it to the goo pass). Loaded by runScene with the GL context current.
 
 #include "engine/render/frame.hpp"
 #include "engine/render/renderer.hpp"
@@ -27,7 +28,9 @@ struct LevelModel {
 struct LevelAssets {
   std::vector<LevelModel> models;  // the level's models, in draw order
   engine::GpuMesh crate;
+  engine::GpuMesh charge;  // the explosives' charge: a unit-diameter sphere
   engine::GpuTexture paving, stone, wood;
+  engine::GpuTexture blob_tentacle;  // loaded for the blob_monster level only
 };
 
 // Loads the models of `level` (a scene.level choice) and the shared textures and crate. False +

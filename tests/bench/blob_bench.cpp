@@ -5,8 +5,10 @@
 // Each case reports the mean (Google Benchmark's time) and p95_ms over its iterations.
 #include "fluid/blob/behaviour.hpp"
 #include "fluid/blob/blob.hpp"
+#include "fluid/blob/tentacle_uv.hpp"
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/surface/marching_slices.hpp"
+#include "fluid/surface/marching_slices_policy.hpp"
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -63,8 +65,9 @@ void BM_BlobStep(benchmark::State& state) {
   report(state, ms);
 }
 
-// The same plus the marching-slices mesh of the body with the tentacles' strength and radius
-// scale (Rc = 2 d, cube d / 3: six cubes per cutoff, as the paper's Figure 7 blob row has ten).
+// The same plus the body's mesh as the game makes it each frame (game/effects/blob.cpp
+// prepareFrame, blob_monster.json defaults): marching slices with the tentacle texturing policy
+// (Rc = 2 d, cube d / 2, T = 0.2, back to front from an eye 4 m away), then u around the tentacles.
 void BM_BlobStepAndMesh(benchmark::State& state) {
   const int n_threads = static_cast<int>(state.range(1));
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(n_threads));
@@ -74,8 +77,12 @@ void BM_BlobStepAndMesh(benchmark::State& state) {
   fluid::SurfaceMesh mesh;
   fluid::SurfaceParams sp;
   sp.rc = 2.0f * s.world.params.spacing;
-  sp.cube = s.world.params.spacing / 3.0f;
+  sp.cube = 0.5f * s.world.params.spacing;
+  sp.threshold = 0.2f;
   sp.threads = n_threads;
+  sp.order = fluid::SurfaceOrder::backToFront;
+  sp.eye = glm::vec3(2.5f, 2.0f, -3.0f);
+  sp.viewDir = glm::normalize(glm::vec3(0.0f, 0.5f, 0.0f) - sp.eye);
   std::vector<float> xs, ys, zs;
   std::vector<double> ms;
   for (auto _ : state) {
@@ -87,7 +94,10 @@ void BM_BlobStepAndMesh(benchmark::State& state) {
     zs.resize(x.size());
     for (std::size_t i = 0; i < x.size(); ++i) xs[i] = x[i].x, ys[i] = x[i].y, zs[i] = x[i].z;
     fluid::SurfaceInput in{xs, ys, zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
-    extractor.extract(in, sp, mesh);
+    const fluid::SurfaceStatus st = fluid::extractWithPolicy(
+        extractor, in, sp, fluid::BlobTentaclePolicy{s.world.particles.length_coord.data()}, mesh);
+    if (!st.ok()) state.SkipWithError(st.error.c_str());
+    fluid::blobTentacleU(mesh, s.world);
     benchmark::DoNotOptimize(mesh.indices.data());
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }

@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
       {"fluid_unsorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::none, false, FluidStyle::water},
       {"fluid_sorted.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water},
       {"fluid_exact_slabs.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, true, FluidStyle::water},
-      {"fluid_goo.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::frontToBack, false, FluidStyle::goo},
+      {"fluid_goo.png", {2.4f, 0.9f, 0.3f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::goo},
       {"fluid_inside.png", {0.05f, 0.5f, 0.0f}, fluid::SurfaceOrder::backToFront, false, FluidStyle::water}};
   int status = 0;
   for (const Shot& shot : shots) {

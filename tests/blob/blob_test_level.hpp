@@ -73,6 +73,16 @@ inline float minDistance(const fluid::BlobWorld& w, std::size_t c) {
 }
 
 // A world with the default 1,000 particles resting on `at`.
+// A blast by the game's law (fluid/core/blast.hpp) whose push on a particle at its core is
+// `core_speed` (m/s): impulse_at_1m = core_speed core_radius^2 / (A / m) with the particle's
+// cross-section A = pi r^2 and mass m. Beyond the core it falls off as 1/r^2, tapering to 0 at `reach`.
+inline fluid::Blast blastOfSpeed(const fluid::BlobWorld& w, glm::vec3 centre, float core_speed, float reach,
+                                 float core_radius = 0.25f) {
+  const float r = fluid::blobParticleRadius(w.params);
+  const float area_over_mass = 3.14159265f * r * r / fluid::blobParticleMass(w.params);
+  return {centre, core_speed * core_radius * core_radius / area_over_mass, core_radius, reach};
+}
+
 inline fluid::BlobWorld restingBlob(glm::vec3 at = glm::vec3(0.0f)) {
   fluid::BlobWorld w;
   const fluid::BlobStatus st = fluid::initBlob(w, at + glm::vec3(0.0f, 0.45f, 0.0f));

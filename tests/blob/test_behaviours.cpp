@@ -192,7 +192,8 @@ TEST(BlobBehaviours, ReassemblesIntoTheRestShapeAfterABlast) {
   runUntilGoal(w, BlobBehaviour{}, 0.5f);
   const float radius = fluid::blobBodyRadius(w.params);
   const glm::vec3 c = fluid::blobCentroid(w.particles.position);
-  EXPECT_GT(fluid::blastBlob(w, c + glm::vec3(0.1f, -0.2f, 0.05f), 15.0f, 2.0f * radius), w.particles.size() / 2);
+  EXPECT_GT(fluid::blastBlob(w, blobtest::blastOfSpeed(w, c + glm::vec3(0.1f, -0.2f, 0.05f), 15.0f, 2.0f * radius)),
+            w.particles.size() / 2);
   // Limp for half a second (an idle state with weight 0, as a program would say "stunned"): the
   // goo flies apart and splashes down.
   BlobBehaviour limp;

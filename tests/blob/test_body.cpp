@@ -42,16 +42,16 @@ TEST(BlobBody, RejectsBadParamsAndNonFiniteState) {
   st = fluid::stepBlob(w);
   EXPECT_NE(st.error.find("particle 7"), std::string::npos) << st.error;
   EXPECT_TRUE(std::isnan(w.particles.velocity[7].x));  // left untouched
-  EXPECT_EQ(fluid::blastBlob(w, glm::vec3(std::nanf("")), 10.0f, 1.0f), 0u);
+  EXPECT_EQ(fluid::blastBlob(w, blobtest::blastOfSpeed(w, glm::vec3(std::nanf("")), 10.0f, 1.0f)), 0u);
 }
 
 TEST(BlobBody, BlastExactlyAtAParticleStaysFinite) {
   fluid::BlobWorld w = blobtest::restingBlob();
   w.colliders.push_back(blobtest::ground());
   const std::size_t n = w.particles.size();
-  EXPECT_GT(fluid::blastBlob(w, w.particles.position[123], 30.0f, 1.0f), 1u);
+  EXPECT_GT(fluid::blastBlob(w, blobtest::blastOfSpeed(w, w.particles.position[123], 30.0f, 1.0f)), 1u);
   expectSane(w, n);
-  EXPECT_GT(glm::length(w.particles.velocity[123]), 29.0f);  // full strength, in some direction
+  EXPECT_GT(glm::length(w.particles.velocity[123]), 29.0f);  // full strength (the core's), straight up
   for (int s = 0; s < 60; ++s) ASSERT_TRUE(fluid::stepBlob(w).ok());
   expectSane(w, n);
 }
@@ -87,7 +87,7 @@ TEST(BlobBody, TenBlastsInOneStepStayBounded) {
   fluid::BlobWorld w = blobtest::restingBlob();
   w.colliders.push_back(blobtest::ground());
   const std::size_t n = w.particles.size();
-  for (int k = 0; k < 10; ++k) fluid::blastBlob(w, glm::vec3(0.0f, 0.3f, 0.0f), 60.0f, 1.5f);
+  for (int k = 0; k < 10; ++k) fluid::blastBlob(w, blobtest::blastOfSpeed(w, glm::vec3(0.0f, 0.3f, 0.0f), 60.0f, 1.5f));
   expectSane(w, n);
   EXPECT_GT(fluid::blobMaxSpeed(w.particles.velocity), 100.0f);
   for (int s = 0; s < 120; ++s) ASSERT_TRUE(fluid::stepBlob(w).ok());
@@ -182,7 +182,7 @@ std::vector<glm::vec3> scriptedRun(std::uint64_t seed, int steps) {
   b.kind = BlobBehaviourKind::tentacles;
   fluid::startBlobBehaviour(w, b, glm::vec3(3.0f, 1.0f, 0.0f));
   for (int s = 0; s < steps; ++s) {
-    if (s == steps / 2) fluid::blastBlob(w, w.particles.position[5], 20.0f, 1.0f);
+    if (s == steps / 2) fluid::blastBlob(w, blobtest::blastOfSpeed(w, w.particles.position[5], 20.0f, 1.0f));
     fluid::updateBlobBehaviour(w, b, glm::vec3(3.0f, 1.0f, 0.0f), w.params.step);
     EXPECT_TRUE(fluid::stepBlob(w).ok());
   }
@@ -285,7 +285,8 @@ TEST(BlobProgram, MachineRunsASequenceAndReassemblesAfterABlast) {
   for (int s = 0; s < 600 && visited.size() < 4; ++s) {
     in.blasted = false;
     if (m.state == 1 && visited.size() == 2) {  // in idle after the ball: blow it up
-      in.blasted = fluid::blastBlob(w, fluid::blobCentroid(w.particles.position), 10.0f, 1.5f) > 0;
+      in.blasted =
+          fluid::blastBlob(w, blobtest::blastOfSpeed(w, fluid::blobCentroid(w.particles.position), 10.0f, 1.5f)) > 0;
     }
     const int before = m.state;
     fluid::stepBlobMachine(p, m, w, in);

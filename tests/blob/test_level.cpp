@@ -81,4 +81,72 @@ TEST(BlobLevel, EmergesFromTheBakedSewerAndStaysOutOfTheLevel) {
   EXPECT_GE(worst, -0.02f);  // within a texel of the 128^2 maps (1.3-2.4 cm)
 }
 
+// blobDepthMapBounds (the cull that lets particles far from a collider skip its queries): no point
+// the baked maps call inside lies outside the box, and a body stepped with the boxes ends
+// bit-identical to one stepped without them.
+TEST(BlobLevel, DepthMapBoundsHoldEveryInsidePointAndChangeNothing) {
+  const std::string models = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/models/";
+  const std::vector<std::shared_ptr<fluid::DepthMapCollider>> shapes = {
+      bake(readObj(models + "blob_street.obj"), "axes"),
+      bake(readObj(models + "blob_sewer.obj"), "axes,cube@0:-1.15:0:1.3"),
+      bake(readObj(models + "blob_wall.obj"), "axes")};
+  std::size_t inside = 0, outside_box = 0;
+  for (std::size_t m = 0; m < shapes.size(); ++m) {
+    const auto& shape = shapes[m];
+    fluid::BlobCollider c = blobtest::collider(shape);
+    fluid::blobDepthMapBounds(c, *shape);
+    ASSERT_TRUE(c.bounded);
+    std::printf("[blob] depth-map bounds of collider %zu: (%.3f %.3f %.3f) .. (%.3f %.3f %.3f)\n", m, c.inside_lo.x,
+                c.inside_lo.y, c.inside_lo.z, c.inside_hi.x, c.inside_hi.y, c.inside_hi.z);
+    // The box is the surfaces' extent (to a texel), not the maps' volumes (0.16 m margin): the
+    // street's top is y = 0, so the body resting on it is outside the box but for its lowest layer.
+    if (m == 0) {
+      EXPECT_LT(c.inside_hi.y, 0.05f);
+    }
+    // Points on a grid over the box widened by 1 m on every side (the street: its central 6 m).
+    glm::vec3 lo = c.inside_lo - 1.0f, hi = c.inside_hi + 1.0f;
+    lo = glm::max(lo, glm::vec3(-3.0f, -4.0f, -3.0f)), hi = glm::min(hi, glm::vec3(3.0f, 5.0f, 3.0f));
+    const int n = 48;
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const glm::vec3 p = lo + (hi - lo) * (glm::vec3(i, j, k) + 0.5f) / static_cast<float>(n);
+          const fluid::ColliderSample s = shape->sample(p);
+          const bool in_box =
+              glm::all(glm::greaterThanEqual(p, c.inside_lo)) && glm::all(glm::lessThanEqual(p, c.inside_hi));
+          outside_box += !in_box;
+          if (s.valid && s.distance < 0.0f) {
+            ++inside;
+            EXPECT_TRUE(in_box) << "inside point " << p.x << " " << p.y << " " << p.z << " outside the box";
+          }
+        }
+  }
+  EXPECT_GT(inside, 1000u);
+  EXPECT_GT(outside_box, 1000u);
+
+  // The same run (emerge out of the sewer, then a chase toward the wall) with and without the boxes.
+  auto run = [&](bool bounded) {
+    fluid::BlobWorld w;
+    EXPECT_TRUE(fluid::initBlob(w, glm::vec3(0.0f)).ok());
+    for (const auto& shape : shapes) {
+      w.colliders.push_back(blobtest::collider(shape));
+      if (bounded) fluid::blobDepthMapBounds(w.colliders.back(), *shape);
+    }
+    EXPECT_TRUE(fluid::placeBlob(w, fluid::blobColumn(w.params, glm::vec3(0.0f, -0.05f, 0.0f), 0.45f)).ok());
+    fluid::BlobBehaviour b;
+    b.kind = fluid::BlobBehaviourKind::emerge;
+    blobtest::runUntilGoal(w, b, 1.5f, glm::vec3(0.0f), false);
+    return w.particles.position;
+  };
+  const std::vector<glm::vec3> with = run(true), without = run(false);
+  ASSERT_EQ(with.size(), without.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < with.size(); ++i) differ += with[i] != without[i];
+  EXPECT_EQ(differ, 0u);
+  std::printf(
+      "[blob] depth-map bounds: %zu inside points, all in the boxes; %zu grid points outside them; %zu of %zu "
+      "particles differ with the cull\n",
+      inside, outside_box, differ, with.size());
+}
+
 }  // namespace

@@ -4,9 +4,31 @@
 #include "fluid/blob/tentacle_uv.hpp"
 #include "fluid/surface/marching_slices_policy.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 namespace {
+
+// u of every vertex with a tentacle share from the nearest tentacle particle by a scan of all of
+// them (the definition blobTentacleU's grid must reproduce exactly).
+std::vector<float> bruteForceU(const fluid::SurfaceMesh& mesh, const fluid::BlobWorld& w) {
+  std::vector<float> u(mesh.positions.size(), -1.0f);
+  for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
+    if (mesh.attributes[k].z < 0.05f) continue;
+    std::uint32_t best = 0;
+    float best_d2 = INFINITY;
+    for (const auto& chain : w.target.tentacle_particles)
+      for (std::uint32_t i : chain) {
+        const glm::vec3 d = mesh.positions[k] - w.particles.position[i];
+        if (glm::dot(d, d) < best_d2) best_d2 = glm::dot(d, d), best = i;
+      }
+    const glm::vec3 t = w.particles.tangent[best], n = w.particles.normal[best];
+    const glm::vec3 rel = mesh.positions[k] - w.particles.position[best];
+    u[k] = std::atan2(glm::dot(rel, glm::cross(t, n)), glm::dot(rel, n)) / 6.28318530717958f + 0.5f;
+    if (u[k] >= 1.0f) u[k] = 0.0f;
+  }
+  return u;
+}
 
 TEST(BlobTentacleUv, VGrowsFromBaseToTipAndUGoesRound) {
   fluid::BlobWorld w = blobtest::restingBlob();
@@ -31,6 +53,25 @@ TEST(BlobTentacleUv, VGrowsFromBaseToTipAndUGoesRound) {
   ASSERT_TRUE(st.ok()) << st.error;
   ASSERT_EQ(mesh.attributes.size(), mesh.positions.size());
   fluid::blobTentacleU(mesh, w);
+  // The grid search finds the same nearest particle as a scan of all of them: u bit-identical.
+  const std::vector<float> reference = bruteForceU(mesh, w);
+  std::size_t textured = 0, differ = 0;
+  for (std::size_t k = 0; k < reference.size(); ++k) {
+    if (reference[k] < 0.0f) continue;
+    ++textured;
+    differ += mesh.attributes[k].x != reference[k];
+  }
+  EXPECT_GT(textured, 1000u);
+  EXPECT_EQ(differ, 0u) << "of " << textured;
+  // Far vertices (the mesh moved 3 m away: outside the grid, every cell empty) take the scan.
+  fluid::SurfaceMesh far = mesh;
+  for (glm::vec3& p : far.positions) p += glm::vec3(3.0f, 0.0f, 0.0f);
+  fluid::blobTentacleU(far, w);
+  const std::vector<float> far_reference = bruteForceU(far, w);
+  differ = 0;
+  for (std::size_t k = 0; k < far_reference.size(); ++k)
+    differ += far_reference[k] >= 0.0f && far.attributes[k].x != far_reference[k];
+  EXPECT_EQ(differ, 0u);
 
   for (std::size_t k = 0; k < w.target.tentacle_particles.size(); ++k) {
     // Vertices of this tentacle (mostly tentacle field, near this tentacle's axis), binned by the
