@@ -332,10 +332,12 @@ struct CollideDesc {
   CollisionMaterial material{};
   float dt = 1.0f / 60.0f;  // s
   float skin = 1e-3f;       // collider units pushed beyond the surface
-  // Beyond the paper: when > 0, a particle whose step is longer than max_step and whose
-  // predicted position is outside is also sampled along the step every max_step, so it
-  // cannot tunnel through walls thinner than its step (the first inside sample is used as
-  // the predicted one). 0 = the paper's two samples only.
+  // Beyond the paper: when > 0, a particle whose step is longer than max_step is also sampled
+  // along the step every max_step (at most 4096 samples), and the first inside sample is used as
+  // the predicted one, whether or not the end point is inside: so it cannot tunnel through walls
+  // thinner than its step, neither with both ends outside nor with its end point past the middle
+  // of the wall (there the end sample's normal points out of the far face). 0 = the paper's two
+  // samples only.
   float max_step = 0.0f;
   ParallelDesc parallel{};
 };
