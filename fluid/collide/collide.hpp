@@ -93,6 +93,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -331,10 +332,12 @@ struct CollideDesc {
   CollisionMaterial material{};
   float dt = 1.0f / 60.0f;  // s
   float skin = 1e-3f;       // collider units pushed beyond the surface
-  // Beyond the paper: when > 0, a particle whose step is longer than max_step and whose
-  // predicted position is outside is also sampled along the step every max_step, so it
-  // cannot tunnel through walls thinner than its step (the first inside sample is used as
-  // the predicted one). 0 = the paper's two samples only.
+  // Beyond the paper: when > 0, a particle whose step is longer than max_step is also sampled
+  // along the step every max_step (at most 4096 samples), and the first inside sample is used as
+  // the predicted one, whether or not the end point is inside: so it cannot tunnel through walls
+  // thinner than its step, neither with both ends outside nor with its end point past the middle
+  // of the wall (there the end sample's normal points out of the far face). 0 = the paper's two
+  // samples only.
   float max_step = 0.0f;
   ParallelDesc parallel{};
 };
@@ -352,6 +355,48 @@ CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderP
                                std::span<const glm::vec3> previous_positions, std::span<glm::vec3> predicted_positions,
                                std::span<glm::vec3> predicted_velocities, const CollideDesc& desc,
                                CollideScratch& scratch);
+
+// ---- Reach culling: a coarse grid of cells the maps place beyond reach -----------------
+
+struct ReachGridDesc {
+  float reach = 0.0f;               // distances >= reach are "beyond reach" for the caller (SPH: the support H)
+  float cell = 0.0f;                 // cell edge (collider units); 0 = reach / 4
+  std::size_t max_cells = 1u << 21;  // beyond it the edge along the axis with the most cells grows
+};
+
+// A static depth-map collider answered only where its answer can matter to a caller that treats
+// every distance >= reach like "beyond reach" (the SPH boundary: no boundary volume, no collision,
+// no tunnelling test beyond the support). Points outside `box` answer {FLT_MAX, invalid} without a
+// lookup (the caller promises every point outside is beyond reach, e.g. the intersection of the
+// ortho maps' view volumes grown by reach - margin), as do points in a grid cell that the maps
+// themselves place at distance >= reach: at construction each cell's image in every map (its texel
+// rectangle and depth range, or the cube texels its directions reach) bounds every vote rule (2)
+// can take there, and a cell is "far" when one vote that is never invalid and never a margin-ring
+// vote is >= reach everywhere in it and every vote that can be >= 0 there is >= reach (so rule (2)'s
+// winner is, and DepthMapCollider::sample would answer a distance >= reach). Everywhere else the
+// full sample. So for such a caller the answers equal the collider's, at a fraction of the lookups:
+// water far from a surface (most of a jet, the upper layers in a basin) costs one cell test.
+class ReachCulledCollider final : public SignedDistanceShape {
+ public:
+  ReachCulledCollider(std::shared_ptr<const DepthMapCollider> inner, Bounds box, const ReachGridDesc& desc);
+  void query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const override;
+  // The answer for one point: the collider's sample, or {FLT_MAX, invalid} when culled.
+  ColliderSample sample(glm::vec3 local_point) const;
+  // True when `local_point` is culled (outside the box or in a far cell).
+  bool culled(glm::vec3 local_point) const;
+  const Bounds& box() const { return box_; }
+  glm::vec3 cell() const { return cell_; }
+  glm::ivec3 cells() const { return dims_; }
+  // Fraction of the grid's cells that are far (the rest query the maps).
+  double farFraction() const;
+
+ private:
+  std::shared_ptr<const DepthMapCollider> inner_;
+  Bounds box_;
+  glm::vec3 cell_{1.0f}, inv_cell_{1.0f};
+  glm::ivec3 dims_{0};
+  std::vector<std::uint8_t> far_;  // per cell, x fastest: 1 = every point beyond reach
+};
 
 // ---- Exact reference: signed distance to a closed triangle mesh (BVH) ------------------
 

@@ -319,12 +319,14 @@ CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderP
     glm::vec3 predicted = predicted_positions[k];
     glm::vec3 previous = previous_positions[k];
     ColliderSample before = scratch.previous[k];
-    const bool outside_after = !after.valid || after.distance >= 0.0f;
-    if (outside_after && desc.max_step > 0.0f) {
+    // Swept (beyond the paper): the first sample inside along the step decides, whether or not the
+    // end point is inside. An end point past the middle of a thin wall is inside too, but nearer the
+    // far face: reacting to it would push the particle out through the far face.
+    if (desc.max_step > 0.0f) {
       const glm::vec3 step = predicted - previous;
       const float length = glm::length(step);
       if (std::isfinite(length) && length > desc.max_step) {
-        const int samples = static_cast<int>(std::min(std::ceil(length / desc.max_step), 1.0e6f));
+        const int samples = static_cast<int>(std::min(std::ceil(length / desc.max_step), 4096.0f));
         for (int s = 1; s < samples; ++s) {
           const glm::vec3 world = previous + step * (static_cast<float>(s) / static_cast<float>(samples));
           const glm::vec3 local = inverse * (world - pose.translation);

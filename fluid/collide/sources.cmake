@@ -6,4 +6,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/collider_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collider_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_distance.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/reach_grid.cpp
 )

@@ -69,31 +69,6 @@ bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shar
   return true;
 }
 
-void ReachCulledShape::query(std::span<const glm::vec3> points, std::span<fluid::ColliderSample> out) const {
-  // Compacts the points inside the box into fixed chunks (no allocation) for one batch query each.
-  constexpr std::size_t kChunk = 64;
-  glm::vec3 inside[kChunk];
-  std::uint32_t index[kChunk];
-  fluid::ColliderSample got[kChunk];
-  for (std::size_t b = 0; b < points.size(); b += kChunk) {
-    const std::size_t e = std::min(points.size(), b + kChunk);
-    std::size_t q = 0;
-    for (std::size_t i = b; i < e; ++i) {
-      const glm::vec3 p = points[i];
-      if (p.x >= box_.lo.x && p.x <= box_.hi.x && p.y >= box_.lo.y && p.y <= box_.hi.y && p.z >= box_.lo.z &&
-          p.z <= box_.hi.z) {
-        inside[q] = p;
-        index[q++] = static_cast<std::uint32_t>(i);
-      } else {
-        out[i] = fluid::ColliderSample{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};  // also NaN points
-      }
-    }
-    if (q == 0) continue;
-    inner_->query(std::span<const glm::vec3>(inside, q), std::span<fluid::ColliderSample>(got, q));
-    for (std::size_t k = 0; k < q; ++k) out[index[k]] = got[k];
-  }
-}
-
 std::shared_ptr<const fluid::SignedDistanceShape> culledPart(const std::shared_ptr<const LevelColliders>& level,
                                                              std::size_t k, float support) {
   const float grow = std::max(0.0f, support - level->margins[k]);
@@ -101,8 +76,10 @@ std::shared_ptr<const fluid::SignedDistanceShape> culledPart(const std::shared_p
   box.lo -= glm::vec3(grow);
   box.hi += glm::vec3(grow);
   // The collider lives in `level`: the alias keeps the whole level alive while the shape is.
-  std::shared_ptr<const fluid::SignedDistanceShape> inner(level, &level->parts[k].collider);
-  return std::make_shared<ReachCulledShape>(std::move(inner), box);
+  std::shared_ptr<const fluid::DepthMapCollider> inner(level, &level->parts[k].collider);
+  fluid::ReachGridDesc grid;
+  grid.reach = support;
+  return std::make_shared<fluid::ReachCulledCollider>(std::move(inner), box, grid);
 }
 
 }  // namespace game

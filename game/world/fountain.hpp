@@ -59,25 +59,12 @@ bool loadLevelColliders(const std::filesystem::path& content_dir, const std::str
 bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shared_ptr<const LevelColliders>& slot,
                              std::string& error);
 
-// A static shape queried only within `reach` of `box` (the part's reach box, grown by what the
-// caller's support needs beyond the bake margin). Points outside answer {valid = false,
-// distance = FLT_MAX}, "beyond reach", without touching the maps: the SPH solver treats that as no
-// boundary volume and no collision, which is what a point farther than its support from the
-// surface gets anyway. So a particle far from the statue never pays for the statue's maps.
-class ReachCulledShape final : public fluid::SignedDistanceShape {
- public:
-  ReachCulledShape(std::shared_ptr<const fluid::SignedDistanceShape> inner, fluid::Bounds box)
-      : inner_(std::move(inner)), box_(box) {}
-  void query(std::span<const glm::vec3> local_points, std::span<fluid::ColliderSample> out) const override;
-  const fluid::Bounds& box() const { return box_; }
-
- private:
-  std::shared_ptr<const fluid::SignedDistanceShape> inner_;
-  fluid::Bounds box_;
-};
-
-// Part `k` of `level` as a shape that answers within `support` of the surface (its reach box
-// grown by max(0, support - margin)); shares the collider with `level`.
+// Part `k` of `level` as a shape that answers within `support` of the surface
+// (fluid::ReachCulledCollider with reach = support over the part's reach box grown by
+// max(0, support - margin)): points outside the box or in a grid cell the maps place at least
+// `support` away answer {FLT_MAX, invalid}, "beyond reach", without touching the maps; the SPH
+// solver treats that like any distance >= support (no boundary volume, no collision). So water far
+// from a part never pays for its maps. Shares the collider with `level`.
 std::shared_ptr<const fluid::SignedDistanceShape> culledPart(const std::shared_ptr<const LevelColliders>& level,
                                                              std::size_t k, float support);
 

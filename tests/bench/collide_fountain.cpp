@@ -7,9 +7,12 @@
 //      (tests/support/fountain_shape.hpp, the reference), and the exact meshes against it
 //      (how far the OBJ models themselves are from the CSG cylinders);
 //   3. the SPH step cost of the boundary: the game's SPH fountain (game::initSphFluid: the baked
-//      colliders, each culled to its reach box), the same colliders queried by every particle,
-//      and the analytic FountainShape, from the same filled state.
-// Usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2]
+//      colliders, each a fluid::ReachCulledCollider), the same colliders queried by every particle,
+//      the analytic FountainShape, and the baked colliders culled to their reach boxes only (the
+//      grid of one cell: the game before the reach grid), from the same filled state; variants
+//      0, 1, 2, 3 in that order.
+// Usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2] [--variants 0,3,1,2] [--tables 0|1]
+// (--variants picks the SPH rows by number, see 3.; --tables 0 skips the accuracy tables.)
 #include "fluid/collide/collider_cache.hpp"
 #include "game/commands/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
@@ -201,7 +204,27 @@ bool buildFountain(game::SphFluid& out, std::string& error) {
          game::initSphFluid(out, params, game::FountainGeometry{}, colliders, game::sceneGravity(scene), error);
 }
 
-int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, const std::vector<int>& threads) {
+// The timed frames of one variant, out of line so a profiler can collect just them
+// (valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*timedFrames*').
+[[gnu::noinline]] bool timedFrames(game::SphFluid& f, int frames, std::vector<double>& ms, double& steps,
+                                   double& collisions, std::size_t& emitted, std::size_t& removed) {
+  for (int frame = 0; frame < frames; ++frame) {
+    double frame_ms = 0.0;
+    if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
+          frame_ms += x.step_ms;
+          steps += 1.0;
+          collisions += static_cast<double>(x.collisions);
+          emitted += x.emitted;
+          removed += x.removed;
+        }))
+      return false;
+    ms.push_back(frame_ms);
+  }
+  return true;
+}
+
+int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, const std::vector<int>& threads,
+                 const std::vector<int>& variants) {
   game::SphFluid filled;
   std::string error;
   if (!buildFountain(filled, error)) {
@@ -219,6 +242,42 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
   // (baked, each culled to its reach box), the same baked colliders queried by every particle,
   // and the analytic FountainShape (1-Lipschitz: end-of-step queries of far particles skipped).
   const std::size_t parts = baked.size();
+  // The game's parts (fluid::ReachCulledCollider), and the same with a one-cell grid: culled to
+  // the reach box only (what the game did before the grid). How many of the filled state's
+  // particles each part culls, against how many its full sample puts beyond the support.
+  std::vector<fluid::SphCollider> box_only;
+  std::printf(
+      "| part | grid cells | cell (m) | far cells | build (ms) | particles culled | beyond the support |\n"
+      "|---|---|---|---|---|---|---|\n");
+  for (std::size_t k = 0; k < parts; ++k) {
+    const auto* rc = dynamic_cast<const fluid::ReachCulledCollider*>(filled.world.colliders[k].shape.get());
+    if (rc == nullptr) {
+      std::fprintf(stderr, "bench_collide_fountain: part %zu is not a ReachCulledCollider\n", k);
+      return 1;
+    }
+    fluid::ReachGridDesc desc;
+    desc.reach = support_radius;
+    const auto t0 = std::chrono::steady_clock::now();
+    const fluid::ReachCulledCollider rebuilt(std::make_shared<fluid::DepthMapCollider>(baked[k].collider), rc->box(),
+                                             desc);
+    const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    desc.max_cells = 1;
+    fluid::SphCollider s = filled.world.colliders[k];
+    s.shape = std::make_shared<fluid::ReachCulledCollider>(std::make_shared<fluid::DepthMapCollider>(baked[k].collider),
+                                                           rc->box(), desc);
+    box_only.push_back(s);
+    std::size_t culled = 0, beyond = 0;
+    for (const glm::vec3& p : filled.world.particles.position) {
+      culled += rc->culled(p);
+      const fluid::ColliderSample full = baked[k].collider.sample(p);
+      beyond += !full.valid || full.distance >= support_radius;
+    }
+    const glm::ivec3 d = rc->cells();
+    std::printf("| %s | %d×%d×%d | %.3f×%.3f×%.3f | %.1f %% | %.0f | %zu of %zu | %zu |\n", baked[k].name.c_str(), d.x,
+                d.y, d.z, rc->cell().x, rc->cell().y, rc->cell().z, 100.0 * rc->farFraction(), build_ms, culled,
+                filled.world.particles.size(), beyond);
+  }
+  std::printf("\n");
   const fluid::SphCollider level = filled.world.colliders.front();
   std::vector<fluid::SphCollider> unculled, analytic(1, level);
   for (const fluid::CachedCollider& c : baked) {
@@ -228,36 +287,27 @@ int sphCostTable(const std::vector<fluid::CachedCollider>& baked, int frames, co
   }
   analytic[0].shape = std::make_shared<fountainref::FountainShape>();
   analytic[0].lipschitz_distance = true;
-  const char* names[] = {"baked, culled to each part's reach box (the game)", "baked, every particle queries all 3",
-                         "analytic FountainShape (1 collider, Lipschitz skip)"};
+  const char* names[] = {"baked, culled by each part's reach grid (the game)", "baked, every particle queries all 3",
+                         "analytic FountainShape (1 collider, Lipschitz skip)",
+                         "baked, culled to each part's reach box only (before the grid)"};
   std::printf(
       "| SPH boundary (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
       "collisions per step | emitted | removed (drains) |\n|---|---|---|---|---|---|---|---|\n");
   for (const int t : threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(t));
-    for (int variant = 0; variant < 3; ++variant) {
+    for (const int variant : variants) {
       game::SphFluid f = filled;
       if (variant > 0) {
-        const std::vector<fluid::SphCollider>& with = variant == 1 ? unculled : analytic;
+        const std::vector<fluid::SphCollider>& with = variant == 1 ? unculled : variant == 2 ? analytic : box_only;
         f.world.colliders.erase(f.world.colliders.begin(), f.world.colliders.begin() + static_cast<long>(parts));
         f.world.colliders.insert(f.world.colliders.begin(), with.begin(), with.end());
       }
       std::vector<double> ms;
       double steps = 0.0, collisions = 0.0;
       std::size_t emitted = 0, removed = 0;
-      for (int frame = 0; frame < frames; ++frame) {
-        double frame_ms = 0.0;
-        if (!game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& x) {
-              frame_ms += x.step_ms;
-              steps += 1.0;
-              collisions += static_cast<double>(x.collisions);
-              emitted += x.emitted;
-              removed += x.removed;
-            })) {
-          std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
-          return 1;
-        }
-        ms.push_back(frame_ms);
+      if (!timedFrames(f, frames, ms, steps, collisions, emitted, removed)) {
+        std::fprintf(stderr, "bench_collide_fountain: %s\n", f.error.c_str());
+        return 1;
       }
       std::vector<double> sorted = ms;
       std::sort(sorted.begin(), sorted.end());
@@ -275,6 +325,8 @@ int main(int argc, char** argv) {
   std::size_t points = 200000;
   int frames = 60;
   std::vector<int> threads{1};
+  std::vector<int> variants{0, 3, 1, 2};
+  bool tables = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
     if (k == "--points")
@@ -285,11 +337,19 @@ int main(int argc, char** argv) {
       threads.clear();
       for (const char* c = argv[i + 1]; *c; ++c)
         if (*c >= '1' && *c <= '9') threads.push_back(*c - '0');
-    } else
+    } else if (k == "--variants") {
+      variants.clear();
+      for (const char* c = argv[i + 1]; *c; ++c)
+        if (*c >= '0' && *c <= '3') variants.push_back(*c - '0');
+    } else if (k == "--tables")
+      tables = std::string(argv[i + 1]) != "0";
+    else
       points = 0;
   }
-  if (argc % 2 == 0 || points == 0 || frames < 1 || threads.empty() || threads.size() > 2) {
-    std::fprintf(stderr, "usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2]\n");
+  if (argc % 2 == 0 || points == 0 || frames < 1 || threads.empty() || threads.size() > 2 || variants.empty()) {
+    std::fprintf(stderr,
+                 "usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2] [--variants 0,3,1,2] "
+                 "[--tables 0|1]\n");
     return 2;
   }
   const std::string load_before = benchplot::loadAverage();
@@ -314,12 +374,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_collide_fountain: %s\n", st.error.c_str());
     return 1;
   }
-  std::printf("### Per model, against the exact distance to its own mesh\n\n");
-  if (perModelTable(entries, models, points) != 0) return 1;
-  std::printf("### The fountain against the analytic FountainShape\n\n");
-  if (fountainTable(baked, models, points) != 0) return 1;
+  if (tables) {
+    std::printf("### Per model, against the exact distance to its own mesh\n\n");
+    if (perModelTable(entries, models, points) != 0) return 1;
+    std::printf("### The fountain against the analytic FountainShape\n\n");
+    if (fountainTable(baked, models, points) != 0) return 1;
+  }
   std::printf("### SPH step cost, %d frames of 1/60 s from the same filled state\n\n", frames);
-  if (sphCostTable(baked, frames, threads) != 0) return 1;
+  if (sphCostTable(baked, frames, threads, variants) != 0) return 1;
   std::printf("\nLoad average (1, 5, 15 min) from /proc/loadavg: %s at the start, %s at the end.\n",
               load_before.c_str(), benchplot::loadAverage().c_str());
   return 0;

@@ -208,6 +208,23 @@ TEST(DepthMap, FastParticleCrossingAThinWall) {
     EXPECT_GT(pos[0].x, -0.1f);
     EXPECT_NEAR(vel[0].x, -50.0f, 0.1f);  // −ε v⊥ with ε = 0.5 (normal quantised by the L1 index)
   }
+  // The end point past the middle of the wall (inside, nearer the far face): the end sample alone
+  // pushes the particle out through the far face; the sweep finds the entry at the near face.
+  {
+    const std::vector<glm::vec3> from = {{-0.3f, 0.0f, 0.0f}};
+    const glm::vec3 end{0.02f, 0.0f, 0.0f};
+    desc.max_step = 0.0f;
+    std::vector<glm::vec3> pos = {end}, vel = {v};
+    fluid::collideParticles(c, {}, from, pos, vel, desc, scratch);
+    EXPECT_GT(pos[0].x, 0.03125f) << "without the sweep: out through the far face";
+    desc.max_step = 0.03f;
+    pos = {end};
+    vel = {v};
+    const fluid::CollideCounts n = fluid::collideParticles(c, {}, from, pos, vel, desc, scratch);
+    EXPECT_EQ(n.swept, 1u);
+    EXPECT_LT(pos[0].x, -0.03125f);
+    EXPECT_LT(vel[0].x, 0.0f);
+  }
 }
 
 TEST(DepthMap, ConcaveBasinNeedsTheExtraMap) {
