@@ -113,6 +113,12 @@ inline float lookupOctant(const std::vector<float>& table, glm::vec3 a, float in
 // box only needs the one octant table). A face far from edges gets 1 - G(-s, -H, -H) = V_wall(s),
 // so with the half extents less wall_shift and the table scaled by beta, a box face is exactly
 // the calibrated wall.
+// Thin boxes keep the tangent plane (sampleBoundary): seen from one side, a wall thinner than the
+// support would leave most of a particle's support empty, and the water beside it would meet
+// only the collision constraint (measured with the exact volume on the 6 mm basin walls of
+// tests/sph: SphBlast's overflowing basin stopped draining). The tangent plane treats such a wall
+// as the solid behind its face, which is what the fluid on one side needs. A box at least H/2
+// thick in every axis (a crate) has no far face within the support of a particle outside it.
 BoundaryVolume boxBoundaryVolume(const SphScratch& scratch, glm::vec3 half, const ColliderPose& pose, glm::vec3 x) {
   const float H = scratch.kernel.support, inv_node = 0.5f * kOctantCells / H;
   const glm::vec3 local = glm::inverse(pose.rotation) * (x - pose.translation);
@@ -143,7 +149,9 @@ BoundaryVolume boxBoundaryVolume(const SphScratch& scratch, glm::vec3 half, cons
         slope.z += s * lookupOctant(scratch.octant_slope, glm::vec3(c.z, c.y, c.x), inv_node);
       }
   out.volume = std::clamp(out.volume, 0.0f, 1.0f);
-  out.gradient = pose.rotation * -slope;
+  const glm::vec3 gradient = pose.rotation * -slope;
+  out.area = glm::length(gradient);
+  if (out.area > 0.0f) out.normal = gradient / -out.area;
   return out;
 }
 
@@ -227,7 +235,9 @@ void sampleBoundary(StepContext& context) {
   scratch.collider_box.assign(collider_count, glm::vec4(0.0f));
   for (std::size_t c = 0; c < collider_count; ++c) {
     const auto* box = dynamic_cast<const BoxShape*>(world.colliders[c].shape.get());
-    if (box == nullptr || box->inverted() || !world.colliders[c].boundary_pressure) continue;
+    if (box == nullptr || box->inverted() || !world.colliders[c].boundary_pressure ||
+        glm::any(glm::lessThan(box->halfExtents(), glm::vec3(0.5f * support))))
+      continue;
     if (scratch.octant_volume.empty()) tabulateOctant(scratch, scratch.wall_beta);
     scratch.collider_box[c] = glm::vec4(glm::max(box->halfExtents() - scratch.wall_shift, glm::vec3(1e-6f)), 1.0f);
   }

@@ -45,10 +45,12 @@ inline float openFraction(const SphScratch& scratch, const SphCollider& collider
   return 1.0f - lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
 }
 
-// Boundary volume V_c of one collider at a particle and its gradient (world space).
+// Boundary volume V_c of one collider at a particle and its gradient grad V_c = -area * normal
+// (world space; normal points out of the solid).
 struct BoundaryVolume {
   float volume = 0.0f;
-  glm::vec3 gradient{0.0f};
+  float area = 0.0f;
+  glm::vec3 normal{0.0f, 0.0f, 1.0f};
 };
 
 // Side of the octant table: (kOctantCells + 1)^3 nodes over [-H, H]^3 (node spacing H / 24 = r / 6).
@@ -59,7 +61,8 @@ constexpr int kOctantCells = 48;
 BoundaryVolume boxBoundaryVolume(const SphScratch& scratch, glm::vec3 half, const ColliderPose& pose, glm::vec3 x);
 
 // V_c and grad V_c of collider c at particle position x with its step-start sample: exact for a
-// solid box (scratch.collider_box[c].w != 0), the calibrated tangent-plane wall otherwise.
+// solid box at least H/2 thick (scratch.collider_box[c].w != 0), the calibrated tangent-plane
+// wall otherwise.
 inline BoundaryVolume colliderVolume(const SphScratch& scratch, const SphCollider& collider, std::size_t c,
                                      const ColliderSample& sample, glm::vec3 x) {
   const float support = scratch.kernel.support;
@@ -67,14 +70,15 @@ inline BoundaryVolume colliderVolume(const SphScratch& scratch, const SphCollide
   const glm::vec4 box = scratch.collider_box[c];
   if (box.w != 0.0f) return boxBoundaryVolume(scratch, glm::vec3(box), collider.pose, x);
   const float s = sample.distance + scratch.wall_shift;
-  return {lookupWallTable(scratch.wall_volume, s, support),
-          -lookupWallTable(scratch.wall_area, s, support) * sample.normal};  // grad V_c = -A(s) n
+  return {lookupWallTable(scratch.wall_volume, s, support), lookupWallTable(scratch.wall_area, s, support),
+          sample.normal};  // grad V_c = -A(s) n
 }
 
 // Collider c's share of grad V at a particle (the union rule of sampleBoundary):
 // grad V_c prod_{c' != c} (1 - V_c'), with product = prod_c (1 - V_c).
 inline glm::vec3 boundaryShare(const BoundaryVolume& term, float product) {
-  return term.gradient * (product / std::max(1.0f - term.volume, 1e-6f));
+  const float others = product / std::max(1.0f - term.volume, 1e-6f);
+  return (-term.area * others) * term.normal;
 }
 
 // Queries one collider at chosen particles, in chunks: which[0 .. q) are particle indices whose
