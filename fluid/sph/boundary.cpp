@@ -104,9 +104,10 @@ inline float lookupOctant(const std::vector<float>& table, glm::vec3 a, float in
 // Why a box is not a plane: the tangent-plane volume fills the whole half-space beyond the
 // nearest point, so around a convex edge or corner it counts solid where the box has none (at a
 // box edge, half of the half-space's share is missing). The water is then kept out of a band
-// along the box's edges, and a floating crate displaces that band too: measured with a box
-// held still in a tank, the buoyant force was 1.24-1.32x rho g V_submerged at 5.6 spacings per
-// edge. For a box, V is exact: the indicator of [-h, h] along each axis is step(y + h) -
+// along the box's edges, and a floating crate displaces that band too: measured with a 0.14 m
+// box held still half submerged in a tank (r = 12.5 mm, 5.6 spacings per edge), the force was
+// 1.24x rho g V_submerged below the visible water level with the tangent plane, 1.14x with the
+// exact volume (the rest is mostly the water's own level offset, see docs/engine.md). For a box, V is exact: the indicator of [-h, h] along each axis is step(y + h) -
 // step(y - h), so the box's integral of W(x - y) is the signed sum over its 8 corners of the
 // octant integral G(a) with a_k = -h_k - x_k or h_k - x_k (Koschier & Bender 2017 define the
 // boundary volume as this integral, their eq. 7, and tabulate it in a volume map per shape; a
