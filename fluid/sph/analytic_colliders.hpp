@@ -29,6 +29,8 @@ class BoxShape final : public SignedDistanceShape {
  public:
   BoxShape(glm::vec3 half_extents, bool inverted = false);
   void query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const override;
+  glm::vec3 halfExtents() const { return half_; }
+  bool inverted() const { return inverted_; }
 
  private:
   glm::vec3 half_;

@@ -37,21 +37,48 @@ inline float lookupWallTable(const std::vector<float>& table, float s, float sup
 // 1 - V_c: the part of a particle's support that collider c leaves to fluid (V_c = its boundary
 // volume from the wall table at that distance; 1 when c does not push back or is out of reach).
 // Several colliders combine by the union rule of sampleBoundary: the product over colliders.
+// The planar (tangent-plane) volume of any collider; the step itself uses colliderVolume, which
+// is exact for solid boxes.
 inline float openFraction(const SphScratch& scratch, const SphCollider& collider, const ColliderSample& sample) {
   const float support = scratch.kernel.support;
   if (!collider.boundary_pressure || !sample.valid || sample.distance >= support) return 1.0f;
   return 1.0f - lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
 }
 
-// Collider c's share of grad V at a particle (the union rule of sampleBoundary);
-// product = prod_c (1 - V_c).
-inline glm::vec3 boundaryShare(const SphScratch& scratch, const ColliderSample& sample, float product) {
+// Boundary volume V_c of one collider at a particle and its gradient grad V_c = -area * normal
+// (world space; normal points out of the solid).
+struct BoundaryVolume {
+  float volume = 0.0f;
+  float area = 0.0f;
+  glm::vec3 normal{0.0f, 0.0f, 1.0f};
+};
+
+// Side of the octant table: (kOctantCells + 1)^3 nodes over [-H, H]^3 (node spacing H / 24 = r / 6).
+constexpr int kOctantCells = 48;
+
+// Exact V and grad V of a solid box at world point x (`half`: its half extents less the wall
+// calibration shift, scaled like the wall tables; boundary.cpp says why a box needs this).
+BoundaryVolume boxBoundaryVolume(const SphScratch& scratch, glm::vec3 half, const ColliderPose& pose, glm::vec3 x);
+
+// V_c and grad V_c of collider c at particle position x with its step-start sample: exact for a
+// solid box at least H/2 thick (scratch.collider_box[c].w != 0), the calibrated tangent-plane
+// wall otherwise.
+inline BoundaryVolume colliderVolume(const SphScratch& scratch, const SphCollider& collider, std::size_t c,
+                                     const ColliderSample& sample, glm::vec3 x) {
   const float support = scratch.kernel.support;
-  if (!sample.valid || sample.distance >= support) return glm::vec3(0.0f);
-  const float vc = lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
-  const float others = product / std::max(1.0f - vc, 1e-6f);
-  return (-lookupWallTable(scratch.wall_area, sample.distance + scratch.wall_shift, support) * others) *
-         sample.normal;  // grad V_c = -A(s) n
+  if (!collider.boundary_pressure || !sample.valid || sample.distance >= support) return {};
+  const glm::vec4 box = scratch.collider_box[c];
+  if (box.w != 0.0f) return boxBoundaryVolume(scratch, glm::vec3(box), collider.pose, x);
+  const float s = sample.distance + scratch.wall_shift;
+  return {lookupWallTable(scratch.wall_volume, s, support), lookupWallTable(scratch.wall_area, s, support),
+          sample.normal};  // grad V_c = -A(s) n
+}
+
+// Collider c's share of grad V at a particle (the union rule of sampleBoundary):
+// grad V_c prod_{c' != c} (1 - V_c'), with product = prod_c (1 - V_c).
+inline glm::vec3 boundaryShare(const BoundaryVolume& term, float product) {
+  const float others = product / std::max(1.0f - term.volume, 1e-6f);
+  return (-term.area * others) * term.normal;
 }
 
 // Queries one collider at chosen particles, in chunks: which[0 .. q) are particle indices whose
@@ -95,10 +122,12 @@ inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size
   const SphScratch& scratch = context.scratch;
   const ColliderSample& sample = scratch.start_samples[c][i];
   if (!sample.valid || sample.distance >= context.support) return;
-  const glm::vec3 grad = boundaryShare(scratch, sample, scratch.boundary_product[i]);
-  const glm::vec3 f = (2.0f * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
+  const SphCollider& collider = context.world.colliders[c];
+  const glm::vec3 grad =
+      boundaryShare(colliderVolume(scratch, collider, c, sample, scratch.old_position[i]), scratch.boundary_product[i]);
+  const glm::vec3 f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
   acc.force += f;
-  acc.torque += glm::cross(scratch.old_position[i] - context.world.colliders[c].pose.translation, f);
+  acc.torque += glm::cross(scratch.old_position[i] - collider.pose.translation, f);
 }
 
 }  // namespace fluid::sph_step

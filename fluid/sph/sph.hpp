@@ -239,7 +239,13 @@ struct SphScratch {
   std::vector<float> wall_volume;  // tabulated boundary volume V(s), s in [-H, H]
   std::vector<float> wall_area;    // tabulated A(s) = -dV/ds
   float wall_shift = 0.0f;         // calibration offset of s (see ensureInit)
+  float wall_beta = 1.0f;          // calibration scale of V and A (see ensureInit)
   float wall_neighbours = 0.0f;    // lattice neighbours per unit boundary volume
+  // Exact boundary volume of solid boxes (boundary.cpp, boxBoundaryVolume): the kernel's integral
+  // over the octant z > a and its slope along a.x, tabulated on (kOctantCells + 1)^3 nodes over
+  // a in [-H, H]^3; built when a solid box collider first appears (empty otherwise).
+  std::vector<float> octant_volume, octant_slope;
+  std::vector<glm::vec4> collider_box;  // per collider, this step: xyz calibrated half extents, w = 1 for a solid box
   NeighborGrid grid;
   // The step's exact lists: the neighbours of i are neighbors.indices[offsets[i] .. offsets[i] +
   // counts[i]) (DFSPH: a fresh search, so that is up to offsets[i + 1]; WCSPH: the front of i's
