@@ -3,6 +3,7 @@
 // against exact signed mesh distance on the same points (BVH on all points; the plain loop over
 // every triangle on a subset), with the misclassification rate next to it.
 // Usage: bench_collide_query [--points N] [--threads T] [--res R] [--reps K] [--brute N]
+#include "bench_timing.hpp"
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
 
@@ -16,6 +17,8 @@
 
 namespace {
 
+using benchtiming::median;
+
 using Clock = std::chrono::steady_clock;
 
 class BruteForce final : public fluid::SignedDistanceShape {
@@ -28,11 +31,6 @@ class BruteForce final : public fluid::SignedDistanceShape {
  private:
   const fluid::MeshDistance& exact_;
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 double timeNs(const fluid::SignedDistanceShape& shape, const std::vector<glm::vec3>& points,
               std::vector<fluid::ColliderSample>& out, int threads, int reps) {

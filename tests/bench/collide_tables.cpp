@@ -5,6 +5,7 @@
 // Usage: bench_collide_tables [--points N] [--l1-samples N] [--res 64,128,...] [--csv FILE [--force]]
 // --csv also writes the rows of table 2 to FILE, which scripts/plots/collide_accuracy.py draws as
 // charts (error against ns per query, log-log; one curve per map set, one point per resolution).
+#include "bench_timing.hpp"
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
 #include "load_average.hpp"
@@ -24,6 +25,8 @@
 #include <vector>
 
 namespace {
+
+using benchtiming::median;
 
 using Clock = std::chrono::steady_clock;
 using collide_test::Mesh;
@@ -96,11 +99,6 @@ std::vector<Config> configsFor(const std::string& shape, const Mesh& mesh, int r
     out.push_back({"axes front-back16 + cavity cube8", specs});
   }
   return out;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 // Chart data: one CSV row per table row, plus the "map set at res²" rows with an error of 0, which a
