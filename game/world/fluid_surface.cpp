@@ -62,6 +62,13 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   }
   if (!s.async_job) s.async_job = std::make_unique<fluid::AsyncSurfaceExtractor>();
   fluid::AsyncSurfaceExtractor& job = *s.async_job;
+  // Refused input is reported in this frame, once, and starts no job: the job in flight is
+  // dropped, and the next good frame waits for its own surface like the first one.
+  if (const fluid::SurfaceStatus valid = fluid::validateSurface(input, sp); !valid.ok()) {
+    if (job.pending()) (void)job.collect(s.mesh);
+    s.mesh.clear();
+    return finish(s, valid);
+  }
   if (!job.pending()) job.start(input, sp);  // first frame: this frame's own surface, waited for
   const fluid::SurfaceStatus st = job.collect(s.mesh);
   job.start(input, sp);
