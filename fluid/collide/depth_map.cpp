@@ -1,6 +1,7 @@
 // Depth-map collider queries: eq. (1) per ortho map, the §4.3 depth-cube distance, and rule (2)
 // of Kolb et al. 2004 §4.1 combining the votes. Encodings: see collide.hpp.
 #include "fluid/collide/collide.hpp"
+#include "fluid/collide/map_sampling.hpp"
 #include "fluid/core/parallel.hpp"
 
 #include <oneapi/tbb/task_arena.h>
@@ -44,21 +45,8 @@ inline void invalidVote(Winner& w, const DepthMap& map) {
   if (map.encloses_collider) vote(w, kFarOutside, nullptr, 0, 0);
 }
 
-inline glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) {
-  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
-}
-
-// binary16 -> float for the depths the maps hold (normal numbers, zero, −1): one shift and
-// add; anything else (subnormal, inf, NaN) takes the exact general path.
-inline float depthHalf(std::uint16_t bits) {
-  const std::uint32_t exponent = (bits >> 10) & 0x1Fu;
-  if (exponent == 0u || exponent == 31u) return halfToFloat(bits);
-  const std::uint32_t f = ((static_cast<std::uint32_t>(bits) & 0x8000u) << 16) |
-                          (((static_cast<std::uint32_t>(bits) & 0x7FFFu) << 13) + (112u << 23));
-  float out;
-  std::memcpy(&out, &f, 4);
-  return out;
-}
+using collide_detail::depthHalf;
+using collide_detail::transformPoint;
 
 inline std::uint16_t loadU16(const std::uint8_t* p) {
   std::uint16_t v;

@@ -2,6 +2,7 @@
 // of every vote of Kolb et al. 2004 §4.1 eq. (1) (ortho maps) and §4.3 (depth cube) over the cell,
 // then rule (2) decides whether the cell's answer is >= reach everywhere.
 #include "fluid/collide/collide.hpp"
+#include "fluid/collide/map_sampling.hpp"
 #include "fluid/core/parallel.hpp"
 
 #include <algorithm>
@@ -49,20 +50,8 @@ struct CellVerdict {
   bool far() const { return !any_valid || (guaranteed && !near); }
 };
 
-// binary16 -> float, exact (depth_map.cpp's depthHalf: normal numbers by shift and add).
-inline float half(std::uint16_t bits) {
-  const std::uint32_t exponent = (bits >> 10) & 0x1Fu;
-  if (exponent == 0u || exponent == 31u) return halfToFloat(bits);
-  const std::uint32_t f = ((static_cast<std::uint32_t>(bits) & 0x8000u) << 16) |
-                          (((static_cast<std::uint32_t>(bits) & 0x7FFFu) << 13) + (112u << 23));
-  float out;
-  std::memcpy(&out, &f, 4);
-  return out;
-}
-
-inline glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) {
-  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
-}
+using collide_detail::depthHalf;
+using collide_detail::transformPoint;
 
 // The map-space bounding box of the box [lo, hi] (the map transform is affine: the image's centre
 // and |M| times the half extent), padded for rounding.
@@ -117,7 +106,7 @@ DepthPyramid depthPyramid(const DepthMap& map) {
       std::uint16_t fb, bb;
       std::memcpy(&fb, t + 4, 2);
       std::memcpy(&bb, t + 6, 2);
-      const float f = half(fb), b = half(bb);
+      const float f = depthHalf(fb), b = depthHalf(bb);
       if (map.margin_ring && fb == bb && f >= 0.0f) {
         d.flags |= kRing;  // its votes go to the ring winner, unused where a cell is far
         continue;
