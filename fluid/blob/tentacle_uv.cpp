@@ -51,16 +51,20 @@ void buildChainGrid(ChainGrid& g, std::span<const glm::vec3> positions, float ce
 }  // namespace
 
 void blobTentacleU(SurfaceMesh& mesh, const BlobWorld& world, glm::vec3 origin, float min_share) {
-  const BlobParticles& parts = world.particles;
+  blobTentacleU(mesh, world.particles, world.target.tentacle_particles, world.params.spacing, origin, min_share);
+}
+
+void blobTentacleU(SurfaceMesh& mesh, const BlobParticles& parts, std::span<const std::vector<std::uint32_t>> tentacles,
+                   float spacing, glm::vec3 origin, float min_share) {
   ChainGrid grid;
-  for (const auto& chain : world.target.tentacle_particles)
+  for (const auto& chain : tentacles)
     grid.chain.insert(grid.chain.end(), chain.begin(), chain.end());
   if (grid.chain.empty() || mesh.attributes.size() != mesh.positions.size()) return;
   for (std::uint32_t i : grid.chain)
     if (!isFinite(parts.position[i])) return;
   // Cells of two spacings: a vertex with a tentacle share lies within the field cutoff (about two
   // spacings) of a tentacle particle, so its nearest one is almost always in the 27 cells around it.
-  buildChainGrid(grid, parts.position, 2.0f * world.params.spacing);
+  buildChainGrid(grid, parts.position, 2.0f * spacing);
   constexpr float kTwoPi = 6.28318530717958f;
   // Per vertex, independent: the result does not depend on the thread count.
   par::parallelFor(par::Range<std::size_t>(0, mesh.positions.size(), 512), [&](const par::Range<std::size_t>& r) {

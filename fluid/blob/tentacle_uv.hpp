@@ -20,6 +20,8 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <span>
+#include <vector>
 
 namespace fluid {
 
@@ -53,5 +55,10 @@ struct BlobTentaclePolicy {
 // (BlobParticles::tangent / normal). `origin` is SurfaceParams::origin (mesh positions are p - origin).
 void blobTentacleU(SurfaceMesh& mesh, const BlobWorld& world, glm::vec3 origin = glm::vec3(0.0f),
                    float min_share = 0.05f);
+// The same from the parts of the world it reads (a copy of them, for meshing on another thread):
+// the particles, the tentacles' particle chains (BlobTarget::tentacle_particles) and the spacing.
+void blobTentacleU(SurfaceMesh& mesh, const BlobParticles& particles,
+                   std::span<const std::vector<std::uint32_t>> tentacles, float spacing,
+                   glm::vec3 origin = glm::vec3(0.0f), float min_share = 0.05f);
 
 }  // namespace fluid

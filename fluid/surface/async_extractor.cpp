@@ -1,5 +1,7 @@
 #include "fluid/surface/async_extractor.hpp"
 
+#include <chrono>
+
 namespace fluid {
 
 namespace {
@@ -22,14 +24,27 @@ AsyncSurfaceExtractor::~AsyncSurfaceExtractor() {
   worker_.join();
 }
 
-void AsyncSurfaceExtractor::start(const SurfaceInput& input, const SurfaceParams& params) {
-  if (pending_) {  // the worker may still read the copy below: wait for it, drop its mesh
-    std::unique_lock lock(mutex_);
-    wake_.wait(lock, [this] { return job_done_; });
-    job_done_ = false;
-    pending_ = false;
+void AsyncSurfaceExtractor::waitForPending() {
+  if (!pending_) return;
+  std::unique_lock lock(mutex_);
+  wake_.wait(lock, [this] { return job_done_; });
+  job_done_ = false;
+  pending_ = false;
+}
+
+void AsyncSurfaceExtractor::launch(Job job) {
+  // The worker is idle (waiting for job_ready_): job_ and the copies are ours until published.
+  job_ = std::move(job);
+  {
+    const std::lock_guard lock(mutex_);
+    job_ready_ = true;
   }
-  // The worker is idle (waiting for job_ready_): the copy is ours until we publish it.
+  pending_ = true;
+  wake_.notify_all();
+}
+
+void AsyncSurfaceExtractor::start(const SurfaceInput& input, const SurfaceParams& params) {
+  waitForPending();  // the worker may still read the copy below
   copyInto(x_, input.x);
   copyInto(y_, input.y);
   copyInto(z_, input.z);
@@ -37,12 +52,15 @@ void AsyncSurfaceExtractor::start(const SurfaceInput& input, const SurfaceParams
   copyInto(radius_scale_, input.radiusScale);
   copyInto(user_, input.user);
   params_ = params;
-  {
-    const std::lock_guard lock(mutex_);
-    job_ready_ = true;
-  }
-  pending_ = true;
-  wake_.notify_all();
+  launch([this](SurfaceExtractor& extractor, SurfaceMesh& mesh) {
+    const SurfaceInput copy{x_, y_, z_, strength_, radius_scale_, user_};
+    return extractor.extract(copy, params_, mesh);
+  });
+}
+
+void AsyncSurfaceExtractor::startJob(Job job) {
+  waitForPending();
+  launch(std::move(job));
 }
 
 SurfaceStatus AsyncSurfaceExtractor::collect(SurfaceMesh& out) {
@@ -52,6 +70,7 @@ SurfaceStatus AsyncSurfaceExtractor::collect(SurfaceMesh& out) {
   job_done_ = false;
   pending_ = false;
   std::swap(out, mesh_);
+  last_job_ms_ = job_ms_;
   return status_;
 }
 
@@ -63,8 +82,9 @@ void AsyncSurfaceExtractor::work() {
       if (!job_ready_) return;  // quit with no job left
       job_ready_ = false;
     }
-    const SurfaceInput input{x_, y_, z_, strength_, radius_scale_, user_};
-    status_ = extractor_.extract(input, params_, mesh_);
+    const auto begin = std::chrono::steady_clock::now();
+    status_ = job_(extractor_, mesh_);
+    job_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
     {
       const std::lock_guard lock(mutex_);
       job_done_ = true;

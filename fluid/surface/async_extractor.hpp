@@ -8,9 +8,13 @@
 // the job and swaps its mesh into the caller's, whose old buffers become the next job's output
 // (no allocation once both meshes have grown). The mesh is what SurfaceExtractor::extract gives
 // for the copied input: deterministic and thread-count invariant like it.
+//
+// startJob() runs any extraction on the worker (a marching_slices_policy.hpp policy and a pass over
+// the finished mesh, as the blob's tentacle texturing does); the job owns the copy it reads.
 #include "fluid/surface/marching_slices.hpp"
 
 #include <condition_variable>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -28,6 +32,13 @@ class AsyncSurfaceExtractor {
   // (its mesh is dropped). The input is validated by the worker: an error comes with collect().
   void start(const SurfaceInput& input, const SurfaceParams& params);
 
+  // The general form: `job` runs on the worker with the worker's extractor and the mesh that
+  // collect() hands over. Everything it reads must stay untouched by the caller until collect()
+  // (or the next start) returns: a copy the job owns, or caller data set aside for it. Waits first
+  // like start(). A job capturing one pointer needs no allocation (std::function's local storage).
+  using Job = std::function<SurfaceStatus(SurfaceExtractor&, SurfaceMesh&)>;
+  void startJob(Job job);
+
   // True from start() until collect() has taken the job's result.
   bool pending() const { return pending_; }
 
@@ -35,16 +46,25 @@ class AsyncSurfaceExtractor {
   // pending job returns an error and leaves `out` alone.
   SurfaceStatus collect(SurfaceMesh& out);
 
+  // Wall time (ms) the worker spent on the job the last collect() took: the meshing cost that no
+  // longer shows on the caller's thread.
+  double lastJobMs() const { return last_job_ms_; }
+
  private:
   void work();
+  void waitForPending();  // drops the mesh of a job not yet collected
+  void launch(Job job);
 
   SurfaceExtractor extractor_;
   // The job: a copy of the particles (one layout, the SurfaceInput's), its params and its result.
   std::vector<float> x_, y_, z_, strength_, radius_scale_;
   std::vector<glm::vec4> user_;
   SurfaceParams params_;
+  Job job_;
   SurfaceMesh mesh_;
   SurfaceStatus status_;
+  double job_ms_ = 0.0;       // written by the worker before job_done_
+  double last_job_ms_ = 0.0;  // caller thread only
 
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -52,6 +52,9 @@ const ParamTable<BlobMonsterParams>& table() {
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the field"),
       param<&P::colour>("colour", 0.0, 1.0, "goo colour (RGB)"),
       param<&P::visible>("visible", "false: the monster is not drawn (it still moves); live"),
+      param<&P::async>("async",
+                       "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
+                       "(Janisz 3.2.6); false: mesh before drawing; live"),
   };
   return rows;
 }
@@ -237,6 +240,28 @@ void startRound(BlobMonster& s) {
   s.caught_timer = 0.0f;
 }
 
+void toSoa(const std::vector<glm::vec3>& x, std::vector<float>& xs, std::vector<float>& ys, std::vector<float>& zs) {
+  xs.resize(x.size()), ys.resize(x.size()), zs.resize(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) xs[i] = x[i].x, ys[i] = x[i].y, zs[i] = x[i].z;
+}
+
+fluid::SurfaceInput inputOf(const BlobMeshFrame& f) {
+  return {f.xs, f.ys, f.zs, f.particles.strength, f.particles.radius_scale, {}};
+}
+
+// The goo's surface of one set of particles (paper §7): marching slices with the tentacle texturing
+// policy, then u around each tentacle (tentacle_uv.hpp says why that is a pass of its own). The
+// synchronous path and the async job both run this, so they give the same bits.
+fluid::SurfaceStatus meshBlob(fluid::SurfaceExtractor& extractor, const fluid::SurfaceInput& in,
+                              const fluid::SurfaceParams& sp, const fluid::BlobParticles& particles,
+                              std::span<const std::vector<std::uint32_t>> tentacles, float spacing,
+                              fluid::SurfaceMesh& mesh) {
+  const fluid::SurfaceStatus st =
+      fluid::extractWithPolicy(extractor, in, sp, fluid::BlobTentaclePolicy{particles.length_coord.data()}, mesh);
+  if (st.ok()) fluid::blobTentacleU(mesh, particles, tentacles, spacing);
+  return st;
+}
+
 // Crates near the body become colliders after the level's (Bullet pose and velocity: a thrown
 // crate dents the blob); the rest of the list is the level, fixed at build.
 void collidersFromCrates(BlobMonster& s, const RigidBodies& bodies) {
@@ -335,10 +360,6 @@ class BlobEffect final : public EffectOf<BlobMonster> {
   bool prepareFrame(const FrameContext& frame, std::string& error) override {
     const PhaseScope phase(frame.profiler, engine::Phase::meshing);
     BlobMonster& s = state;
-    const std::vector<glm::vec3>& x = s.world.particles.position;
-    s.xs.resize(x.size()), s.ys.resize(x.size()), s.zs.resize(x.size());
-    for (std::size_t i = 0; i < x.size(); ++i) s.xs[i] = x[i].x, s.ys[i] = x[i].y, s.zs[i] = x[i].z;
-    const fluid::SurfaceInput in{s.xs, s.ys, s.zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
     fluid::SurfaceParams sp;
     sp.rc = s.params.smoothing * s.params.spacing;
     sp.cube = s.params.cube * s.params.spacing;
@@ -346,15 +367,41 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     sp.order = fluid::SurfaceOrder::backToFront;  // paper §5: blocks far to near
     sp.eye = frame.eye;
     sp.viewDir = frame.view_dir;
-    const fluid::SurfaceStatus st = fluid::extractWithPolicy(
-        s.extractor, in, sp, fluid::BlobTentaclePolicy{s.world.particles.length_coord.data()}, s.mesh);
-    if (!st.ok()) {
-      s.mesh.clear();
-      error = "blob: " + st.error;
-      return false;
+    if (!s.params.async) {
+      s.async_job.reset();
+      s.mesh_worker_ms = 0.0;
+      toSoa(s.world.particles.position, s.xs, s.ys, s.zs);
+      const fluid::SurfaceInput in{s.xs, s.ys, s.zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
+      return meshed(meshBlob(s.extractor, in, sp, s.world.particles, s.world.target.tentacle_particles,
+                             s.world.params.spacing, s.mesh),
+                    error);
     }
-    fluid::blobTentacleU(s.mesh, s.world);  // u around each tentacle (tentacle_uv.hpp says why here)
-    return true;
+    if (!s.async_job) s.async_job = std::make_unique<BlobMonster::MeshJob>();
+    fluid::AsyncSurfaceExtractor& worker = s.async_job->worker;
+    BlobMeshFrame& f = s.async_job->frame;
+    // The job in flight meshed the previous frame's copy: collect it, then the copy is ours again.
+    const bool in_flight = worker.pending();
+    fluid::SurfaceStatus st;
+    if (in_flight) st = worker.collect(s.mesh), s.mesh_worker_ms = worker.lastJobMs();
+    f.particles = s.world.particles;  // copy-assigned: no allocation once the vectors have grown
+    f.tentacles = s.world.target.tentacle_particles;
+    f.spacing = s.world.params.spacing;
+    f.params = sp;
+    toSoa(f.particles.position, f.xs, f.ys, f.zs);
+    // Refused input is reported in its own frame and starts no job; the next good frame waits for
+    // its own surface, like the first.
+    if (const fluid::SurfaceStatus valid = fluid::validateSurface(inputOf(f), sp); !valid.ok())
+      return meshed(valid, error);
+    const auto job = [&f](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
+      return meshBlob(extractor, inputOf(f), f.params, f.particles, f.tentacles, f.spacing, mesh);
+    };
+    if (!in_flight) {  // first frame: this frame's own surface, waited for
+      worker.startJob(job);
+      st = worker.collect(s.mesh);
+      s.mesh_worker_ms = worker.lastJobMs();
+    }
+    worker.startJob(job);
+    return meshed(st, error);
   }
 
   void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
@@ -392,6 +439,13 @@ class BlobEffect final : public EffectOf<BlobMonster> {
   }
 
  private:
+  bool meshed(const fluid::SurfaceStatus& st, std::string& error) {
+    if (st.ok()) return true;
+    state.mesh.clear();
+    error = "blob: " + st.error;
+    return false;
+  }
+
   void stepRound(BlobMonster& s, const StepContext& ctx) {
     if (s.caught_timer > 0.0f) {
       s.caught_timer -= static_cast<float>(ctx.step_seconds);

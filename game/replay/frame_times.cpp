@@ -23,7 +23,7 @@ std::string frameCsvHeader() {
     line += "_ms";
   }
   line +=
-      ",particles,sprites,triangles,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,"
+      ",particles,sprites,triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,"
       "dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash";
   return line;
 }
@@ -35,10 +35,13 @@ std::string frameCsvRow(const FrameRow& row) {
     std::snprintf(number, sizeof number, ",%.4f", p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
     line += number;
   }
-  for (std::uint64_t count : {row.particles, row.sprites, row.triangles, row.truth.sph_steps}) {
+  for (std::uint64_t count : {row.particles, row.sprites, row.triangles}) {
     line += ',';
     line += std::to_string(count);
   }
+  std::snprintf(number, sizeof number, ",%.4f", row.mesh_worker_ms);
+  line += number;
+  line += ',' + std::to_string(row.truth.sph_steps);
   const FrameTruth& t = row.truth;
   // %.9g: a float's value survives the text round trip.
   std::snprintf(number, sizeof number, ",%.9g,%.9g", t.density_err_mean, t.density_err_max);
@@ -140,7 +143,7 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
       ok = parseCell(cells[++c], p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
     if (ok)
       ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.sprites) &&
-           parseCell(cells[++c], row.triangles);
+           parseCell(cells[++c], row.triangles) && parseCell(cells[++c], row.mesh_worker_ms);
     FrameTruth& t = row.truth;
     if (ok)
       ok = parseCell(cells[++c], t.sph_steps) && parseCell(cells[++c], t.density_err_mean) &&

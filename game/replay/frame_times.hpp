@@ -4,10 +4,12 @@
 //
 // CSV columns, one row per rendered frame:
 //   frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,
-//   sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,
-//   dt_request_cuts,nonfinite,warned,state_hash
+//   mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,
+//   dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash
 // step is the simulation step count after the frame; particles the SPH particles, sprites the CPU
-// sprite particles, triangles the fluid surface's; sph_steps .. nonfinite the SPH solver's health
+// sprite particles, triangles the meshed surfaces' (water and blob); mesh_worker_ms the time the
+// asynchronous meshing's worker spent on the surfaces drawn (meshing_ms is then only the main thread's
+// wait and hand-over; 0 when meshing is synchronous); sph_steps .. nonfinite the SPH solver's health
 // counters over the frame's sub-steps (FrameTruth); warned is 1 where the overlay's plot draws a
 // red marker; state_hash is empty except on checkpoint steps.
 
@@ -44,6 +46,7 @@ struct FrameRow {
   std::uint64_t particles = 0;
   std::uint64_t sprites = 0;
   std::uint64_t triangles = 0;
+  double mesh_worker_ms = 0.0;
   FrameTruth truth;
   bool has_hash = false;
   std::uint64_t state_hash = 0;

@@ -3,6 +3,7 @@
 
 #include "engine/ui/overlay.hpp"
 #include "game/paths.hpp"
+#include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
 #include <algorithm>
@@ -132,7 +133,14 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
                  t.speed_clamps, t.dt_min_clamps,      t.dt_request_cuts,   t.nonfinite,  sphFluidWarns(*fluid, t)};
   }
   if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
-  if (surface) row.triangles = surface->mesh.indices.size() / 3;
+  if (surface) {
+    row.triangles = surface->mesh.indices.size() / 3;
+    row.mesh_worker_ms = surface->mesh_worker_ms;
+  }
+  if (const BlobMonster* blob = findState<BlobMonster>(world)) {
+    row.triangles += blob->mesh.indices.size() / 3;
+    row.mesh_worker_ms += blob->mesh_worker_ms;
+  }
   if (surface && surface->params.method == SurfaceMethodChoice::raycast && surface->raycast.pool > 0) {
     const FluidSurface& s = *surface;
     RaycastTally& t = result.raycast;

@@ -5,6 +5,7 @@
 
 #include "fluid/blob/behaviour.hpp"
 #include "fluid/blob/blob.hpp"
+#include "fluid/surface/async_extractor.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <glm/vec3.hpp>
@@ -33,6 +34,19 @@ struct BlobMonsterParams {
   float threshold = 0.2f;
   glm::vec3 colour{0.35f, 0.8f, 0.2f};
   bool visible = true;
+  // Mesh frame N on a worker thread while the next steps run (Janisz §3.2.6), drawing the surface
+  // of the previous frame's particles; false: mesh before drawing.
+  bool async = true;
+};
+
+// What the goo's surface reads (prepareFrame): for the async job, a copy taken at the frame it
+// belongs to, since the next steps move the particles and change the tentacles while it meshes.
+struct BlobMeshFrame {
+  fluid::BlobParticles particles;
+  std::vector<std::vector<std::uint32_t>> tentacles;  // fluid::BlobTarget::tentacle_particles
+  float spacing = 0.0f;
+  fluid::SurfaceParams params;
+  std::vector<float> xs, ys, zs;  // positions as the extractor's SoA input
 };
 
 struct BlobMonster {
@@ -43,18 +57,25 @@ struct BlobMonster {
   std::vector<glm::vec3> start_column;  // where each round starts: the column in the pipe
   std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
   std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
-  std::vector<int> crate_of_collider;
-  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)  // per
-                                          // collider after the level: index into RigidBodies::crates
+  std::vector<int> crate_of_collider;      // per collider after the level: index into RigidBodies::crates
+  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)
   glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
   float caught_timer = 0.0f;              // > 0 while the caught effect plays
   int catches = 0;
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;
   // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy).
-  fluid::SurfaceExtractor extractor;
-  fluid::SurfaceMesh mesh;
-  std::vector<float> xs, ys, zs;
+  fluid::SurfaceExtractor extractor;  // params.async false
+  fluid::SurfaceMesh mesh;            // the surface drawn this frame (async: the previous frame's particles)
+  std::vector<float> xs, ys, zs;      // params.async false: the positions as SoA
+  // params.async: the worker and the frame it meshes, made at first use (the frame is left alone
+  // from startJob to collect, and outlives the worker, which waits for its job when destroyed).
+  struct MeshJob {
+    BlobMeshFrame frame;
+    fluid::AsyncSurfaceExtractor worker;
+  };
+  std::unique_ptr<MeshJob> async_job;
+  double mesh_worker_ms = 0.0;  // the worker's time on the surface drawn this frame (0 when synchronous)
   std::string error;  // a refused step or mesh (the effect stops stepping on a refused step)
 };
 

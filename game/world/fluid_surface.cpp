@@ -30,6 +30,7 @@ bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
 }  // namespace
 
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
+  s.mesh_worker_ms = 0.0;
   if (s.params.method != SurfaceMethodChoice::mesh) {  // the particle renderers need no mesh
     s.async_job.reset();
     s.mesh.clear();
@@ -71,6 +72,7 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   }
   if (!job.pending()) job.start(input, sp);  // first frame: this frame's own surface, waited for
   const fluid::SurfaceStatus st = job.collect(s.mesh);
+  s.mesh_worker_ms = job.lastJobMs();
   job.start(input, sp);
   return finish(s, st);
 }

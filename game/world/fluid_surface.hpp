@@ -49,6 +49,7 @@ struct FluidSurface {
   fluid::SurfaceExtractor extractor;                        // params.async false
   std::unique_ptr<fluid::AsyncSurfaceExtractor> async_job;  // params.async true, made at first use
   fluid::SurfaceMesh mesh;        // the surface drawn this frame (async: the previous frame's particles)
+  double mesh_worker_ms = 0.0;    // async: the worker's time on `mesh` (0 when synchronous)
   std::uint64_t meshes = 0;       // frames meshed
   std::string error;              // last extraction error (mesh cleared then)
   // Method raycast, last frame (written by the engine's water pass): fragment-list records asked

@@ -24,7 +24,7 @@ import csv, struct, sys, pathlib
 work = pathlib.Path(sys.argv[1])
 rows = list(csv.reader(open(work / "f.csv")))
 want = ("frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,"
-        "triangles,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
+        "triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
         "dt_request_cuts,nonfinite,warned,state_hash").split(",")
 assert rows[0] == want, rows[0]
 body = rows[1:]
@@ -33,6 +33,9 @@ assert [int(r[1]) for r in body] == list(range(1, 151)), "one step per frame"
 hashed = [int(r[1]) for r in body if r[-1]]
 assert hashed == [150], hashed
 assert all(float(r[8]) > 0 for r in body), "frame times"
+# The crate yard has no surface to mesh: no triangles, no meshing worker time.
+tri, worker = want.index("triangles"), want.index("mesh_worker_ms")
+assert all(int(r[tri]) == 0 and float(r[worker]) == 0 for r in body), "a surface in the crate yard"
 def png_size(path):
     data = open(path, "rb").read(24)
     assert data[:8] == b"\x89PNG\r\n\x1a\n", path

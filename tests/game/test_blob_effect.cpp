@@ -9,8 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -146,6 +149,60 @@ TEST(BlobEffect, ACrateDroppedOnItAndTheBlobPushEachOther) {
   EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, c.y + 0.5f);
   EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
   EXPECT_EQ(blob->world.particles.size(), 1000u);
+}
+
+game::World blobWorldWith(const std::vector<std::string>& overrides) {
+  game::SceneConfig scene;
+  EXPECT_TRUE(game::loadSceneFile(game::scenesDir() / "blob_monster.json", scene).ok());
+  for (const std::string& o : overrides) {
+    const game::SceneStatus st = game::applyOverride(scene, o);
+    EXPECT_TRUE(st.ok()) << st.error;
+  }
+  game::World world;
+  std::string error;
+  EXPECT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  return world;
+}
+
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// blob.async (Janisz §3.2.6): the goo drawn at frame N is what the synchronous mesher gives for
+// frame N-1's particles and tentacles, bit for bit, the tentacles' (u, v) included (frame 0: its own).
+// A program that grows tentacles at once, so the tentacle texturing pass runs on the worker's copy.
+TEST(BlobEffect, AsyncDrawsThePreviousFramesGooBitForBit) {
+  const std::filesystem::path program = std::filesystem::temp_directory_path() / "fluiddemo_async.program.json";
+  std::ofstream(program) << R"({"initial": "tentacles", "states": [{"name": "tentacles", "behaviour": "tentacles",
+      "tentacles": 4, "tentacle_particles": 30, "tentacle_length": 1.2}]})";
+  game::World sync_world = blobWorldWith({"blob.program=" + program.string(), "blob.async=false"});
+  game::World async_world = blobWorldWith({"blob.program=" + program.string(), "blob.async=true"});
+  const game::BlobMonster& sync_blob = *game::findState<game::BlobMonster>(sync_world);
+  const game::BlobMonster& async_blob = *game::findState<game::BlobMonster>(async_world);
+  fluid::SurfaceMesh previous;
+  int textured = 0;
+  for (int frame = 0; frame < 120; ++frame) {
+    game::stepWorld(sync_world, nullptr);
+    game::stepWorld(async_world, nullptr);
+    game::meshWorld(sync_world, nullptr);
+    game::meshWorld(async_world, nullptr);
+    ASSERT_EQ(async_world.failures.count, 0u) << async_world.failures.first;
+    const fluid::SurfaceMesh& expected = frame == 0 ? sync_blob.mesh : previous;
+    const fluid::SurfaceMesh& got = async_blob.mesh;
+    ASSERT_FALSE(got.indices.empty()) << "frame " << frame;
+    ASSERT_TRUE(sameBits(got.positions, expected.positions) && sameBits(got.normals, expected.normals) &&
+                sameBits(got.indices, expected.indices) && sameBits(got.attributes, expected.attributes))
+        << "frame " << frame;
+    bool has_u = false;
+    for (const glm::vec4& a : got.attributes) has_u = has_u || (a.z > 0.5f && a.x > 0.0f);
+    textured += has_u ? 1 : 0;
+    EXPECT_GT(async_blob.mesh_worker_ms, 0.0) << "frame " << frame;
+    EXPECT_EQ(sync_blob.mesh_worker_ms, 0.0);
+    previous = sync_blob.mesh;
+  }
+  EXPECT_GE(textured, 100) << "the tentacles' u is on the surface in almost every frame";
+  std::filesystem::remove(program);
 }
 
 TEST(BlobEffect, BadProgramsNameFileKeyAndValue) {

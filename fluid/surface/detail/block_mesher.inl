@@ -199,10 +199,8 @@ class BlockMesher {
     const std::uint32_t id = cellLo.corner;
     if (id) [[likely]]
       return id - 1;
-    if constexpr (!Policy::kHasUser) {
-      if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
-        return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
-    }
+    if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
+      return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
     return evaluateInto(lo, cellLo, x, y, z, interior) - 1;
   }
 

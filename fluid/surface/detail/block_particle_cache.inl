@@ -490,9 +490,10 @@
     float v = 0, gx = 0, gy = 0, gz = 0;
     std::uint64_t looked = 0;
     c.user = {};
-    if constexpr (!kGradient && !Policy::kHasUser) {
+    if constexpr (!kGradient) {
       // Margin corner: only the sign of f - T is ever read (§3), so stop as soon as the sum
-      // passes T (see insideAt).
+      // passes T (see insideAt). No vertex lies on a margin corner's edges (only interior cubes
+      // emit), so a policy's corner data stays empty there.
       v = sumUntilAbove<true>(x, y, z, dzt, looked);
     } else {
       forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
@@ -557,9 +558,11 @@
   // corner's index + 1 (the upper one is cached in its slice).
   // Scalar sums: GCC's SLP vectoriser would pack each corner's four sums into one register and
   // repack them on every term (about 10 more instructions per term for the second corner).
+  // A policy's corner data is summed per corner as evaluate<true> sums it: same terms, same order.
   [[gnu::noinline, gnu::optimize("no-tree-slp-vectorize")]] std::uint32_t evaluatePairInto(
       Slice<Policy>& lo, SliceCell& cellLo, Slice<Policy>& hi, SliceCell& cellHi, int x, int y, int z) {
     float v0 = 0, gx0 = 0, gy0 = 0, gz0 = 0, v1 = 0, gx1 = 0, gy1 = 0, gz1 = 0;
+    typename Policy::CornerData user0{}, user1{};
     std::uint64_t looked = 0;
     const std::size_t k = col(x, y);
     const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
@@ -587,21 +590,26 @@
         if (in0) {
           ++looked;
           const SliceDz& d = atParticle8(dzLo, pi);
+          const float before = v0;
           accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
+          if constexpr (Policy::kHasUser) pol_.add(user0, indexOf(p), v0 - before);
         }
         if (in1) {
           ++looked;
           const SliceDz& d = atParticle8(dzHi, pi);
+          const float before = v1;
           accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
+          if constexpr (Policy::kHasUser) pol_.add(user1, indexOf(p), v1 - before);
         }
       }
     }
     looked_ += looked;
     Corner<Policy> c;
-    c.user = {};
     c.vert[0] = c.vert[1] = c.vert[2] = 0;
     c.cell = std::uint32_t(col(x, y));
-    auto store = [&c](Slice<Policy>& slice, SliceCell& cell, float v, float gx, float gy, float gz) {
+    auto store = [&c](Slice<Policy>& slice, SliceCell& cell, float v, float gx, float gy, float gz,
+                      const typename Policy::CornerData& user) {
+      c.user = user;
       c.value = v;
       c.g[0] = gx;
       c.g[1] = gy;
@@ -609,7 +617,7 @@
       slice.corners.push_back(c);
       cell.corner = std::uint32_t(slice.corners.size());
     };
-    store(hi, cellHi, v1, gx1, gy1, gz1);
-    store(lo, cellLo, v0, gx0, gy0, gz0);
+    store(hi, cellHi, v1, gx1, gy1, gz1, user1);
+    store(lo, cellLo, v0, gx0, gy0, gz0, user0);
     return cellLo.corner;
   }
