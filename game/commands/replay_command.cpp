@@ -199,8 +199,8 @@ int replayCommand(const Args& args) {
   app.add_flag("--allow-scene-change", a.run.allow_scene_change, "replay even if the scene file's hash changed");
   app.add_option("--compare", a.compare, "A.csv B.csv: per-phase p50/p95 ratios B/A")->expected(2);
   app.add_option("--set", a.sets,
-                 "a render-only override, section.key=value (repeatable; fluid_surface.* only, so the checkpoints "
-                 "still hold), e.g. fluid_surface.method=raycast");
+                 "a render-only override, section.key=value (repeatable; fluid_surface.* and the blob's surface "
+                 "keys only, so the checkpoints still hold), e.g. fluid_surface.method=raycast, blob.async=false");
   app.add_flag("--no-ui", a.no_ui, "start with the overlay hidden");
   bool no_render = false;
   app.add_flag("--no-render", no_render,

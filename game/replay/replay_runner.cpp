@@ -7,6 +7,7 @@
 #include "game/world/world.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 
 namespace game {
@@ -316,13 +317,19 @@ bool renderOnlyOverride(std::string_view assignment, std::string& error) {
   const std::size_t dot = path.find('.');
   const std::string_view section = dot == std::string_view::npos ? path : path.substr(0, dot);
   constexpr std::string_view kRenderOnly = "fluid_surface";
+  // The blob's surface keys: how its goo is meshed and drawn, never how the body moves.
+  constexpr std::array<std::string_view, 6> kBlobSurface = {"blob.async",     "blob.smoothing", "blob.cube",
+                                                            "blob.threshold", "blob.colour",    "blob.visible"};
   if (section == kRenderOnly) return true;
+  if (std::find(kBlobSurface.begin(), kBlobSurface.end(), path) != kBlobSurface.end()) return true;
   std::string keys;
   if (const SectionSpec* spec = findSection(kRenderOnly))
     for (const ParamSpec& param : spec->params) keys += (keys.empty() ? "" : ", ") + std::string(param.key);
+  std::string blob_keys;
+  for (const std::string_view key : kBlobSurface) blob_keys += (blob_keys.empty() ? "" : ", ") + std::string(key);
   error = "--set " + std::string(assignment) + ": '" + std::string(path) +
           "' is not render-only (it could change the simulation the checkpoints hash); a replay accepts --set for " +
-          std::string(kRenderOnly) + ".* keys only (" + keys + ")";
+          std::string(kRenderOnly) + ".* keys (" + keys + ") and the blob's surface keys (" + blob_keys + ") only";
   return false;
 }
 

@@ -3,7 +3,8 @@
 # `fluiddemo replay --set` takes render-only keys: the fountain tour replayed to its first
 # checkpoint (step 150) with the ray caster, and again with the water hidden, matches the committed
 # hash, and the ray caster really drew (its pool line) without dropping a record; a simulation
-# key, a camera key and an unknown fluid_surface key are refused, each named.
+# key, a camera key and an unknown fluid_surface key are refused, each named; the blob tour replays
+# to its checkpoints with its goo meshed synchronously (blob.async=false).
 set -u
 exe=$1 replays=$2 out=$3
 mkdir -p "$out"
@@ -29,4 +30,11 @@ run camera_key 2 --frames 150 --set camera.fov_degrees=70
 has camera_key "'camera.fov_degrees' is not render-only"
 run unknown_key 1 --frames 150 --set fluid_surface.bogus=1
 has unknown_key "unknown key 'bogus'"
+# The blob's surface keys are render-only too (meshing the goo synchronously changes no checkpoint);
+# its body's keys are not.
+"$exe" replay "$replays/blob_tour.replay" --headless --no-ui --width 160 --height 90 --frames 300 \
+  --set blob.async=false > "$out/blob_sync.txt" 2>&1 || fail "blob_sync: exit $?"
+has blob_sync '^checkpoints: 2 matched of 10 '
+run blob_body 2 --frames 150 --set blob.substeps=2
+has blob_body "'blob.substeps' is not render-only"
 echo "replay_set_render_only: ok"
