@@ -13,17 +13,17 @@ the goo meshed asynchronously and synchronously, interleaved; plus the meshing w
 
     python3 scripts/blob_table.py --cost build/dev/tests/bench/bench_blob build/dev/game/fluiddemo [README.md]
 """
-import csv
 import json
 import os
 import re
 import subprocess
 import sys
-import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import replay_budget  # noqa: E402
 
 BEGIN, END = "<!-- blob_table begin -->", "<!-- blob_table end -->"
 COST_BEGIN, COST_END = "<!-- blob_cost begin -->", "<!-- blob_cost end -->"
-ROUNDS = 2  # blob replay runs per meshing mode, interleaved
 
 
 def replace_section(readme, begin, end, lines):
@@ -33,11 +33,6 @@ def replace_section(readme, begin, end, lines):
     head, rest = text.split(begin, 1)
     tail = rest.split(end, 1)[1]
     open(readme, "w").write(head + "\n".join([begin] + lines + [end]) + tail)
-
-
-def percentile(values, p):
-    values = sorted(values)
-    return values[min(len(values) - 1, int(len(values) * p))]
 
 
 def cost(bench, fluiddemo, readme):
@@ -61,40 +56,15 @@ def cost(bench, fluiddemo, readme):
             rows.append(f"| {n:,} | {t} | {step['real_time']:.2f} | {step['p95_ms']:.2f} | {both['real_time']:.2f} | "
                         f"{both['p95_ms']:.2f} | {both['cpu_time']:.2f} | {both['triangles']:,.0f} |")
     # The blob replay, its goo meshed asynchronously (the default) and synchronously, interleaved.
-    replay = [fluiddemo, "replay", "content/replays/blob_tour.replay", "--headless", "--no-ui", "--width", "320",
-              "--height", "180", "--threads", "2"]
-    modes = {"async": [], "sync": ["--set", "blob.async=false"]}
-    frames = {mode: [] for mode in modes}
-    with tempfile.TemporaryDirectory() as tmp:
-        for round_ in range(ROUNDS):
-            for mode, extra in modes.items():
-                out = os.path.join(tmp, f"{mode}{round_}.csv")
-                cmd = replay + extra + ["--csv", out]
-                run = subprocess.run(cmd, capture_output=True, text=True,
-                                     env=dict(os.environ, SDL_VIDEODRIVER="offscreen"))
-                if run.returncode != 0:
-                    sys.exit(f"blob_table: {' '.join(cmd)} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
-                frames[mode] += list(csv.DictReader(open(out)))
+    command, frames = replay_budget.run_modes(fluiddemo, "content/replays/blob_tour.replay", "blob.async")
     load_after = os.getloadavg()[0]
     lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {os.cpu_count()} cores, "
              f"load average {load_before:.1f} before and {load_after:.1f} after: wall times on a shared machine, "
              "as noisy as that load says (the CPU column, the main thread's CPU time per frame, is the steadier one "
              "for 1 thread).", "",
-             f"The blob replay (`{' '.join(replay[1:])}`), {ROUNDS} runs of each mode interleaved, "
-             f"{len(frames['async'])} frames each: body step + meshing on the main thread (the CSV's fluid_ms + "
-             "meshing_ms), the meshing worker's own time (mesh_worker_ms: with async meshing it runs beside the "
-             "render and the next steps, off the main thread) and the whole frame (llvmpipe rendering included):", "",
-             "| meshing | step + meshing p50 ms | step + meshing p95 ms | step p95 | meshing (main thread) p95 | "
-             "worker p95 ms | frame p95 ms |",
-             "|---|---|---|---|---|---|---|"]
-    for mode, label in (("async", "async (`blob.async`, the default)"),
-                        ("sync", "synchronous (`--set blob.async=false`)")):
-        rows_ = frames[mode]
-        both = [float(f["fluid_ms"]) + float(f["meshing_ms"]) for f in rows_]
-        col = lambda name: [float(f[name]) for f in rows_]
-        lines.append(f"| {label} | {percentile(both, 0.5):.2f} | **{percentile(both, 0.95):.2f}** | "
-                     f"{percentile(col('fluid_ms'), 0.95):.2f} | {percentile(col('meshing_ms'), 0.95):.2f} | "
-                     f"{percentile(col('mesh_worker_ms'), 0.95):.2f} | {percentile(col('frame_ms'), 0.95):.2f} |")
+             "The blob replay (simulation: the body's step and Bullet's crates; with async meshing the worker "
+             "meshes beside the render and the next steps, off the main thread):", ""]
+    lines += replay_budget.budget_table(command, frames, "blob.async")
     lines += ["", "bench_blob (a body growing four tentacles on the ground; the mesh as the game makes it, synchronously):",
               ""]
     replace_section(readme, COST_BEGIN, COST_END, lines + rows + [""])

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""Per-frame budget of a replay with its surfaces meshed asynchronously and synchronously.
+
+Runs `fluiddemo replay REPLAY --headless` ROUNDS times per meshing mode, the modes interleaved (so
+both see the same load), and prints a markdown table over all frames of each mode: simulation
+(physics_ms + fluid_ms) + meshing on the main thread (meshing_ms: with async meshing only the
+hand-over and the wait), the meshing worker's own time (mesh_worker_ms), and the whole frame
+(llvmpipe rendering included, which measures Mesa rather than this project).
+
+    python3 scripts/replay_budget.py build/dev/game/fluiddemo content/replays/fountain_tour.replay \\
+        fluid_surface.async [README.md]
+
+With README.md, the table replaces the section between <!-- budget NAME begin/end --> markers,
+NAME the replay's file name without extension; otherwise it is printed.
+"""
+import csv
+import os
+import subprocess
+import sys
+import tempfile
+
+ROUNDS = 2
+SIZE = ["--width", "320", "--height", "180"]
+
+
+def percentile(values, p):
+    values = sorted(values)
+    return values[min(len(values) - 1, int(len(values) * p))]
+
+
+def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
+    """Frames per mode ("async": the scene's default, "sync": --set ASYNC_KEY=false), interleaved."""
+    base = [fluiddemo, "replay", replay, "--headless", "--no-ui"] + SIZE + ["--threads", str(threads)]
+    modes = {"async": [], "sync": ["--set", f"{async_key}=false"]}
+    frames = {mode: [] for mode in modes}
+    with tempfile.TemporaryDirectory() as tmp:
+        for round_ in range(rounds):
+            for mode, extra in modes.items():
+                out = os.path.join(tmp, f"{mode}{round_}.csv")
+                cmd = base + extra + ["--csv", out]
+                run = subprocess.run(cmd, capture_output=True, text=True,
+                                     env=dict(os.environ, SDL_VIDEODRIVER="offscreen"))
+                if run.returncode != 0:
+                    sys.exit(f"replay_budget: {' '.join(cmd)} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
+                frames[mode] += list(csv.DictReader(open(out)))
+    return base[1:], frames
+
+
+def budget_table(command, frames, async_key, rounds=ROUNDS):
+    """Markdown lines: one row per mode."""
+    lines = [f"`{' '.join(command)}`, {rounds} runs per mode interleaved, {len(frames['async'])} frames each; "
+             "simulation = physics_ms + fluid_ms, meshing = meshing_ms (main thread), worker = mesh_worker_ms:", "",
+             "| meshing | most particles | simulation + meshing p50 ms | simulation + meshing p95 ms | "
+             "simulation p95 | meshing (main thread) p95 | worker p95 ms | frame p95 ms |",
+             "|---|---|---|---|---|---|---|---|"]
+    labels = {"async": f"async (`{async_key}`, the default)", "sync": f"synchronous (`--set {async_key}=false`)"}
+    for mode in ("async", "sync"):
+        rows = frames[mode]
+        col = lambda name: [float(f[name]) for f in rows]
+        sim = [float(f["physics_ms"]) + float(f["fluid_ms"]) for f in rows]
+        both = [s + float(f["meshing_ms"]) for s, f in zip(sim, rows)]
+        lines.append(f"| {labels[mode]} | {max(int(f['particles']) for f in rows):,} | {percentile(both, 0.5):.2f} | "
+                     f"**{percentile(both, 0.95):.2f}** | {percentile(sim, 0.95):.2f} | "
+                     f"{percentile(col('meshing_ms'), 0.95):.2f} | {percentile(col('mesh_worker_ms'), 0.95):.2f} | "
+                     f"{percentile(col('frame_ms'), 0.95):.2f} |")
+    return lines
+
+
+def replace_section(path, name, lines):
+    begin, end = f"<!-- budget {name} begin -->", f"<!-- budget {name} end -->"
+    text = open(path).read()
+    if begin not in text or end not in text:
+        sys.exit(f"replay_budget: {path} has no {begin} ... {end} section")
+    head, rest = text.split(begin, 1)
+    open(path, "w").write(head + "\n".join([begin, ""] + lines + ["", end]) + rest.split(end, 1)[1])
+
+
+def main():
+    if len(sys.argv) < 4:
+        sys.exit(__doc__)
+    fluiddemo, replay, async_key = sys.argv[1:4]
+    load_before = os.getloadavg()[0]
+    command, frames = run_modes(fluiddemo, replay, async_key)
+    lines = budget_table(command, frames, async_key)
+    lines += ["", f"Written by `python3 scripts/replay_budget.py {' '.join(sys.argv[1:4])}` on {os.cpu_count()} cores, "
+              f"load average {load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
+    if len(sys.argv) > 4:
+        replace_section(sys.argv[4], os.path.splitext(os.path.basename(replay))[0], lines)
+        print(f"replay_budget: written to {sys.argv[4]}")
+    else:
+        print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
