@@ -33,27 +33,18 @@ CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSamp
                                  glm::vec3 predicted_position, glm::vec3 predicted_velocity,
                                  const ColliderSample& predicted, glm::vec3 collider_velocity, float dt, float skin,
                                  const CollisionMaterial& material) {
+  (void)previous_position;
+  (void)dt;
   CollisionResult result{predicted_position, predicted_velocity, CollisionOutcome::none};
   if (!predicted.valid || predicted.distance >= 0.0f) return result;
 
   const glm::vec3 n = predicted.normal;
   const glm::vec3 relative = predicted_velocity - collider_velocity;
-  const bool caught = previous.valid && previous.distance < 0.0f;
   // Projecting the predicted position onto the surface (plus a skin) guarantees the step
-  // never ends inside the collider, to the accuracy of the distance field. A particle that was
-  // outside at the start of its step crossed the surface during it, so it is no deeper than its
-  // path relative to the collider is long (at most |step| + |collider velocity| dt); an exact
-  // distance never exceeds that. A depth map's inside distance is measured along one map axis
-  // (Kolb §4) and inside a thick part can be much larger than the way the particle came in
-  // (half a metre in the statue's dish, 3 cm below its top): taken as is, the push would throw
-  // the particle through the part. Capped at the path length, such a particle lands near where it
-  // entered; a caught particle (inside at both ends) is pushed out by the full depth.
-  float depth = -predicted.distance;
-  if (!caught)
-    depth = std::min(depth, glm::length(predicted_position - previous_position) + glm::length(collider_velocity) * dt);
-  result.position = predicted_position + n * (skin + depth);
-  result.depth = depth;
+  // never ends inside the collider, to the accuracy of the distance field.
+  result.position = predicted_position + n * (skin - predicted.distance);
 
+  const bool caught = previous.valid && previous.distance < 0.0f;
   if (!caught) {
     // About to collide (Figure 2a): friction/resilience reaction.
     result.velocity = collisionResponse(relative, n, material) + collider_velocity;

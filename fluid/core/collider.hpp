@@ -67,7 +67,6 @@ struct CollisionResult {
   glm::vec3 position{0.0f};
   glm::vec3 velocity{0.0f};
   CollisionOutcome outcome = CollisionOutcome::none;
-  float depth = 0.0f;  // how deep inside the particle was taken to be: the push along the normal, less the skin
 };
 
 // The double check of §3.3.2 for one particle: `previous` is the sample at the previous
@@ -75,8 +74,7 @@ struct CollisionResult {
 //  - predicted outside (or invalid): nothing happens.
 //  - previous outside, predicted inside: the particle is about to collide; its velocity gets
 //    the friction/resilience reaction and the predicted position is moved onto the surface
-//    along the normal, plus `skin`, by at most the length of its path relative to the collider
-//    (|predicted - previous| + |collider_velocity| dt: no deeper can it be, see the .cpp).
+//    along the normal, plus `skin`.
 //  - previous inside too: the particle is caught; it is pushed out along the normal to the
 //    surface plus `skin`, and its normal velocity is made to head outside (v⊥ − v*, eq. of
 //    §3.3.2 for a particle heading inside).

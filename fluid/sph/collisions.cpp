@@ -116,6 +116,7 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             scratch.pushed[i] = 1;
             ++acc.particles;
           }
+          if (!crossed && s.valid) acc.depth = std::max(acc.depth, -s.distance);
           CollisionResult res;
           if (crossed) {
             const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
@@ -131,9 +132,8 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             scratch.push_plane[i] = glm::vec4(nm, glm::dot(nm, res.position));
           } else if (!crossed && scratch.push_plane[i] != glm::vec4(0.0f)) {
             res.position =
-                wedgePosition(positions[i], s.normal, skin + res.depth, scratch.push_plane[i], spacing, res.position);
+                wedgePosition(positions[i], s.normal, skin - s.distance, scratch.push_plane[i], spacing, res.position);
           }
-          if (!crossed) acc.depth = std::max(acc.depth, res.depth);  // (s is valid: it is inside)
           const glm::vec3 reaction = -mass * (res.velocity - velocities[i]) / dt;  // on the collider
           positions[i] = res.position;
           velocities[i] = res.velocity;

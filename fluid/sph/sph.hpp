@@ -194,7 +194,7 @@ struct SphStepStats {
   // colliders pushed it): ended inside a collider, or tunnelled through a thin part, although the
   // boundary pressure should have held them outside.
   std::size_t pushed_out = 0;
-  float max_push_depth = 0.0f;   // m, deepest end-of-step penetration among them as the push took it (CollisionResult::depth; 0 when none)
+  float max_push_depth = 0.0f;   // m, deepest end-of-step penetration among them (0 when none)
   std::size_t speed_clamps = 0;  // particles whose speed was cut to params.max_speed
   // The CFL/force/viscosity bounds asked for a step shorter than params.min_time_step; dt was held
   // at it (the fluid moves further per step than the CFL number allows).

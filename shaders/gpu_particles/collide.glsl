@@ -275,10 +275,8 @@ vec3 collisionResponse(vec3 v, vec3 n) {
 }
 
 // fluid::collideParticles for every collider in turn: the double check of §3.3.2 at the
-// previous position and the predicted one (fluid::resolveCollision: a particle outside at the
-// previous position is pushed by at most its path's length relative to the collider). Returns
-// true when any collider reacted.
-bool collideAll(vec3 previous, inout vec3 predicted, inout vec3 velocity, float dt) {
+// previous position and the predicted one. Returns true when any collider reacted.
+bool collideAll(vec3 previous, inout vec3 predicted, inout vec3 velocity) {
   bool hit = false;
   for (int c = 0; c < u_collider_count; ++c) {
     float d_after;
@@ -289,9 +287,7 @@ bool collideAll(vec3 previous, inout vec3 predicted, inout vec3 velocity, float 
     bool caught = sampleWorld(c, previous, d_before, n_before) && d_before < 0.0;
     vec3 collider_velocity = u_pose_linear[c] + cross(u_pose_angular[c], predicted - u_pose_translation[c]);
     vec3 relative = velocity - collider_velocity;
-    float depth = -d_after;
-    if (!caught) depth = min(depth, length(predicted - previous) + length(collider_velocity) * dt);
-    predicted = predicted + n * (u_skin + depth);
+    predicted = predicted + n * (u_skin - d_after);
     if (!caught) {
       velocity = collisionResponse(relative, n) + collider_velocity;
     } else {

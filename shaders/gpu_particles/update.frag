@@ -100,7 +100,7 @@ vec3 acceleration(vec3 p, vec3 v) {
 
 bool collide(vec3 previous, inout vec3 predicted, inout vec3 velocity) {
 #ifdef COLLIDERS
-  return collideAll(previous, predicted, velocity, u_dt);
+  return collideAll(previous, predicted, velocity);
 #else
   return false;
 #endif
