@@ -5,6 +5,7 @@
 
 #include "engine/assets/assets.hpp"
 #include "fluid/core/blast.hpp"
+#include "fluid/core/collider.hpp"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -99,6 +100,12 @@ int applyBlast(PhysicsWorld& world, const fluid::Blast& blast);
 
 int bodyCount(const PhysicsWorld& world);
 BodyState bodyState(const PhysicsWorld& world, BodyId id);
+// A body as the pose of a fluid collider (water, blob) that moves with it: collider space is the
+// body's own, its origin the centre of mass (a box shape centred there), with the body's velocities
+// so the collider pushes particles as it moves (fluid::colliderVelocityAt).
+inline fluid::ColliderPose colliderPoseOf(const BodyState& body) {
+  return {body.rotation, body.position, body.linear_velocity, body.angular_velocity};
+}
 // Takes a body out of the simulation (Bullet neither moves it nor collides with it) or puts it
 // back at its current state. Ids stay valid: a game recycles short-lived bodies (explosives)
 // instead of removing them.

@@ -126,7 +126,8 @@ struct BlobCollider {
   // Optional: a collider-space box outside which `shape` never reports a point inside (distance
   // < 0). A particle whose sub-step path lies wholly outside it skips the shape's queries: the
   // same result for less work (most particles are nowhere near most of the level's colliders).
-  // blobDepthMapBounds gives the box of a baked collider. bounded = false: query every particle.
+  // blobDepthMapBounds gives the box of a baked collider; stepBlob hands it to fluid::collideParticles
+  // (CollideDesc::bounded, inside). bounded = false: query every particle.
   bool bounded = false;
   glm::vec3 inside_lo{0.0f}, inside_hi{0.0f};
   // Output of the last stepBlob: momentum (N s) and angular momentum about pose.translation
@@ -142,7 +143,7 @@ struct BlobScratch {
   bool verlet_valid = false;
   std::vector<glm::vec3> accel, previous, before, goal;
   std::vector<glm::vec4> pos4, vel4;  // pair loop: position + radius scale, velocity
-  std::vector<std::uint8_t> outcome;  // per particle: 0 no collision, 1 reacted, 2 found by the sweep
+  CollideScratch collide;             // fluid::collideParticles' per-particle outcomes
 };
 
 struct BlobStepStats {

@@ -172,75 +172,32 @@ void computeAccelerations(BlobWorld& world, glm::vec3 goal_velocity) {
   });
 }
 
-// `identity`: the pose is the identity (the level's colliders, baked in world coordinates), so
-// the point and normal need no transform.
-ColliderSample sampleAt(const BlobCollider& c, glm::vec3 world, bool identity) {
-  const glm::vec3 local = identity ? world : toColliderSpace(c.pose, world);
-  ColliderSample s;
-  c.shape->query({&local, 1}, {&s, 1});
-  if (!identity) s.normal = toWorldDirection(c.pose, s.normal);
-  return s;
-}
-
-// The segment from `a` to `b` (world) misses the collider's inside box (BlobCollider::bounded).
-bool missesInsideBox(const BlobCollider& c, glm::vec3 a, glm::vec3 b, bool identity) {
-  if (!c.bounded) return false;
-  if (!identity) a = toColliderSpace(c.pose, a), b = toColliderSpace(c.pose, b);
-  const glm::vec3 lo = glm::min(a, b), hi = glm::max(a, b);
-  return glm::any(glm::lessThan(hi, c.inside_lo)) || glm::any(glm::greaterThan(lo, c.inside_hi));
-}
-
-// Collisions of the predicted positions with every collider (Kolb 2004 §3.3.2 double check) and
-// the momentum each collider took from the particles (the game applies it to its rigid body).
-// Swept: a step longer than max_step is sampled every max_step from the previous position and the
-// first sample inside is the one reacted to, whether or not the end point is inside. (Sampling
-// only when the end point is outside, as fluid::collideParticles does, lets a fast particle whose
-// end point lies past the middle of a thin wall be pushed out through the far face.)
+// Collisions of the predicted positions with every collider (Kolb 2004 §3.3.2 double check, swept
+// every max_step so a fast particle cannot cross a thin wall: fluid::collideParticles) and the
+// momentum each collider took from the particles (the game applies it to its rigid body).
 void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobStepStats& stats) {
   const BlobParams& p = world.params;
   BlobScratch& s = world.scratch;
   auto& v = world.particles.velocity;
   const std::size_t n = predicted.size();
   const float mass = blobParticleMass(p);
-  const float skin = 0.01f * p.spacing;
-  const float max_step = 0.125f * p.spacing;
-  s.outcome.resize(n);
+  CollideDesc desc;
+  desc.dt = dt;
+  desc.skin = 0.01f * p.spacing;
+  desc.max_step = 0.125f * p.spacing;
+  desc.parallel.grain = kGrain;
   for (BlobCollider& c : world.colliders) {
     if (!c.shape) continue;
-    const CollisionMaterial& material = c.use_blob_material ? p.material : c.material;
+    desc.material = c.use_blob_material ? p.material : c.material;
+    desc.bounded = c.bounded;
+    desc.inside = {c.inside_lo, c.inside_hi};
     s.before.assign(v.begin(), v.end());
-    const bool identity = c.pose.rotation == glm::quat(1.0f, 0.0f, 0.0f, 0.0f) && c.pose.translation == glm::vec3(0.0f);
-    par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        s.outcome[i] = 0;
-        const glm::vec3 from = s.previous[i];
-        // Every sample below lies on the segment: outside the box, none can be inside.
-        if (missesInsideBox(c, from, predicted[i], identity)) continue;
-        const glm::vec3 step = predicted[i] - from;
-        const float len = glm::length(step);
-        const int samples = len > max_step ? static_cast<int>(std::min(std::ceil(len / max_step), 4096.0f)) : 1;
-        glm::vec3 hit_point(0.0f);
-        ColliderSample hit;
-        bool inside = false;
-        for (int k = 1; k <= samples && !inside; ++k) {
-          hit_point = k == samples ? predicted[i] : from + step * (static_cast<float>(k) / static_cast<float>(samples));
-          hit = sampleAt(c, hit_point, identity);
-          inside = hit.valid && hit.distance < 0.0f;
-          if (inside && k < samples) s.outcome[i] = 2;  // found by the sweep
-        }
-        if (!inside) continue;
-        const CollisionResult res = resolveCollision(from, sampleAt(c, from, identity), hit_point, v[i], hit,
-                                                     colliderVelocityAt(c.pose, hit_point), dt, skin, material);
-        predicted[i] = res.position;
-        v[i] = res.velocity;
-        if (s.outcome[i] == 0) s.outcome[i] = 1;
-      }
-    });
+    const CollideCounts counts = collideParticles(*c.shape, c.pose, s.previous, predicted, v, desc, s.collide);
+    stats.collisions += counts.reacted + counts.pushed_out;
+    stats.swept += counts.swept;
     // Serial, in index order: the sums are the same for every thread count.
     for (std::size_t i = 0; i < n; ++i) {
-      if (s.outcome[i] == 0) continue;
-      ++stats.collisions;
-      stats.swept += s.outcome[i] == 2;
+      if (s.collide.outcome[i] == CollisionOutcome::none) continue;
       // Momentum the collider's reaction gave the particle (a push-out moves it without changing it).
       const glm::vec3 dp = mass * (v[i] - s.before[i]);
       c.impulse -= dp;

@@ -324,8 +324,10 @@ std::size_t queryWorld(const SignedDistanceShape& shape, const ColliderPose& pos
 
 // Caller-owned scratch for collideParticles (grows once, reused every step).
 struct CollideScratch {
-  std::vector<glm::vec3> local;
-  std::vector<ColliderSample> previous, predicted;
+  // Per particle, what the last call decided (none where nothing happened or the particle was
+  // culled): lets a caller sum what each reaction took from the particles, serially in index order
+  // (fluid/blob reports that momentum to the rigid body behind the collider).
+  std::vector<CollisionOutcome> outcome;
 };
 
 struct CollideDesc {
@@ -339,18 +341,29 @@ struct CollideDesc {
   // of the wall (there the end sample's normal points out of the far face). 0 = the paper's two
   // samples only.
   float max_step = 0.0f;
+  // Optional cull (beyond the paper): a collider-space box outside which `shape` never reports a
+  // point inside (distance < 0), e.g. blobDepthMapBounds. Every sample of a particle lies on its
+  // step, so a step that misses the box cannot collide and is skipped without a query: the same
+  // results for less work where most particles are far from the collider. An empty box (lo > hi on
+  // some axis) culls every step. Ignored unless `bounded`.
+  bool bounded = false;
+  Bounds inside{};
   ParallelDesc parallel{};
 };
 
 struct CollideCounts {
-  std::size_t reacted = 0, pushed_out = 0, non_finite = 0;
+  std::size_t reacted = 0, pushed_out = 0;
+  // Previous and predicted positions with an inf or NaN coordinate (none counted in culled steps).
+  std::size_t non_finite = 0;
   std::size_t swept = 0;  // collisions found only by the max_step sampling
 };
 
 // §3.3.2 double check for a batch: samples the collider at previous and predicted world
 // positions (moving collider: the pose is applied before the lookup, its velocity is the
 // rest frame of the reaction) and calls resolveCollision; positions/velocities are updated
-// in place. Spans must have equal sizes.
+// in place. Spans must have equal sizes. The previous position is sampled only where the
+// predicted one (or a swept sample) is inside: elsewhere resolveCollision does not read it.
+// Particles are independent: the results do not depend on desc.parallel.
 CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderPose& pose,
                                std::span<const glm::vec3> previous_positions, std::span<glm::vec3> predicted_positions,
                                std::span<glm::vec3> predicted_velocities, const CollideDesc& desc,

@@ -289,56 +289,124 @@ std::size_t queryWorld(const SignedDistanceShape& shape, const ColliderPose& pos
   return bad;
 }
 
+namespace {
+
+// No coordinate is inf or NaN: x * 0 is NaN exactly then, so one compare checks all three (this
+// runs for every particle and collider, most of which then need nothing else).
+bool finitePoint(glm::vec3 p) { return glm::dot(p, glm::vec3(0.0f)) == 0.0f; }
+constexpr ColliderSample kNoOpinion{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};
+
+// The posed collider as collideParticles samples it: the pose, its inverse and whether it is the
+// identity (a level's colliders, baked in world coordinates: no transform needed, the same samples).
+struct PosedShape {
+  const SignedDistanceShape& shape;
+  const ColliderPose& pose;
+  glm::quat inverse;
+  bool identity;
+
+  glm::vec3 local(glm::vec3 world) const { return identity ? world : inverse * (world - pose.translation); }
+  // A valid normal comes back in world space; `finite` false: no opinion (nothing is queried).
+  ColliderSample sample(glm::vec3 local_point, bool finite) const {
+    if (!finite) return kNoOpinion;
+    ColliderSample s;
+    shape.query({&local_point, 1}, {&s, 1});
+    if (s.valid && !identity) s.normal = pose.rotation * s.normal;
+    return s;
+  }
+};
+
+// The segment from a to b (collider space) misses the box.
+bool segmentMissesBox(glm::vec3 a, glm::vec3 b, const Bounds& box) {
+  const glm::vec3 lo = glm::min(a, b), hi = glm::max(a, b);
+  return glm::any(glm::lessThan(hi, box.lo)) || glm::any(glm::greaterThan(lo, box.hi));
+}
+
+CollisionOutcome collideOne(const PosedShape& posed, glm::vec3 previous, glm::vec3& predicted_position,
+                            glm::vec3& velocity, const CollideDesc& desc, CollideCounts& counts) {
+  glm::vec3 predicted = predicted_position;
+  const glm::vec3 local_predicted = posed.local(predicted);
+  if (desc.bounded && segmentMissesBox(posed.local(previous), local_predicted, desc.inside))
+    return CollisionOutcome::none;
+  const glm::vec3 step = predicted - previous;
+  // A non-finite position has no opinion (as queryWorld). One check for the pair: the step is
+  // finite unless a coordinate of either end is inf or NaN (or it overflows: then both ends are).
+  bool previous_finite = true, predicted_finite = true;
+  if (!finitePoint(step)) {
+    previous_finite = finitePoint(previous);
+    predicted_finite = finitePoint(predicted);
+    counts.non_finite += !previous_finite + !predicted_finite;
+  }
+  ColliderSample after = posed.sample(local_predicted, predicted_finite);
+  // Swept (beyond the paper): the first sample inside along the step decides, whether or not the
+  // end point is inside. An end point past the middle of a thin wall is inside too, but nearer the
+  // far face: reacting to it would push the particle out through the far face.
+  if (desc.max_step > 0.0f) {
+    const float length = glm::length(step);
+    if (std::isfinite(length) && length > desc.max_step) {
+      const int samples = static_cast<int>(std::min(std::ceil(length / desc.max_step), 4096.0f));
+      for (int s = 1; s < samples; ++s) {
+        const glm::vec3 world = previous + step * (static_cast<float>(s) / static_cast<float>(samples));
+        const ColliderSample hit = posed.sample(posed.local(world), true);  // between two finite ends
+        if (hit.valid && hit.distance < 0.0f) {
+          after = hit;
+          predicted = world;
+          ++counts.swept;
+          break;
+        }
+      }
+    }
+  }
+  if (!after.valid || after.distance >= 0.0f) return CollisionOutcome::none;
+  // §3.3.2: the collision test is done twice, at the previous and the expected position.
+  const ColliderSample before = posed.sample(posed.local(previous), previous_finite);
+  const CollisionResult r =
+      resolveCollision(previous, before, predicted, velocity, after, colliderVelocityAt(posed.pose, predicted), desc.dt,
+                       desc.skin, desc.material);
+  predicted_position = r.position;
+  velocity = r.velocity;
+  counts.reacted += r.outcome == CollisionOutcome::reacted;
+  counts.pushed_out += r.outcome == CollisionOutcome::pushed_out;
+  return r.outcome;
+}
+
+}  // namespace
+
 CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderPose& pose,
                                std::span<const glm::vec3> previous_positions, std::span<glm::vec3> predicted_positions,
                                std::span<glm::vec3> predicted_velocities, const CollideDesc& desc,
                                CollideScratch& scratch) {
   const std::size_t n = previous_positions.size();
   assert(predicted_positions.size() == n && predicted_velocities.size() == n);
-  scratch.previous.resize(n);
-  scratch.predicted.resize(n);
-  CollideCounts counts;
-  // §3.3.2: the collision test is done twice, at the previous and the expected position.
-  counts.non_finite = queryWorld(shape, pose, previous_positions, scratch.previous, scratch.local, desc.parallel);
-  counts.non_finite += queryWorld(shape, pose, predicted_positions, scratch.predicted, scratch.local, desc.parallel);
-  const glm::quat inverse = glm::inverse(pose.rotation);
-  for (std::size_t k = 0; k < n; ++k) {
-    ColliderSample after = scratch.predicted[k];
-    glm::vec3 predicted = predicted_positions[k];
-    glm::vec3 previous = previous_positions[k];
-    ColliderSample before = scratch.previous[k];
-    // Swept (beyond the paper): the first sample inside along the step decides, whether or not the
-    // end point is inside. An end point past the middle of a thin wall is inside too, but nearer the
-    // far face: reacting to it would push the particle out through the far face.
-    if (desc.max_step > 0.0f) {
-      const glm::vec3 step = predicted - previous;
-      const float length = glm::length(step);
-      if (std::isfinite(length) && length > desc.max_step) {
-        const int samples = static_cast<int>(std::min(std::ceil(length / desc.max_step), 4096.0f));
-        for (int s = 1; s < samples; ++s) {
-          const glm::vec3 world = previous + step * (static_cast<float>(s) / static_cast<float>(samples));
-          const glm::vec3 local = inverse * (world - pose.translation);
-          ColliderSample hit;
-          shape.query({&local, 1}, {&hit, 1});
-          if (hit.valid && hit.distance < 0.0f) {
-            hit.normal = pose.rotation * hit.normal;
-            after = hit;
-            predicted = world;
-            ++counts.swept;
-            break;
-          }
-        }
-      }
-    }
-    if (!after.valid || after.distance >= 0.0f) continue;
-    const CollisionResult r = resolveCollision(previous, before, predicted, predicted_velocities[k], after,
-                                               colliderVelocityAt(pose, predicted), desc.dt, desc.skin, desc.material);
-    predicted_positions[k] = r.position;
-    predicted_velocities[k] = r.velocity;
-    counts.reacted += r.outcome == CollisionOutcome::reacted;
-    counts.pushed_out += r.outcome == CollisionOutcome::pushed_out;
-  }
-  return counts;
+  scratch.outcome.resize(n);
+  const PosedShape posed{shape, pose, glm::inverse(pose.rotation),
+                         pose.rotation == glm::quat(1.0f, 0.0f, 0.0f, 0.0f) && pose.translation == glm::vec3(0.0f)};
+  auto chunk = [&](const par::Range<std::size_t>& r, CollideCounts counts) {
+    // Local copies: the shape's (virtual) query could write anything the caller can reach, so
+    // values read through the captured references would be reloaded after every query.
+    const PosedShape p = posed;
+    const CollideDesc d = desc;
+    const glm::vec3* previous = previous_positions.data();
+    glm::vec3* predicted = predicted_positions.data();
+    glm::vec3* velocity = predicted_velocities.data();
+    CollisionOutcome* outcome = scratch.outcome.data();
+    for (std::size_t k = r.begin(); k != r.end(); ++k)
+      outcome[k] = collideOne(p, previous[k], predicted[k], velocity[k], d, counts);
+    return counts;
+  };
+  const std::size_t grain = std::max<std::size_t>(desc.parallel.grain, 1);
+  if (desc.parallel.threads == 1 || n <= grain) return chunk(par::Range<std::size_t>(0, n), CollideCounts{});
+  auto join = [](CollideCounts a, const CollideCounts& b) {
+    a.reacted += b.reacted;
+    a.pushed_out += b.pushed_out;
+    a.non_finite += b.non_finite;
+    a.swept += b.swept;
+    return a;
+  };
+  // Integer sums: the same for any split, so the non-deterministic (faster) reduce is fine.
+  auto run = [&] { return par::parallelReduce(par::Range<std::size_t>(0, n, grain), CollideCounts{}, chunk, join); };
+  if (desc.parallel.threads <= 0) return run();  // the caller's arena: no arena set-up per call
+  tbb::task_arena arena(desc.parallel.threads);
+  return arena.execute(run);
 }
 
 }  // namespace fluid

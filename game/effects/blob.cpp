@@ -277,10 +277,7 @@ void collidersFromCrates(BlobMonster& s, const RigidBodies& bodies) {
     if (glm::any(glm::lessThan(b.position, lo - reach)) || glm::any(glm::greaterThan(b.position, hi + reach))) continue;
     fluid::BlobCollider c;
     c.shape = s.crate_shape;
-    c.pose.rotation = b.rotation;
-    c.pose.translation = b.position;  // box centre = centre of mass
-    c.pose.linear_velocity = b.linear_velocity;
-    c.pose.angular_velocity = b.angular_velocity;
+    c.pose = engine::colliderPoseOf(b);  // box centre = centre of mass
     s.world.colliders.push_back(c);
     s.crate_of_collider.push_back(static_cast<int>(k));
   }

@@ -41,10 +41,7 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
     if (glm::any(glm::lessThan(state.position, lo)) || glm::any(glm::greaterThan(state.position, hi))) continue;
     fluid::SphCollider collider;
     collider.shape = coupling.box_shape;
-    collider.pose.rotation = state.rotation;
-    collider.pose.translation = state.position;  // box centre = centre of mass
-    collider.pose.linear_velocity = state.linear_velocity;
-    collider.pose.angular_velocity = state.angular_velocity;
+    collider.pose = engine::colliderPoseOf(state);  // box centre = centre of mass
     collider.material = coupling.material;
     collider.integrate_pose = true;  // moves with its velocities through the SPH sub-steps
     sph.colliders.push_back(collider);

@@ -100,6 +100,31 @@ TEST(Physics, ResetTeleportsAndNonFiniteBodiesAreFound) {
   EXPECT_EQ(engine::findNonFiniteBody(*world), b);
 }
 
+// colliderPoseOf: a point fixed in the body, mapped by the pose (world = rotation * local +
+// translation), moves over one physics step as colliderVelocityAt says it does.
+TEST(Physics, ColliderPoseOfFollowsTheBody) {
+  auto world = engine::createPhysicsWorld({glm::vec3(0.0f)});
+  const engine::BodyId id = engine::addBox(*world, box({0, 0, 0}), glm::vec3(0.2f));
+  engine::BodyState state;
+  state.position = {1, 2, 3};
+  state.rotation = glm::angleAxis(0.5f, glm::vec3(0, 1, 0));
+  state.linear_velocity = {1, 0, 0};
+  state.angular_velocity = {0, 0, 2};
+  engine::resetBody(*world, id, state);
+  const glm::vec3 corner(0.2f, 0.2f, 0.2f);  // body space
+  const fluid::ColliderPose pose = engine::colliderPoseOf(engine::bodyState(*world, id));
+  const glm::vec3 at = pose.rotation * corner + pose.translation;
+  EXPECT_LT(glm::length(fluid::toColliderSpace(pose, at) - corner), 1e-6f);
+  const glm::vec3 velocity = fluid::colliderVelocityAt(pose, at);
+  const double dt = 1.0 / 240.0;
+  engine::stepPhysics(*world, dt, 1);
+  const fluid::ColliderPose after = engine::colliderPoseOf(engine::bodyState(*world, id));
+  const glm::vec3 moved = (after.rotation * corner + after.translation - at) / static_cast<float>(dt);
+  // Second order: the centripetal term |w|^2 |r| dt / 2 ~ 3e-3 m/s.
+  EXPECT_LT(glm::length(moved - velocity), 0.01f) << moved.x << " " << moved.y << " " << moved.z;
+  EXPECT_GT(glm::length(velocity - state.linear_velocity), 0.5f);  // the spin adds to the corner's speed
+}
+
 }  // namespace
 
 namespace {
