@@ -50,7 +50,7 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
     """Markdown lines: one row per mode."""
     lines = [f"`{' '.join(command)}`, {rounds} runs per mode interleaved, {len(frames['async'])} frames each; "
              "simulation = physics_ms + fluid_ms, meshing = meshing_ms (main thread), worker = mesh_worker_ms:", "",
-             "| meshing | most particles | simulation + meshing p50 ms | simulation + meshing p95 ms | "
+             "| meshing | most SPH particles | simulation + meshing p50 ms | simulation + meshing p95 ms | "
              "simulation p95 | meshing (main thread) p95 | worker p95 ms | frame p95 ms |",
              "|---|---|---|---|---|---|---|---|"]
     labels = {"async": f"async (`{async_key}`, the default)", "sync": f"synchronous (`--set {async_key}=false`)"}
@@ -59,7 +59,8 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
         col = lambda name: [float(f[name]) for f in rows]
         sim = [float(f["physics_ms"]) + float(f["fluid_ms"]) for f in rows]
         both = [s + float(f["meshing_ms"]) for s, f in zip(sim, rows)]
-        lines.append(f"| {labels[mode]} | {max(int(f['particles']) for f in rows):,} | {percentile(both, 0.5):.2f} | "
+        most = max(int(f["particles"]) for f in rows)
+        lines.append(f"| {labels[mode]} | {f'{most:,}' if most else '-'} | {percentile(both, 0.5):.2f} | "
                      f"**{percentile(both, 0.95):.2f}** | {percentile(sim, 0.95):.2f} | "
                      f"{percentile(col('meshing_ms'), 0.95):.2f} | {percentile(col('mesh_worker_ms'), 0.95):.2f} | "
                      f"{percentile(col('frame_ms'), 0.95):.2f} |")
