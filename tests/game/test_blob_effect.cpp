@@ -6,10 +6,10 @@
 #include "game/world/blob_monster.hpp"
 #include "game/world/rigid_bodies.hpp"
 #include "game/world/world.hpp"
+#include "tests/support/mesh_bits.hpp"
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -164,11 +164,6 @@ game::World blobWorldWith(const std::vector<std::string>& overrides) {
   return world;
 }
 
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
 // blob.async (Janisz §3.2.6): the goo drawn at frame N is what the synchronous mesher gives for
 // frame N-1's particles and tentacles, bit for bit, the tentacles' (u, v) included (frame 0: its own).
 // A program that grows tentacles at once, so the tentacle texturing pass runs on the worker's copy.
@@ -191,9 +186,7 @@ TEST(BlobEffect, AsyncDrawsThePreviousFramesGooBitForBit) {
     const fluid::SurfaceMesh& expected = frame == 0 ? sync_blob.mesh : previous;
     const fluid::SurfaceMesh& got = async_blob.mesh;
     ASSERT_FALSE(got.indices.empty()) << "frame " << frame;
-    ASSERT_TRUE(sameBits(got.positions, expected.positions) && sameBits(got.normals, expected.normals) &&
-                sameBits(got.indices, expected.indices) && sameBits(got.attributes, expected.attributes))
-        << "frame " << frame;
+    ASSERT_EQ(test_support::meshBitsDiffer(got, expected), "") << "frame " << frame;
     bool has_u = false;
     for (const glm::vec4& a : got.attributes) has_u = has_u || (a.z > 0.5f && a.x > 0.0f);
     textured += has_u ? 1 : 0;

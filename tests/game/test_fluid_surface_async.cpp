@@ -5,10 +5,10 @@
 #include "game/scene/scene_config.hpp"
 #include "game/world/fluid_surface.hpp"
 #include "game/world/world.hpp"
+#include "tests/support/mesh_bits.hpp"
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -22,15 +22,6 @@ game::SceneConfig fountainScene(bool async) {
   const game::SceneStatus status = game::parseSceneText(text, "async_test.json", scene);
   EXPECT_TRUE(status.ok()) << status.error;
   return scene;
-}
-
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-bool sameMesh(const fluid::SurfaceMesh& a, const fluid::SurfaceMesh& b) {
-  return sameBits(a.positions, b.positions) && sameBits(a.normals, b.normals) && sameBits(a.indices, b.indices);
 }
 
 TEST(FluidSurfaceAsync, DrawsThePreviousFramesSurfaceBitForBit) {
@@ -49,7 +40,7 @@ TEST(FluidSurfaceAsync, DrawsThePreviousFramesSurfaceBitForBit) {
     game::meshWorld(async_world, nullptr);
     ASSERT_EQ(async_surface.error, "") << "frame " << frame;
     const fluid::SurfaceMesh& expected = frame == 0 ? sync_surface.mesh : previous;
-    ASSERT_TRUE(sameMesh(async_surface.mesh, expected)) << "frame " << frame;
+    ASSERT_EQ(test_support::meshBitsDiffer(async_surface.mesh, expected), "") << "frame " << frame;
     compared += expected.indices.empty() ? 0 : 1;
     previous = sync_surface.mesh;
   }

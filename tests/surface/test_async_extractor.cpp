@@ -3,27 +3,16 @@
 // arrays after start(); collect() returns the jobs in order, one frame behind in a frame loop.
 #include "fluid/surface/async_extractor.hpp"
 #include "random_sets.hpp"
+#include "tests/support/mesh_bits.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <string>
 
 namespace {
 
-template <class T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-std::string compareMeshes(const fluid::SurfaceMesh& got, const fluid::SurfaceMesh& want) {
-  if (!sameBits(got.positions, want.positions)) return "positions differ";
-  if (!sameBits(got.normals, want.normals)) return "normals differ";
-  if (!sameBits(got.indices, want.indices)) return "indices differ";
-  if (!sameBits(got.edgeKeys, want.edgeKeys)) return "edge keys differ";
-  return {};
-}
+using test_support::meshBitsDiffer;
 
 TEST(AsyncSurfaceExtractor, MeshesTheInputItWasHandedBitForBit) {
   fluid::AsyncSurfaceExtractor async;
@@ -42,7 +31,7 @@ TEST(AsyncSurfaceExtractor, MeshesTheInputItWasHandedBitForBit) {
     EXPECT_FALSE(async.pending());
     ASSERT_EQ(got_status.error, want_status.error) << "seed " << seed << " (" << set.what << ")";
     if (!want_status.ok()) continue;
-    EXPECT_EQ(compareMeshes(got, want), "") << "seed " << seed << " (" << set.what << ")";
+    EXPECT_EQ(meshBitsDiffer(got, want), "") << "seed " << seed << " (" << set.what << ")";
     meshed += want.indices.empty() ? 0 : 1;
   }
   EXPECT_GE(meshed, 12) << "most seeds give a surface to compare";
@@ -61,7 +50,7 @@ TEST(AsyncSurfaceExtractor, CollectReturnsThePreviousFramesSurfaceInAFrameLoop) 
     async.start(frames[f].input(), frames[f].params);
     const fluid::SurfaceStatus want_status = plain.extract(frames[f - 1].input(), frames[f - 1].params, want);
     ASSERT_EQ(st.error, want_status.error) << "frame " << f;
-    EXPECT_EQ(compareMeshes(shown, want), "") << "frame " << f << " shows frame " << f - 1;
+    EXPECT_EQ(meshBitsDiffer(shown, want), "") << "frame " << f << " shows frame " << f - 1;
   }
   EXPECT_TRUE(async.pending()) << "the last job is still out; the destructor waits for it";
 }
@@ -87,7 +76,7 @@ TEST(AsyncSurfaceExtractor, AStartWithoutCollectDropsTheEarlierJob) {
   async.start(b.input(), b.params);
   const fluid::SurfaceStatus st = async.collect(got);
   ASSERT_EQ(st.error, plain.extract(b.input(), b.params, want).error);
-  EXPECT_EQ(compareMeshes(got, want), "");
+  EXPECT_EQ(meshBitsDiffer(got, want), "");
 }
 
 }  // namespace
