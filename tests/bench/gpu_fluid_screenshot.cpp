@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 using namespace engine;
@@ -38,14 +39,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", r.error.c_str());
     return 1;
   }
-  GLuint tex = 0, fbo = 0;
-  glGenTextures(1, &tex);
-  glBindTexture(GL_TEXTURE_2D, tex);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, kW, kH, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-  glGenFramebuffers(1, &fbo);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  auto target = std::make_unique<gputest::ColourTarget>(kW, kH, GL_RGBA8);  // deleted before the context
   struct Shot {
     const char* name;
     glm::vec3 eye;
@@ -70,7 +64,7 @@ int main(int argc, char** argv) {
     }
     WaterParams params;
     params.style = shot.style;
-    const std::vector<unsigned char> px = gputest::renderFrame(scene, r, fbo, params, true);
+    const std::vector<unsigned char> px = gputest::renderFrame(scene, r, target->fbo, params, true);
     const OutOfOrder ooo = countOutOfOrderPairs(scene.mesh.positions, scene.mesh.indices, scene.camera.eye);
     gputest::destroyFluidScene(scene);
     const std::filesystem::path path = out_dir / shot.name;
@@ -92,8 +86,7 @@ int main(int argc, char** argv) {
     std::printf("wrote %s: %llu triangles, %llu out-of-order pairs\n", path.string().c_str(),
                 static_cast<unsigned long long>(ooo.triangles), static_cast<unsigned long long>(ooo.pairs));
   }
-  glDeleteFramebuffers(1, &fbo);
-  glDeleteTextures(1, &tex);
+  target.reset();
   destroyFluidRenderer(r);
   gputest::destroyContext(ctx);
   return status;

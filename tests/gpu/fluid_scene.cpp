@@ -9,6 +9,20 @@
 
 namespace gputest {
 
+ColourTarget::ColourTarget(int width, int height, GLenum format) {
+  texture = engine::createTexture2D(format, width, height, GL_RGBA, format == GL_RGBA8 ? GL_UNSIGNED_BYTE : GL_FLOAT,
+                                    nullptr);
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+ColourTarget::~ColourTarget() {
+  glDeleteFramebuffers(1, &fbo);
+  glDeleteTextures(1, &texture);
+}
+
 bool createFluidScene(FluidScene& s, int width, int height, glm::vec3 eye, std::string& error) {
   s.width = width;
   s.height = height;

@@ -24,6 +24,16 @@ struct FluidScene {
   int width = 0, height = 0;
 };
 
+// A colour render target of the given format and its framebuffer, deleted by the destructor (a
+// GL context must be current for both).
+struct ColourTarget {
+  GLuint fbo = 0, texture = 0;
+  ColourTarget(int width, int height, GLenum format);
+  ~ColourTarget();
+  ColourTarget(const ColourTarget&) = delete;
+  ColourTarget& operator=(const ColourTarget&) = delete;
+};
+
 // Builds the backdrop program/geometry and the particle blob; camera at `eye` looking at the blob.
 bool createFluidScene(FluidScene& scene, int width, int height, glm::vec3 eye, std::string& error);
 void destroyFluidScene(FluidScene& scene);

@@ -26,22 +26,6 @@ const glm::vec4 kClear(0.1f, 0.1f, 0.12f, 1.0f);
 
 std::filesystem::path shaderDir() { return std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "shaders"; }
 
-// A colour target of the given format and its framebuffer (deleted by the destructor).
-struct Target {
-  GLuint fbo = 0, texture = 0;
-  Target(int w, int h, GLenum format) {
-    texture = createTexture2D(format, w, h, GL_RGBA, format == GL_RGBA8 ? GL_UNSIGNED_BYTE : GL_FLOAT, nullptr);
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  }
-  ~Target() {
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteTextures(1, &texture);
-  }
-};
-
 std::vector<unsigned char> readRgba8(GLuint fbo, int w, int h) {
   std::vector<unsigned char> px(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
@@ -172,7 +156,7 @@ class FluidMethodsTest : public ::testing::Test {
 // Screen space draws spheres of the lone-particle radius, smoothed: a different surface, close
 // at the bulk and off at the rim and between the two blobs: IoU >= 0.7.
 TEST_F(FluidMethodsTest, EachMethodDrawsTheWaterWhereTheMeshDoes) {
-  Target target(kW, kH, GL_RGBA8);
+  ColourTarget target(kW, kH, GL_RGBA8);
   const auto background = renderMesh(target.fbo, false);
   const auto mesh_mask = waterMask(renderMesh(target.fbo, true), background);
   const std::vector<glm::vec3> particles = positionsOf(scene_);
@@ -208,7 +192,7 @@ TEST_F(FluidMethodsTest, LoneParticleRaycastHasTheAnalyticRadius) {
   water_.absorption = glm::vec3(40.0f);
   water_.refraction = 0.0f;
   water_.opacity = 1.0f;
-  Target target(kSize, kSize, GL_RGBA8);
+  ColourTarget target(kSize, kSize, GL_RGBA8);
   const std::vector<glm::vec3> one{centre}, none;
   const auto background = renderRaycast(target.fbo, none, raycastDesc(), raycastParams());
   const auto image = renderRaycast(target.fbo, one, raycastDesc(), raycastParams());
@@ -231,7 +215,7 @@ TEST_F(FluidMethodsTest, LoneParticleRaycastHasTheAnalyticRadius) {
 // a float target) holds no NaN or infinity; a pool large enough drops nothing.
 TEST_F(FluidMethodsTest, FragmentPoolOverflowIsCountedAndHarmless) {
   const std::vector<glm::vec3> particles = positionsOf(scene_);
-  Target target(kW, kH, GL_RGBA32F);
+  ColourTarget target(kW, kH, GL_RGBA32F);
   RaycastDesc tiny = raycastDesc();
   tiny.pool_per_pixel = 0.05f;
   RaycastParams fixed = raycastParams();
@@ -265,7 +249,7 @@ TEST_F(FluidMethodsTest, FragmentPoolOverflowIsCountedAndHarmless) {
 // is the one an ample fixed pool gives; the next frame needs no growth.
 TEST_F(FluidMethodsTest, PoolGrowsToTheDemandAndDropsNothing) {
   const std::vector<glm::vec3> particles = positionsOf(scene_);
-  Target target(kW, kH, GL_RGBA8);
+  ColourTarget target(kW, kH, GL_RGBA8);
   RaycastDesc ample = raycastDesc();
   ample.pool_per_pixel = 32.0f;
   RaycastParams fixed = raycastParams();
@@ -294,7 +278,7 @@ TEST_F(FluidMethodsTest, PoolGrowsToTheDemandAndDropsNothing) {
 // Growth stops at max_pool_per_pixel: the demand above it is dropped and counted as before.
 TEST_F(FluidMethodsTest, PoolStopsAtItsBoundAndCountsTheRest) {
   const std::vector<glm::vec3> particles = positionsOf(scene_);
-  Target target(kW, kH, GL_RGBA8);
+  ColourTarget target(kW, kH, GL_RGBA8);
   RaycastDesc bounded = raycastDesc();
   bounded.pool_per_pixel = 0.05f;
   bounded.max_pool_per_pixel = 0.5f;  // this blob asks for ~11 records per pixel on average
@@ -314,7 +298,7 @@ TEST_F(FluidMethodsTest, PoolStopsAtItsBoundAndCountsTheRest) {
 // before them.
 TEST_F(FluidMethodsTest, SwitchingMethodsLeaksNoGlObjects) {
   const std::vector<glm::vec3> particles = positionsOf(scene_);
-  Target target(kW, kH, GL_RGBA8);
+  ColourTarget target(kW, kH, GL_RGBA8);
   renderMesh(target.fbo, true);
   const std::size_t before = liveNamesProbe();
   // An unused method holds nothing.

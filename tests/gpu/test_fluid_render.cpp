@@ -5,6 +5,8 @@
 #include "tests/gpu/gl_test_context.hpp"
 
 #include <gtest/gtest.h>
+
+#include <memory>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
@@ -36,23 +38,16 @@ class FluidRenderTest : public ::testing::Test {
     ASSERT_TRUE(createFluidScene(scene_, kW, kH, {2.4f, 0.9f, 0.3f}, error)) << error;
     ASSERT_TRUE(extractMesh(scene_, fluid::SurfaceOrder::backToFront, false, error)) << error;
     ASSERT_GT(scene_.mesh.indices.size(), 300u);
-    glGenTextures(1, &target_tex_);
-    glBindTexture(GL_TEXTURE_2D, target_tex_);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, kW, kH, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    glGenFramebuffers(1, &target_);
-    glBindFramebuffer(GL_FRAMEBUFFER, target_);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, target_tex_, 0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    target_ = std::make_unique<ColourTarget>(kW, kH, GL_RGBA8);
   }
   void TearDown() override {
-    if (target_ != 0) glDeleteFramebuffers(1, &target_);
-    if (target_tex_ != 0) glDeleteTextures(1, &target_tex_);
+    target_.reset();
     destroyFluidScene(scene_);
     destroyFluidRenderer(renderer_);
     destroyContext(ctx_);
   }
   std::vector<unsigned char> render(const WaterParams& p, bool mesh = true) {
-    return renderFrame(scene_, renderer_, target_, p, mesh);
+    return renderFrame(scene_, renderer_, target_->fbo, p, mesh);
   }
   // Pixel (x, y) is covered by the projected mesh (any triangle's screen bounding circle test
   // is too loose; we rasterise the projected triangles on the CPU at pixel centres).
@@ -84,7 +79,7 @@ class FluidRenderTest : public ::testing::Test {
   GlContext ctx_;
   FluidRenderer renderer_;
   FluidScene scene_;
-  GLuint target_ = 0, target_tex_ = 0;
+  std::unique_ptr<ColourTarget> target_;  // made once the context exists
 };
 
 int pixelDiff(const std::vector<unsigned char>& a, const std::vector<unsigned char>& b, std::size_t pixel) {
@@ -206,9 +201,9 @@ TEST_F(FluidRenderTest, WaterAbsorbsThroughItselfNotToTheBackground) {
     } else {
       EXPECT_TRUE(uploadFluidMesh(renderer_, {}, {}, {}, error));
     }
-    drawFluid(renderer_, target_, scene_.camera, WaterParams{});
+    drawFluid(renderer_, target_->fbo, scene_.camera, WaterParams{});
     std::vector<unsigned char> px(static_cast<std::size_t>(kW) * kH * 4);
-    glBindFramebuffer(GL_FRAMEBUFFER, target_);
+    glBindFramebuffer(GL_FRAMEBUFFER, target_->fbo);
     glReadPixels(0, 0, kW, kH, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return px;
@@ -333,9 +328,9 @@ TEST_F(FluidRenderTest, ZeroTrianglesCameraInsideAndGoo) {
   std::size_t differ = 0;
   std::string error;
   ASSERT_TRUE(uploadFluidMesh(renderer_, {}, {}, {}, error));
-  drawFluid(renderer_, target_, scene_.camera, WaterParams{});
+  drawFluid(renderer_, target_->fbo, scene_.camera, WaterParams{});
   std::vector<unsigned char> px(scene.size());
-  glBindFramebuffer(GL_FRAMEBUFFER, target_);
+  glBindFramebuffer(GL_FRAMEBUFFER, target_->fbo);
   glReadPixels(0, 0, kW, kH, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   for (std::size_t p = 0; p < static_cast<std::size_t>(kW) * kH; ++p) differ += pixelDiff(scene, px, p) > 0;
@@ -357,8 +352,8 @@ TEST_F(FluidRenderTest, ZeroTrianglesCameraInsideAndGoo) {
   FluidScene inside;
   ASSERT_TRUE(createFluidScene(inside, kW, kH, {0.05f, 0.5f, 0.0f}, error)) << error;
   ASSERT_TRUE(extractMesh(inside, fluid::SurfaceOrder::backToFront, false, error)) << error;
-  const auto in_scene = renderFrame(inside, renderer_, target_, WaterParams{}, false);
-  const auto in_water = renderFrame(inside, renderer_, target_, WaterParams{}, true);
+  const auto in_scene = renderFrame(inside, renderer_, target_->fbo, WaterParams{}, false);
+  const auto in_water = renderFrame(inside, renderer_, target_->fbo, WaterParams{}, true);
   std::size_t tinted = 0;
   for (std::size_t p = 0; p < static_cast<std::size_t>(kW) * kH; ++p) tinted += pixelDiff(in_scene, in_water, p) > 4;
   EXPECT_GT(tinted, static_cast<std::size_t>(kW * kH / 2)) << "from inside, the water should cover the view";
@@ -383,7 +378,7 @@ TEST_F(FluidRenderTest, MillionTriangleMesh) {
   ASSERT_TRUE(uploadFluidMesh(renderer_, pos, nrm, idx, error)) << error;
   EXPECT_EQ(renderer_.index_count, tris * 3);
   beginOpaquePass(renderer_, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
-  drawFluid(renderer_, target_, scene_.camera, WaterParams{});
+  drawFluid(renderer_, target_->fbo, scene_.camera, WaterParams{});
   EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include <cmath>
 #include <limits>
 
@@ -49,17 +51,10 @@ class GooTextureTest : public ::testing::Test {
     y_lo_ = std::numeric_limits<float>::max(), y_hi_ = -y_lo_;
     for (const glm::vec3& p : scene_.mesh.positions) y_lo_ = std::min(y_lo_, p.y), y_hi_ = std::max(y_hi_, p.y);
     ASSERT_GT(y_hi_ - y_lo_, 0.3f);
-    glGenTextures(1, &target_tex_);
-    glBindTexture(GL_TEXTURE_2D, target_tex_);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, kW, kH, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    glGenFramebuffers(1, &target_);
-    glBindFramebuffer(GL_FRAMEBUFFER, target_);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, target_tex_, 0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    target_ = std::make_unique<ColourTarget>(kW, kH, GL_RGBA8);
   }
   void TearDown() override {
-    if (target_ != 0) glDeleteFramebuffers(1, &target_);
-    if (target_tex_ != 0) glDeleteTextures(1, &target_tex_);
+    target_.reset();
     texture_ = GpuTexture{};
     destroyFluidScene(scene_);
     destroyFluidRenderer(renderer_);
@@ -87,9 +82,9 @@ class GooTextureTest : public ::testing::Test {
     EXPECT_TRUE(
         uploadFluidMesh(renderer_, scene_.mesh.positions, scene_.mesh.normals, scene_.mesh.indices, attr, error))
         << error;
-    drawFluid(renderer_, target_, scene_.camera, p);
+    drawFluid(renderer_, target_->fbo, scene_.camera, p);
     std::vector<unsigned char> px(static_cast<std::size_t>(kW) * kH * 4);
-    glBindFramebuffer(GL_FRAMEBUFFER, target_);
+    glBindFramebuffer(GL_FRAMEBUFFER, target_->fbo);
     glReadPixels(0, 0, kW, kH, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return px;
@@ -161,7 +156,7 @@ class GooTextureTest : public ::testing::Test {
   FluidScene scene_;
   GpuTexture texture_;
   float y_lo_ = 0.0f, y_hi_ = 0.0f;
-  GLuint target_ = 0, target_tex_ = 0;
+  std::unique_ptr<ColourTarget> target_;  // made once the context exists
 };
 
 WaterParams gooParams(GLuint texture) {
