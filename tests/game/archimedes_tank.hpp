@@ -89,16 +89,14 @@ struct Floating {
   std::string error;                   // empty, or why the run stopped early
 };
 
-// A tank (the SPH container and the same walls in Bullet) with `layers` lattice layers of water
-// over its whole floor, and a box of `density` with its centre at `box_y`. Water particles the
-// box would overlap are left out (a box released under water).
-// Returns false (nothing built) when the parameters are refused.
-inline bool buildDeepTank(Tank& t, float density, int layers, float box_y, float particle_radius = 0.0125f) {
+// The tank's water: DFSPH parameters with particles of `particle_radius` and the tank as the SPH
+// container collider (0.4 x 0.4 m, 1 m high, floor at y = 0). False when the parameters are refused.
+inline bool setUpTankWater(Tank& t, float particle_radius, std::size_t max_particles) {
   fluid::SphParams& p = t.sph.params;
   p.solver = fluid::SphSolverKind::dfsph;
   p.particle_radius = particle_radius;
   p.viscosity = 0.01f;
-  p.max_particles = 200000;
+  p.max_particles = max_particles;
   p.domain_min = glm::vec3(-kTankHalf, -0.05f, -kTankHalf);
   p.domain_max = glm::vec3(kTankHalf, 0.6f, kTankHalf);
   if (!fluid::validateSphParams(p).ok()) return false;
@@ -108,6 +106,29 @@ inline bool buildDeepTank(Tank& t, float density, int layers, float box_y, float
   tank.integrate_pose = false;
   tank.material.resilience = 0.0f;
   t.sph.colliders.push_back(tank);
+  return true;
+}
+
+// The same walls in Bullet (floor and four sides), a box of `density` centred at `centre`, and the
+// coupling between it and the water.
+inline void addTankBox(Tank& t, float density, glm::vec3 centre) {
+  t.physics = engine::createPhysicsWorld({});
+  engine::addStaticPlane(*t.physics, glm::vec3(0, 1, 0), 0.0f);
+  for (const glm::vec3 n : {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)})
+    engine::addStaticPlane(*t.physics, n, -kTankHalf);
+  engine::BodyDesc box;
+  box.mass = density * std::pow(2.0f * kBoxHalf, 3.0f);
+  box.position = centre;
+  t.box = engine::addBox(*t.physics, box, glm::vec3(kBoxHalf));
+  game::initBodyFluidCoupling(t.coupling, t.sph, glm::vec3(kBoxHalf), t.sph.params.domain_min, t.sph.params.domain_max);
+}
+
+// A tank (the SPH container and the same walls in Bullet) with `layers` lattice layers of water
+// over its whole floor, and a box of `density` with its centre at `box_y`. Water particles the
+// box would overlap are left out (a box released under water).
+// Returns false (nothing built) when the parameters are refused.
+inline bool buildDeepTank(Tank& t, float density, int layers, float box_y, float particle_radius = 0.0125f) {
+  if (!setUpTankWater(t, particle_radius, 200000)) return false;
   const float r = particle_radius, d = 2.0f * r;
   const int columns = static_cast<int>(std::lround(2.0f * kTankHalf / d));
   const glm::vec3 centre(0.0f, box_y, 0.0f);
@@ -118,15 +139,7 @@ inline bool buildDeepTank(Tank& t, float density, int layers, float box_y, float
         if (glm::all(glm::lessThan(glm::abs(q - centre), glm::vec3(kBoxHalf + r)))) continue;
         fluid::addSphParticle(t.sph, q);
       }
-  t.physics = engine::createPhysicsWorld({});
-  engine::addStaticPlane(*t.physics, glm::vec3(0, 1, 0), 0.0f);
-  for (const glm::vec3 n : {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)})
-    engine::addStaticPlane(*t.physics, n, -kTankHalf);
-  engine::BodyDesc box;
-  box.mass = density * std::pow(2.0f * kBoxHalf, 3.0f);
-  box.position = centre;
-  t.box = engine::addBox(*t.physics, box, glm::vec3(kBoxHalf));
-  game::initBodyFluidCoupling(t.coupling, t.sph, glm::vec3(kBoxHalf), p.domain_min, p.domain_max);
+  addTankBox(t, density, centre);
   return true;
 }
 

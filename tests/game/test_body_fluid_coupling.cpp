@@ -26,33 +26,12 @@ constexpr float kFillHeight = 0.2f;  // addSphBlock's box top; the settled level
 // A tank of water (SPH, container collider) with the same walls in Bullet, and a box of
 // `density` released with its bottom 5 cm above the water.
 void buildTank(Tank& t, float density, float particle_radius = 0.0125f) {
-  fluid::SphParams& p = t.sph.params;
-  p.solver = fluid::SphSolverKind::dfsph;
-  p.particle_radius = particle_radius;  // spacing 2r: 2.5 cm by default, 5.6 spacings per box edge
-  p.viscosity = 0.01f;
-  p.max_particles = 20000;
-  p.domain_min = glm::vec3(-kTankHalf, -0.05f, -kTankHalf);
-  p.domain_max = glm::vec3(kTankHalf, 0.6f, kTankHalf);
-  ASSERT_TRUE(fluid::validateSphParams(p).ok());
-  fluid::SphCollider tank;
-  tank.shape = std::make_shared<fluid::BoxShape>(glm::vec3(kTankHalf, 0.5f, kTankHalf), true);
-  tank.pose.translation = glm::vec3(0.0f, 0.5f, 0.0f);
-  tank.integrate_pose = false;
-  tank.material.resilience = 0.0f;
-  t.sph.colliders.push_back(tank);
-  const float d = 2.0f * p.particle_radius;
+  // Spacing 2r: 2.5 cm by default, 5.6 spacings per box edge.
+  ASSERT_TRUE(setUpTankWater(t, particle_radius, 20000));
+  const float d = 2.0f * particle_radius;
   fluid::addSphBlock(t.sph, glm::vec3(-kTankHalf + 0.5f * d, 0.5f * d, -kTankHalf + 0.5f * d),
                      glm::vec3(kTankHalf - 0.5f * d, kFillHeight, kTankHalf - 0.5f * d));
-
-  t.physics = engine::createPhysicsWorld({});
-  engine::addStaticPlane(*t.physics, glm::vec3(0, 1, 0), 0.0f);
-  for (const glm::vec3 n : {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)})
-    engine::addStaticPlane(*t.physics, n, -kTankHalf);
-  engine::BodyDesc box;
-  box.mass = density * std::pow(2.0f * kBoxHalf, 3.0f);
-  box.position = glm::vec3(0.0f, kFillHeight + 0.05f + kBoxHalf, 0.0f);
-  t.box = engine::addBox(*t.physics, box, glm::vec3(kBoxHalf));
-  game::initBodyFluidCoupling(t.coupling, t.sph, glm::vec3(kBoxHalf), p.domain_min, p.domain_max);
+  addTankBox(t, density, glm::vec3(0.0f, kFillHeight + 0.05f + kBoxHalf, 0.0f));
 }
 
 // Steps the tank for `seconds` at 60 Hz; returns the box's mean centre height over the last 0.3 s.
