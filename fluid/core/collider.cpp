@@ -32,19 +32,37 @@ glm::vec3 collisionResponse(glm::vec3 velocity, glm::vec3 outward_normal, const 
 CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSample& previous,
                                  glm::vec3 predicted_position, glm::vec3 predicted_velocity,
                                  const ColliderSample& predicted, glm::vec3 collider_velocity, float dt, float skin,
-                                 const CollisionMaterial& material) {
-  (void)previous_position;
-  (void)dt;
+                                 const CollisionMaterial& material, float depth_slack) {
   CollisionResult result{predicted_position, predicted_velocity, CollisionOutcome::none};
   if (!predicted.valid || predicted.distance >= 0.0f) return result;
 
-  const glm::vec3 n = predicted.normal;
   const glm::vec3 relative = predicted_velocity - collider_velocity;
+  const bool caught = previous.valid && previous.distance < 0.0f;
+  if (!caught && previous.valid) {
+    // A depth map measures distance along its axis or its cube's ray (§4.1, §4.3), so a point just
+    // inside a concave corner or under an overhang (a floor beside a wall whose rim covers its
+    // texel, a dish floor round a spire) can read many times deeper than it is. A particle the
+    // previous sample saw outside went in at most as far as it moved relative to the collider: an
+    // answer deeper than that by more than the field's own error (depth_slack) is not its
+    // penetration, and projecting by it would throw the particle across the part. It stays at its
+    // previous position, which the collider called outside (skin along that normal), and reacts as
+    // if it had met a surface square to its way: the way it was stopped.
+    const glm::vec3 moved = predicted_position - previous_position - collider_velocity * dt;
+    const float travelled = glm::length(moved);
+    if (-predicted.distance > travelled + skin + depth_slack) {
+      result.position =
+          previous_position + collider_velocity * dt + previous.normal * std::max(0.0f, skin - previous.distance);
+      const glm::vec3 blocking = travelled > 0.0f ? -moved / travelled : previous.normal;
+      result.velocity = collisionResponse(relative, blocking, material) + collider_velocity;
+      result.outcome = CollisionOutcome::reacted;
+      result.held_back = true;
+      return result;
+    }
+  }
+  const glm::vec3 n = predicted.normal;
   // Projecting the predicted position onto the surface (plus a skin) guarantees the step
   // never ends inside the collider, to the accuracy of the distance field.
   result.position = predicted_position + n * (skin - predicted.distance);
-
-  const bool caught = previous.valid && previous.distance < 0.0f;
   if (!caught) {
     // About to collide (Figure 2a): friction/resilience reaction.
     result.velocity = collisionResponse(relative, n, material) + collider_velocity;

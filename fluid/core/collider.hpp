@@ -11,6 +11,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <cstddef>
+#include <limits>
 #include <span>
 
 namespace fluid {
@@ -67,6 +68,9 @@ struct CollisionResult {
   glm::vec3 position{0.0f};
   glm::vec3 velocity{0.0f};
   CollisionOutcome outcome = CollisionOutcome::none;
+  // Reacted at its previous position: the predicted sample claimed a penetration deeper than the
+  // particle moved since a sample that saw it outside (see resolveCollision).
+  bool held_back = false;
 };
 
 // The double check of §3.3.2 for one particle: `previous` is the sample at the previous
@@ -74,7 +78,11 @@ struct CollisionResult {
 //  - predicted outside (or invalid): nothing happens.
 //  - previous outside, predicted inside: the particle is about to collide; its velocity gets
 //    the friction/resilience reaction and the predicted position is moved onto the surface
-//    along the normal, plus `skin`.
+//    along the normal, plus `skin`. When the predicted sample is deeper than the particle moved
+//    relative to the collider plus `skin` plus `depth_slack` (the distance field's own error),
+//    which a true penetration cannot be, the particle is held back at its previous position
+//    instead and reacts against its own direction of travel (held_back). The default slack
+//    (infinite) keeps the paper's rule.
 //  - previous inside too: the particle is caught; it is pushed out along the normal to the
 //    surface plus `skin`, and its normal velocity is made to head outside (v⊥ − v*, eq. of
 //    §3.3.2 for a particle heading inside).
@@ -82,6 +90,7 @@ struct CollisionResult {
 CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSample& previous,
                                  glm::vec3 predicted_position, glm::vec3 predicted_velocity,
                                  const ColliderSample& predicted, glm::vec3 collider_velocity, float dt, float skin,
-                                 const CollisionMaterial& material);
+                                 const CollisionMaterial& material,
+                                 float depth_slack = std::numeric_limits<float>::infinity());
 
 }  // namespace fluid

@@ -61,6 +61,10 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
   const float dt = context.dt, support = context.support, spacing = context.spacing, mass = context.mass;
   const float skin =
       context.params.collision_skin > 0.0f ? context.params.collision_skin : 0.01f * context.params.particle_radius;
+  // The depth maps' error near a surface is a texel or two, well under a particle radius, and the
+  // boundary pressure keeps water about a radius off a wall: a sample deeper than the step by more
+  // than that is the axis-distance error of a concave corner (resolveCollision).
+  const float depth_slack = context.params.particle_radius;
   const bool track_stale = collider_count <= 32;
   const std::uint32_t all_colliders = collider_count >= 32 ? ~0u : (1u << collider_count) - 1u;
   const SphCollider& collider = context.world.colliders[c];
@@ -116,7 +120,6 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             scratch.pushed[i] = 1;
             ++acc.particles;
           }
-          if (!crossed && s.valid) acc.depth = std::max(acc.depth, -s.distance);
           CollisionResult res;
           if (crossed) {
             const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
@@ -124,13 +127,18 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             res.velocity = collisionResponse(velocities[i] - vc, s0.normal, collider.material) + vc;
           } else {
             res = resolveCollision(scratch.old_position[i], s0, positions[i], velocities[i], s,
-                                   colliderVelocityAt(pose, positions[i]), dt, skin, collider.material);
+                                   colliderVelocityAt(pose, positions[i]), dt, skin, collider.material, depth_slack);
           }
+          // A held-back particle went in at most as far as it moved (resolveCollision); otherwise the
+          // sample's depth is the penetration.
+          if (!crossed)
+            acc.depth =
+                std::max(acc.depth, res.held_back ? glm::length(positions[i] - scratch.old_position[i]) : -s.distance);
           if (!still) {
             // The moving face the particle now rests on: n . x >= n . x_now (it sits skin outside).
-            const glm::vec3 nm = crossed ? s0.normal : s.normal;
+            const glm::vec3 nm = crossed || res.held_back ? s0.normal : s.normal;
             scratch.push_plane[i] = glm::vec4(nm, glm::dot(nm, res.position));
-          } else if (!crossed && scratch.push_plane[i] != glm::vec4(0.0f)) {
+          } else if (!crossed && !res.held_back && scratch.push_plane[i] != glm::vec4(0.0f)) {
             res.position =
                 wedgePosition(positions[i], s.normal, skin - s.distance, scratch.push_plane[i], spacing, res.position);
           }

@@ -1,13 +1,17 @@
 // The fountain level's baked colliders (content/colliders, issue 18 item 2) on the real models:
 // the shipped files match their models, the basin's map set covers its cavity, and every point
-// within the SPH support of a surface gets a finite distance.
+// within the SPH support of a surface gets a finite distance, and the SPH's double check never
+// throws a particle farther than its step on them.
 #include "fluid/collide/collider_cache.hpp"
+#include "fluid/core/collider.hpp"
 #include "game/commands/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <random>
 
@@ -148,6 +152,79 @@ TEST(FountainColliders, EveryPointWithinTheSphSupportGetsAFiniteDistance) {
     if (part.entry.name != "ground") {
       EXPECT_GT(beyond_without, 0u) << part.entry.name;
     }
+  }
+}
+
+// Seeded points in the ring (radius r0..r1 about the y axis, height y0..y1) round a concave corner.
+std::vector<glm::vec3> ringPoints(float r0, float r1, float y0, float y1, std::size_t count) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<glm::vec3> points(count);
+  for (glm::vec3& p : points) {
+    const float angle = 6.2831853f * u(rng), r = r0 + (r1 - r0) * u(rng);
+    p = {r * std::cos(angle), y0 + (y1 - y0) * u(rng), r * std::sin(angle)};
+  }
+  return points;
+}
+
+// The statue's dish floor round its spire (the spire's knob covers the floor's texels in the y map)
+// and the basin's floor beside its wall (the rim covers them) read far deeper than they are: a
+// particle stepping a few millimetres in would be projected half a metre (the paper's rule, no
+// slack). With the SPH's slack (a particle radius, fluid/sph/collisions.cpp) the double check moves
+// no particle farther than its step plus slack and twice the skin.
+TEST(FountainColliders, DoubleCheckMovesNoParticleFartherThanItsStep) {
+  const float support = fountainSupport();
+  ASSERT_GT(support, 0.0f);
+  const float radius = support / 4.0f, skin = 0.01f * radius, dt = 1.0f / 120.0f;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), length(0.0f, 0.5f * radius);
+  for (const Part& part : fountainModels()) {
+    if (part.entry.name == "ground") continue;
+    const fluid::DepthMapCollider collider = bake(part, part.entry.recipe);
+    std::size_t steps_in = 0, thrown_by_paper = 0, thrown = 0, held = 0;
+    float worst_paper = 0.0f;
+    // Points all round the part, and in the ring round its concave corner (the spire's foot on the
+    // dish floor; the basin floor's edge at the wall).
+    const game::FountainGeometry g;
+    std::vector<glm::vec3> points = pointsAround(part, 300000), ring;
+    if (part.entry.name == "statue")
+      ring =
+          ringPoints(g.spire_radius - 0.05f, g.spire_radius + 0.05f, g.dish_floor - 0.03f, g.dish_floor + 0.05f, 50000);
+    else
+      ring = ringPoints(g.basin_inner_radius - 0.05f, g.basin_inner_radius + 0.02f, g.basin_floor - 0.03f,
+                        g.basin_floor + 0.05f, 50000);
+    points.insert(points.end(), ring.begin(), ring.end());
+    for (const glm::vec3& from : points) {
+      const fluid::ColliderSample before = collider.sample(from);
+      if (!before.valid || before.distance < 0.0f || before.distance > radius) continue;
+      glm::vec3 direction{u(rng), u(rng), u(rng)};
+      if (glm::length(direction) < 1e-3f) continue;
+      const glm::vec3 to = from + glm::normalize(direction) * length(rng);
+      const fluid::ColliderSample after = collider.sample(to);
+      if (!after.valid || after.distance >= 0.0f) continue;
+      ++steps_in;
+      // A projection moves by skin - distance; a held-back particle returns its step.
+      const float step = glm::length(to - from), bound = step + 2.0f * skin + radius + 1e-5f;
+      const glm::vec3 velocity = (to - from) / dt;
+      const fluid::CollisionResult paper = fluid::resolveCollision(from, before, to, velocity, after, {}, dt, skin, {});
+      const float paper_move = glm::length(paper.position - to);
+      worst_paper = std::max(worst_paper, paper_move);
+      thrown_by_paper += paper_move > bound;
+      const fluid::CollisionResult r =
+          fluid::resolveCollision(from, before, to, velocity, after, {}, dt, skin, {}, radius);
+      thrown += glm::length(r.position - to) > bound;
+      held += r.held_back;
+      EXPECT_TRUE(std::isfinite(r.velocity.x + r.velocity.y + r.velocity.z));
+    }
+    ASSERT_GT(steps_in, 1000u) << part.entry.name;
+    EXPECT_EQ(thrown, 0u) << part.entry.name;
+    // The check can fail: on these models the paper's rule alone throws some particles far.
+    EXPECT_GT(thrown_by_paper, 0u) << part.entry.name << " (worst " << worst_paper << " m)";
+    EXPECT_GE(held, thrown_by_paper) << part.entry.name;
+    std::printf(
+        "%s: %zu steps in, %zu thrown farther than step + %.3f m by the paper's rule (worst %.3f m), "
+        "0 with the slack\n",
+        part.entry.name.c_str(), steps_in, thrown_by_paper, skin + radius, worst_paper);
   }
 }
 

@@ -67,6 +67,45 @@ TEST(ResolveCollision, MovingColliderPushesRestingParticle) {
   EXPECT_NEAR(result.velocity.z, 2.0f, 1e-6f);
 }
 
+// A depth map's distance is measured along an axis, so a point just inside a concave corner can
+// read far deeper than it is: a particle that was outside 5 cm before cannot be 50 cm inside.
+TEST(ResolveCollision, SampleDeeperThanThePathIsHeldBackWithASlack) {
+  const fluid::CollisionMaterial material{0.0f, 0.5f, 0.0f};
+  const glm::vec3 from{0, 0, 0.1f}, to{0, 0, 0.05f}, velocity{0, 0, -0.5f};
+  const fluid::ColliderSample axis_error = sample(-0.5f, glm::vec3(1, 0, 0));
+  const auto held =
+      fluid::resolveCollision(from, sample(0.1f), to, velocity, axis_error, {}, 0.1f, 0.01f, material, 0.04f);
+  EXPECT_TRUE(held.held_back);
+  EXPECT_EQ(held.outcome, fluid::CollisionOutcome::reacted);
+  EXPECT_EQ(held.position, from);  // outside by more than the skin there: no push
+  // Stopped on its way down: the way it came is the blocking normal (resilience 0.5).
+  EXPECT_NEAR(held.velocity.z, 0.25f, 1e-6f);
+  EXPECT_FLOAT_EQ(held.velocity.x, 0.0f);
+  // Without a slack (the paper's rule) the sample's normal and depth throw it half a metre sideways.
+  const auto paper = fluid::resolveCollision(from, sample(0.1f), to, velocity, axis_error, {}, 0.1f, 0.01f, material);
+  EXPECT_FALSE(paper.held_back);
+  EXPECT_NEAR(paper.position.x, 0.51f, 1e-6f);
+  // A depth within the path plus skin and slack is a penetration: projected as before.
+  const auto within =
+      fluid::resolveCollision(from, sample(0.1f), to, velocity, sample(-0.08f), {}, 0.1f, 0.01f, material, 0.04f);
+  EXPECT_FALSE(within.held_back);
+  EXPECT_NEAR(within.position.z, 0.05f + 0.09f, 1e-6f);
+  // Caught (inside before): the previous sample says nothing about the depth, no hold.
+  const auto caught =
+      fluid::resolveCollision(from, sample(-0.01f), to, velocity, axis_error, {}, 0.1f, 0.01f, material, 0.04f);
+  EXPECT_FALSE(caught.held_back);
+  EXPECT_EQ(caught.outcome, fluid::CollisionOutcome::pushed_out);
+}
+
+// Held back next to a moving collider: the particle is carried along with it.
+TEST(ResolveCollision, HeldBackParticleMovesWithTheCollider) {
+  const glm::vec3 wall_velocity{0, 0, 1.0f};
+  const auto held = fluid::resolveCollision({0, 0, 0.2f}, sample(0.2f), {0, 0, 0.25f}, {0, 0, 0.5f}, sample(-0.6f),
+                                            wall_velocity, 0.1f, 0.0f, {}, 0.04f);
+  EXPECT_TRUE(held.held_back);
+  EXPECT_NEAR(held.position.z, 0.3f, 1e-6f);  // previous position + wall velocity * dt
+}
+
 TEST(ColliderPose, RoundTripsPointsAndRigidVelocity) {
   fluid::ColliderPose pose;
   pose.rotation = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 0, 1));
