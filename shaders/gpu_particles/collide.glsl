@@ -7,6 +7,16 @@
 // All maps of all colliders live in one R32UI buffer texture holding the texel bytes as they are
 // (little-endian words): float32 = 4 words/texel, fixed8 and cube8 = 1, front_back16 = 2.
 
+// A GPU may fuse a multiply and an add (FMA) where the CPU rounds twice; at a texel boundary or a
+// tie of two votes that one rounding flips the texel or the winning map. `precise` (GLSL 4.00,
+// ARB_gpu_shader5 under 3.30) keeps the stated operations in the position transforms and votes.
+#extension GL_ARB_gpu_shader5 : enable
+#ifdef GL_ARB_gpu_shader5
+#define PRECISE precise
+#else
+#define PRECISE
+#endif
+
 #define MAX_COLLIDERS 4
 #define MAX_MAPS 16
 
@@ -76,7 +86,7 @@ uint mapWord(int map, int word) { return texelFetch(u_map_words, u_map_info[map]
 vec3 transformPoint(mat4 m, vec3 p) { return m[0].xyz * p.x + m[1].xyz * p.y + m[2].xyz * p.z + m[3].xyz; }
 
 void orthoVotes(inout Winner w, int map, vec3 p) {
-  vec3 q = transformPoint(u_map_matrix[map], p);
+  PRECISE vec3 q = transformPoint(u_map_matrix[map], p);
   int format = u_map_info[map].x;
   // Outside the map's footprint: invalid vote (§4.1).
   if (!(q.x >= 0.0 && q.x < 1.0 && q.y >= 0.0 && q.y < 1.0)) {
@@ -102,7 +112,8 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
       invalidVote(w, map);
       return;
     }
-    vote(w, sign_less * z_scale * (depth - q.z), map, texel, 0);
+    PRECISE float f = sign_less * z_scale * (depth - q.z);
+    vote(w, f, map, texel, 0);
   }
 #endif
 #ifdef FORMAT_FIXED8
@@ -113,7 +124,8 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
       invalidVote(w, map);
       return;
     }
-    vote(w, sign_less * z_scale * (float(code) * u_fixed_step - q.z), map, texel, 0);
+    PRECISE float f = sign_less * z_scale * (float(code) * u_fixed_step - q.z);
+    vote(w, f, map, texel, 0);
   }
 #endif
 #ifdef FORMAT_FRONT_BACK16
@@ -124,12 +136,14 @@ void orthoVotes(inout Winner w, int map, vec3 p) {
     if (front < 0.0 || !less_ok) {
       invalidVote(w, map);
     } else {
-      vote(w, z_scale * (front - q.z), map, texel, 0);  // eq. (1), LESS
+      PRECISE float f = z_scale * (front - q.z);  // eq. (1), LESS
+      vote(w, f, map, texel, 0);
     }
     if (back < 0.0 || !greater_ok) {
       invalidVote(w, map);
     } else {
-      vote(w, z_scale * (q.z - back), map, texel, 1);  // GREATER: eq. (1) negated
+      PRECISE float f = z_scale * (q.z - back);  // GREATER: eq. (1) negated
+      vote(w, f, map, texel, 1);
     }
   }
 #endif
@@ -170,19 +184,19 @@ int cubeFace(vec3 d, out float sc, out float tc, out float ma) {
 
 // §4.3 depth cube: f = (1 − r/L)|S·P'| signed by the compare function.
 void cubeVote(inout Winner w, int map, vec3 p) {
-  vec3 q = transformPoint(u_map_matrix[map], p);
+  PRECISE vec3 q = transformPoint(u_map_matrix[map], p);
   if (!(abs(q.x) <= 1.0 && abs(q.y) <= 1.0 && abs(q.z) <= 1.0)) {
     invalidVote(w, map);
     return;
   }
-  float len = sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
-  vec3 dir = len > 0.0 ? q / len : vec3(0.0, 0.0, 1.0);
+  PRECISE float len = sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+  PRECISE vec3 dir = len > 0.0 ? q / len : vec3(0.0, 0.0, 1.0);
   float sc, tc, ma;
   int face = cubeFace(len > 0.0 ? q : dir, sc, tc, ma);
   int n = u_map_info[map].z;
   float nf = float(n);
-  float s = (sc / ma + 1.0) * 0.5;
-  float t = (tc / ma + 1.0) * 0.5;
+  PRECISE float s = (sc / ma + 1.0) * 0.5;
+  PRECISE float t = (tc / ma + 1.0) * 0.5;
   int i = clamp(int(s * nf), 0, n - 1);
   int j = clamp(int(t * nf), 0, n - 1);
   int texel = face * n * n + j * n + i;
@@ -193,8 +207,8 @@ void cubeVote(inout Winner w, int map, vec3 p) {
     return;
   }
   float r = float(code) * u_cube_step;
-  float along = length(u_map_params[map].yzw * dir);
-  float f = (u_map_info[map].y == 0 ? (r - len) : (len - r)) * along;
+  PRECISE float along = length(u_map_params[map].yzw * dir);
+  PRECISE float f = (u_map_info[map].y == 0 ? (r - len) : (len - r)) * along;
   vote(w, f, map, texel, 0);
 }
 
@@ -257,7 +271,8 @@ vec3 quatRotate(vec4 q, vec3 v) {
 // World-space sample of collider c (fluid::queryWorld).
 bool sampleWorld(int c, vec3 world, out float dist, out vec3 normal) {
   vec4 inv = vec4(-u_pose_rotation[c].xyz, u_pose_rotation[c].w) / dot(u_pose_rotation[c], u_pose_rotation[c]);
-  bool valid = sampleCollider(c, quatRotate(inv, world - u_pose_translation[c]), dist, normal);
+  PRECISE vec3 local = quatRotate(inv, world - u_pose_translation[c]);
+  bool valid = sampleCollider(c, local, dist, normal);
   if (valid) normal = quatRotate(u_pose_rotation[c], normal);
   return valid;
 }

@@ -1,0 +1,34 @@
+#!/bin/bash
+# Packs what scripts/gpu_check.sh needs to run fluiddemo's GL paths on a machine with a GPU driver
+# but none of our packages: the game, the GL tests and the GPU benchmarks from BUILD (stripped), the
+# shared libraries they load that are not the C library or GL itself, and the glvnd loaders as
+# Debian packages (unpacked there; the machine's driver supplies the vendor library).
+#   usage: scripts/gpu_bundle.sh [BUILD=build/dev]   -> .gpurun/ and .gl/ in the repository root
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build/dev}
+bins=(game/fluiddemo tests/engine/gl_engine tests/gpu/gl_gpu_particles tests/gpu/gl_fluid_render
+      tests/gpu/gl_goo_texture tests/gpu/gl_fluid_methods
+      tests/bench/bench_gpu_particles tests/bench/bench_fluid_render)
+rm -rf .gpurun/bin .gpurun/lib
+mkdir -p .gpurun/bin .gpurun/lib .gl
+for b in "${bins[@]}"; do
+  strip --strip-unneeded -o ".gpurun/bin/$(basename "$b")" "$build/$b"
+done
+# Every library the binaries load, minus glibc's own and the GL dispatch libraries (glvnd, below).
+skip='^(linux-vdso|ld-linux|libc\.so|libm\.so|libpthread|libdl\.so|librt\.so|libGL|libEGL|libOpenGL|libGLX|libGLdispatch)'
+for b in .gpurun/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $1, $3}' | sort -u |
+  while read -r name path; do
+    [[ $name =~ $skip ]] && continue
+    strip --strip-unneeded -o ".gpurun/lib/$name" "$path"
+  done
+cp scripts/gpu_check.sh .gpurun/run.sh
+# The source path compiled into the test binaries (FLUIDDEMO_SOURCE_DIR): gpu_check.sh links it.
+sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt" > .gpurun/source_dir
+if ! ls .gl/libegl1_*.deb >/dev/null 2>&1; then
+  o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+  mkdir -p /tmp/amd64/partial
+  apt-get $o update >/dev/null
+  (cd .gl && apt-get $o download libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
+fi
+du -sh .gpurun .gl
