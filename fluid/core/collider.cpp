@@ -45,13 +45,13 @@ CollisionResult resolveCollision(glm::vec3 previous_position, const ColliderSamp
     // previous sample saw outside went in at most as far as it moved relative to the collider: an
     // answer deeper than that by more than the field's own error (depth_slack) is not its
     // penetration, and projecting by it would throw the particle across the part. It stays at its
-    // previous position, which the collider called outside (skin along that normal), and reacts as
-    // if it had met a surface square to its way: the way it was stopped.
+    // previous position, which the collider called outside (no skin added: next to such a corner the
+    // field can flip to "deep inside" within a fraction of a millimetre), and reacts as if it had met
+    // a surface square to its way: the way it was stopped.
     const glm::vec3 moved = predicted_position - previous_position - collider_velocity * dt;
     const float travelled = glm::length(moved);
     if (-predicted.distance > travelled + skin + depth_slack) {
-      result.position =
-          previous_position + collider_velocity * dt + previous.normal * std::max(0.0f, skin - previous.distance);
+      result.position = previous_position + collider_velocity * dt;
       const glm::vec3 blocking = travelled > 0.0f ? -moved / travelled : previous.normal;
       result.velocity = collisionResponse(relative, blocking, material) + collider_velocity;
       result.outcome = CollisionOutcome::reacted;

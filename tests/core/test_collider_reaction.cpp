@@ -77,7 +77,7 @@ TEST(ResolveCollision, SampleDeeperThanThePathIsHeldBackWithASlack) {
       fluid::resolveCollision(from, sample(0.1f), to, velocity, axis_error, {}, 0.1f, 0.01f, material, 0.04f);
   EXPECT_TRUE(held.held_back);
   EXPECT_EQ(held.outcome, fluid::CollisionOutcome::reacted);
-  EXPECT_EQ(held.position, from);  // outside by more than the skin there: no push
+  EXPECT_EQ(held.position, from);
   // Stopped on its way down: the way it came is the blocking normal (resilience 0.5).
   EXPECT_NEAR(held.velocity.z, 0.25f, 1e-6f);
   EXPECT_FLOAT_EQ(held.velocity.x, 0.0f);
@@ -90,6 +90,12 @@ TEST(ResolveCollision, SampleDeeperThanThePathIsHeldBackWithASlack) {
       fluid::resolveCollision(from, sample(0.1f), to, velocity, sample(-0.08f), {}, 0.1f, 0.01f, material, 0.04f);
   EXPECT_FALSE(within.held_back);
   EXPECT_NEAR(within.position.z, 0.05f + 0.09f, 1e-6f);
+  // Closer than the skin before: it stays exactly there (next to a concave corner a skin's push can
+  // land where the field reads deep inside again).
+  const auto grazing = fluid::resolveCollision(from, sample(0.0001f), to, velocity, axis_error, {}, 0.1f, 0.01f,
+                                               material, 0.04f);
+  EXPECT_TRUE(grazing.held_back);
+  EXPECT_EQ(grazing.position, from);
   // Caught (inside before): the previous sample says nothing about the depth, no hold.
   const auto caught =
       fluid::resolveCollision(from, sample(-0.01f), to, velocity, axis_error, {}, 0.1f, 0.01f, material, 0.04f);
