@@ -46,6 +46,21 @@ enum class SurfaceOrder : std::uint8_t {
   frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
+// How a corner's field is summed. Both are exact (every particle within Rc_i, summed in (z, index)
+// order with the same float expressions), so both give the same bits and the same mesh (tests
+// compare them on every test set). docs/surface.md ("Field routes") has the measured costs.
+enum class SurfaceFieldRoute : std::uint8_t {
+  // The paper's §6 2D-projection 1D-lookup cache, walked per corner the sweep needs. The default:
+  // on the test sets it does fewer instructions than sliceSplat (most corners of a slice are
+  // never needed by the surface-following sweep, §4).
+  particleCache,
+  // Per slice, the block's particles in (z, index) order each add their term to the corners of
+  // their disc in that slice (8 corners of a row at once), the slice's field held dense while the
+  // sweep has it. Policies with per-corner data (Policy::kHasUser, SurfaceInput::user) use
+  // particleCache whatever this says.
+  sliceSplat,
+};
+
 struct SurfaceParams {
   float rc = 3.0f;         // cutoff radius Rc, world units, > 0
   float threshold = 0.2f;  // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
@@ -70,6 +85,7 @@ struct SurfaceParams {
   // (with BMI1/BMI2/POPCNT): particle-cache fill, triangle index writes and vertex interpolation.
   // Both copies give the same bits (a test checks it); the AVX2 one does fewer instructions.
   bool portableKernels = false;
+  SurfaceFieldRoute fieldRoute = SurfaceFieldRoute::particleCache;
 };
 
 // Index range [first, first + count) into SurfaceMesh::indices.

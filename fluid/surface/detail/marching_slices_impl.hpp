@@ -170,6 +170,8 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::local);
   grow(&Worker<Policy>::rowSpans);
   grow(&Worker<Policy>::offsets);
+  grow(&Worker<Policy>::splatOffsets);
+  grow(&Worker<Policy>::splatCx);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
@@ -311,6 +313,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
   for (auto& w : workers) {
     if (!w) w = std::make_unique<Worker<Policy>>();
     w->resize(su.n);
+    w->setPlanes(su.splat, su.m);
     w->peakBytes = 0;
   }
   if (st.seams.size() < st.blocks.size()) st.seams.resize(st.blocks.size());
@@ -628,6 +631,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (!status.ok()) return status;
 
   Setup su = setupFromParams(params);
+  su.splat = params.fieldRoute == SurfaceFieldRoute::sliceSplat && !Policy::kHasUser;
   prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
   su.m = marginCubes(su.rcMax, su.s);

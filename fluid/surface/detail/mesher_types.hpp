@@ -163,6 +163,9 @@ struct Slice {
   std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
   std::vector<Corner<Policy>> corners;
   std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
+  // Slice-splat route (block_slice_splat.inl): the slice's field, dense, as four planes (value,
+  // df/dx, df/dy, df/dz) of Worker::planeFloats floats each; empty on the particle-cache route.
+  std::vector<float> field;
 };
 
 struct BlockDesc {
@@ -224,6 +227,7 @@ struct Setup {
   SweepFrame frame;
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
+  bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -248,6 +252,16 @@ struct Worker {
   std::vector<Slice<Policy>*> freeSlices;
   std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
   std::vector<std::vector<std::uint32_t>> todo;  // per slab z (0..nz-1)
+  // Slice-splat route (block_slice_splat.inl). A plane holds one float per corner of a slice,
+  // rows of planeStride floats: corner (x, y) at y planeStride + planePad + x, with planePad
+  // floats before x = 0 and planePad + 7 after x = nx, so a particle's 8-wide row windows
+  // (from its anchor - reach, reach <= m) never leave the row's storage. 0 on the cache route.
+  std::size_t planeFloats = 0;
+  int planeStride = 0, planePad = 0;
+  std::vector<float> seedRing;      // seeding: value planes of the last ringSlots slices used
+  std::vector<std::int32_t> ringZ;  // slice z held by each ring slot (-1: none)
+  std::vector<float> splatOffsets;  // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
+  std::vector<double> splatCx;      // double(g0 + x) S, x in [-m, nx + m + 15]
   std::vector<std::uint32_t> slabCount;
   std::uint64_t peakBytes = 0;
 
@@ -279,6 +293,25 @@ struct Worker {
     slabCount.assign(nz + 1, 0);
   }
 
+  // The slice-splat planes for margin m (0: the cache route, no planes). Sized once per block
+  // shape, so after warm-up nothing is allocated.
+  void setPlanes(bool splat, int m) {
+    const int pad = splat ? m : 0;
+    const int stride = splat ? nx + 1 + 2 * m + 7 : 0;
+    const std::size_t floats = splat ? std::size_t(stride) * std::size_t(ny + 1) : 0;
+    if (floats == planeFloats && stride == planeStride && pad == planePad) return;
+    planeFloats = floats, planeStride = stride, planePad = pad;
+    for (auto& s : slicePool) s->field.assign(4 * floats, 0.0f);
+    // Seeding's descents start at the particles' nearest corners, which rise with their z, but a
+    // descent from a margin column may run down the whole block (block_seeding.inl): one value
+    // plane per slice when that stays under 4 MB (each slice is then summed at most once), else a
+    // ring of 2 m + 4 (refilled on such long descents).
+    const std::size_t all = std::size_t(nz + 1);
+    const std::size_t slots = !splat ? 0 : all * floats * sizeof(float) <= (4u << 20) ? all : std::size_t(2 * m + 4);
+    seedRing.assign(slots * floats, 0.0f);
+    ringZ.assign(slots, -1);
+  }
+
   Slice<Policy>* acquireSlice() {
     if (freeSlices.empty()) return acquireSliceFromNewStorage();
     Slice<Policy>* s = freeSlices.back();
@@ -289,6 +322,7 @@ struct Worker {
   Slice<Policy>* acquireSliceFromNewStorage() {
     slicePool.push_back(std::make_unique<Slice<Policy>>());
     slicePool.back()->cells.assign(columns(), SliceCell{});
+    slicePool.back()->field.resize(4 * planeFloats);
     return slicePool.back().get();
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
