@@ -1,6 +1,6 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
-//                  [--block N] [--field cache|splat] [--reps N] [--stats] [--force]
+//                  [--block N] [--field auto|cache|splat] [--reps N] [--stats] [--force]
 // Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
 // --reps N times N more extractions with the same extractor after the first (warm: scratch and
 // output capacity kept, as in a game meshing every frame) and prints their median and min, the first
@@ -86,17 +86,19 @@ int meshCommand(const Args& args) {
   app.add_option("--block", params.blockCubes, "largest block edge in cubes, 0 = auto")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
-  std::string field = "cache";
-  app.add_option("--field", field, "how corner fields are summed: cache (paper §6 cache) or splat (slice splat)")
+  std::string field = "auto";
+  app.add_option("--field", field, "how corner fields are summed: auto, cache (paper §6 cache) or splat (slice splat)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"splat", "cache"}));
+      ->check(CLI::IsMember({"auto", "cache", "splat"}));
   app.add_option("--reps", reps, "time N warm extractions after the first and print their median and min")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
-  params.fieldRoute = field == "splat" ? fluid::SurfaceFieldRoute::sliceSplat : fluid::SurfaceFieldRoute::particleCache;
+  params.fieldRoute = field == "splat"   ? fluid::SurfaceFieldRoute::sliceSplat
+                      : field == "cache" ? fluid::SurfaceFieldRoute::particleCache
+                                         : fluid::SurfaceFieldRoute::automatic;
   {
     std::string ext = std::filesystem::path(out).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -186,7 +188,7 @@ int meshCommand(const Args& args) {
     std::printf("triangles            %llu\n", static_cast<unsigned long long>(s.triangles));
     std::printf("vertices             %llu (before welding block seams)\n",
                 static_cast<unsigned long long>(s.vertices));
-    std::printf("blocks               %u\n", s.blocks);
+    std::printf("blocks               %u (%u with the slice-splat field route)\n", s.blocks, s.splatBlocks);
     std::printf("cubes visited        %llu\n", static_cast<unsigned long long>(s.cubesVisited));
     std::printf("corners evaluated    %llu (+%llu while seeding)\n",
                 static_cast<unsigned long long>(s.cornersEvaluated),

@@ -4,7 +4,8 @@
 // when CMake finds VTK 9 (Debian: `apt-get install libvtk9-dev`); not part of scripts/test.sh.
 //
 //   bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]
-//   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests)
+//   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests;
+//                                           ROUTE = ours | cache | splat | peer)
 //
 // Timings: rounds interleave ours and the peer (1 thread, then 2 threads); each timed mesh follows
 // an untimed one of the same route (steady state, as a game meshing every frame); medians of N
@@ -12,11 +13,11 @@
 // the text between the markers `<!-- bench_surface_peers -->` and `<!-- /bench_surface_peers -->`
 // of FILE (appends them when absent). --callgrind runs `valgrind --tool=callgrind` on this program
 // in --count mode for fountain and spray and adds the instruction counts (ours / peer).
+#include "bench_timing.hpp"
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "load_average.hpp"
 #include "surface_peers_vtk.hpp"
-#include "bench_timing.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -222,7 +223,11 @@ int countMode(const std::string& set, const std::string& route) {
   Ours ours;
   DensePeer peer;
   benchpeers::setThreads(1);
-  auto run = [&] { return route == "ours" ? ours.mesh1(ps, cube, 1) : peer.mesh(ps, cube, 1); };
+  // ours = default SurfaceParams; cache / splat = that field route (SurfaceFieldRoute).
+  fluid::SurfaceParams params;
+  if (route == "cache") params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+  if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
+  auto run = [&] { return route == "peer" ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
   CALLGRIND_START_INSTRUMENTATION;
   const std::size_t tris = run();
@@ -403,7 +408,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|peer\n");
+                   "       bench_surface_peers --count SET ours|cache|splat|peer\n");
       return 2;
     }
   }

@@ -35,6 +35,7 @@ fluid::SurfaceMesh expectRoutesAgree(const fluid::SurfaceInput& in, const fluid:
   const fluid::SurfaceMesh cache = meshWith(in, p, fluid::SurfaceFieldRoute::particleCache);
   const fluid::SurfaceMesh splat = meshWith(in, p, fluid::SurfaceFieldRoute::sliceSplat);
   EXPECT_GE(splat.indices.size() / 3, minTriangles) << what;
+  EXPECT_EQ(splat.stats.splatBlocks, splat.stats.blocks) << what;
   EXPECT_EQ(test_support::meshBitsDiffer(splat, cache), "") << what;
   EXPECT_EQ(splat.blocks.size(), cache.blocks.size()) << what;
   for (std::size_t b = 0; b < std::min(splat.blocks.size(), cache.blocks.size()); ++b)
@@ -74,6 +75,28 @@ TEST(FieldRoutes, SliceSplatIsTheCacheMeshBitForBitOnTheTestSets) {
       if (variant == 2) p.portableKernels = true;  // the SSE2 copy of the splat
       expectRoutesAgree(inputOf(ps), p, std::string(name) + " variant " + std::to_string(variant), 1000);
     }
+  }
+}
+
+TEST(FieldRoutes, AutomaticPicksTheSplatForDenseSetsWithSmallDiscs) {
+  // The default route: the splat on fountain and explosion (dense, ceil(Rc / S) <= 5, block fields
+  // within the volume budget), the cache on blob (ceil(Rc / S) = 10) and spray (large sparse
+  // blocks); the same bits either way.
+  const std::tuple<const char*, float, bool> sets[] = {{"fountain.xyz", 1.0f, true},
+                                                       {"blob.xyz", 0.3f, false},
+                                                       {"explosion.xyz", 0.6f, true},
+                                                       {"spray.xyz", 1.0f, false}};
+  for (const auto& [name, cube, splat] : sets) {
+    const fluid::ParticlePositions ps = loadSet(name);
+    fluid::SurfaceParams p;
+    p.cube = cube;
+    p.threads = 1;
+    EXPECT_EQ(p.fieldRoute, fluid::SurfaceFieldRoute::automatic);
+    const fluid::SurfaceMesh automatic = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::automatic);
+    const fluid::SurfaceMesh cache = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::particleCache);
+    EXPECT_EQ(automatic.stats.splatBlocks, splat ? automatic.stats.blocks : 0u) << name;
+    EXPECT_EQ(cache.stats.splatBlocks, 0u) << name;
+    EXPECT_EQ(test_support::meshBitsDiffer(automatic, cache), "") << name;
   }
 }
 

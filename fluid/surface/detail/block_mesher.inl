@@ -66,10 +66,11 @@ class BlockMesher {
     out_.vertexCount = std::uint32_t(out_.positions.size() - vertexBase_);
     out_.runCount = std::uint32_t(out_.runs.size() - runBase_);
     out_.stats.triangles = out_.indexCount / 3;
+    out_.stats.splatBlocks = su_.splat ? 1 : 0;
     out_.stats.vertices = out_.vertexCount;
     if (su_.splat)  // block particles, the seeding ring and the small tables
       out_.particleBytes = std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
-                           std::uint64_t(w_.seedRing.size()) * sizeof(float) +
+                           std::uint64_t(w_.seedRing.size() + w_.volume.size()) * sizeof(float) +
                            std::uint64_t(w_.splatOffsets.size()) * sizeof(float) +
                            std::uint64_t(w_.splatCx.size()) * sizeof(double);
     else
@@ -159,7 +160,7 @@ class BlockMesher {
     if (!w_.active[z]) {
       w_.active[z] = w_.acquireSlice();
       if (su_.splat)
-        looked_ += splatSlice<true>(w_.active[z]->field.data(), z);
+        attachPlanes(*w_.active[z], z);
       else
         fillSliceDz(*w_.active[z], z);
       ++activeSlices_;

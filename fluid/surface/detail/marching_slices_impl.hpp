@@ -172,6 +172,7 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::offsets);
   grow(&Worker<Policy>::splatOffsets);
   grow(&Worker<Policy>::splatCx);
+  grow(&Worker<Policy>::splatReach);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
@@ -382,6 +383,21 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
   }
 }
 
+// Whether the blocks sum their fields by slice splat (SurfaceFieldRoute; the plan's block shape
+// and margin set). automatic: where the splat's whole-block field fits Worker::kVolumeBytes (summed
+// once, serving seeding and the sweep) and a particle's disc row fits one or two 8-wide windows
+// (ceil(Rc / S) <= 5). Measured (docs/surface.md, "Field routes"): there it does fewer instructions
+// than the §6 cache walk on the dense sets; with larger discs (blob, Rc / S = 10) or blocks whose
+// field does not fit (spray) the cache does fewer. The choice depends on the data, S and Rc only,
+// never on the thread count, and both routes give the same bits.
+inline bool useSliceSplat(SurfaceFieldRoute route, const Setup& su) {
+  if (route != SurfaceFieldRoute::automatic) return route == SurfaceFieldRoute::sliceSplat;
+  const int r = std::max(1, int(std::ceil(su.rcMax / su.s)));
+  const std::size_t stride = std::size_t(std::max(su.n[0] + 1, 8 * ((2 * su.m + 8) / 8)));
+  const std::size_t volumeBytes = 4 * std::size_t(su.n[2] + 1) * stride * std::size_t(su.n[1] + 1) * sizeof(float);
+  return r <= 5 && volumeBytes <= Worker<PlainPolicy>::kVolumeBytes;
+}
+
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
 void runFollow(ExtractorState& st, const Setup& su);
 std::uint64_t followPeakBytes(const ExtractorState& st);
@@ -538,6 +554,7 @@ inline SurfaceStatus gatherBlocks(ExtractorState& st, const Setup& su, bool user
     stats.particlesLookedUp += o.stats.particlesLookedUp;
     stats.maxActiveSlices = std::max(stats.maxActiveSlices, o.stats.maxActiveSlices);
     stats.slabReversals += o.stats.slabReversals;
+    stats.splatBlocks += o.stats.splatBlocks;
     stats.cacheBuildMs += o.stats.cacheBuildMs;
     stats.seedMs += o.stats.seedMs;
     stats.marchMs += o.stats.marchMs;
@@ -631,7 +648,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (!status.ok()) return status;
 
   Setup su = setupFromParams(params);
-  su.splat = params.fieldRoute == SurfaceFieldRoute::sliceSplat && !Policy::kHasUser;
+
   prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
   su.m = marginCubes(su.rcMax, su.s);
@@ -643,6 +660,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   su.octant = viewOctant(params, su.frame);
+  su.splat = !Policy::kHasUser && useSliceSplat(params.fieldRoute, su);
 
   buildBlockLists(st, su, params);
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());

@@ -166,6 +166,7 @@ struct Slice {
   // Slice-splat route (block_slice_splat.inl): the slice's field, dense, as four planes (value,
   // df/dx, df/dy, df/dz) of Worker::planeFloats floats each; empty on the particle-cache route.
   std::vector<float> field;
+  const float* planes = nullptr;  // this slice's four planes: `field`, or its part of Worker::volume
 };
 
 struct BlockDesc {
@@ -253,15 +254,18 @@ struct Worker {
   std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
   std::vector<std::vector<std::uint32_t>> todo;  // per slab z (0..nz-1)
   // Slice-splat route (block_slice_splat.inl). A plane holds one float per corner of a slice,
-  // rows of planeStride floats: corner (x, y) at y planeStride + planePad + x, with planePad
-  // floats before x = 0 and planePad + 7 after x = nx, so a particle's 8-wide row windows
-  // (from its anchor - reach, reach <= m) never leave the row's storage. 0 on the cache route.
+  // rows of planeStride floats (nx + 1, or a particle's widest window of 8-wide vectors if more):
+  // corner (x, y) at y planeStride + planePad + x (planePad is 0). 0 on the cache route.
   std::size_t planeFloats = 0;
   int planeStride = 0, planePad = 0;
-  std::vector<float> seedRing;      // seeding: value planes of the last ringSlots slices used
-  std::vector<std::int32_t> ringZ;  // slice z held by each ring slot (-1: none)
-  std::vector<float> splatOffsets;  // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
-  std::vector<double> splatCx;      // double(g0 + x) S, x in [-m, nx + m + 15]
+  bool volumeMode = false;               // the block's field is summed whole into `volume` (setPlanes)
+  std::size_t sliceFieldFloats = 0;      // Slice::field size (4 planes, or 0 in volume mode)
+  std::vector<float> volume;             // volume mode: slice z's four planes at 4 z planeFloats
+  std::vector<float> seedRing;           // seeding: value planes of the last ringSlots slices used
+  std::vector<std::int32_t> ringZ;       // slice z held by each ring slot (-1: none)
+  std::vector<float> splatOffsets;       // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
+  std::vector<double> splatCx;           // double(g0 + x) S, x in [-m, nx + m + 15]
+  std::vector<std::int16_t> splatReach;  // particleReach() of each block particle
   std::vector<std::uint32_t> slabCount;
   std::uint64_t peakBytes = 0;
 
@@ -294,20 +298,29 @@ struct Worker {
   }
 
   // The slice-splat planes for margin m (0: the cache route, no planes). Sized once per block
-  // shape, so after warm-up nothing is allocated.
+  // shape, so after warm-up nothing is allocated. When the block's whole field (four planes per
+  // slice) stays under kVolumeBytes it is summed once up front (`volume`) and serves both §4
+  // seeding and the sweep; otherwise each slice the sweep takes up is summed into the slice's own
+  // planes, and seeding reads value planes of all slices (`seedRing`) or, when even those exceed
+  // kVolumeBytes, a ring of 2 m + 4 (seeding's descents start at the particles' nearest corners,
+  // which rise with their z, but one from a margin column may run down the whole block).
+  static constexpr std::size_t kVolumeBytes = std::size_t(8) << 20;
   void setPlanes(bool splat, int m) {
-    const int pad = splat ? m : 0;
-    const int stride = splat ? nx + 1 + 2 * m + 7 : 0;
+    const int pad = 0;
+    const int stride = splat ? std::max(nx + 1, 8 * ((2 * m + 8) / 8)) : 0;
     const std::size_t floats = splat ? std::size_t(stride) * std::size_t(ny + 1) : 0;
-    if (floats == planeFloats && stride == planeStride && pad == planePad) return;
-    planeFloats = floats, planeStride = stride, planePad = pad;
-    for (auto& s : slicePool) s->field.assign(4 * floats, 0.0f);
-    // Seeding's descents start at the particles' nearest corners, which rise with their z, but a
-    // descent from a margin column may run down the whole block (block_seeding.inl): one value
-    // plane per slice when that stays under 4 MB (each slice is then summed at most once), else a
-    // ring of 2 m + 4 (refilled on such long descents).
-    const std::size_t all = std::size_t(nz + 1);
-    const std::size_t slots = !splat ? 0 : all * floats * sizeof(float) <= (4u << 20) ? all : std::size_t(2 * m + 4);
+    const std::size_t slices = std::size_t(nz + 1);
+    const bool vol = splat && 4 * slices * floats * sizeof(float) <= kVolumeBytes;
+    if (floats == planeFloats && stride == planeStride && pad == planePad && vol == volumeMode &&
+        (!vol || volume.size() == 4 * slices * floats))
+      return;
+    planeFloats = floats, planeStride = stride, planePad = pad, volumeMode = vol;
+    sliceFieldFloats = vol ? 0 : 4 * floats;
+    for (auto& s : slicePool) s->field.assign(sliceFieldFloats, 0.0f);
+    volume.assign(vol ? 4 * slices * floats : 0, 0.0f);
+    const std::size_t slots = !splat || vol                                     ? 0
+                              : slices * floats * sizeof(float) <= kVolumeBytes ? slices
+                                                                                : std::size_t(2 * m + 4);
     seedRing.assign(slots * floats, 0.0f);
     ringZ.assign(slots, -1);
   }
@@ -322,7 +335,7 @@ struct Worker {
   Slice<Policy>* acquireSliceFromNewStorage() {
     slicePool.push_back(std::make_unique<Slice<Policy>>());
     slicePool.back()->cells.assign(columns(), SliceCell{});
-    slicePool.back()->field.resize(4 * planeFloats);
+    slicePool.back()->field.resize(sliceFieldFloats);
     return slicePool.back().get();
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
