@@ -56,7 +56,16 @@
     std::fill(w_.ringZ.begin(), w_.ringZ.end(), -1);
     parts_ = w_.local.data();
     if (w_.volumeMode)  // the whole block's field, once (see Worker::setPlanes)
-      for (int z = 0; z <= nz_; ++z) looked_ += splatSlice<true>(w_.volume.data() + std::size_t(z) * 4 * w_.planeFloats, z);
+      for (int z = 0; z <= nz_; ++z) {
+        float* planes = w_.volume.data() + std::size_t(z) * 4 * w_.planeFloats;
+        std::array<std::int16_t, 4>& rect = w_.volumeRect[std::size_t(z)];
+        for (int y = rect[0]; y <= rect[1]; ++y)  // what the last splat wrote (the rest is 0)
+          for (int a = 0; a < 4; ++a) {
+            float* row = planes + std::size_t(a) * w_.planeFloats + std::size_t(y) * std::size_t(w_.planeStride);
+            std::fill(row + rect[2], row + rect[3] + 1, 0.0f);
+          }
+        looked_ += splatSlice<true>(planes, z, &rect);
+      }
   }
 
   // Slice z's planes for the sweep: its part of the block's volume, or summed into its own.
@@ -89,11 +98,17 @@
   // each within 2^-24 of their value, the squares and sums add a few more such errors), so a lane
   // with float r^2 more than tol = 3e-5 L^2 from Rc_i^2 is settled by it; a window with a lane
   // inside that band is decided lane by lane in double, as influences() does.
+  // With `rect` the planes are already 0 outside what the splat writes, and the rows and columns it
+  // writes are stored there (Worker::volumeRect).
   template <bool kGrad>
-  std::uint64_t splatSlice(float* planes, int z) {
+  std::uint64_t splatSlice(float* planes, int z, std::array<std::int16_t, 4>* rect = nullptr) {
     const std::size_t pf = w_.planeFloats;
-    std::fill(planes, planes + (kGrad ? 4 : 1) * pf, 0.0f);
+    if (rect)
+      *rect = {1, 0, 1, 0};
+    else
+      std::fill(planes, planes + (kGrad ? 4 : 1) * pf, 0.0f);
     if (z < 1 || z > nz_ - 1) return 0;  // outer slices stay 0 (§3)
+    int wy0 = ny_, wy1 = 0, wx0 = w_.planeStride, wx1 = 0;  // rows and columns written
     const int m = su_.m, stride = w_.planeStride;
     const CacheParticle* parts = w_.local.data();
     const std::size_t n = w_.local.size();
@@ -126,6 +141,8 @@
       const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
       const float inBelow = float(p.rc2 - tol), outFrom = float(p.rc2 + tol);
       float* base = planes + std::size_t(xs);
+      wy0 = std::min(wy0, y0), wy1 = std::max(wy1, y1);
+      wx0 = std::min(wx0, xs), wx1 = std::max(wx1, xs + 8 * vectors - 1);
       for (int v = 0; v < vectors; ++v) {
         const int x = xs + 8 * v;
         const SplatI8 inBlock = (SplatI8)((SplatU8)(iota + (x - 1)) <= xSpan);
@@ -172,6 +189,7 @@
         }
       }
     }
+    if (rect && wy0 <= wy1) *rect = {std::int16_t(wy0), std::int16_t(wy1), std::int16_t(wx0), std::int16_t(wx1)};
     std::uint64_t terms = 0;
     for (int i = 0; i < 8; ++i) terms += std::uint32_t(counted[i]);
     return terms;

@@ -258,9 +258,12 @@ struct Worker {
   // corner (x, y) at y planeStride + planePad + x (planePad is 0). 0 on the cache route.
   std::size_t planeFloats = 0;
   int planeStride = 0, planePad = 0;
-  bool volumeMode = false;               // the block's field is summed whole into `volume` (setPlanes)
-  std::size_t sliceFieldFloats = 0;      // Slice::field size (4 planes, or 0 in volume mode)
-  std::vector<float> volume;             // volume mode: slice z's four planes at 4 z planeFloats
+  bool volumeMode = false;           // the block's field is summed whole into `volume` (setPlanes)
+  std::size_t sliceFieldFloats = 0;  // Slice::field size (4 planes, or 0 in volume mode)
+  std::vector<float> volume;         // volume mode: slice z's four planes at 4 z planeFloats
+  // Volume mode: per slice, the rows y0..y1 and columns x0..x1 ({y0, y1, x0, x1}) its last splat
+  // wrote; all else of the volume is 0, so the next block clears just these (empty: y0 > y1).
+  std::vector<std::array<std::int16_t, 4>> volumeRect;
   std::vector<float> seedRing;           // seeding: value planes of the last ringSlots slices used
   std::vector<std::int32_t> ringZ;       // slice z held by each ring slot (-1: none)
   std::vector<float> splatOffsets;       // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
@@ -318,6 +321,7 @@ struct Worker {
     sliceFieldFloats = vol ? 0 : 4 * floats;
     for (auto& s : slicePool) s->field.assign(sliceFieldFloats, 0.0f);
     volume.assign(vol ? 4 * slices * floats : 0, 0.0f);
+    volumeRect.assign(vol ? slices : 0, std::array<std::int16_t, 4>{1, 0, 1, 0});
     const std::size_t slots = !splat || vol                                     ? 0
                               : slices * floats * sizeof(float) <= kVolumeBytes ? slices
                                                                                 : std::size_t(2 * m + 4);
