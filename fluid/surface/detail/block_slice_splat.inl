@@ -26,6 +26,7 @@
   using SplatD4 = double __attribute__((vector_size(32)));
   using SplatU8 = std::uint32_t __attribute__((vector_size(32)));
   using SplatI4 = std::int32_t __attribute__((vector_size(16)));
+  int splatReachMax_ = 0;  // largest particleReach() of the block's particles (prepareSplat)
 
   // Block setup for the route: the block particles' float records (CacheParticle, as the cache has
   // them), the offsets table float(d S) and the corners' x coordinates over the padded plane rows.
@@ -40,9 +41,16 @@
     for (int i = -m; i <= nx_ + m + 15; ++i) w_.splatCx[std::size_t(i + m)] = double(g0_[0] + i) * su_.s;
     w_.local.resize(particles.size());
     w_.splatReach.resize(particles.size());
+    w_.splatBand.resize(particles.size());
+    splatReachMax_ = 0;
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
-      w_.splatReach[li] = std::int16_t(particleReach(p, su_.s));  // <= m (blockSpan)
+      const int r = particleReach(p, su_.s);  // <= m (blockSpan)
+      w_.splatReach[li] = std::int16_t(r);
+      splatReachMax_ = std::max(splatReachMax_, r);
+      // splatSlice's band around Rc_i^2 where the float r^2 does not settle a lane.
+      const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
+      w_.splatBand[li] = {float(p.rc2 - tol), float(p.rc2 + tol)};
       CacheParticle& cp = w_.local[li];
       for (int a = 0; a < 3; ++a) {
         cp.rest[a] = p.rest[a];
@@ -112,11 +120,13 @@
     const int m = su_.m, stride = w_.planeStride;
     const CacheParticle* parts = w_.local.data();
     const std::size_t n = w_.local.size();
-    // Local anchors along z that can reach slice z (reach <= m); -na[2] is non-decreasing in li.
+    // Local anchors along z that can reach slice z (|z - anchor| <= reach); -na[2] is
+    // non-decreasing in li.
+    const int reachMax = splatReachMax_;
     const CacheParticle* first =
-        std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < z - m; });
+        std::partition_point(parts, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) < z - reachMax; });
     const CacheParticle* last =
-        std::partition_point(first, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) <= z + m; });
+        std::partition_point(first, parts + n, [&](const CacheParticle& p) { return -int(p.na[2]) <= z + reachMax; });
     const float* off = w_.splatOffsets.data() + offsetRange_;
     const double* cxPad = w_.splatCx.data() + m;  // cxPad[x] = double(g0 + x) S for x in [-m, nx + m + 15]
     const std::int16_t* reachOf = w_.splatReach.data();
@@ -138,8 +148,7 @@
       const int vectors = (2 * r + 8) / 8;
       const int xs = std::min(std::max(ax - r, 0), stride - 8 * vectors);
       const float k = cp->k, s = cp->s, s4 = cp->s4, rest0 = cp->rest[0], rest1 = cp->rest[1];
-      const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
-      const float inBelow = float(p.rc2 - tol), outFrom = float(p.rc2 + tol);
+      const float inBelow = w_.splatBand[li][0], outFrom = w_.splatBand[li][1];
       float* base = planes + std::size_t(xs);
       wy0 = std::min(wy0, y0), wy1 = std::max(wy1, y1);
       wx0 = std::min(wx0, xs), wx1 = std::max(wx1, xs + 8 * vectors - 1);

@@ -173,6 +173,7 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::splatOffsets);
   grow(&Worker<Policy>::splatCx);
   grow(&Worker<Policy>::splatReach);
+  grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.

@@ -264,11 +264,12 @@ struct Worker {
   // Volume mode: per slice, the rows y0..y1 and columns x0..x1 ({y0, y1, x0, x1}) its last splat
   // wrote; all else of the volume is 0, so the next block clears just these (empty: y0 > y1).
   std::vector<std::array<std::int16_t, 4>> volumeRect;
-  std::vector<float> seedRing;           // seeding: value planes of the last ringSlots slices used
-  std::vector<std::int32_t> ringZ;       // slice z held by each ring slot (-1: none)
-  std::vector<float> splatOffsets;       // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
-  std::vector<double> splatCx;           // double(g0 + x) S, x in [-m, nx + m + 15]
-  std::vector<std::int16_t> splatReach;  // particleReach() of each block particle
+  std::vector<float> seedRing;                  // seeding: value planes of the last ringSlots slices used
+  std::vector<std::int32_t> ringZ;              // slice z held by each ring slot (-1: none)
+  std::vector<float> splatOffsets;              // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
+  std::vector<double> splatCx;                  // double(g0 + x) S, x in [-m, nx + m + 15]
+  std::vector<std::int16_t> splatReach;         // particleReach() of each block particle
+  std::vector<std::array<float, 2>> splatBand;  // per block particle: float(Rc_i^2 -/+ tol) (splatSlice)
   std::vector<std::uint32_t> slabCount;
   std::uint64_t peakBytes = 0;
 
