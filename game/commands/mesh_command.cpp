@@ -197,13 +197,16 @@ int meshCommand(const Args& args) {
     std::printf("slices alive (max)   %u, sweep reversals %llu\n", s.maxActiveSlices,
                 static_cast<unsigned long long>(s.slabReversals));
     std::printf("corner caches        %.3f MB (largest block)\n", double(s.cornerCacheBytesPeakBlock) / 1e6);
-    std::printf("particle cache       %.3f MB (largest block)\n", double(s.particleCacheBytesPeakBlock) / 1e6);
+    std::printf("particle cache       %.3f MB (largest block%s)\n", double(s.particleCacheBytesPeakBlock) / 1e6,
+                s.splatBlocks ? "; slice splat: its field planes" : "");
     std::printf("working memory       %.3f MB (all workers)\n", double(s.workingBytesAllWorkers) / 1e6);
     std::printf("time                 %.3f ms\n", ms);
     // The block phases are summed over blocks: on several threads they can add up to more than the time.
     const char* summed = s.blocks > 1 ? ", summed over blocks" : "";
     std::printf("  prepare            %.3f ms (checks, particle sort, block lists)\n", s.prepareMs);
-    std::printf("  particle cache     %.3f ms (§6 cache%s)\n", s.cacheBuildMs, summed);
+    // With the slice-splat route the block setup phase sums the fields instead of building §6 caches.
+    std::printf("  particle cache     %.3f ms (%s%s)\n", s.cacheBuildMs,
+                s.splatBlocks ? "§6 caches, or slice splat's up-front block fields" : "§6 cache", summed);
     std::printf("  seeding            %.3f ms (§4 seeding%s)\n", s.seedMs, summed);
     std::printf("  march              %.3f ms (with corner evaluations%s)\n", s.marchMs, summed);
     std::printf("  gather             %.3f ms\n", s.gatherMs);
