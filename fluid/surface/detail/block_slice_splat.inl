@@ -86,10 +86,12 @@
     }
   }
 
-  // Whether any lane of an int mask is set.
-  static bool anyLane(SplatI8 m) {
+  // Whether any lane of an int mask is set. (By reference: a 32-byte vector by value would be
+  // passed differently with and without AVX where not inlined, GCC's -Wpsabi note.)
+  static bool anyLane(const SplatI8& m) {
 #if defined(FLUID_SURFACE_IN_AVX2_COPY)
-    return !_mm256_testz_si256(reinterpret_cast<__m256i&>(m), reinterpret_cast<__m256i&>(m));
+    const __m256i v = reinterpret_cast<const __m256i&>(m);
+    return !_mm256_testz_si256(v, v);
 #else
     const SplatI4 lo = __builtin_shufflevector(m, m, 0, 1, 2, 3), hi = __builtin_shufflevector(m, m, 4, 5, 6, 7);
     const SplatI4 o = lo | hi;
