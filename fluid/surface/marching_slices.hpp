@@ -130,7 +130,7 @@ struct SurfaceStats {
   // extractor's marching slices; 0 for the approach-2 baseline) and summed over blocks, so on
   // several threads they add up to more than the call's wall time.
   double prepareMs = 0;     // checks, sweep frame, particles sorted into (z, index) order, block lists (§3)
-  double cacheBuildMs = 0;  // §6 particle caches of all blocks
+  double cacheBuildMs = 0;  // §6 particle caches of all blocks (slice splat: block setup and up-front fields)
   double seedMs = 0;        // §4 seeding
   double marchMs = 0;       // Alg. 1 sweeps: corner evaluations (§6 lookups), cubes, triangles, slab order
   double gatherMs = 0;      // block outputs joined into the mesh
