@@ -46,6 +46,22 @@ enum class SurfaceOrder : std::uint8_t {
   frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
+// How a corner's field is summed. Both routes are exact (every particle within Rc_i, summed in
+// (z, index) order with the same float expressions), so they give the same bits and the same mesh
+// (tests compare them); they differ in cost. docs/surface.md ("Field routes") has the measurements.
+enum class SurfaceFieldRoute : std::uint8_t {
+  // sliceSplat where the block's whole field fits 8 MB per worker and ceil(Rc / S) <= 5 (dense
+  // sets, small discs), else particleCache. Decided per extract() from the block plan, S and Rc.
+  automatic,
+  // The paper's §6 2D-projection 1D-lookup cache, walked per corner the sweep needs (Figure 7).
+  particleCache,
+  // Per slice, the block's particles in (z, index) order each add their term to the corners of
+  // their disc in that slice (8 corners of a row at once); the whole block's field when it fits
+  // 8 MB per worker, else each slice as the sweep takes it up. Policies with per-corner data
+  // (Policy::kHasUser, SurfaceInput::user) use particleCache whatever this says.
+  sliceSplat,
+};
+
 struct SurfaceParams {
   float rc = 3.0f;         // cutoff radius Rc, world units, > 0
   float threshold = 0.2f;  // T, in (0, 0.25 * max strength); 0.2 gives radius 0.975 Rc/3
@@ -70,6 +86,7 @@ struct SurfaceParams {
   // (with BMI1/BMI2/POPCNT): particle-cache fill, triangle index writes and vertex interpolation.
   // Both copies give the same bits (a test checks it); the AVX2 one does fewer instructions.
   bool portableKernels = false;
+  SurfaceFieldRoute fieldRoute = SurfaceFieldRoute::automatic;
 };
 
 // Index range [first, first + count) into SurfaceMesh::indices.
@@ -101,6 +118,7 @@ struct SurfaceStats {
   std::uint64_t triangles = 0;
   std::uint64_t vertices = 0;
   std::uint32_t blocks = 0;
+  std::uint32_t splatBlocks = 0;      // blocks whose field was summed by slice splat (SurfaceFieldRoute)
   std::uint32_t maxActiveSlices = 0;  // most slice caches alive at once in one block
   std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
   // Working memory, bytes actually touched: largest single block, and summed over all blocks
@@ -112,7 +130,7 @@ struct SurfaceStats {
   // extractor's marching slices; 0 for the approach-2 baseline) and summed over blocks, so on
   // several threads they add up to more than the call's wall time.
   double prepareMs = 0;     // checks, sweep frame, particles sorted into (z, index) order, block lists (§3)
-  double cacheBuildMs = 0;  // §6 particle caches of all blocks
+  double cacheBuildMs = 0;  // §6 particle caches of all blocks (slice splat: block setup and up-front fields)
   double seedMs = 0;        // §4 seeding
   double marchMs = 0;       // Alg. 1 sweeps: corner evaluations (§6 lookups), cubes, triangles, slab order
   double gatherMs = 0;      // block outputs joined into the mesh

@@ -1,6 +1,6 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
-//                  [--block N] [--reps N] [--stats] [--force]
+//                  [--block N] [--field auto|cache|splat] [--reps N] [--stats] [--force]
 // Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
 // --reps N times N more extractions with the same extractor after the first (warm: scratch and
 // output capacity kept, as in a game meshing every frame) and prints their median and min, the first
@@ -86,12 +86,19 @@ int meshCommand(const Args& args) {
   app.add_option("--block", params.blockCubes, "largest block edge in cubes, 0 = auto")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
+  std::string field = "auto";
+  app.add_option("--field", field, "how corner fields are summed: auto, cache (paper §6 cache) or splat (slice splat)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cache", "splat"}));
   app.add_option("--reps", reps, "time N warm extractions after the first and print their median and min")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
+  params.fieldRoute = field == "splat"   ? fluid::SurfaceFieldRoute::sliceSplat
+                      : field == "cache" ? fluid::SurfaceFieldRoute::particleCache
+                                         : fluid::SurfaceFieldRoute::automatic;
   {
     std::string ext = std::filesystem::path(out).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -181,7 +188,7 @@ int meshCommand(const Args& args) {
     std::printf("triangles            %llu\n", static_cast<unsigned long long>(s.triangles));
     std::printf("vertices             %llu (before welding block seams)\n",
                 static_cast<unsigned long long>(s.vertices));
-    std::printf("blocks               %u\n", s.blocks);
+    std::printf("blocks               %u (%u with the slice-splat field route)\n", s.blocks, s.splatBlocks);
     std::printf("cubes visited        %llu\n", static_cast<unsigned long long>(s.cubesVisited));
     std::printf("corners evaluated    %llu (+%llu while seeding)\n",
                 static_cast<unsigned long long>(s.cornersEvaluated),
@@ -190,13 +197,16 @@ int meshCommand(const Args& args) {
     std::printf("slices alive (max)   %u, sweep reversals %llu\n", s.maxActiveSlices,
                 static_cast<unsigned long long>(s.slabReversals));
     std::printf("corner caches        %.3f MB (largest block)\n", double(s.cornerCacheBytesPeakBlock) / 1e6);
-    std::printf("particle cache       %.3f MB (largest block)\n", double(s.particleCacheBytesPeakBlock) / 1e6);
+    std::printf("particle cache       %.3f MB (largest block%s)\n", double(s.particleCacheBytesPeakBlock) / 1e6,
+                s.splatBlocks ? "; slice splat: its field planes" : "");
     std::printf("working memory       %.3f MB (all workers)\n", double(s.workingBytesAllWorkers) / 1e6);
     std::printf("time                 %.3f ms\n", ms);
     // The block phases are summed over blocks: on several threads they can add up to more than the time.
     const char* summed = s.blocks > 1 ? ", summed over blocks" : "";
     std::printf("  prepare            %.3f ms (checks, particle sort, block lists)\n", s.prepareMs);
-    std::printf("  particle cache     %.3f ms (§6 cache%s)\n", s.cacheBuildMs, summed);
+    // With the slice-splat route the block setup phase sums the fields instead of building §6 caches.
+    std::printf("  particle cache     %.3f ms (%s%s)\n", s.cacheBuildMs,
+                s.splatBlocks ? "§6 caches, or slice splat's up-front block fields" : "§6 cache", summed);
     std::printf("  seeding            %.3f ms (§4 seeding%s)\n", s.seedMs, summed);
     std::printf("  march              %.3f ms (with corner evaluations%s)\n", s.marchMs, summed);
     std::printf("  gather             %.3f ms\n", s.gatherMs);

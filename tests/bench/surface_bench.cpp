@@ -11,13 +11,13 @@
 // machine load hits them alike; the median is reported. In the Figure 7 and thread-scaling tables
 // each timed extraction follows an untimed one of the same method (timeWarmMs). Peer timings in the bar check are the
 // figures of tests/data/README.md (measured by others on this machine), quoted, not measured here.
-#include "fluid/surface/baselines.hpp"
-#include "fluid/surface/marching_slices.hpp"
-#include "mesh_checks.hpp"
-#include "load_average.hpp"
-#include "order_metrics.hpp"
 #include "bench_csv.hpp"
 #include "bench_timing.hpp"
+#include "fluid/surface/baselines.hpp"
+#include "fluid/surface/marching_slices.hpp"
+#include "load_average.hpp"
+#include "mesh_checks.hpp"
+#include "order_metrics.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -165,8 +165,10 @@ int main(int argc, char** argv) {
      << "cmake --build build/dev --target bench_surface && build/dev/tests/bench/bench_surface --reps " << reps
      << " --out docs/surface.md --force`). Every figure below comes from that run on this machine (" << hw
      << " hardware threads); timings are medians of " << reps
-     << " repetitions with the approaches interleaved, and in the Figure 7 and thread-scaling tables each timed extraction "
-        "directly follows an untimed one of the same method (steady state, as when a game meshes every frame). Rc = 3, T = 0.2, blockCubes = 0 (auto: blocks of up to max(128, "
+     << " repetitions with the approaches interleaved, and in the Figure 7 and thread-scaling tables each timed "
+        "extraction "
+        "directly follows an untimed one of the same method (steady state, as when a game meshes every frame). Rc = 3, "
+        "T = 0.2, blockCubes = 0 (auto: blocks of up to max(128, "
         "12 ceil(Rc/S)) cubes for approach 1 and max(64, 12 ceil(Rc/S)) for approach 2, whose full 3D corner array "
         "grows with the cube of the block edge; a set fitting one block is halved along its longest axis when the "
         "halves stay at least 5 margins wide) unless stated. The machine is shared, so absolute times are noisy; "
@@ -203,6 +205,7 @@ int main(int argc, char** argv) {
     fluid::SurfaceParams p1;
     p1.cube = cfg.cube;
     p1.threads = 1;
+    p1.fieldRoute = fluid::SurfaceFieldRoute::particleCache;  // the paper's §6 cache: Figure 7 is about it
     fluid::SurfaceParams pN = p1;
     pN.threads = hw;
     fluid::SurfaceExtractor ex1, exN;
@@ -331,7 +334,8 @@ int main(int argc, char** argv) {
           "per entry and a load of the particle record per term. The counts behind that trade for a set (cubes, "
           "corners evaluated, particles looked up) are printed by `fluiddemo mesh --in tests/data/SET.xyz "
           "--out /tmp/m.obj --cube S --stats`.\n\n"
-       << "| set | S | ms per mesh | prepare | particle cache | seeding | march + corner evaluations | gather | peer ms "
+       << "| set | S | ms per mesh | prepare | particle cache | seeding | march + corner evaluations | gather | peer "
+          "ms "
           "(whole mesh) | particle cache / peer |\n"
        << "|---|---|---|---|---|---|---|---|---|---|\n";
     std::size_t i = 0;
@@ -366,6 +370,7 @@ int main(int argc, char** argv) {
         fluid::SurfaceParams p;
         p.cube = cfg.cube;
         p.threads = t;
+        p.fieldRoute = fluid::SurfaceFieldRoute::particleCache;  // as the Figure 7 table
         const double ms_ = timeWarmMs([&] { exs[t - 1].extract(in, p, ms[t - 1]); });
         if (i) ts[t - 1].push_back(ms_);
       }
@@ -459,8 +464,9 @@ int main(int argc, char** argv) {
   };
   if (!accuracyCsv.empty()) {
     md << "\n![volume error and largest vertex error against ms per mesh, log-log, one point per cube size S]("
-       << std::filesystem::path(outPath).stem().string() << "_accuracy.png)\n\nChart command: `scripts/plots/surface_charts.py "
-       << outPath << "` (draws both charts from the CSVs this run wrote beside the page).\n";
+       << std::filesystem::path(outPath).stem().string()
+       << "_accuracy.png)\n\nChart command: `scripts/plots/surface_charts.py " << outPath
+       << "` (draws both charts from the CSVs this run wrote beside the page).\n";
     notDrawn(undrawable);
   }
 
@@ -516,16 +522,17 @@ int main(int argc, char** argv) {
     md << "| " << cfg.label << " | " << cfg.cube << " | " << fmt("%.4f", sNone / views) << " | "
        << fmt("%.4f", sB / views) << " | " << fmt("%.4f", wB) << " | " << fmt("%.4f", sE / views) << " | "
        << fmt("%.2f", median(tNone)) << " | " << fmt("%.2f", median(tB)) << " | " << fmt("%.2f", median(tE)) << " |\n";
-    for (const auto& [method, ms, fraction] : {std::tuple{"none", median(tNone), sNone / views},
-                                               std::tuple{"b2f", median(tB), sB / views},
-                                               std::tuple{"b2f exact", median(tE), sE / views}}) {
+    for (const auto& [method, ms, fraction] :
+         {std::tuple{"none", median(tNone), sNone / views}, std::tuple{"b2f", median(tB), sB / views},
+          std::tuple{"b2f exact", median(tE), sE / views}}) {
       orderTable.rows.push_back(
           {cfg.label, fmt("%g", cfg.cube), method, benchcsv::number(ms), benchcsv::number(fraction)});
       undrawable += !benchcsv::drawableOnLogAxes(ms, fraction);
     }
   }
   if (!orderCsv.empty()) {
-    md << "\n![mean fraction of triangle pairs out of order against ms per mesh, log-log, per set: none, b2f, b2f exact]("
+    md << "\n![mean fraction of triangle pairs out of order against ms per mesh, log-log, per set: none, b2f, b2f "
+          "exact]("
        << std::filesystem::path(outPath).stem().string() << "_order.png)\n";
     notDrawn(undrawable);
   }

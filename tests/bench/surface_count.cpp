@@ -12,7 +12,8 @@
 // SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto. SURFACE_COUNT_RATIO=N times N
 // interleaved rounds of approach 1 and approach 3 (hashed baseline) on the calling thread's CPU
 // clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
-// bench_surface runs (1 thread). SURFACE_COUNT_PORTABLE=1 sets SurfaceParams::portableKernels
+// bench_surface runs (1 thread), on the §6 cache route (SURFACE_COUNT_ROUTE=auto|splat for the others).
+// SURFACE_COUNT_PORTABLE=1 sets SurfaceParams::portableKernels
 // (the SSE2 particle-cache fill even where the CPU has AVX2), to compare the two paths.
 // SURFACE_COUNT_SCALING=N times N interleaved rounds of approach 1 on 1 thread and on
 // SURFACE_COUNT_THREADS (default 2) threads, wall clock, each timed extraction right after an
@@ -23,11 +24,11 @@
 #include "fluid/surface/marching_slices.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <chrono>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,12 @@ int main(int argc, char** argv) {
     params.threads = std::max(1, std::atoi(t));                                              // timing checks
   if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
   if (const char* pk = std::getenv("SURFACE_COUNT_PORTABLE")) params.portableKernels = std::atoi(pk) != 0;
+  // The §6 cache route (bench_surface's Figure 7 tables use it); SURFACE_COUNT_ROUTE=auto|splat for the others.
+  params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+  if (const char* r = std::getenv("SURFACE_COUNT_ROUTE"))
+    params.fieldRoute = std::string(r) == "splat"  ? fluid::SurfaceFieldRoute::sliceSplat
+                        : std::string(r) == "auto" ? fluid::SurfaceFieldRoute::automatic
+                                                   : fluid::SurfaceFieldRoute::particleCache;
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
@@ -132,8 +139,9 @@ int main(int argc, char** argv) {
     std::sort(tn.begin(), tn.end());
     std::sort(ratio.begin(), ratio.end());
     const double a = t1[t1.size() / 2], b = tn[tn.size() / 2];
-    std::printf("wall ms median of %d: 1 thr %.3f, %d thr %.3f, ratio of medians %.3f, median of per-round ratios %.3f%s\n",
-                rounds, a, pn.threads, b, a / b, ratio[ratio.size() / 2], same ? "" : " MESHES DIFFER");
+    std::printf(
+        "wall ms median of %d: 1 thr %.3f, %d thr %.3f, ratio of medians %.3f, median of per-round ratios %.3f%s\n",
+        rounds, a, pn.threads, b, a / b, ratio[ratio.size() / 2], same ? "" : " MESHES DIFFER");
   }
   return 0;
 }

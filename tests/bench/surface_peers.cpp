@@ -4,7 +4,8 @@
 // when CMake finds VTK 9 (Debian: `apt-get install libvtk9-dev`); not part of scripts/test.sh.
 //
 //   bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]
-//   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests)
+//   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests;
+//                                           ROUTE = ours | cache | splat | peer)
 //
 // Timings: rounds interleave ours and the peer (1 thread, then 2 threads); each timed mesh follows
 // an untimed one of the same route (steady state, as a game meshing every frame); medians of N
@@ -12,11 +13,11 @@
 // the text between the markers `<!-- bench_surface_peers -->` and `<!-- /bench_surface_peers -->`
 // of FILE (appends them when absent). --callgrind runs `valgrind --tool=callgrind` on this program
 // in --count mode for fountain and spray and adds the instruction counts (ours / peer).
+#include "bench_timing.hpp"
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "load_average.hpp"
 #include "surface_peers_vtk.hpp"
-#include "bench_timing.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -222,7 +223,11 @@ int countMode(const std::string& set, const std::string& route) {
   Ours ours;
   DensePeer peer;
   benchpeers::setThreads(1);
-  auto run = [&] { return route == "ours" ? ours.mesh1(ps, cube, 1) : peer.mesh(ps, cube, 1); };
+  // ours = default SurfaceParams; cache / splat = that field route (SurfaceFieldRoute).
+  fluid::SurfaceParams params;
+  if (route == "cache") params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+  if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
+  auto run = [&] { return route == "peer" ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
   CALLGRIND_START_INSTRUMENTATION;
   const std::size_t tris = run();
@@ -264,9 +269,12 @@ void setsTables(int reps, std::ostringstream& md) {
   bool allMet = true, allMetCpu = true;
   std::ostringstream cpuTable;
   for (Set& set : sets) {
-    Ours o1, o2;
+    Ours o1, o2, oc, os;  // oc, os: one thread with the field route fixed (cache, splat)
     DensePeer p1, p2;
-    std::vector<double> to1, to2, tp1, tp2, co1, cp1;
+    std::vector<double> to1, to2, tp1, tp2, co1, cp1, cc1, cs1;
+    fluid::SurfaceParams cacheRoute, splatRoute;
+    cacheRoute.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+    splatRoute.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
     std::size_t tri[4] = {};
     for (int r = 0; r < reps; ++r) {
       // Two threads first (VTK's thread setting caps the process, see setThreads), then one.
@@ -277,12 +285,16 @@ void setsTables(int reps, std::ostringstream& md) {
       to2.push_back(timeMs([&] { tri[2] = o2.mesh1(set.ps, set.cube, 2); }));
       o1.mesh1(set.ps, set.cube, 1);
       to1.push_back(timeCpuMs([&] { tri[0] = o1.mesh1(set.ps, set.cube, 1); }, co1));
+      oc.mesh1(set.ps, set.cube, 1, cacheRoute);
+      timeCpuMs([&] { oc.mesh1(set.ps, set.cube, 1, cacheRoute); }, cc1);
+      os.mesh1(set.ps, set.cube, 1, splatRoute);
+      timeCpuMs([&] { os.mesh1(set.ps, set.cube, 1, splatRoute); }, cs1);
       benchpeers::setThreads(1);
       p1.mesh(set.ps, set.cube, 1);
       tp1.push_back(timeCpuMs([&] { tri[1] = p1.mesh(set.ps, set.cube, 1); }, cp1));
     }
     const double mo1 = median(to1), mp1 = median(tp1), mo2 = median(to2), mp2 = median(tp2);
-    const double mc1 = median(co1), mq1 = median(cp1);
+    const double mc1 = median(co1), mq1 = median(cp1), mcc = median(cc1), mcs = median(cs1);
     const bool met = mo1 <= 0.8 * mp1, metCpu = mc1 <= 0.8 * mq1;
     allMet = allMet && met && tri[0] == tri[1];
     allMetCpu = allMetCpu && metCpu && tri[0] == tri[1];
@@ -295,13 +307,19 @@ void setsTables(int reps, std::ostringstream& md) {
        << fmt("%.3f", mp2) << " | " << fmt("%.2f", mo2 / mp2) << " | " << fmt("%.2f", mo1 / mo2) << "x | "
        << fmt("%.3f", o2.mesh.stats.workingBytesAllWorkers / 1e6) << " | " << fmt("%.3f", p1.bytes() / 1e6) << " | "
        << allocs[std::size_t(&set - sets.data())][0] << " / " << allocs[std::size_t(&set - sets.data())][1] << " |\n";
-    cpuTable << "| " << set.name << " | " << fmt("%.3f", mc1) << " | " << fmt("%.3f", mq1) << " | "
-             << fmt("%.2f", mc1 / mq1) << (metCpu ? " (met)" : " (**not met**)") << " |\n";
+    cpuTable << "| " << set.name << " | " << (o1.mesh.stats.splatBlocks ? "slice splat" : "particle cache") << " | "
+             << fmt("%.3f", mc1) << " | " << fmt("%.3f", mq1) << " | " << fmt("%.2f", mc1 / mq1)
+             << (metCpu ? " (met)" : " (**not met**)") << " | " << fmt("%.3f", mcc) << " | " << fmt("%.3f", mcs)
+             << " | " << fmt("%.2f", mcc / mq1) << " | " << fmt("%.2f", mcs / mq1) << " |\n";
   }
   md << "\nThe same one-thread meshes timed by the CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`, "
         "medians of the same rounds): both routes run on the calling thread there, and this leaves out the time it "
         "waited for a core, which dominates the wall-clock figures on a loaded machine.\n\n"
-        "| set | ours CPU ms | peer CPU ms | ours / peer (CPU) |\n|---|---|---|---|\n"
+        "Ours uses the default `SurfaceFieldRoute::automatic`, which picks the route in the second column; the last "
+        "four columns time both field routes forced, in the same rounds (both give the same bits).\n\n"
+        "| set | route picked | ours CPU ms | peer CPU ms | ours / peer (CPU) | particle cache CPU ms | slice splat "
+        "CPU "
+        "ms | cache / peer | splat / peer |\n|---|---|---|---|---|---|---|---|---|\n"
      << cpuTable.str();
   md << "\nAll four one-thread ratios at most 0.8 with equal triangles: wall clock **" << (allMet ? "met" : "not met")
      << "**, CPU time **" << (allMetCpu ? "met" : "not met") << "**.\n";
@@ -310,12 +328,18 @@ void setsTables(int reps, std::ostringstream& md) {
 // Instruction counts of one warm mesh (fountain, spray) by each route, from callgrind runs of `self`.
 void callgrindTable(const char* self, std::ostringstream& md) {
   md << "\nInstruction counts (callgrind, one warm mesh on one thread between client requests: "
-        "`bench_surface_peers --count SET ours|peer` under `valgrind --tool=callgrind --instr-atstart=no`):\n\n"
-        "| set | ours Ir | peer Ir | ours / peer |\n|---|---|---|---|\n";
-  for (const char* set : {"fountain", "spray"}) {
-    const double a = callgrindIr(self, set, "ours"), b = callgrindIr(self, set, "peer");
-    std::printf("callgrind %s: ours %.0f peer %.0f ratio %.3f\n", set, a, b, a / b);
-    md << "| " << set << " | " << fmt("%.0f", a) << " | " << fmt("%.0f", b) << " | " << fmt("%.3f", a / b) << " |\n";
+        "`bench_surface_peers --count SET ours|cache|splat|peer` under `valgrind --tool=callgrind --instr-atstart=no`; "
+        "ours = the default automatic route, cache / splat = that field route forced; a memset counts about one "
+        "instruction per byte there):\n\n"
+        "| set | ours Ir | particle cache Ir | slice splat Ir | peer Ir | ours / peer | cache / peer | splat / peer |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+  for (const char* set : {"fountain", "blob", "explosion", "spray"}) {
+    const double a = callgrindIr(self, set, "ours"), c = callgrindIr(self, set, "cache"),
+                 sp = callgrindIr(self, set, "splat"), b = callgrindIr(self, set, "peer");
+    std::printf("callgrind %s: ours %.0f cache %.0f splat %.0f peer %.0f ratio %.3f\n", set, a, c, sp, b, a / b);
+    md << "| " << set << " | " << fmt("%.0f", a) << " | " << fmt("%.0f", c) << " | " << fmt("%.0f", sp) << " | "
+       << fmt("%.0f", b) << " | " << fmt("%.3f", a / b) << " | " << fmt("%.3f", c / b) << " | " << fmt("%.3f", sp / b)
+       << " |\n";
   }
 }
 
@@ -403,7 +427,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|peer\n");
+                   "       bench_surface_peers --count SET ours|cache|splat|peer\n");
       return 2;
     }
   }
@@ -418,7 +442,8 @@ int main(int argc, char** argv) {
      << "the particles' bounding box plus Rc (same f, same global lattice, rows of each particle's ball, split in "
      << "z-slabs over the threads), then VTK 9.1 `vtkFlyingEdges3D` with normals (TBB backend, "
      << "`vtkSMPTools::Initialize(threads)`). Ours = `SurfaceExtractor` with default `SurfaceParams` (Rc = 3, "
-     << "T = 0.2). Rounds interleave the two routes; every timed mesh follows an untimed one of the same route; "
+     << "T = 0.2; field route `automatic`: slice splat or the paper's §6 particle cache, per the CPU table below). "
+        "Rounds interleave the two routes; every timed mesh follows an untimed one of the same route; "
      << "medians of " << reps << " rounds, wall clock. Bars (issue 20): ours / peer <= 0.8 on one thread; two threads "
      << ">= 1.7x one thread on spray and explosion; working memory on spray < 2.4 MB; no allocation per mesh after "
      << "warm-up (operator new calls counted over 20 meshes after 3 untimed ones, before VTK has run).\n\n"

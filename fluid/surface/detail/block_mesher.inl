@@ -43,7 +43,10 @@ class BlockMesher {
     nIndices_ = indexBase_;
     const PhaseClock::time_point start = PhaseClock::now();
     begin(block);
-    buildParticleCache(particles);
+    if (su_.splat)
+      prepareSplat(particles);
+    else
+      buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
     seed(particles);
     seedFromNeighbours();
@@ -63,11 +66,18 @@ class BlockMesher {
     out_.vertexCount = std::uint32_t(out_.positions.size() - vertexBase_);
     out_.runCount = std::uint32_t(out_.runs.size() - runBase_);
     out_.stats.triangles = out_.indexCount / 3;
+    out_.stats.splatBlocks = su_.splat ? 1 : 0;
     out_.stats.vertices = out_.vertexCount;
-    out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
-                         std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
-                         std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
-                         std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
+    if (su_.splat)  // block particles, the seeding ring and the small tables
+      out_.particleBytes = std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
+                           std::uint64_t(w_.seedRing.size() + w_.volume.size()) * sizeof(float) +
+                           std::uint64_t(w_.splatOffsets.size()) * sizeof(float) +
+                           std::uint64_t(w_.splatCx.size()) * sizeof(double);
+    else
+      out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
+                           std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use
+                           std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
+                           std::uint64_t(w_.rowSpans.size()) * sizeof(w_.rowSpans[0]);
     out_.cornerBytes = peakCornerBytes_;
     w_.peakBytes = std::max(w_.peakBytes, out_.particleBytes + out_.cornerBytes);
   }
@@ -143,12 +153,16 @@ class BlockMesher {
   }
 
 #include "fluid/surface/detail/block_particle_cache.inl"
+#include "fluid/surface/detail/block_slice_splat.inl"
 #include "fluid/surface/detail/block_seeding.inl"
 
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {
       w_.active[z] = w_.acquireSlice();
-      fillSliceDz(*w_.active[z], z);
+      if (su_.splat)
+        attachPlanes(*w_.active[z], z);
+      else
+        fillSliceDz(*w_.active[z], z);
       ++activeSlices_;
       activeLo_ = std::min(activeLo_, z);
       activeHi_ = std::max(activeHi_, z);
@@ -178,7 +192,8 @@ class BlockMesher {
     for (int i = activeLo_; i <= activeHi_; ++i)  // (every active slice lies in that range)
       if (w_.active[i])
         bytes += w_.active[i]->cells.size() * sizeof(SliceCell) +
-                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz);
+                 w_.active[i]->corners.size() * sizeof(Corner<Policy>) + w_.active[i]->dz.size() * sizeof(SliceDz) +
+                 w_.active[i]->field.size() * sizeof(float);
     (void)z;
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }
@@ -199,7 +214,7 @@ class BlockMesher {
     const std::uint32_t id = cellLo.corner;
     if (id) [[likely]]
       return id - 1;
-    if (!cellHi.corner && (interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
+    if (!cellHi.corner && (su_.splat || interior || (interiorCorner(x, y, z) && interiorCorner(x, y, z + 1))))
       return evaluatePairInto(lo, cellLo, hi, cellHi, x, y, z) - 1;
     return evaluateInto(lo, cellLo, x, y, z, interior) - 1;
   }
@@ -209,7 +224,9 @@ class BlockMesher {
   [[gnu::noinline]] std::uint32_t evaluateInto(Slice<Policy>& slice, SliceCell& cell, int x, int y, int z,
                                                bool interior) {
     Corner<Policy> c;
-    if (interior || interiorCorner(x, y, z))
+    if (su_.splat)
+      cornerFromPlanes(slice, x, y, c);  // the full sum also at margin corners: the same sign (§3)
+    else if (interior || interiorCorner(x, y, z))
       evaluate<true>(x, y, z, slice.dz.data(), c);
     else
       evaluate<false>(x, y, z, slice.dz.data(), c);  // margin: only the sign is needed (§3)

@@ -565,8 +565,14 @@
     typename Policy::CornerData user0{}, user1{};
     std::uint64_t looked = 0;
     const std::size_t k = col(x, y);
-    const std::uint32_t begin = colStart_[k], end = colStart_[k + 1];
-    if (begin != end) {
+    const std::uint32_t begin = su_.splat ? 0 : colStart_[k], end = su_.splat ? 0 : colStart_[k + 1];
+    if (su_.splat) {  // slice-splat route: both corners from their slices' planes (same order of stores)
+      Corner<Policy> a, b;
+      cornerFromPlanes(lo, x, y, a);
+      cornerFromPlanes(hi, x, y, b);
+      v0 = a.value, gx0 = a.g[0], gy0 = a.g[1], gz0 = a.g[2];
+      v1 = b.value, gx1 = b.g[0], gy1 = b.g[1], gz1 = b.g[2];
+    } else if (begin != end) {
       const std::uint32_t cur = seekColumn(k, begin, end, z);  // start of z's walk
       const ColumnEntry* e = entries_;
       const float* off = off0_;

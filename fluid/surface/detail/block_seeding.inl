@@ -5,6 +5,7 @@
   bool insideAt(int x, int y, int z) {
     std::uint64_t looked = 0;
     ++out_.stats.seedEvaluations;
+    if (su_.splat) return seedFieldAt(x, y, z) > su_.threshold;
     return sumUntilAbove<false>(x, y, z, nullptr, looked) > su_.threshold;
   }
 

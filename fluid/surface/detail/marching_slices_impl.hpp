@@ -170,6 +170,10 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::local);
   grow(&Worker<Policy>::rowSpans);
   grow(&Worker<Policy>::offsets);
+  grow(&Worker<Policy>::splatOffsets);
+  grow(&Worker<Policy>::splatCx);
+  grow(&Worker<Policy>::splatReach);
+  grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
@@ -311,6 +315,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
   for (auto& w : workers) {
     if (!w) w = std::make_unique<Worker<Policy>>();
     w->resize(su.n);
+    w->setPlanes(su.splat, su.m);
     w->peakBytes = 0;
   }
   if (st.seams.size() < st.blocks.size()) st.seams.resize(st.blocks.size());
@@ -377,6 +382,21 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     su.b[a] = int((extent[a] + su.nb[a] - 1) / su.nb[a]);
     su.n[a] = su.b[a] + 2 * su.m;
   }
+}
+
+// Whether the blocks sum their fields by slice splat (SurfaceFieldRoute; the plan's block shape
+// and margin set). automatic: where the splat's whole-block field fits Worker::kVolumeBytes (summed
+// once, serving seeding and the sweep) and a particle's disc row fits one or two 8-wide windows
+// (ceil(Rc / S) <= 5). Measured (docs/surface.md, "Field routes"): there it does fewer instructions
+// than the §6 cache walk on the dense sets; with larger discs (blob, Rc / S = 10) or blocks whose
+// field does not fit (spray) the cache does fewer. The choice depends on the data, S and Rc only,
+// never on the thread count, and both routes give the same bits.
+inline bool useSliceSplat(SurfaceFieldRoute route, const Setup& su) {
+  if (route != SurfaceFieldRoute::automatic) return route == SurfaceFieldRoute::sliceSplat;
+  const int r = std::max(1, int(std::ceil(su.rcMax / su.s)));
+  const std::size_t stride = std::size_t(std::max(su.n[0] + 1, 8 * ((2 * su.m + 8) / 8)));
+  const std::size_t volumeBytes = 4 * std::size_t(su.n[2] + 1) * stride * std::size_t(su.n[1] + 1) * sizeof(float);
+  return r <= 5 && volumeBytes <= Worker<PlainPolicy>::kVolumeBytes;
 }
 
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
@@ -535,6 +555,7 @@ inline SurfaceStatus gatherBlocks(ExtractorState& st, const Setup& su, bool user
     stats.particlesLookedUp += o.stats.particlesLookedUp;
     stats.maxActiveSlices = std::max(stats.maxActiveSlices, o.stats.maxActiveSlices);
     stats.slabReversals += o.stats.slabReversals;
+    stats.splatBlocks += o.stats.splatBlocks;
     stats.cacheBuildMs += o.stats.cacheBuildMs;
     stats.seedMs += o.stats.seedMs;
     stats.marchMs += o.stats.marchMs;
@@ -628,6 +649,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (!status.ok()) return status;
 
   Setup su = setupFromParams(params);
+
   prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
   if (st.particles.empty()) return {};
   su.m = marginCubes(su.rcMax, su.s);
@@ -639,6 +661,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   su.octant = viewOctant(params, su.frame);
+  su.splat = !Policy::kHasUser && useSliceSplat(params.fieldRoute, su);
 
   buildBlockLists(st, su, params);
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());

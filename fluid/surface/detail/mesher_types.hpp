@@ -163,6 +163,10 @@ struct Slice {
   std::vector<SliceCell> cells;  // (Nx+1)(Ny+1) corner index array
   std::vector<Corner<Policy>> corners;
   std::vector<SliceDz> dz;  // per block particle; filled for those a lookup at this z can walk
+  // Slice-splat route (block_slice_splat.inl): the slice's field, dense, as four planes (value,
+  // df/dx, df/dy, df/dz) of Worker::planeFloats floats each; empty on the particle-cache route.
+  std::vector<float> field;
+  const float* planes = nullptr;  // this slice's four planes: `field`, or its part of Worker::volume
 };
 
 struct BlockDesc {
@@ -224,6 +228,7 @@ struct Setup {
   SweepFrame frame;
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
+  bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -248,6 +253,23 @@ struct Worker {
   std::vector<Slice<Policy>*> freeSlices;
   std::vector<Slice<Policy>*> active;            // per slice z (0..nz)
   std::vector<std::vector<std::uint32_t>> todo;  // per slab z (0..nz-1)
+  // Slice-splat route (block_slice_splat.inl). A plane holds one float per corner of a slice,
+  // rows of planeStride floats (nx + 1, or a particle's widest window of 8-wide vectors if more):
+  // corner (x, y) at y planeStride + planePad + x (planePad is 0). 0 on the cache route.
+  std::size_t planeFloats = 0;
+  int planeStride = 0, planePad = 0;
+  bool volumeMode = false;           // the block's field is summed whole into `volume` (setPlanes)
+  std::size_t sliceFieldFloats = 0;  // Slice::field size (4 planes, or 0 in volume mode)
+  std::vector<float> volume;         // volume mode: slice z's four planes at 4 z planeFloats
+  // Volume mode: per slice, the rows y0..y1 and columns x0..x1 ({y0, y1, x0, x1}) its last splat
+  // wrote; all else of the volume is 0, so the next block clears just these (empty: y0 > y1).
+  std::vector<std::array<std::int16_t, 4>> volumeRect;
+  std::vector<float> seedRing;                  // seeding: value planes of the last ringSlots slices used
+  std::vector<std::int32_t> ringZ;              // slice z held by each ring slot (-1: none)
+  std::vector<float> splatOffsets;              // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
+  std::vector<double> splatCx;                  // double(g0 + x) S, x in [-m, nx + m + 15]
+  std::vector<std::int16_t> splatReach;         // particleReach() of each block particle
+  std::vector<std::array<float, 2>> splatBand;  // per block particle: float(Rc_i^2 -/+ tol) (splatSlice)
   std::vector<std::uint32_t> slabCount;
   std::uint64_t peakBytes = 0;
 
@@ -279,6 +301,35 @@ struct Worker {
     slabCount.assign(nz + 1, 0);
   }
 
+  // The slice-splat planes for margin m (0: the cache route, no planes). Sized once per block
+  // shape, so after warm-up nothing is allocated. When the block's whole field (four planes per
+  // slice) stays under kVolumeBytes it is summed once up front (`volume`) and serves both §4
+  // seeding and the sweep; otherwise each slice the sweep takes up is summed into the slice's own
+  // planes, and seeding reads value planes of all slices (`seedRing`) or, when even those exceed
+  // kVolumeBytes, a ring of 2 m + 4 (seeding's descents start at the particles' nearest corners,
+  // which rise with their z, but one from a margin column may run down the whole block).
+  static constexpr std::size_t kVolumeBytes = std::size_t(8) << 20;
+  void setPlanes(bool splat, int m) {
+    const int pad = 0;
+    const int stride = splat ? std::max(nx + 1, 8 * ((2 * m + 8) / 8)) : 0;
+    const std::size_t floats = splat ? std::size_t(stride) * std::size_t(ny + 1) : 0;
+    const std::size_t slices = std::size_t(nz + 1);
+    const bool vol = splat && 4 * slices * floats * sizeof(float) <= kVolumeBytes;
+    if (floats == planeFloats && stride == planeStride && pad == planePad && vol == volumeMode &&
+        (!vol || volume.size() == 4 * slices * floats))
+      return;
+    planeFloats = floats, planeStride = stride, planePad = pad, volumeMode = vol;
+    sliceFieldFloats = vol ? 0 : 4 * floats;
+    for (auto& s : slicePool) s->field.assign(sliceFieldFloats, 0.0f);
+    volume.assign(vol ? 4 * slices * floats : 0, 0.0f);
+    volumeRect.assign(vol ? slices : 0, std::array<std::int16_t, 4>{1, 0, 1, 0});
+    const std::size_t slots = !splat || vol                                     ? 0
+                              : slices * floats * sizeof(float) <= kVolumeBytes ? slices
+                                                                                : std::size_t(2 * m + 4);
+    seedRing.assign(slots * floats, 0.0f);
+    ringZ.assign(slots, -1);
+  }
+
   Slice<Policy>* acquireSlice() {
     if (freeSlices.empty()) return acquireSliceFromNewStorage();
     Slice<Policy>* s = freeSlices.back();
@@ -289,6 +340,7 @@ struct Worker {
   Slice<Policy>* acquireSliceFromNewStorage() {
     slicePool.push_back(std::make_unique<Slice<Policy>>());
     slicePool.back()->cells.assign(columns(), SliceCell{});
+    slicePool.back()->field.resize(sliceFieldFloats);
     return slicePool.back().get();
   }
   // Returns a slice to the pool, clearing only the entries it touched (§4).
