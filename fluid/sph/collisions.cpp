@@ -210,6 +210,20 @@ void resolveCollisions(StepContext& context) {
     }
     if (inside_total == 0) break;
   }
+  // What the next step's boundary sampling may reuse (SphScratch::SampleCarry): end_samples[c]
+  // where collide_stale bit c is clear were queried at the particle's final position, except for
+  // colliders whose far particles were skipped without a query.
+  SphScratch::SampleCarry& carry = scratch.carry;
+  carry.shape.resize(collider_count);
+  carry.pose.resize(collider_count);
+  carry.usable.resize(collider_count);
+  for (std::size_t c = 0; c < collider_count; ++c) {
+    const SphCollider& collider = context.world.colliders[c];
+    carry.shape[c] = collider.shape;
+    carry.pose[c] = collider.integrate_pose ? advancedPose(collider.pose, context.dt) : collider.pose;
+    const bool skipped_far = !sphColliderMoves(collider) && collider.lipschitz_distance;
+    carry.usable[c] = collider_count <= 32 && !skipped_far ? 1 : 0;
+  }
 }
 
 }  // namespace fluid::sph_step
