@@ -101,7 +101,11 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           which[q++] = static_cast<std::uint32_t>(i);
         }
         query.run(positions, which, q, end_samples);
-        for (std::size_t i = b; i < e; ++i) {
+        // Only the particles just queried can react: one skipped as unchanged since its last query
+        // has the sample that gave no reaction then (a reaction marks every sample stale), and one
+        // skipped as far has no reaction. Ascending i, so the sums add in the same order.
+        for (std::uint32_t w = 0; w < q; ++w) {
+          const std::size_t i = which[w];
           const ColliderSample& s = end_samples[i];
           const ColliderSample& s0 = start_samples[i];
           // Tunnelling through a thin part: outside at both ends of the step but on opposite
