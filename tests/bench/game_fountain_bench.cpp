@@ -185,9 +185,9 @@ int main(int argc, char** argv) {
       const double p95 = sorted[static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(sorted.size()))) - 1];
       char cpu[32] = "-";
       if (t == 1) std::snprintf(cpu, sizeof cpu, "%.2f", median(cpu_ms));
-      std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% | %.2f | %s |\n", config.label.c_str(),
-                  t, f.world.particles.size(), median(ms), sorted.back(), steps / frames, iterations * per_step,
-                  100.0 * err * per_step, 100.0 * max_err, p95, cpu);
+      std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% | %.2f | %s |\n",
+                  config.label.c_str(), t, f.world.particles.size(), median(ms), sorted.back(), steps / frames,
+                  iterations * per_step, 100.0 * err * per_step, 100.0 * max_err, p95, cpu);
       std::fflush(stdout);
     }
   }
