@@ -4,6 +4,7 @@
 #include "fluid/sph/analytic_colliders.hpp"
 
 #include <cmath>
+#include <cstring>
 
 namespace fluid::sph_step {
 namespace {
@@ -97,6 +98,13 @@ inline float lookupOctant(const std::vector<float>& table, glm::vec3 a, float in
   const float c00 = lerp(p[0], p[1], f[0]), c10 = lerp(p[sy], p[sy + 1], f[0]);
   const float c01 = lerp(p[sz], p[sz + 1], f[0]), c11 = lerp(p[sz + sy], p[sz + sy + 1], f[0]);
   return lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+}
+
+// Bit-for-bit equality (positions, poses): a collider sample is a pure function of its inputs'
+// bits, and == would equate -0 and +0.
+template <typename T>
+bool sameBits(const T& a, const T& b) {
+  return std::memcmp(&a, &b, sizeof(T)) == 0;
 }
 
 }  // namespace
@@ -207,6 +215,28 @@ void ensureStepTables(SphWorld& world) {
   scratch.initialised = true;
 }
 
+// The colliders (bit c) whose end-of-step samples of the last step can stand in for this step's
+// queries (SphScratch::SampleCarry): the same shape object at the same pose, bit for bit, and
+// samples the last collision passes took at every particle they did not skip.
+std::uint32_t carriedColliders(const SphWorld& world) {
+  const SphScratch& scratch = world.scratch;
+  const SphScratch::SampleCarry& carry = scratch.carry;
+  const std::size_t count = std::min(world.colliders.size(), carry.usable.size());
+  if (carry.count == 0 || world.colliders.size() > 32 || carry.position.size() < carry.count ||
+      scratch.collide_stale.size() < carry.count || carry.shape.size() < count || carry.pose.size() < count ||
+      scratch.end_samples.size() < count)
+    return 0;
+  std::uint32_t bits = 0;
+  for (std::size_t c = 0; c < count; ++c) {
+    const SphCollider& collider = world.colliders[c];
+    const ColliderPose& pose = carry.pose[c];
+    if (carry.usable[c] && carry.shape[c] == collider.shape && scratch.end_samples[c].size() >= carry.count &&
+        sameBits(pose.translation, collider.pose.translation) && sameBits(pose.rotation, collider.pose.rotation))
+      bits |= 1u << c;
+  }
+  return bits;
+}
+
 void sampleBoundary(StepContext& context) {
   SphWorld& world = context.world;
   SphScratch& scratch = context.scratch;
@@ -242,14 +272,31 @@ void sampleBoundary(StepContext& context) {
     if (scratch.octant_volume.empty()) tabulateOctant(scratch, scratch.wall_beta);
     scratch.collider_box[c] = glm::vec4(glm::max(box->halfExtents() - scratch.wall_shift, glm::vec3(1e-6f)), 1.0f);
   }
+  const std::uint32_t reuse = carriedColliders(world);
+  const SphScratch::SampleCarry& carry = scratch.carry;
   context.collider_speed = reduceChunks(
       n, 0.0f,
       [&](std::size_t b, std::size_t e, float& acc) {
         std::uint32_t which[kGrain];
-        for (std::size_t i = b; i < e; ++i) which[i - b] = static_cast<std::uint32_t>(i);
-        for (std::size_t c = 0; c < collider_count; ++c)
-          ColliderQuery(world.colliders[c], world.colliders[c].pose)
-              .run(positions, which, static_cast<std::uint32_t>(e - b), scratch.start_samples[c]);
+        for (std::size_t c = 0; c < collider_count; ++c) {
+          std::vector<ColliderSample>& samples = scratch.start_samples[c];
+          std::uint32_t q = 0;
+          const std::uint32_t bit = c < 32 ? 1u << c : 0u;
+          if (reuse & bit) {
+            const std::vector<ColliderSample>& carried = scratch.end_samples[c];
+            for (std::size_t i = b; i < e; ++i) {
+              const std::uint32_t p = carry.index[i];
+              if (p != SphScratch::SampleCarry::kNone && !(scratch.collide_stale[p] & bit) &&
+                  sameBits(carry.position[p], positions[i]))
+                samples[i] = carried[p];
+              else
+                which[q++] = static_cast<std::uint32_t>(i);
+            }
+          } else {
+            for (std::size_t i = b; i < e; ++i) which[q++] = static_cast<std::uint32_t>(i);
+          }
+          ColliderQuery(world.colliders[c], world.colliders[c].pose).run(positions, which, q, samples);
+        }
         // Each collider's V_c and grad V_c, kept for the second loop (recomputed beyond kKept colliders).
         constexpr std::size_t kKept = 16;
         BoundaryVolume kept[kKept];

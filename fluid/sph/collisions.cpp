@@ -105,7 +105,11 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           which[q++] = static_cast<std::uint32_t>(i);
         }
         query.run(positions, which, q, end_samples);
-        for (std::size_t i = b; i < e; ++i) {
+        // Only the particles just queried can react: one skipped as unchanged since its last query
+        // has the sample that gave no reaction then (a reaction marks every sample stale), and one
+        // skipped as far has no reaction. Ascending i, so the sums add in the same order.
+        for (std::uint32_t w = 0; w < q; ++w) {
+          const std::size_t i = which[w];
           const ColliderSample& s = end_samples[i];
           const ColliderSample& s0 = start_samples[i];
           // Tunnelling through a thin part: outside at both ends of the step but on opposite
@@ -217,6 +221,20 @@ void resolveCollisions(StepContext& context) {
       }
     }
     if (inside_total == 0) break;
+  }
+  // What the next step's boundary sampling may reuse (SphScratch::SampleCarry): end_samples[c]
+  // where collide_stale bit c is clear were queried at the particle's final position, except for
+  // colliders whose far particles were skipped without a query.
+  SphScratch::SampleCarry& carry = scratch.carry;
+  carry.shape.resize(collider_count);
+  carry.pose.resize(collider_count);
+  carry.usable.resize(collider_count);
+  for (std::size_t c = 0; c < collider_count; ++c) {
+    const SphCollider& collider = context.world.colliders[c];
+    carry.shape[c] = collider.shape;
+    carry.pose[c] = collider.integrate_pose ? advancedPose(collider.pose, context.dt) : collider.pose;
+    const bool skipped_far = !sphColliderMoves(collider) && collider.lipschitz_distance;
+    carry.usable[c] = collider_count <= 32 && !skipped_far ? 1 : 0;
   }
 }
 

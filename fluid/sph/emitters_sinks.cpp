@@ -20,6 +20,11 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_
   const auto& v = world.particles.velocity;
   auto& keep = world.scratch.keep;
   keep.resize(x.size());
+  // Each particle starts as the one at its index at the end of the last step (sampleBoundary
+  // checks that its position is still the carried one, so a store changed between steps only
+  // loses the reuse).
+  SphScratch::SampleCarry& carry = world.scratch.carry;
+  carry.index.resize(x.size());
   const std::size_t none = std::numeric_limits<std::size_t>::max();
   struct Scan {
     std::size_t bad;
@@ -39,6 +44,7 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_
           inside = inside || (p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x && p.y <= k.max.y &&
                               p.z <= k.max.z);
         keep[i] = inside ? 0u : 1u;
+        carry.index[i] = i < carry.count ? static_cast<std::uint32_t>(i) : SphScratch::SampleCarry::kNone;
         acc.inside += inside ? 1 : 0;
       },
       [](Scan a, const Scan& b) {
@@ -79,6 +85,7 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks) {
       store.pressure[out] = store.pressure[i];
       store.id[out] = store.id[i];
       scratch.warm_kappa[out] = scratch.warm_kappa[i];
+      scratch.carry.index[out] = scratch.carry.index[i];
     }
     ++out;
   }
@@ -89,6 +96,7 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks) {
   store.pressure.resize(out);
   store.id.resize(out);
   scratch.warm_kappa.resize(out);
+  scratch.carry.index.resize(out);
   return removed;
 }
 

@@ -29,6 +29,8 @@ void resortByCell(StepContext& context, NeighborLists& lists) {
   scratch.float_tmp.resize(n);
   scratch.pos4.resize(n);
   scratch.vel4.resize(n);
+  SphScratch::SampleCarry& carry = scratch.carry;
+  carry.index_tmp.resize(n);
   forEach(n, [&](std::size_t e) {
     const std::uint32_t o = order[e];
     const glm::vec3 x = store.position[o], v = store.velocity[o];
@@ -39,6 +41,7 @@ void resortByCell(StepContext& context, NeighborLists& lists) {
     scratch.pos4[e] = glm::vec4(x, 0.0f);
     scratch.vel4[e] = glm::vec4(v, 0.0f);
     scratch.sorted_keys[e] = old_keys[o];
+    carry.index_tmp[e] = carry.index[o];
     soa_x[e] = x.x;
     soa_y[e] = x.y;
     soa_z[e] = x.z;
@@ -48,6 +51,7 @@ void resortByCell(StepContext& context, NeighborLists& lists) {
   store.velocity.swap(scratch.vec_b);
   store.id.swap(scratch.u32_tmp);
   scratch.warm_kappa.swap(scratch.float_tmp);
+  carry.index.swap(carry.index_tmp);
   markGridReordered(scratch.grid, scratch.sorted_keys);
 }
 

@@ -282,6 +282,25 @@ struct SphScratch {
   // collider c's last query).
   std::vector<std::uint32_t> collide_stale;
   std::vector<std::uint32_t> collide_order;  // collision passes: moving colliders first, still ones last
+  // The end-of-step samples carried to the next step's boundary sampling (sampleBoundary): the last
+  // collision pass queried each collider at the particles' final positions, which are the next
+  // step's start positions. A sample is a pure function of the shape, its pose and the point, so
+  // it is reused where all three are bit-for-bit the same (the results are bit-identical).
+  struct SampleCarry {
+    static constexpr std::uint32_t kNone = ~0u;
+    // Per particle, indexed as at the end of the last step: the position end_samples were taken at
+    // (collide_stale says which colliders' samples are current there).
+    std::vector<glm::vec3> position;
+    std::size_t count = 0;  // particles at the end of the last step (0: nothing carried)
+    // This step: particle -> its index at the end of the last step (kNone: none, e.g. emitted);
+    // the sinks' compaction and the re-sort keep it in step with the store.
+    std::vector<std::uint32_t> index, index_tmp;
+    // Per collider: the shape queried (held, so a new shape never takes its address), the pose of
+    // the query, and whether end_samples[c] holds real queries where collide_stale bit c is clear.
+    std::vector<std::shared_ptr<const SignedDistanceShape>> shape;
+    std::vector<ColliderPose> pose;
+    std::vector<std::uint8_t> usable;
+  } carry;
   std::vector<glm::vec4> push_plane;  // per particle: the moving face that pushed it this step (xyz normal, w offset)
   std::vector<std::uint8_t> pushed;   // per particle: 1 once a collision pass moved it this step (stats.pushed_out)
   std::vector<glm::vec3> reduce_force, reduce_torque;

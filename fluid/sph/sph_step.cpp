@@ -116,6 +116,9 @@ void finishStep(StepContext& context, float requested) {
   ParticleStore& store = context.particles;
   std::vector<glm::vec3>& velocities = store.velocity;
   for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(context.count);
+  SphScratch::SampleCarry& carry = context.scratch.carry;
+  carry.position.resize(context.count);
+  carry.count = context.count;
   struct Pass {
     double sum_v2 = 0.0;
     std::size_t clamps = 0, nonfinite = 0;
@@ -135,6 +138,7 @@ void finishStep(StepContext& context, float requested) {
         store.position_x[i] = x.x;
         store.position_y[i] = x.y;
         store.position_z[i] = x.z;
+        carry.position[i] = x;  // where the last collision pass sampled the colliders
         acc.nonfinite += isFinite(x) && isFinite(velocities[i]) && std::isfinite(store.density[i]) ? 0 : 1;
       },
       [](Pass a, const Pass& b) {
@@ -172,6 +176,7 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   stats.emitted = applyEmitters(world);
   const std::size_t n = store.size();
   scratch.warm_kappa.resize(n, 0.0f);
+  scratch.carry.index.resize(n, SphScratch::SampleCarry::kNone);  // emitted: nothing carried
   store.density.resize(n);
   store.pressure.resize(n);
 

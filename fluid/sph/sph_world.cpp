@@ -139,6 +139,9 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.sorted_keys.reserve(capacity);
   w.keep.reserve(capacity);
   w.collide_stale.reserve(capacity);
+  w.carry.position.reserve(capacity);
+  w.carry.index.reserve(capacity);
+  w.carry.index_tmp.reserve(capacity);
   reserveNeighborLists(w.neighbors, capacity);
   reserveNeighborLists(w.verlet, capacity);
   w.verlet_position.reserve(capacity);

@@ -228,11 +228,18 @@ TEST(SphSolvers, LipschitzQuerySkipsKeepResultsBitIdentical) {
     std::atomic<long> count{0};
     SphScene s = scene("dambreak", SphSolverKind::dfsph, {{"width", "0.1"}, {"spacing", "0.01"}});
     ASSERT_GE(s.world.colliders.size(), 2u);  // several walls: the multi-collider passes run too
+    std::vector<std::shared_ptr<const SignedDistanceShape>> inner;
     for (SphCollider& c : s.world.colliders) {
-      c.shape = std::make_shared<CountingShape>(c.shape, &count);
+      inner.push_back(c.shape);
       c.lipschitz_distance = flag == 1;
     }
-    for (int i = 0; i < 80; ++i) ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+    for (int i = 0; i < 80; ++i) {
+      // A new shape object every step: nothing is carried from one step to the next
+      // (SphScratch::SampleCarry), so the counts compare the end-of-step queries alone.
+      for (std::size_t c = 0; c < inner.size(); ++c)
+        s.world.colliders[c].shape = std::make_shared<CountingShape>(inner[c], &count);
+      ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+    }
     out[flag] = {s.world.particles.position, s.world.particles.velocity, s.world.particles.id};
     points[flag] = count.load();
   }
@@ -245,6 +252,66 @@ TEST(SphSolvers, LipschitzQuerySkipsKeepResultsBitIdentical) {
   float fastest = 0.0f;
   for (const glm::vec3& v : out[1].v) fastest = std::max(fastest, glm::length(v));
   EXPECT_GT(fastest, 0.2f);
+}
+
+// The next step's boundary sampling reuses the last collision pass's samples where the collider
+// (shape object, pose) and the particle's position are bit-for-bit the ones queried
+// (SphScratch::SampleCarry). The reference run wraps every collider in a new shape object before
+// each step, so nothing is carried and every sample is queried afresh; both runs must give the
+// same bits, through emitters, a sink and the re-sort (indices change every step), a collider
+// that moves, and positions written between steps (two particles swapped, one put inside a wall:
+// a carried sample is only valid at its own position).
+TEST(SphSolvers, CarriedColliderSamplesKeepResultsBitIdentical) {
+  const Overrides o{{"spacing", "0.04"},   {"budget", "500"},      {"rate", "3000"},
+                    {"basin_size", "0.5"}, {"drain_size", "0.25"}, {"nozzle_radius", "0.1"}};
+  for (SphSolverKind solver : {SphSolverKind::dfsph, SphSolverKind::wcsph}) {
+    Snapshot out[2];
+    long points[2] = {0, 0};
+    std::size_t removed = 0;
+    for (int fresh = 0; fresh < 2; ++fresh) {
+      std::atomic<long> count{0};
+      SphScene s = scene("fountain", solver, o);
+      ASSERT_GE(s.world.colliders.size(), 2u);
+      std::vector<std::shared_ptr<const SignedDistanceShape>> inner;
+      for (SphCollider& c : s.world.colliders) {
+        inner.push_back(c.shape);
+        c.shape = std::make_shared<CountingShape>(c.shape, &count);
+        c.lipschitz_distance = false;  // every particle is queried at the end of a step (as for depth maps)
+      }
+      // The +z wall slides slowly outwards: its pose changes every step (never carried).
+      SphCollider& moving = s.world.colliders.back();
+      ASSERT_EQ(dynamic_cast<const PlaneShape&>(*inner.back()).normal(), glm::vec3(0.0f, 0.0f, -1.0f));
+      moving.integrate_pose = true;
+      moving.pose.linear_velocity = glm::vec3(0.0f, 0.0f, 0.05f);
+      bool moved_by_hand = false;
+      while (s.world.time < 1.0) {
+        if (fresh)
+          for (std::size_t c = 0; c < inner.size(); ++c)
+            s.world.colliders[c].shape = std::make_shared<CountingShape>(inner[c], &count);
+        if (!moved_by_hand && s.world.time >= 0.7) {
+          moved_by_hand = true;
+          std::vector<glm::vec3>& x = s.world.particles.position;
+          ASSERT_GT(x.size(), 20u);
+          std::swap(x[3], x[x.size() - 4]);
+          x[10] = glm::vec3(x[10].x, -0.01f, x[10].z);  // into the floor: the step must push it out
+        }
+        SphStepStats st;
+        ASSERT_TRUE(stepSph(s.world, 0.0f, &st).ok());
+        if (fresh == 0) removed += st.removed;
+      }
+      out[fresh] = {s.world.particles.position, s.world.particles.velocity, s.world.particles.id};
+      points[fresh] = count.load();
+    }
+    ASSERT_EQ(out[0].id, out[1].id) << sphSolverName(solver);
+    EXPECT_EQ(0, std::memcmp(out[0].x.data(), out[1].x.data(), out[0].x.size() * sizeof(glm::vec3)))
+        << sphSolverName(solver);
+    EXPECT_EQ(0, std::memcmp(out[0].v.data(), out[1].v.data(), out[0].v.size() * sizeof(glm::vec3)))
+        << sphSolverName(solver);
+    EXPECT_GT(out[0].id.size(), 100u);  // the jet filled the basin
+    EXPECT_GT(removed, 0u);             // and the sink drained some of it
+    // The start-of-step queries of the still walls were carried: fewer points asked for.
+    EXPECT_LT(points[0], points[1] * 3 / 4) << sphSolverName(solver) << ": " << points[0] << " vs " << points[1];
+  }
 }
 
 TEST(SphSolvers, EmittersAndSinksAreThreadCountInvariant) {
