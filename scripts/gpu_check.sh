@@ -16,6 +16,7 @@ export LD_LIBRARY_PATH=$PWD/.gpurun/lib SDL_VIDEODRIVER=offscreen
 src=$(cat .gpurun/source_dir)
 [ -n "$src" ] && [ ! -e "$src" ] && mkdir -p "$(dirname "$src")" && ln -sfn "$PWD" "$src"
 B=.gpurun/bin
+: >"$OUT/gl_tests.txt"
 {
   nvidia-smi -L
   echo "cores: $(nproc); $(ldd --version | head -1)"

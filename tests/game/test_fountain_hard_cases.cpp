@@ -280,16 +280,15 @@ TEST(FountainHardCases, BasinFilledToTheBrimAndOverflowingFor60Seconds) {
   // above the wall top (the basin's area times a spacing, in particles) and for the dish and the jet
   // in flight, so the jet keeps running and the basin really overflows. (With room for the dish alone
   // the budget binds a centimetre below the spill, the jet stops and nothing leaves.)
-  const float spacing = fluid::sphSpacing(w.params);
-  const double layer = 3.14159265358979 * g.basin_inner_radius * g.basin_inner_radius * spacing /
-                       (fluid::sphParticleMass(w.params) / w.params.rest_density);
-  const std::size_t room = static_cast<std::size_t>(2.0 * layer);
+  const double pi = 3.14159265358979;
+  const double layer_volume = pi * g.basin_inner_radius * g.basin_inner_radius * fluid::sphSpacing(w.params);
+  const double particle_volume = fluid::sphParticleMass(w.params) / w.params.rest_density;
+  const std::size_t room = static_cast<std::size_t>(2.0 * layer_volume / particle_volume);
   ASSERT_GT(static_cast<float>(room), f.params.rate);
   w.params.max_particles = filled + room;
   fluid::reserveSph(w, w.params.max_particles);
   // The fill holds the cavity's volume (the cylinder up to the wall top less the plinth and the
   // column) within 15 %: the lattice keeps a radius off the floor, the wall and the statue.
-  const double pi = 3.14159265358979;
   const double cavity = pi * (g.basin_inner_radius * g.basin_inner_radius * (g.basin_wall_top - g.basin_floor) -
                               g.plinth_radius * g.plinth_radius * (g.plinth_top - g.basin_floor) -
                               g.column_radius * g.column_radius * (g.basin_wall_top - g.plinth_top));
@@ -332,7 +331,6 @@ TEST(FountainHardCases, BasinFilledToTheBrimAndOverflowingFor60Seconds) {
   // The overflow pins the level: it neither drains nor piles up over the last half minute (within
   // half a particle layer of the basin's area), and the head that carries the jet's flow over the
   // wall stays under two layers above the brim.
-  const double layer_volume = pi * g.basin_inner_radius * g.basin_inner_radius * spacing;
   EXPECT_LT(std::abs(at_60 - at_30), 0.5 * layer_volume);
   for (const double level : {at_30, at_60}) {
     EXPECT_GT(level, brim - 0.5 * layer_volume) << "the basin drained";

@@ -80,4 +80,34 @@ inline fluid::ParticlePositions loadSet(const std::string& name) {
 
 inline fluid::SurfaceInput inputOf(const fluid::ParticlePositions& p) { return {p.x, p.y, p.z, {}, {}, {}}; }
 
+// Hidden-style case (paper Fig. 4b): a thin hemispherical bowl of radius 8 open at the top, whose
+// inner surface has local minima that no particle's downward step reaches. With S = 0.5 one block
+// of 64 cubes holds it whole (block seams through its axis would close it off early).
+inline fluid::ParticlePositions uprightBowl() {
+  fluid::ParticlePositions p;
+  for (float th = 0.0f; th < 1.55f; th += 0.09f)
+    for (float ph = 0.0f; ph < 6.28f; ph += 0.09f / std::max(0.09f, std::sin(th))) {
+      p.x.push_back(16.0f + 8.0f * std::sin(th) * std::cos(ph));
+      p.y.push_back(16.0f + 8.0f * std::sin(th) * std::sin(ph));
+      p.z.push_back(-16.0f - 8.0f * std::cos(th));
+    }
+  return p;
+}
+
+// Hidden-style case: the blob set moved 1e5 from the origin, with the origin put beside it so
+// float vertices keep their precision.
+inline fluid::ParticlePositions blobOffsetBy1e5(fluid::SurfaceParams& params) {
+  fluid::ParticlePositions p = loadSet("blob.xyz");
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.x[i] += 1e5f;
+    p.y[i] -= 1e5f;
+    p.z[i] += 1e5f;
+  }
+  params.cube = 0.3f;
+  params.originX = 1e5;
+  params.originY = -1e5;
+  params.originZ = 1e5;
+  return p;
+}
+
 }  // namespace surface_test

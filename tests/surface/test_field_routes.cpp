@@ -123,25 +123,16 @@ TEST(FieldRoutes, SliceSplatIsThreadCountInvariant) {
 
 TEST(FieldRoutes, HiddenStyleCases) {
   {  // an upright bowl: the sweep reverses (paper Fig. 4b)
-    std::vector<float> x, y, z;
-    for (float th = 0.0f; th < 1.55f; th += 0.09f)
-      for (float ph = 0.0f; ph < 6.28f; ph += 0.09f / std::max(0.09f, std::sin(th))) {
-        x.push_back(16.0f + 8.0f * std::sin(th) * std::cos(ph));
-        y.push_back(16.0f + 8.0f * std::sin(th) * std::sin(ph));
-        z.push_back(-16.0f - 8.0f * std::cos(th));
-      }
+    const fluid::ParticlePositions bowl = uprightBowl();
     fluid::SurfaceParams p;
     p.cube = 0.5f;
     p.blockCubes = 64;
-    const fluid::SurfaceMesh m = expectRoutesAgree({x, y, z, {}, {}, {}}, p, "bowl", 1000);
+    const fluid::SurfaceMesh m = expectRoutesAgree(inputOf(bowl), p, "bowl", 1000);
     EXPECT_GT(m.stats.slabReversals, 0u);
   }
   {  // 1e5 from the origin
-    fluid::ParticlePositions ps = loadSet("blob.xyz");
-    for (std::size_t i = 0; i < ps.size(); ++i) ps.x[i] += 1e5f, ps.y[i] -= 1e5f, ps.z[i] += 1e5f;
     fluid::SurfaceParams p;
-    p.cube = 0.3f;
-    p.originX = 1e5, p.originY = -1e5, p.originZ = 1e5;
+    const fluid::ParticlePositions ps = blobOffsetBy1e5(p);
     expectRoutesAgree(inputOf(ps), p, "offset 1e5", 1000);
   }
   {  // field exactly T at corners (Rc = 2, S = 1, T = 1/8 - 1/2 squared)

@@ -293,36 +293,19 @@ TEST(MarchingSlices, CoincidentParticles) {
 }
 
 TEST(MarchingSlices, UprightBowlSeedingFailureCaseOfFigure4b) {
-  // A thin hemispherical bowl open at the top: its inner surface has local minima that no
-  // particle's downward step reaches (paper Fig. 4b); the sweep must still reach them.
-  std::vector<float> x, y, z;
-  for (float th = 0.0f; th < 1.55f; th += 0.09f)
-    for (float ph = 0.0f; ph < 6.28f; ph += 0.09f / std::max(0.09f, std::sin(th))) {
-      x.push_back(16.0f + 8.0f * std::sin(th) * std::cos(ph));
-      y.push_back(16.0f + 8.0f * std::sin(th) * std::sin(ph));
-      z.push_back(-16.0f - 8.0f * std::cos(th));
-    }
-  // One block holds the whole bowl (block seams through its axis would close it off early).
+  // The bowl's inner minima (uprightBowl): the sweep must still reach them.
+  const fluid::ParticlePositions bowl = uprightBowl();
   fluid::SurfaceParams p;
   p.cube = 0.5f;
   p.blockCubes = 64;
-  const fluid::SurfaceMesh m = slices({x, y, z, {}, {}, {}}, p);
+  const fluid::SurfaceMesh m = slices(inputOf(bowl), p);
   EXPECT_GT(m.stats.slabReversals, 0u) << "the sweep never reversed; the bowl does not test reversal";
-  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 1000);
+  expectClosedAndEqualToOracle(inputOf(bowl), p, 1000);
 }
 
 TEST(MarchingSlices, FarFromOriginOffsetBy1e5) {
-  fluid::ParticlePositions ps = loadSet("blob.xyz");
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    ps.x[i] += 1e5f;
-    ps.y[i] -= 1e5f;
-    ps.z[i] += 1e5f;
-  }
   fluid::SurfaceParams p;
-  p.cube = 0.3f;
-  p.originX = 1e5;
-  p.originY = -1e5;
-  p.originZ = 1e5;
+  const fluid::ParticlePositions ps = blobOffsetBy1e5(p);
   expectClosedAndEqualToOracle(inputOf(ps), p, 1000);
   // Local positions stay small and precise (float relative to the origin).
   const fluid::SurfaceMesh m = slices(inputOf(ps), p);
