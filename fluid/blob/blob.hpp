@@ -116,12 +116,17 @@ struct BlobTarget {
 
 // A level collider or a rigid body (crate). Moving colliders (pose velocities, integrated over the
 // sub-steps; the game resets the pose from Bullet every step) push particles. Colliders are
-// resolved in list order, each against the result of the previous: list crates first and the
-// level last, so where a crate presses into a wall the particle ends outside the wall.
+// resolved one after the other, each against the result of the previous: those not marked
+// `level` first, in list order, then the `level` ones in list order, so where a crate presses
+// into a wall the particle ends outside the wall (the crate's overlap with the wall is Bullet's
+// to resolve, not the particle's). Indices into the list (BlobBehaviour::wall_collider) are not
+// affected by that order.
 struct BlobCollider {
   std::shared_ptr<const SignedDistanceShape> shape;  // non-null, read-only, shared
   ColliderPose pose;
   CollisionMaterial material;
+  bool level = false;             // part of the fixed level: resolved after every collider that is not
+                                  // (a crate pressing a particle into a wall leaves it outside the wall)
   bool use_blob_material = true;  // use BlobParams::material instead of `material`
   // Optional: a collider-space box outside which `shape` never reports a point inside (distance
   // < 0). A particle whose sub-step path lies wholly outside it skips the shape's queries: the

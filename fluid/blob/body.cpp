@@ -186,24 +186,25 @@ void collide(BlobWorld& world, std::span<glm::vec3> predicted, float dt, BlobSte
   desc.skin = 0.01f * p.spacing;
   desc.max_step = 0.125f * p.spacing;
   desc.parallel.grain = kGrain;
-  for (BlobCollider& c : world.colliders) {
-    if (!c.shape) continue;
-    desc.material = c.use_blob_material ? p.material : c.material;
-    desc.bounded = c.bounded;
-    desc.inside = {c.inside_lo, c.inside_hi};
-    s.before.assign(v.begin(), v.end());
-    const CollideCounts counts = collideParticles(*c.shape, c.pose, s.previous, predicted, v, desc, s.collide);
-    stats.collisions += counts.reacted + counts.pushed_out;
-    stats.swept += counts.swept;
-    // Serial, in index order: the sums are the same for every thread count.
-    for (std::size_t i = 0; i < n; ++i) {
-      if (s.collide.outcome[i] == CollisionOutcome::none) continue;
-      // Momentum the collider's reaction gave the particle (a push-out moves it without changing it).
-      const glm::vec3 dp = mass * (v[i] - s.before[i]);
-      c.impulse -= dp;
-      c.angular_impulse -= glm::cross(predicted[i] - c.pose.translation, dp);
+  for (const bool level : {false, true})  // crates before the level (BlobCollider)
+    for (BlobCollider& c : world.colliders) {
+      if (!c.shape || c.level != level) continue;
+      desc.material = c.use_blob_material ? p.material : c.material;
+      desc.bounded = c.bounded;
+      desc.inside = {c.inside_lo, c.inside_hi};
+      s.before.assign(v.begin(), v.end());
+      const CollideCounts counts = collideParticles(*c.shape, c.pose, s.previous, predicted, v, desc, s.collide);
+      stats.collisions += counts.reacted + counts.pushed_out;
+      stats.swept += counts.swept;
+      // Serial, in index order: the sums are the same for every thread count.
+      for (std::size_t i = 0; i < n; ++i) {
+        if (s.collide.outcome[i] == CollisionOutcome::none) continue;
+        // Momentum the collider's reaction gave the particle (a push-out moves it without changing it).
+        const glm::vec3 dp = mass * (v[i] - s.before[i]);
+        c.impulse -= dp;
+        c.angular_impulse -= glm::cross(predicted[i] - c.pose.translation, dp);
+      }
     }
-  }
 }
 
 void advanceColliderPoses(BlobWorld& world, float dt) {

@@ -263,7 +263,8 @@ fluid::SurfaceStatus meshBlob(fluid::SurfaceExtractor& extractor, const fluid::S
 }
 
 // Crates near the body become colliders after the level's (Bullet pose and velocity: a thrown
-// crate dents the blob); the rest of the list is the level, fixed at build.
+// crate dents the blob); the start of the list is the level, fixed at build and marked `level`, so
+// stepBlob resolves the crates first and a particle a crate presses into a wall ends outside it.
 void collidersFromCrates(BlobMonster& s, const RigidBodies& bodies) {
   s.world.colliders.resize(s.level_colliders);
   s.crate_of_collider.clear();
@@ -487,6 +488,7 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   std::vector<std::string> walls;
   for (fluid::CachedCollider& part : parts) {
     fluid::BlobCollider c;
+    c.level = true;  // resolved after the crates (BlobCollider)
     auto shape = std::make_shared<fluid::DepthMapCollider>(std::move(part.collider));
     fluid::blobDepthMapBounds(c, *shape);  // particles far from it skip its queries
     c.shape = std::move(shape);

@@ -172,6 +172,43 @@ TEST(BlobBody, SqueezedIntoACornerByCratesStaysSane) {
               fluid::blobMaxSpeed(w.particles.velocity));
 }
 
+// A crate as wide and tall as the wall driven through the resting body 0.3 m into the wall (the body
+// has no way round it), listed after the level as the game lists them (level parts, then the crates
+// near the body). Returns the largest x any particle ends at (the wall's face is x = 0.8).
+float farthestParticleAfterCrateDrive(bool mark_level) {
+  fluid::BlobWorld w = blobtest::restingBlob();
+  w.colliders.push_back(blobtest::ground());
+  w.colliders.push_back(blobtest::wall(0.8f, 0.5f));  // 0.8 <= x <= 1.3
+  for (fluid::BlobCollider& c : w.colliders) c.level = mark_level;
+  fluid::BlobCollider crate =
+      blobtest::collider(std::make_shared<fluid::BoxShape>(glm::vec3(0.5f, 2.0f, 3.0f)), glm::vec3(-1.6f, 1.0f, 0.0f));
+  crate.pose.linear_velocity = glm::vec3(2.0f, 0.0f, 0.0f);
+  w.colliders.push_back(crate);
+  const std::size_t n = w.particles.size();
+  for (int s = 0; s < 90; ++s) {  // the crate's face reaches x = 1.1, 0.3 m into the wall, then stops
+    if (w.colliders[2].pose.translation.x >= 0.6f) w.colliders[2].pose.linear_velocity = glm::vec3(0.0f);
+    EXPECT_TRUE(fluid::stepBlob(w).ok());
+  }
+  expectSane(w, n);
+  float farthest = -1e30f;
+  for (const glm::vec3& x : w.particles.position) farthest = std::max(farthest, x.x);
+  return farthest;
+}
+
+TEST(BlobBody, LevelCollidersWinOverACrateListedAfterThem) {
+  const float skin = 0.01f * fluid::BlobParams{}.spacing;
+  const float marked = farthestParticleAfterCrateDrive(true);
+  const float unmarked = farthestParticleAfterCrateDrive(false);
+  std::printf(
+      "[blob] crate driven 0.3 m into a wall at x = 0.8: farthest particle x = %.3f m (level marked), %.3f m "
+      "(list order)\n",
+      marked, unmarked);
+  EXPECT_LE(marked, 0.8f + skin);  // the level is resolved last: every particle ends on the near side
+  // Resolved in list order, the crate comes last and pushes particles out of its far face, inside the
+  // wall, which then pushes them out of its own far face: through the wall (x > 1.3).
+  EXPECT_GT(unmarked, 1.3f);
+}
+
 // Runs a behaviour mix for `steps` and returns the positions and velocities as bytes.
 std::vector<glm::vec3> scriptedRun(std::uint64_t seed, int steps) {
   fluid::BlobWorld w;
