@@ -5,11 +5,17 @@
 // by the game's own game::stepSphFluid, the jet still running.
 //
 //   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
-//                       [--ab-carry 1]
+//                       [--ab-carry 1] [--mesh 1]
 // --ab-carry 1 adds a row "fresh shapes" per thread count: a copy of the same filled fountain
 // whose colliders get a new shape object after every step, so the step carries no collider
 // sample from one step to the next (SphScratch::SampleCarry); the copies step frame by frame in
 // turn (the same machine load for both), and their state hashes must be equal.
+// --mesh 1 adds the game's meshing (game::meshFluidSurface with the scene's `fluid_surface` section,
+// eye and view from its camera): after each frame's steps the frame's particles are handed to the
+// mesher, which, asynchronous as in the game (Janisz §3.2.6), meshes them on its worker while the
+// next frame's steps run; the frame's clock then covers the steps plus the wait for the previous
+// frame's mesh, which is the game's simulation + meshing cost per frame (issue 18 item 5). Three
+// columns are added at the end: that frame's median and p95, and the mesher worker's median ms.
 // Every solver knob is a scene key, e.g. --set sph_fluid.warm_start=false turns DFSPH's warm start
 // off for the whole run, fill included.
 //
@@ -25,11 +31,12 @@
 // are instrumented (the fill runs at valgrind's uninstrumented speed), e.g.
 //   valgrind --tool=callgrind --instr-atstart=no bench_game_fountain --threads 1 --frames 10
 // gives the instructions of 10 frames (plus the per-run constant: compare 10 and 20 frames).
+#include "bench_timing.hpp"
 #include "game/scene/scene_config.hpp"
+#include "game/world/fluid_surface.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
-#include "bench_timing.hpp"
 
 #include <tbb/global_control.h>
 
@@ -59,7 +66,13 @@ struct Config {
   std::vector<std::string> assignments;  // "sph_fluid.key=value"
 };
 
-bool buildFluid(const std::string& scene_file, const std::vector<std::string>& assignments, game::SphFluid& fluid) {
+// The scene's eye and view direction (camera section: yaw -90 looks along -z, pitch up positive).
+struct View {
+  glm::vec3 eye{0.0f}, dir{0.0f, 0.0f, -1.0f};
+};
+
+bool buildFluid(const std::string& scene_file, const std::vector<std::string>& assignments, game::SphFluid& fluid,
+                game::FluidSurfaceParams* surface = nullptr, View* view = nullptr) {
   game::SceneConfig scene;
   game::SceneStatus st = game::loadSceneFile(scene_file, scene);
   for (const std::string& a : assignments)
@@ -75,6 +88,20 @@ bool buildFluid(const std::string& scene_file, const std::vector<std::string>& a
   }
   game::SphFluidParams params;
   std::string error;
+  if (surface != nullptr) {
+    const game::SectionConfig* mesh_section = scene.effect("fluid_surface");
+    if (mesh_section == nullptr || !game::surfaceParamsFrom(*mesh_section, *surface, error)) {
+      std::fprintf(stderr, "bench_game_fountain: %s has no usable fluid_surface effect %s\n", scene_file.c_str(),
+                   error.c_str());
+      return false;
+    }
+  }
+  if (view != nullptr) {
+    const float yaw = glm::radians(static_cast<float>(scene.camera.number("yaw_degrees")));
+    const float pitch = glm::radians(static_cast<float>(scene.camera.number("pitch_degrees")));
+    view->eye = scene.camera.vec3("position");
+    view->dir = glm::vec3(std::cos(yaw) * std::cos(pitch), std::sin(pitch), std::sin(yaw) * std::cos(pitch));
+  }
   std::shared_ptr<const game::LevelColliders> colliders;
   if (!game::sphParamsFrom(*section, params, error) ||
       !game::ensureFountainColliders(std::string(FLUIDDEMO_SOURCE_DIR) + "/content", colliders, error) ||
@@ -91,6 +118,11 @@ struct Run {
   bool fresh = false;  // a new shape object for every collider after every step (nothing carried)
   std::vector<std::shared_ptr<const fluid::SignedDistanceShape>> inner;
   std::vector<double> ms, cpu_ms;
+  // --mesh: the game's mesher, its frames' steps + mesh wait (ms) and the worker's ms per mesh.
+  bool mesh = false;
+  game::FluidSurface surface;
+  View view;
+  std::vector<double> with_mesh_ms, worker_ms;
   double steps = 0.0, iterations = 0.0, err = 0.0, max_err = 0.0;
 };
 
@@ -125,7 +157,24 @@ bool stepFrame(Run& r) {
   });
   r.ms.push_back(frame_ms);
   r.cpu_ms.push_back(benchtiming::threadCpuMs() - cpu0);
+  if (ok && r.mesh) {
+    bool meshed = false;
+    const double wait_ms =
+        benchtiming::timeMs([&] { meshed = game::meshFluidSurface(r.surface, r.f, r.view.eye, r.view.dir); });
+    if (!meshed) {
+      std::fprintf(stderr, "bench_game_fountain: %s\n", r.surface.error.c_str());
+      return false;
+    }
+    r.with_mesh_ms.push_back(frame_ms + wait_ms);
+    if (r.surface.mesh_worker_ms > 0.0) r.worker_ms.push_back(r.surface.mesh_worker_ms);
+  }
   return ok;
+}
+
+// Nearest rank: the smallest value that at least 95 % of the values do not exceed.
+double p95Of(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(values.size()))) - 1];
 }
 
 void printRow(const std::string& label, int t, int frames, const Run& r) {
@@ -142,15 +191,16 @@ void printRow(const std::string& label, int t, int frames, const Run& r) {
   mix(p.id.data(), p.id.size() * sizeof(std::uint32_t));
   std::fprintf(stderr, "%s (%d): state hash %016llx\n", label.c_str(), t, static_cast<unsigned long long>(hash));
   const double per_step = 1.0 / std::max(r.steps, 1.0);
-  std::vector<double> sorted = r.ms;
-  std::sort(sorted.begin(), sorted.end());
-  // Nearest rank: the smallest frame time that at least 95 % of the frames do not exceed.
-  const double p95 = sorted[static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(sorted.size()))) - 1];
+  const double worst = *std::max_element(r.ms.begin(), r.ms.end());
   char cpu[32] = "-";
   if (t == 1) std::snprintf(cpu, sizeof cpu, "%.2f", median(r.cpu_ms));
-  std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% | %.2f | %s |\n", label.c_str(), t,
-              p.size(), median(r.ms), sorted.back(), r.steps / frames, r.iterations * per_step,
-              100.0 * r.err * per_step, 100.0 * r.max_err, p95, cpu);
+  char mesh[96] = "- | - | -";
+  if (r.mesh && !r.with_mesh_ms.empty())
+    std::snprintf(mesh, sizeof mesh, "%.2f | %.2f | %.2f", median(r.with_mesh_ms), p95Of(r.with_mesh_ms),
+                  r.worker_ms.empty() ? 0.0 : median(r.worker_ms));
+  std::printf("| %s (%d) | %zu | %.2f | %.2f | %.1f | %.2f | %.3f %% | %.2f %% | %.2f | %s | %s |\n", label.c_str(), t,
+              p.size(), median(r.ms), worst, r.steps / frames, r.iterations * per_step, 100.0 * r.err * per_step,
+              100.0 * r.max_err, p95Of(r.ms), cpu, mesh);
   std::fflush(stdout);
 }
 
@@ -160,13 +210,15 @@ int main(int argc, char** argv) {
   std::string scene_file = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/scenes/fountain.json";
   std::vector<int> threads{1, 2};
   int frames = 60;
-  bool ab_carry = false;
+  bool ab_carry = false, with_mesh = false;
   std::vector<std::string> common{"sph_fluid.max_particles=10000"};
   std::vector<Config> configs{{"as in the scene file", {}}};
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--ab-carry") {
       ab_carry = v == "1";
+    } else if (k == "--mesh") {
+      with_mesh = v == "1";
     } else if (k == "--scene") {
       scene_file = v;
     } else if (k == "--frames") {
@@ -194,24 +246,27 @@ int main(int argc, char** argv) {
   if (argc % 2 == 0 || frames < 1 || threads.empty()) {
     std::fprintf(stderr,
                  "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
-                 "[--config \"k=v,k=v\"]... [--ab-carry 1]\n");
+                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--mesh 1]\n");
     return 2;
   }
 
   std::printf(
       "| configuration (threads) | particles | ms per 1/60 s frame (median) | worst frame (ms) | SPH steps per frame | "
       "solver iterations per step | mean density error | max density error | p95 frame (ms) | CPU ms per frame "
-      "(median, 1 thread) |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+      "(median, 1 thread) | steps + mesh wait ms (median) | steps + mesh wait ms (p95) | mesher worker ms (median) "
+      "|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Config& config : configs) {
     std::vector<std::string> assignments = common;
     assignments.insert(assignments.end(), config.assignments.begin(), config.assignments.end());
     game::SphFluid filled;
+    game::FluidSurfaceParams surface_params;
+    View view;
     {
       // Fill with the drains shut (one fill per configuration, all rows of it time the same state).
       std::vector<std::string> fill = assignments;
       fill.push_back("sph_fluid.drain=false");
-      if (!buildFluid(scene_file, fill, filled)) return 1;
+      if (!buildFluid(scene_file, fill, filled, &surface_params, &view)) return 1;
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
       const double budget = static_cast<double>(filled.world.params.max_particles);
       const double target = budget - std::min(0.5 * budget, static_cast<double>(filled.params.rate));
@@ -230,6 +285,15 @@ int main(int argc, char** argv) {
       for (std::size_t k = 0; k < runs.size(); ++k) {
         runs[k].f = filled;
         runs[k].fresh = k == 1;
+        runs[k].mesh = with_mesh;
+        runs[k].view = view;
+        runs[k].surface.params = surface_params;
+        // The first call meshes its own particles before returning (nothing handed over yet): untimed,
+        // like the fill, so the timed frames are the steady state the game plays in.
+        if (with_mesh && !game::meshFluidSurface(runs[k].surface, runs[k].f, view.eye, view.dir)) {
+          std::fprintf(stderr, "bench_game_fountain: %s\n", runs[k].surface.error.c_str());
+          return 1;
+        }
         for (const fluid::SphCollider& c : filled.world.colliders) runs[k].inner.push_back(c.shape);
       }
       CALLGRIND_START_INSTRUMENTATION;
