@@ -27,6 +27,7 @@
   using SplatU8 = std::uint32_t __attribute__((vector_size(32)));
   using SplatI4 = std::int32_t __attribute__((vector_size(16)));
   int splatReachMax_ = 0;  // largest particleReach() of the block's particles (prepareSplat)
+  float oneSpan2_ = 0;     // float((4 S)^2): splatSlice's one-window rows
 
   // Block setup for the route: the block particles' float records (CacheParticle, as the cache has
   // them), the offsets table float(d S) and the corners' x coordinates over the padded plane rows.
@@ -34,6 +35,7 @@
     const int m = su_.m;
     // Windows start at most 2 m + 9 columns from a particle's anchor either way (splatSlice).
     offsetRange_ = 2 * m + 10;
+    oneSpan2_ = float(16.0 * su_.s * su_.s);
     w_.splatOffsets.resize(std::size_t(2 * offsetRange_ + 1));
     for (int d = -offsetRange_; d <= offsetRange_; ++d)
       w_.splatOffsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
@@ -151,53 +153,85 @@
       const int xs = std::min(std::max(ax - r, 0), stride - 8 * vectors);
       const float k = cp->k, s = cp->s, s4 = cp->s4, rest0 = cp->rest[0], rest1 = cp->rest[1];
       const float inBelow = w_.splatBand[li][0], outFrom = w_.splatBand[li][1];
-      float* base = planes + std::size_t(xs);
       wy0 = std::min(wy0, y0), wy1 = std::max(wy1, y1);
       wx0 = std::min(wx0, xs), wx1 = std::max(wx1, xs + 8 * vectors - 1);
-      for (int v = 0; v < vectors; ++v) {
-        const int x = xs + 8 * v;
-        const SplatI8 inBlock = (SplatI8)((SplatU8)(iota + (x - 1)) <= xSpan);
-        SplatF8 offs;
-        std::memcpy(&offs, off + (x - ax), sizeof offs);
-        const SplatF8 dxf = offs - rest0, dxf2 = dxf * dxf;
-        for (int y = y0; y <= y1; ++y) {
-          const float dyf = off[y + cp->na[1]] - rest1, dy2f = dyf * dyf;
-          if (!(dy2f + dz2f < outFrom)) continue;  // r^2 >= dy^2 + dz^2 >= Rc^2 + tol on every lane
-          // accumulateDz2S4's expressions: w = ((dx dx + dy dy) + dz dz) k - 1/2, f += s w^2,
-          // grad += (4 s w) k (dx, dy, dz).
-          const SplatF8 r2 = (dxf2 + dy2f) + dz2f;
-          const SplatI8 in = r2 < inBelow;
-          SplatI8 mask = in & inBlock;
-          if (anyLane(~(in | (r2 >= outFrom)) & inBlock)) [[unlikely]] {
-            // A lane near Rc_i: the exact predicate of influences(), lane by lane in double.
-            const double dyd = w_.cy[y] - p.y, dy2d = dyd * dyd;
-            SplatD4 cxa, cxb;
-            std::memcpy(&cxa, cxPad + x, sizeof cxa);
-            std::memcpy(&cxb, cxPad + x + 4, sizeof cxb);
-            const SplatD4 dxa = cxa - p.x, dxb = cxb - p.x;
-            const auto ina = ((dxa * dxa + dy2d) + dz2d) < p.rc2;
-            const auto inb = ((dxb * dxb + dy2d) + dz2d) < p.rc2;
-            const SplatI4 ma = __builtin_convertvector(ina, SplatI4), mb = __builtin_convertvector(inb, SplatI4);
-            mask = __builtin_shufflevector(ma, mb, 0, 1, 2, 3, 4, 5, 6, 7) & inBlock;
-          }
-          counted -= mask;
-          const SplatF8 wv = r2 * k - 0.5f;
-          float* at = base + std::size_t(y) * std::size_t(stride) + 8 * v;
-          SplatF8 acc;
-          std::memcpy(&acc, at, sizeof acc);
-          acc += (SplatF8)((SplatI8)(s * (wv * wv)) & mask);
-          std::memcpy(at, &acc, sizeof acc);
-          if constexpr (kGrad) {
-            const SplatF8 g = (s4 * wv) * k;
-            float* gp[3] = {at + pf, at + 2 * pf, at + 3 * pf};
-            const SplatF8 terms[3] = {g * dxf, g * dyf, g * dzf};
-            for (int a = 0; a < 3; ++a) {
-              std::memcpy(&acc, gp[a], sizeof acc);
-              acc += (SplatF8)((SplatI8)terms[a] & mask);
-              std::memcpy(gp[a], &acc, sizeof acc);
+      // Rows ya .. yb in `nv` windows of 8 from column xw.
+      auto rows = [&](int xw, int nv, int ya, int yb) __attribute__((always_inline)) {
+        float* base = planes + std::size_t(xw);
+        for (int v = 0; v < nv; ++v) {
+          const int x = xw + 8 * v;
+          const SplatI8 inBlock = (SplatI8)((SplatU8)(iota + (x - 1)) <= xSpan);
+          SplatF8 offs;
+          std::memcpy(&offs, off + (x - ax), sizeof offs);
+          const SplatF8 dxf = offs - rest0, dxf2 = dxf * dxf;
+          for (int y = ya; y <= yb; ++y) {
+            const float dyf = off[y + cp->na[1]] - rest1, dy2f = dyf * dyf;
+            if (!(dy2f + dz2f < outFrom)) continue;  // r^2 >= dy^2 + dz^2 >= Rc^2 + tol on every lane
+            // accumulateDz2S4's expressions: w = ((dx dx + dy dy) + dz dz) k - 1/2, f += s w^2,
+            // grad += (4 s w) k (dx, dy, dz).
+            const SplatF8 r2 = (dxf2 + dy2f) + dz2f;
+            const SplatI8 in = r2 < inBelow;
+            SplatI8 mask = in & inBlock;
+            if (anyLane(~(in | (r2 >= outFrom)) & inBlock)) [[unlikely]] {
+              // A lane near Rc_i: the exact predicate of influences(), lane by lane in double.
+              const double dyd = w_.cy[y] - p.y, dy2d = dyd * dyd;
+              SplatD4 cxa, cxb;
+              std::memcpy(&cxa, cxPad + x, sizeof cxa);
+              std::memcpy(&cxb, cxPad + x + 4, sizeof cxb);
+              const SplatD4 dxa = cxa - p.x, dxb = cxb - p.x;
+              const auto ina = ((dxa * dxa + dy2d) + dz2d) < p.rc2;
+              const auto inb = ((dxb * dxb + dy2d) + dz2d) < p.rc2;
+              const SplatI4 ma = __builtin_convertvector(ina, SplatI4), mb = __builtin_convertvector(inb, SplatI4);
+              mask = __builtin_shufflevector(ma, mb, 0, 1, 2, 3, 4, 5, 6, 7) & inBlock;
+            }
+            counted -= mask;
+            const SplatF8 wv = r2 * k - 0.5f;
+            float* at = base + std::size_t(y) * std::size_t(stride) + 8 * v;
+            SplatF8 acc;
+            std::memcpy(&acc, at, sizeof acc);
+            acc += (SplatF8)((SplatI8)(s * (wv * wv)) & mask);
+            std::memcpy(at, &acc, sizeof acc);
+            if constexpr (kGrad) {
+              const SplatF8 g = (s4 * wv) * k;
+              float* gp[3] = {at + pf, at + 2 * pf, at + 3 * pf};
+              const SplatF8 terms[3] = {g * dxf, g * dyf, g * dzf};
+              for (int a = 0; a < 3; ++a) {
+                std::memcpy(&acc, gp[a], sizeof acc);
+                acc += (SplatF8)((SplatI8)terms[a] & mask);
+                std::memcpy(gp[a], &acc, sizeof acc);
+              }
             }
           }
         }
+      };
+      // Rows whose chord reaches less than 4 S from the particle fit the one window ax - 3 .. ax + 4
+      // (the particle lies in column ax .. ax + 1): with rest in [0, S), a column d = x - ax with
+      // |d S - rest| < 4 S has -3 <= d <= 4. A corner that influences() accepts has exact dx^2 <
+      // Rc_i^2 - dy^2 - dz^2, below outFrom - dyz by about tol (the float dyz = dy^2 + dz^2 errs by
+      // ~2e-6 L^2, tol = 3e-5 L^2), so rows with dyz >= outFrom - (4 S)^2 have their chord within
+      // 4 S. Those rows are the disc's outer ones (dyz grows with |dy|): for Rc_i / S in (3, 5]
+      // about 2/3 of them, which windows from ax - r would cover with two. The lanes of a window are
+      // still settled by the predicate, so the narrower one only leaves out lanes that add +0.
+      // Different rows, the same particle: every corner's terms keep their order.
+      if (vectors == 2 && ax >= 3 && ax + 4 < stride) {
+        const float oneFrom = outFrom - oneSpan2_;
+        int ya = y0;  // first row that needs both windows
+        while (ya <= y1) {
+          const float dyf = off[ya + cp->na[1]] - rest1;
+          if (dyf * dyf + dz2f < oneFrom) break;
+          ++ya;
+        }
+        int yb = y1;  // last one
+        while (yb >= ya) {
+          const float dyf = off[yb + cp->na[1]] - rest1;
+          if (dyf * dyf + dz2f < oneFrom) break;
+          --yb;
+        }
+        rows(ax - 3, 1, y0, ya - 1);
+        rows(xs, 2, ya, yb);
+        rows(ax - 3, 1, yb + 1, y1);
+      } else {
+        rows(xs, vectors, y0, y1);
       }
     }
     if (rect && wy0 <= wy1) *rect = {std::int16_t(wy0), std::int16_t(wy1), std::int16_t(wx0), std::int16_t(wx1)};
