@@ -172,6 +172,7 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::offsets);
   grow(&Worker<Policy>::splatOffsets);
   grow(&Worker<Policy>::splatCx);
+  grow(&Worker<Policy>::splatInBlock);
   grow(&Worker<Policy>::splatReach);
   grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
