@@ -16,8 +16,9 @@
 // whole field fits Worker::kVolumeBytes it is summed once up front and serves both; otherwise
 // value-only slices (Worker::seedRing) serve seeding, summed the same way (see Worker::setPlanes).
 //
-// Masked lanes add +0.0f, which leaves every sum unchanged: values are >= 0 and a gradient sum
-// that starts at +0 and only adds never becomes -0 (round to nearest gives -0 only for -0 + -0).
+// Masked lanes add +0.0f or -0.0f (their w is zeroed, and w, s, k and the offsets are finite), which
+// leaves every sum unchanged: x + -0 = x for every x, +0 included, and a sum that starts at +0
+// never becomes -0 (round to nearest gives -0 only for -0 + -0).
 
   // GCC vector extensions: 8 floats, 8 int32 and 4 doubles (two SSE registers each in the
   // portable copy, one AVX register in the AVX2 one; the same IEEE operations lane by lane, no FMA).
@@ -197,8 +198,9 @@
           const SplatF8 dxf = offs - rest0, dxf2 = dxf * dxf;
           float* at = base + std::size_t(ya) * std::size_t(stride) + 8 * v;
           for (int y = ya; y <= yb; ++y, at += stride) {
+            // (No test of dy^2 + dz^2 against outFrom first: the rows are the disc's, and a row just
+            // outside it has r^2 >= outFrom on every lane, so its mask is empty and it adds +0.)
             const float dyf = offY[y] - rest1, dy2f = dyf * dyf;
-            if (!(dy2f + dz2f < outFrom)) continue;  // r^2 >= dy^2 + dz^2 >= Rc^2 + tol on every lane
             // accumulateDz2S4's expressions: w = ((dx dx + dy dy) + dz dz) k - 1/2, f += s w^2,
             // grad += (4 s w) k (dx, dy, dz).
             const SplatF8 r2 = (dxf2 + dy2f) + dz2f;
@@ -218,10 +220,12 @@
               mask = __builtin_shufflevector(ma, mb, 0, 1, 2, 3, 4, 5, 6, 7) & inBlock;
             }
             counted -= mask;
-            const SplatF8 wv = r2 * k - 0.5f;
+            // w is zeroed on masked lanes (one mask instead of one per plane): their terms are then
+            // +-0, which leave every sum as it is (see the top of this file).
+            const SplatF8 wv = (SplatF8)((SplatI8)(r2 * k - 0.5f) & mask);
             SplatF8 acc;
             std::memcpy(&acc, at, sizeof acc);
-            acc += (SplatF8)((SplatI8)(s * (wv * wv)) & mask);
+            acc += s * (wv * wv);
             std::memcpy(at, &acc, sizeof acc);
             if constexpr (kGrad) {
               const SplatF8 g = (s4 * wv) * k;
@@ -229,7 +233,7 @@
               const SplatF8 terms[3] = {g * dxf, g * dyf, g * dzf};
               for (int a = 0; a < 3; ++a) {
                 std::memcpy(&acc, gp[a], sizeof acc);
-                acc += (SplatF8)((SplatI8)terms[a] & mask);
+                acc += terms[a];
                 std::memcpy(gp[a], &acc, sizeof acc);
               }
             }
