@@ -39,13 +39,14 @@
 //   valgrind --tool=callgrind --instr-atstart=no bench_game_fountain --threads 1 --frames 10
 // gives the instructions of 10 frames (plus the per-run constant: compare 10 and 20 frames).
 #include "bench_timing.hpp"
+#include "fluid/io/particle_io.hpp"
+#include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fluid_surface.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
-#include "fluid/io/particle_io.hpp"
-#include "fluid/surface/marching_slices.hpp"
+#include "load_average.hpp"
 
 #include <tbb/global_control.h>
 
@@ -213,12 +214,21 @@ void printRow(const std::string& label, int t, int frames, const Run& r) {
   std::fflush(stdout);
 }
 
+double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
 // --mesh-reps: the frame's particles meshed by the game's mesher settings, 1 and 2 threads interleaved.
 void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfaceParams& game_params, int reps) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
   fluid::SurfaceExtractor ex[2];
   fluid::SurfaceMesh mesh[2];
-  std::vector<double> wall[2], cpu1;
+  // CPU ms: the calling thread's for both thread counts, and for 2 threads also the whole process's
+  // (both threads: when it about equals the one-thread CPU time while the wall time does not halve,
+  // the second thread found no free core).
+  std::vector<double> wall[2], cpu[2], process2;
   const fluid::SurfaceInput input{ps.x, ps.y, ps.z, {}, {}, {}};
   auto run = [&](int k) {
     fluid::SurfaceParams sp = game_params;
@@ -229,22 +239,29 @@ void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfacePara
       std::exit(1);
     }
   };
+  const std::string load_start = benchplot::loadAverage();
   run(0);
   run(1);
   for (int r = 0; r < reps; ++r)
     for (int k : {1, 0}) {
-      const double c0 = benchtiming::threadCpuMs();
+      const double c0 = benchtiming::threadCpuMs(), p0 = processCpuMs();
       wall[k].push_back(benchtiming::timeMs([&] { run(k); }));
-      if (k == 0) cpu1.push_back(benchtiming::threadCpuMs() - c0);
+      cpu[k].push_back(benchtiming::threadCpuMs() - c0);
+      if (k == 1) process2.push_back(processCpuMs() - p0);
     }
   const fluid::SurfaceStats& st = mesh[0].stats;
-  std::printf("\n| particles | Rc | S | triangles | blocks (slice splat) | 1 thr ms median | 1 thr ms min | 2 thr ms "
-              "median | 2 thr ms min | 2 thr speed-up | 1 thr CPU ms median |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
-  std::printf("| %zu | %.4g | %.4g | %zu%s | %u (%u) | %.3f | %.3f | %.3f | %.3f | %.2fx | %.3f |\n", ps.size(),
-              double(game_params.rc), double(game_params.cube), mesh[0].indices.size() / 3,
+  std::printf(
+      "\n| particles | Rc | S | triangles | blocks (slice splat) | 1 thr ms median | 1 thr ms min | 2 thr ms "
+      "median | 2 thr ms min | 2 thr speed-up | 1 thr CPU ms median | 2 thr calling thread CPU ms median | 2 thr "
+      "process CPU ms median |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| %zu | %.4g | %.4g | %zu%s | %u (%u) | %.3f | %.3f | %.3f | %.3f | %.2fx | %.3f | %.3f | %.3f |\n",
+              ps.size(), double(game_params.rc), double(game_params.cube), mesh[0].indices.size() / 3,
               mesh[0].indices == mesh[1].indices ? "" : " (**2 thr differ**)", st.blocks, st.splatBlocks,
               median(wall[0]), *std::min_element(wall[0].begin(), wall[0].end()), median(wall[1]),
-              *std::min_element(wall[1].begin(), wall[1].end()), median(wall[0]) / median(wall[1]), median(cpu1));
+              *std::min_element(wall[1].begin(), wall[1].end()), median(wall[0]) / median(wall[1]), median(cpu[0]),
+              median(cpu[1]), median(process2));
+  std::printf("\nLoad average (1, 5, 15 min) from /proc/loadavg: %s before the meshes, %s after.\n", load_start.c_str(),
+              benchplot::loadAverage().c_str());
   std::fflush(stdout);
 }
 
@@ -362,8 +379,8 @@ int main(int argc, char** argv) {
         last_frame.x.assign(pa.x.begin(), pa.x.end());
         last_frame.y.assign(pa.y.begin(), pa.y.end());
         last_frame.z.assign(pa.z.begin(), pa.z.end());
-        frame_params = game::surfaceParamsFor(surface_params, fluid::sphSpacing(runs[0].f.world.params), view.eye,
-                                              view.dir);
+        frame_params =
+            game::surfaceParamsFor(surface_params, fluid::sphSpacing(runs[0].f.world.params), view.eye, view.dir);
       }
     }
     if (!dump_frame.empty()) {

@@ -9,7 +9,8 @@
 // (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
 // A fourth argument `blocks` also prints each block's triangles and vertices (thread balance);
 // SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1, and
-// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto, SURFACE_COUNT_RC=R with rc = R. SURFACE_COUNT_RATIO=N times N
+// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto, SURFACE_COUNT_RC=R with rc = R (default 3).
+// SURFACE_COUNT_RATIO=N times N
 // interleaved rounds of approach 1 and approach 3 (hashed baseline) on the calling thread's CPU
 // clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
 // bench_surface runs (1 thread), on the §6 cache route (SURFACE_COUNT_ROUTE=auto|splat for the others).
