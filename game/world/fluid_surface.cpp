@@ -2,9 +2,7 @@
 
 namespace game {
 
-namespace {
-
-fluid::SurfaceParams surfaceParams(const FluidSurfaceParams& p, float spacing, glm::vec3 eye, glm::vec3 view_dir) {
+fluid::SurfaceParams surfaceParamsFor(const FluidSurfaceParams& p, float spacing, glm::vec3 eye, glm::vec3 view_dir) {
   fluid::SurfaceParams sp;
   sp.rc = p.smoothing * spacing;
   sp.cube = p.cube * spacing;
@@ -17,6 +15,8 @@ fluid::SurfaceParams surfaceParams(const FluidSurfaceParams& p, float spacing, g
   sp.viewDir = view_dir;
   return sp;
 }
+
+namespace {
 
 bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
   if (!st.ok()) {
@@ -48,7 +48,7 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
     return false;
   }
   ++s.meshes;
-  const fluid::SurfaceParams sp = surfaceParams(s.params, fluid::sphSpacing(fluid.world.params), eye, view_dir);
+  const fluid::SurfaceParams sp = surfaceParamsFor(s.params, fluid::sphSpacing(fluid.world.params), eye, view_dir);
   fluid::SurfaceInput input;
   input.x = positions.x;
   input.y = positions.y;

@@ -44,6 +44,11 @@ struct FluidSurfaceParams {
 // returns true; the signature stays for callers that check.
 bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, std::string& error);
 
+// The mesher's parameters meshFluidSurface uses for particles `spacing` apart (fluid::sphSpacing),
+// seen from `eye` along `view_dir` (threads left at the extractor's default). Public so that
+// benchmarks mesh with exactly the game's settings.
+fluid::SurfaceParams surfaceParamsFor(const FluidSurfaceParams& p, float spacing, glm::vec3 eye, glm::vec3 view_dir);
+
 struct FluidSurface {
   FluidSurfaceParams params;
   fluid::SurfaceExtractor extractor;                        // params.async false

@@ -28,15 +28,25 @@
 // a loaded machine kept the thread waiting for a core.
 // Configurations: the scene file as written, then each `--config "k=v,k=v"` given (sph_fluid keys).
 // Instruction counts: under `valgrind --tool=callgrind --instr-atstart=no` only the timed frames
+// --mesh-reps N (issue 20's game-scale bar: a 13,000-particle frame meshed in <= 3 ms on 2 threads) takes
+// the first thread count's final frame (after its timed frames) and meshes it synchronously with the
+// game's own mesher settings (game::surfaceParamsFor: the scene's fluid_surface section, the particle
+// spacing, eye and view from the camera), 1 and 2 threads interleaved, one untimed mesh each first, then
+// N timed rounds; prints one more table (median and min wall ms, the 1-thread CPU ms, triangles,
+// blocks and field route). --dump-frame FILE also writes that frame as .xyz (for callgrind runs of
+// bench_surface_count on it).
 // are instrumented (the fill runs at valgrind's uninstrumented speed), e.g.
 //   valgrind --tool=callgrind --instr-atstart=no bench_game_fountain --threads 1 --frames 10
 // gives the instructions of 10 frames (plus the per-run constant: compare 10 and 20 frames).
 #include "bench_timing.hpp"
+#include "fluid/io/particle_io.hpp"
+#include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fluid_surface.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"
+#include "load_average.hpp"
 
 #include <tbb/global_control.h>
 
@@ -204,6 +214,57 @@ void printRow(const std::string& label, int t, int frames, const Run& r) {
   std::fflush(stdout);
 }
 
+double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
+// --mesh-reps: the frame's particles meshed by the game's mesher settings, 1 and 2 threads interleaved.
+void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfaceParams& game_params, int reps) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+  fluid::SurfaceExtractor ex[2];
+  fluid::SurfaceMesh mesh[2];
+  // CPU ms: the calling thread's for both thread counts, and for 2 threads also the whole process's
+  // (both threads: when it about equals the one-thread CPU time while the wall time does not halve,
+  // the second thread found no free core).
+  std::vector<double> wall[2], cpu[2], process2;
+  const fluid::SurfaceInput input{ps.x, ps.y, ps.z, {}, {}, {}};
+  auto run = [&](int k) {
+    fluid::SurfaceParams sp = game_params;
+    sp.threads = k + 1;
+    const fluid::SurfaceStatus st = ex[k].extract(input, sp, mesh[k]);
+    if (!st.ok()) {
+      std::fprintf(stderr, "bench_game_fountain: %s\n", st.error.c_str());
+      std::exit(1);
+    }
+  };
+  const std::string load_start = benchplot::loadAverage();
+  run(0);
+  run(1);
+  for (int r = 0; r < reps; ++r)
+    for (int k : {1, 0}) {
+      const double c0 = benchtiming::threadCpuMs(), p0 = processCpuMs();
+      wall[k].push_back(benchtiming::timeMs([&] { run(k); }));
+      cpu[k].push_back(benchtiming::threadCpuMs() - c0);
+      if (k == 1) process2.push_back(processCpuMs() - p0);
+    }
+  const fluid::SurfaceStats& st = mesh[0].stats;
+  std::printf(
+      "\n| particles | Rc | S | triangles | blocks (slice splat) | 1 thr ms median | 1 thr ms min | 2 thr ms "
+      "median | 2 thr ms min | 2 thr speed-up | 1 thr CPU ms median | 2 thr calling thread CPU ms median | 2 thr "
+      "process CPU ms median |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| %zu | %.4g | %.4g | %zu%s | %u (%u) | %.3f | %.3f | %.3f | %.3f | %.2fx | %.3f | %.3f | %.3f |\n",
+              ps.size(), double(game_params.rc), double(game_params.cube), mesh[0].indices.size() / 3,
+              mesh[0].indices == mesh[1].indices ? "" : " (**2 thr differ**)", st.blocks, st.splatBlocks,
+              median(wall[0]), *std::min_element(wall[0].begin(), wall[0].end()), median(wall[1]),
+              *std::min_element(wall[1].begin(), wall[1].end()), median(wall[0]) / median(wall[1]), median(cpu[0]),
+              median(cpu[1]), median(process2));
+  std::printf("\nLoad average (1, 5, 15 min) from /proc/loadavg: %s before the meshes, %s after.\n", load_start.c_str(),
+              benchplot::loadAverage().c_str());
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -211,6 +272,8 @@ int main(int argc, char** argv) {
   std::vector<int> threads{1, 2};
   int frames = 60;
   bool ab_carry = false, with_mesh = false;
+  int mesh_reps = 0;
+  std::string dump_frame;
   std::vector<std::string> common{"sph_fluid.max_particles=10000"};
   std::vector<Config> configs{{"as in the scene file", {}}};
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -219,6 +282,10 @@ int main(int argc, char** argv) {
       ab_carry = v == "1";
     } else if (k == "--mesh") {
       with_mesh = v == "1";
+    } else if (k == "--mesh-reps") {
+      mesh_reps = std::atoi(v.c_str());
+    } else if (k == "--dump-frame") {
+      dump_frame = v;
     } else if (k == "--scene") {
       scene_file = v;
     } else if (k == "--frames") {
@@ -246,7 +313,7 @@ int main(int argc, char** argv) {
   if (argc % 2 == 0 || frames < 1 || threads.empty()) {
     std::fprintf(stderr,
                  "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
-                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--mesh 1]\n");
+                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--mesh 1] [--mesh-reps N] [--dump-frame FILE]\n");
     return 2;
   }
 
@@ -262,6 +329,8 @@ int main(int argc, char** argv) {
     game::SphFluid filled;
     game::FluidSurfaceParams surface_params;
     View view;
+    fluid::ParticlePositions last_frame;  // --mesh-reps / --dump-frame: the first thread count's final frame
+    fluid::SurfaceParams frame_params;
     {
       // Fill with the drains shut (one fill per configuration, all rows of it time the same state).
       std::vector<std::string> fill = assignments;
@@ -305,7 +374,23 @@ int main(int argc, char** argv) {
           }
       CALLGRIND_STOP_INSTRUMENTATION;
       for (const Run& r : runs) printRow(config.label + (r.fresh ? " fresh shapes" : ""), t, frames, r);
+      if (t == threads.front() && (mesh_reps > 0 || !dump_frame.empty())) {
+        const fluid::SphPositionArrays pa = fluid::sphPositionArrays(runs[0].f.world);
+        last_frame.x.assign(pa.x.begin(), pa.x.end());
+        last_frame.y.assign(pa.y.begin(), pa.y.end());
+        last_frame.z.assign(pa.z.begin(), pa.z.end());
+        frame_params =
+            game::surfaceParamsFor(surface_params, fluid::sphSpacing(runs[0].f.world.params), view.eye, view.dir);
+      }
     }
+    if (!dump_frame.empty()) {
+      const fluid::IoStatus io = fluid::writeParticleXyz(dump_frame, last_frame, fluid::OverwritePolicy::replace);
+      if (!io.ok()) {
+        std::fprintf(stderr, "bench_game_fountain: %s\n", io.error.c_str());
+        return 1;
+      }
+    }
+    if (mesh_reps > 0) meshFrameTable(last_frame, frame_params, mesh_reps);
   }
   return 0;
 }

@@ -9,7 +9,8 @@
 // (positions, normals, indices, in output order) so an optimisation can be checked bit for bit.
 // A fourth argument `blocks` also prints each block's triangles and vertices (thread balance);
 // SURFACE_COUNT_THREADS=N in the environment runs with N threads instead of 1, and
-// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto. SURFACE_COUNT_RATIO=N times N
+// SURFACE_COUNT_BLOCK=B with blockCubes = B instead of auto, SURFACE_COUNT_RC=R with rc = R (default 3).
+// SURFACE_COUNT_RATIO=N times N
 // interleaved rounds of approach 1 and approach 3 (hashed baseline) on the calling thread's CPU
 // clock and prints both medians and a3/a1: a quick check of the Figure 7 ratio between full
 // bench_surface runs (1 thread), on the §6 cache route (SURFACE_COUNT_ROUTE=auto|splat for the others).
@@ -18,7 +19,8 @@
 // SURFACE_COUNT_SCALING=N times N interleaved rounds of approach 1 on 1 thread and on
 // SURFACE_COUNT_THREADS (default 2) threads, wall clock, each timed extraction right after an
 // untimed one with the same extractor (as bench_surface's thread-scaling table), and prints both
-// medians and their ratio: a quick check of the two-thread bar between full bench_surface runs.
+// medians and their ratio (and, for the several threads, the calling thread's and the process's CPU ms): a quick check
+// of the two-thread bar between full bench_surface runs.
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -59,6 +61,7 @@ int main(int argc, char** argv) {
   if (const char* t = std::getenv("SURFACE_COUNT_THREADS"))
     params.threads = std::max(1, std::atoi(t));                                              // timing checks
   if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
+  if (const char* rc = std::getenv("SURFACE_COUNT_RC")) params.rc = float(std::atof(rc));
   if (const char* pk = std::getenv("SURFACE_COUNT_PORTABLE")) params.portableKernels = std::atoi(pk) != 0;
   // The §6 cache route (bench_surface's Figure 7 tables use it); SURFACE_COUNT_ROUTE=auto|splat for the others.
   params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
@@ -122,26 +125,44 @@ int main(int argc, char** argv) {
     pn.threads = params.threads > 1 ? params.threads : 2;
     fluid::SurfaceExtractor e1, en;
     fluid::SurfaceMesh m1, mn;
+    auto cpuMs = [](clockid_t clock) {
+      timespec ts{};
+      clock_gettime(clock, &ts);
+      return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+    };
+    // Also the CPU ms of the calling thread and of the whole process over the timed extraction: on
+    // a loaded machine, a process CPU time near the one-thread time with a wall time that does not
+    // drop says the other threads waited for a core rather than that the work did not split.
+    double callingCpu = 0, processCpu = 0;
     auto wallMs = [&](fluid::SurfaceExtractor& e, const fluid::SurfaceParams& p, fluid::SurfaceMesh& m) {
       (void)e.extract(in, p, m);  // untimed: steady state, as when a game meshes every frame
+      const double c0 = cpuMs(CLOCK_THREAD_CPUTIME_ID), p0 = cpuMs(CLOCK_PROCESS_CPUTIME_ID);
       const auto t0 = std::chrono::steady_clock::now();
       (void)e.extract(in, p, m);
-      return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      callingCpu = cpuMs(CLOCK_THREAD_CPUTIME_ID) - c0, processCpu = cpuMs(CLOCK_PROCESS_CPUTIME_ID) - p0;
+      return ms;
     };
-    std::vector<double> t1, tn, ratio;
+    std::vector<double> t1, tn, ratio, cn, pcn;
     for (int r = 0; r < rounds; ++r) {
       t1.push_back(wallMs(e1, p1, m1));
       tn.push_back(wallMs(en, pn, mn));
+      cn.push_back(callingCpu);
+      pcn.push_back(processCpu);
       ratio.push_back(t1.back() / tn.back());
     }
     const bool same = m1.positions == mn.positions && m1.normals == mn.normals && m1.indices == mn.indices;
     std::sort(t1.begin(), t1.end());
     std::sort(tn.begin(), tn.end());
     std::sort(ratio.begin(), ratio.end());
+    std::sort(cn.begin(), cn.end());
+    std::sort(pcn.begin(), pcn.end());
     const double a = t1[t1.size() / 2], b = tn[tn.size() / 2];
     std::printf(
         "wall ms median of %d: 1 thr %.3f, %d thr %.3f, ratio of medians %.3f, median of per-round ratios %.3f%s\n",
         rounds, a, pn.threads, b, a / b, ratio[ratio.size() / 2], same ? "" : " MESHES DIFFER");
+    std::printf("%d thr CPU ms median: calling thread %.3f, process %.3f\n", pn.threads, cn[cn.size() / 2],
+                pcn[pcn.size() / 2]);
   }
   return 0;
 }

@@ -72,7 +72,8 @@ class BlockMesher {
       out_.particleBytes = std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
                            std::uint64_t(w_.seedRing.size() + w_.volume.size()) * sizeof(float) +
                            std::uint64_t(w_.splatOffsets.size()) * sizeof(float) +
-                           std::uint64_t(w_.splatCx.size()) * sizeof(double);
+                           std::uint64_t(w_.splatCx.size()) * sizeof(double) +
+                           std::uint64_t(w_.splatInBlock.size()) * sizeof(std::int32_t);
     else
       out_.particleBytes = std::uint64_t(w_.columns()) * (2 * sizeof(std::uint32_t) + sizeof(std::int16_t)) +
                            std::uint64_t(w_.colStart[w_.columns()]) * sizeof(ColumnEntry) +  // elements in use

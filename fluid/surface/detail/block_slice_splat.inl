@@ -16,8 +16,9 @@
 // whole field fits Worker::kVolumeBytes it is summed once up front and serves both; otherwise
 // value-only slices (Worker::seedRing) serve seeding, summed the same way (see Worker::setPlanes).
 //
-// Masked lanes add +0.0f, which leaves every sum unchanged: values are >= 0 and a gradient sum
-// that starts at +0 and only adds never becomes -0 (round to nearest gives -0 only for -0 + -0).
+// Masked lanes add +0.0f or -0.0f (their w is zeroed, and w, s, k and the offsets are finite), which
+// leaves every sum unchanged: x + -0 = x for every x, +0 included, and a sum that starts at +0
+// never becomes -0 (round to nearest gives -0 only for -0 + -0).
 
   // GCC vector extensions: 8 floats, 8 int32 and 4 doubles (two SSE registers each in the
   // portable copy, one AVX register in the AVX2 one; the same IEEE operations lane by lane, no FMA).
@@ -27,6 +28,8 @@
   using SplatU8 = std::uint32_t __attribute__((vector_size(32)));
   using SplatI4 = std::int32_t __attribute__((vector_size(16)));
   int splatReachMax_ = 0;  // largest particleReach() of the block's particles (prepareSplat)
+  float oneSpan2_ = 0;     // float((4 S)^2): splatSlice's one-window rows
+  float invS_ = 1, hSlack_ = 0;  // float(1 / S) and float(1e-3 S): splatSlice's disc rows
 
   // Block setup for the route: the block particles' float records (CacheParticle, as the cache has
   // them), the offsets table float(d S) and the corners' x coordinates over the padded plane rows.
@@ -34,9 +37,14 @@
     const int m = su_.m;
     // Windows start at most 2 m + 9 columns from a particle's anchor either way (splatSlice).
     offsetRange_ = 2 * m + 10;
+    oneSpan2_ = float(16.0 * su_.s * su_.s);
+    invS_ = float(1.0 / su_.s);
+    hSlack_ = float(1e-3 * su_.s);
     w_.splatOffsets.resize(std::size_t(2 * offsetRange_ + 1));
     for (int d = -offsetRange_; d <= offsetRange_; ++d)
       w_.splatOffsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
+    w_.splatInBlock.resize(std::size_t(w_.planeStride));
+    for (int x = 0; x < w_.planeStride; ++x) w_.splatInBlock[std::size_t(x)] = x >= 1 && x <= nx_ - 1 ? -1 : 0;
     w_.splatCx.resize(std::size_t(nx_ + 1 + 2 * m + 16));
     for (int i = -m; i <= nx_ + m + 15; ++i) w_.splatCx[std::size_t(i + m)] = double(g0_[0] + i) * su_.s;
     w_.local.resize(particles.size());
@@ -98,6 +106,17 @@
     return (o[0] | o[1] | o[2] | o[3]) != 0;
 #endif
   }
+  // Whether any lane of an int mask is clear.
+  static bool anyLaneClear(const SplatI8& m) {
+#if defined(FLUID_SURFACE_IN_AVX2_COPY)
+    const __m256i v = reinterpret_cast<const __m256i&>(m);
+    return !_mm256_testc_si256(v, _mm256_set1_epi32(-1));
+#else
+    const SplatI4 lo = __builtin_shufflevector(m, m, 0, 1, 2, 3), hi = __builtin_shufflevector(m, m, 4, 5, 6, 7);
+    const SplatI4 a = lo & hi;
+    return (a[0] & a[1] & a[2] & a[3]) != -1;
+#endif
+  }
 
   // Sums slice z's field into `planes` (value, then with kGrad df/dx, df/dy, df/dz; Worker::planeFloats
   // each, cleared first). Returns the number of particle terms added.
@@ -132,8 +151,7 @@
     const float* off = w_.splatOffsets.data() + offsetRange_;
     const double* cxPad = w_.splatCx.data() + m;  // cxPad[x] = double(g0 + x) S for x in [-m, nx + m + 15]
     const std::int16_t* reachOf = w_.splatReach.data();
-    const SplatI8 iota = {0, 1, 2, 3, 4, 5, 6, 7};
-    const unsigned xSpan = unsigned(nx_ - 2);  // inner columns 1 .. nx - 1: unsigned(x - 1) <= nx - 2
+    const std::int32_t* inBlockAt = w_.splatInBlock.data();  // -1 on the inner columns 1 .. nx - 1, else 0
     const int ylo = 1, yhi = ny_ - 1;
     SplatI8 counted = {};
     for (const CacheParticle* cp = first; cp != last; ++cp) {
@@ -144,60 +162,112 @@
       const int r = reachOf[li];
       const int ax = -cp->na[0], ay = -cp->na[1];
       const float dzf = off[z + cp->na[2]] - cp->rest[2], dz2f = dzf * dzf;
-      const int y0 = std::max(ylo, ay - r), y1 = std::min(yhi, ay + r);
+      const float rest0 = cp->rest[0], rest1 = cp->rest[1], outFrom = w_.splatBand[li][1];
+      // The rows of the particle's disc in this slice (not all of ay - r .. ay + r: every window
+      // would test the rows outside it). A corner that influences() accepts has exact dy^2 <
+      // Rc_i^2 - dz^2, below outFrom - dz2f by about tol (the float dz2f errs by ~2e-6 L^2, tol =
+      // 3e-5 L^2), so |dy| < hz, and the 1e-3 S on top is far beyond the rounding of hz and of the
+      // row bounds: rows d = y - ay with |d S - rest| < hz, ceil((rest - hz) / S) .. floor((rest +
+      // hz) / S), within blockSpan's -r .. r. (Floors by truncation of x + r + 2 >= 0.)
+      // (outFrom > dz2f: dz^2 < Rc_i^2 in double just above.)
+      const float hz = std::sqrt(outFrom - dz2f) + hSlack_;
+      const int ir = r + 2;
+      const float fr = float(ir);
+      const int y0 = std::max(ylo, ay + std::max(-r, ir - int((hz - rest1) * invS_ + fr)));
+      const int y1 = std::min(yhi, ay + std::min(r, int((rest1 + hz) * invS_ + fr) - ir));
       // Columns ax - r .. ax + r (blockSpan's reach) in `vectors` windows of 8 from xs, the start
       // moved into the row where the reach sticks out of it (the lane mask keeps columns 1 .. nx - 1).
       const int vectors = (2 * r + 8) / 8;
       const int xs = std::min(std::max(ax - r, 0), stride - 8 * vectors);
-      const float k = cp->k, s = cp->s, s4 = cp->s4, rest0 = cp->rest[0], rest1 = cp->rest[1];
-      const float inBelow = w_.splatBand[li][0], outFrom = w_.splatBand[li][1];
-      float* base = planes + std::size_t(xs);
+      const float k = cp->k, s = cp->s, s4 = cp->s4;
+      const float inBelow = w_.splatBand[li][0];
       wy0 = std::min(wy0, y0), wy1 = std::max(wy1, y1);
       wx0 = std::min(wx0, xs), wx1 = std::max(wx1, xs + 8 * vectors - 1);
-      for (int v = 0; v < vectors; ++v) {
-        const int x = xs + 8 * v;
-        const SplatI8 inBlock = (SplatI8)((SplatU8)(iota + (x - 1)) <= xSpan);
-        SplatF8 offs;
-        std::memcpy(&offs, off + (x - ax), sizeof offs);
-        const SplatF8 dxf = offs - rest0, dxf2 = dxf * dxf;
-        for (int y = y0; y <= y1; ++y) {
-          const float dyf = off[y + cp->na[1]] - rest1, dy2f = dyf * dyf;
-          if (!(dy2f + dz2f < outFrom)) continue;  // r^2 >= dy^2 + dz^2 >= Rc^2 + tol on every lane
-          // accumulateDz2S4's expressions: w = ((dx dx + dy dy) + dz dz) k - 1/2, f += s w^2,
-          // grad += (4 s w) k (dx, dy, dz).
-          const SplatF8 r2 = (dxf2 + dy2f) + dz2f;
-          const SplatI8 in = r2 < inBelow;
-          SplatI8 mask = in & inBlock;
-          if (anyLane(~(in | (r2 >= outFrom)) & inBlock)) [[unlikely]] {
-            // A lane near Rc_i: the exact predicate of influences(), lane by lane in double.
-            const double dyd = w_.cy[y] - p.y, dy2d = dyd * dyd;
-            SplatD4 cxa, cxb;
-            std::memcpy(&cxa, cxPad + x, sizeof cxa);
-            std::memcpy(&cxb, cxPad + x + 4, sizeof cxb);
-            const SplatD4 dxa = cxa - p.x, dxb = cxb - p.x;
-            const auto ina = ((dxa * dxa + dy2d) + dz2d) < p.rc2;
-            const auto inb = ((dxb * dxb + dy2d) + dz2d) < p.rc2;
-            const SplatI4 ma = __builtin_convertvector(ina, SplatI4), mb = __builtin_convertvector(inb, SplatI4);
-            mask = __builtin_shufflevector(ma, mb, 0, 1, 2, 3, 4, 5, 6, 7) & inBlock;
-          }
-          counted -= mask;
-          const SplatF8 wv = r2 * k - 0.5f;
-          float* at = base + std::size_t(y) * std::size_t(stride) + 8 * v;
-          SplatF8 acc;
-          std::memcpy(&acc, at, sizeof acc);
-          acc += (SplatF8)((SplatI8)(s * (wv * wv)) & mask);
-          std::memcpy(at, &acc, sizeof acc);
-          if constexpr (kGrad) {
-            const SplatF8 g = (s4 * wv) * k;
-            float* gp[3] = {at + pf, at + 2 * pf, at + 3 * pf};
-            const SplatF8 terms[3] = {g * dxf, g * dyf, g * dzf};
-            for (int a = 0; a < 3; ++a) {
-              std::memcpy(&acc, gp[a], sizeof acc);
-              acc += (SplatF8)((SplatI8)terms[a] & mask);
-              std::memcpy(gp[a], &acc, sizeof acc);
+      // Rows ya .. yb in `nv` windows of 8 from column xw.
+      // Loop invariants read once: the stores below go through memcpy, which the compiler must
+      // assume may write anything, so it would reload cp->na[1] in every row.
+      const float* offY = off + cp->na[1];
+      auto rows = [&](int xw, int nv, int ya, int yb) __attribute__((always_inline)) {
+        float* base = planes + std::size_t(xw);
+        for (int v = 0; v < nv; ++v) {
+          const int x = xw + 8 * v;
+          SplatI8 inBlock;
+          std::memcpy(&inBlock, inBlockAt + x, sizeof inBlock);
+          SplatF8 offs;
+          std::memcpy(&offs, off + (x - ax), sizeof offs);
+          const SplatF8 dxf = offs - rest0, dxf2 = dxf * dxf;
+          float* at = base + std::size_t(ya) * std::size_t(stride) + 8 * v;
+          for (int y = ya; y <= yb; ++y, at += stride) {
+            // (No test of dy^2 + dz^2 against outFrom first: the rows are the disc's, and a row just
+            // outside it has r^2 >= outFrom on every lane, so its mask is empty and it adds +0.)
+            const float dyf = offY[y] - rest1, dy2f = dyf * dyf;
+            // accumulateDz2S4's expressions: w = ((dx dx + dy dy) + dz dz) k - 1/2, f += s w^2,
+            // grad += (4 s w) k (dx, dy, dz).
+            const SplatF8 r2 = (dxf2 + dy2f) + dz2f;
+            const SplatI8 in = r2 < inBelow;
+            SplatI8 mask = in & inBlock;
+            // (Lanes outside the block may take this path too; the mask below drops them.)
+            if (anyLaneClear(in | (r2 >= outFrom))) [[unlikely]] {
+              // A lane near Rc_i: the exact predicate of influences(), lane by lane in double.
+              const double dyd = w_.cy[y] - p.y, dy2d = dyd * dyd;
+              SplatD4 cxa, cxb;
+              std::memcpy(&cxa, cxPad + x, sizeof cxa);
+              std::memcpy(&cxb, cxPad + x + 4, sizeof cxb);
+              const SplatD4 dxa = cxa - p.x, dxb = cxb - p.x;
+              const auto ina = ((dxa * dxa + dy2d) + dz2d) < p.rc2;
+              const auto inb = ((dxb * dxb + dy2d) + dz2d) < p.rc2;
+              const SplatI4 ma = __builtin_convertvector(ina, SplatI4), mb = __builtin_convertvector(inb, SplatI4);
+              mask = __builtin_shufflevector(ma, mb, 0, 1, 2, 3, 4, 5, 6, 7) & inBlock;
+            }
+            counted -= mask;
+            // w is zeroed on masked lanes (one mask instead of one per plane): their terms are then
+            // +-0, which leave every sum as it is (see the top of this file).
+            const SplatF8 wv = (SplatF8)((SplatI8)(r2 * k - 0.5f) & mask);
+            SplatF8 acc;
+            std::memcpy(&acc, at, sizeof acc);
+            acc += s * (wv * wv);
+            std::memcpy(at, &acc, sizeof acc);
+            if constexpr (kGrad) {
+              const SplatF8 g = (s4 * wv) * k;
+              float* gp[3] = {at + pf, at + 2 * pf, at + 3 * pf};
+              const SplatF8 terms[3] = {g * dxf, g * dyf, g * dzf};
+              for (int a = 0; a < 3; ++a) {
+                std::memcpy(&acc, gp[a], sizeof acc);
+                acc += terms[a];
+                std::memcpy(gp[a], &acc, sizeof acc);
+              }
             }
           }
         }
+      };
+      // Rows whose chord reaches less than 4 S from the particle fit the one window ax - 3 .. ax + 4
+      // (the particle lies in column ax .. ax + 1): with rest in [0, S), a column d = x - ax with
+      // |d S - rest| < 4 S has -3 <= d <= 4. A corner that influences() accepts has exact dx^2 <
+      // Rc_i^2 - dy^2 - dz^2, below outFrom - dyz by about tol (the float dyz = dy^2 + dz^2 errs by
+      // ~2e-6 L^2, tol = 3e-5 L^2), so rows with dyz >= outFrom - (4 S)^2 have their chord within
+      // 4 S. Those rows are the disc's outer ones (dyz grows with |dy|): for Rc_i / S in (3, 5]
+      // about 2/3 of them, which windows from ax - r would cover with two. The lanes of a window are
+      // still settled by the predicate, so the narrower one only leaves out lanes that add +0.
+      // Different rows, the same particle: every corner's terms keep their order.
+      if (vectors == 2 && ax >= 3 && ax + 4 < stride) {
+        const float oneFrom = outFrom - oneSpan2_;
+        int ya = y0;  // first row that needs both windows
+        while (ya <= y1) {
+          const float dyf = offY[ya] - rest1;
+          if (dyf * dyf + dz2f < oneFrom) break;
+          ++ya;
+        }
+        int yb = y1;  // last one
+        while (yb >= ya) {
+          const float dyf = offY[yb] - rest1;
+          if (dyf * dyf + dz2f < oneFrom) break;
+          --yb;
+        }
+        rows(ax - 3, 1, y0, ya - 1);
+        rows(xs, 2, ya, yb);
+        rows(ax - 3, 1, yb + 1, y1);
+      } else {
+        rows(xs, vectors, y0, y1);
       }
     }
     if (rect && wy0 <= wy1) *rect = {std::int16_t(wy0), std::int16_t(wy1), std::int16_t(wx0), std::int16_t(wx1)};

@@ -172,6 +172,7 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::offsets);
   grow(&Worker<Policy>::splatOffsets);
   grow(&Worker<Policy>::splatCx);
+  grow(&Worker<Policy>::splatInBlock);
   grow(&Worker<Policy>::splatReach);
   grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
@@ -388,9 +389,11 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
 // and margin set). automatic: where the splat's whole-block field fits Worker::kVolumeBytes (summed
 // once, serving seeding and the sweep) and a particle's disc row fits one or two 8-wide windows
 // (ceil(Rc / S) <= 5). Measured (docs/surface.md, "Field routes"): there it does fewer instructions
-// than the §6 cache walk on the dense sets; with larger discs (blob, Rc / S = 10) or blocks whose
-// field does not fit (spray) the cache does fewer. The choice depends on the data, S and Rc only,
-// never on the thread count, and both routes give the same bits.
+// than the §6 cache walk on the dense sets; with blocks whose field does not fit (spray) the cache
+// does fewer, and with larger discs it does fewer on the larger sets (fountain and explosion at
+// S = 0.3, Rc / S = 10: bench_surface_count with SURFACE_COUNT_ROUTE=cache|splat under callgrind),
+// while on blob (Rc / S = 10, 100 particles) the two are about even. The choice depends on the
+// data, S and Rc only, never on the thread count, and both routes give the same bits.
 inline bool useSliceSplat(SurfaceFieldRoute route, const Setup& su) {
   if (route != SurfaceFieldRoute::automatic) return route == SurfaceFieldRoute::sliceSplat;
   const int r = std::max(1, int(std::ceil(su.rcMax / su.s)));

@@ -268,6 +268,7 @@ struct Worker {
   std::vector<std::int32_t> ringZ;              // slice z held by each ring slot (-1: none)
   std::vector<float> splatOffsets;              // float(d S), d in [-(m + 2), m + 18] (8-wide windows)
   std::vector<double> splatCx;                  // double(g0 + x) S, x in [-m, nx + m + 15]
+  std::vector<std::int32_t> splatInBlock;       // per plane column: -1 on the inner columns 1 .. nx - 1, else 0
   std::vector<std::int16_t> splatReach;         // particleReach() of each block particle
   std::vector<std::array<float, 2>> splatBand;  // per block particle: float(Rc_i^2 -/+ tol) (splatSlice)
   std::vector<std::uint32_t> slabCount;
