@@ -5,11 +5,14 @@
 // by the game's own game::stepSphFluid, the jet still running.
 //
 //   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
-//                       [--ab-carry 1]
+//                       [--ab-carry 1] [--ab-batch 1]
 // --ab-carry 1 adds a row "fresh shapes" per thread count: a copy of the same filled fountain
 // whose colliders get a new shape object after every step, so the step carries no collider
 // sample from one step to the next (SphScratch::SampleCarry); the copies step frame by frame in
 // turn (the same machine load for both), and their state hashes must be equal.
+// --ab-batch 1 adds a row "point by point" the same way: a copy whose colliders are each wrapped
+// once in a shape that hands the collider one point per query, so the depth-map lookups run one
+// point at a time as before the batch query (DepthMapCollider::query); the hashes must be equal.
 // Every solver knob is a scene key, e.g. --set sph_fluid.warm_start=false turns DFSPH's warm start
 // off for the whole run, fill included.
 //
@@ -89,6 +92,7 @@ bool buildFluid(const std::string& scene_file, const std::vector<std::string>& a
 struct Run {
   game::SphFluid f;
   bool fresh = false;  // a new shape object for every collider after every step (nothing carried)
+  bool point_by_point = false;  // colliders queried one point per call
   std::vector<std::shared_ptr<const fluid::SignedDistanceShape>> inner;
   std::vector<double> ms, cpu_ms;
   double steps = 0.0, iterations = 0.0, err = 0.0, max_err = 0.0;
@@ -100,6 +104,18 @@ class FreshShape final : public fluid::SignedDistanceShape {
   explicit FreshShape(std::shared_ptr<const fluid::SignedDistanceShape> inner) : inner_(std::move(inner)) {}
   void query(std::span<const glm::vec3> points, std::span<fluid::ColliderSample> out) const override {
     inner_->query(points, out);
+  }
+
+ private:
+  std::shared_ptr<const fluid::SignedDistanceShape> inner_;
+};
+
+// Forwards one point per call to the shape it wraps: the same samples, without the batch path.
+class PointByPointShape final : public fluid::SignedDistanceShape {
+ public:
+  explicit PointByPointShape(std::shared_ptr<const fluid::SignedDistanceShape> inner) : inner_(std::move(inner)) {}
+  void query(std::span<const glm::vec3> points, std::span<fluid::ColliderSample> out) const override {
+    for (std::size_t k = 0; k < points.size(); ++k) inner_->query(points.subspan(k, 1), out.subspan(k, 1));
   }
 
  private:
@@ -160,13 +176,15 @@ int main(int argc, char** argv) {
   std::string scene_file = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/scenes/fountain.json";
   std::vector<int> threads{1, 2};
   int frames = 60;
-  bool ab_carry = false;
+  bool ab_carry = false, ab_batch = false;
   std::vector<std::string> common{"sph_fluid.max_particles=10000"};
   std::vector<Config> configs{{"as in the scene file", {}}};
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--ab-carry") {
       ab_carry = v == "1";
+    } else if (k == "--ab-batch") {
+      ab_batch = v == "1";
     } else if (k == "--scene") {
       scene_file = v;
     } else if (k == "--frames") {
@@ -194,7 +212,7 @@ int main(int argc, char** argv) {
   if (argc % 2 == 0 || frames < 1 || threads.empty()) {
     std::fprintf(stderr,
                  "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
-                 "[--config \"k=v,k=v\"]... [--ab-carry 1]\n");
+                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--ab-batch 1]\n");
     return 2;
   }
 
@@ -226,11 +244,16 @@ int main(int argc, char** argv) {
       // --ab-carry: a second copy whose colliders get a new shape object after every step, so no
       // collider sample is carried to the next step (SphScratch::SampleCarry); the two copies step
       // frame by frame in turn, so both see the same machine load.
-      std::vector<Run> runs(ab_carry ? 2 : 1);
+      // --ab-batch: likewise, a copy whose colliders take one point per query.
+      std::vector<Run> runs(1 + (ab_carry ? 1 : 0) + (ab_batch ? 1 : 0));
       for (std::size_t k = 0; k < runs.size(); ++k) {
         runs[k].f = filled;
-        runs[k].fresh = k == 1;
+        runs[k].fresh = ab_carry && k == 1;
+        runs[k].point_by_point = ab_batch && k + 1 == runs.size();
         for (const fluid::SphCollider& c : filled.world.colliders) runs[k].inner.push_back(c.shape);
+        if (runs[k].point_by_point)
+          for (fluid::SphCollider& c : runs[k].f.world.colliders)
+            c.shape = std::make_shared<PointByPointShape>(c.shape);
       }
       CALLGRIND_START_INSTRUMENTATION;
       for (int frame = 0; frame < frames; ++frame)
@@ -240,7 +263,8 @@ int main(int argc, char** argv) {
             return 1;
           }
       CALLGRIND_STOP_INSTRUMENTATION;
-      for (const Run& r : runs) printRow(config.label + (r.fresh ? " fresh shapes" : ""), t, frames, r);
+      for (const Run& r : runs)
+        printRow(config.label + (r.fresh ? " fresh shapes" : r.point_by_point ? " point by point" : ""), t, frames, r);
     }
   }
   return 0;
