@@ -185,6 +185,9 @@ class DepthMapCollider final : public SignedDistanceShape {
   std::vector<DepthMap> maps_;
   int normal_resolution_ = 256;
   std::vector<glm::vec3> normal_table_;  // l1NormalTexture(normal_resolution_)
+  // Per map, per texel: the depth bits its votes read (depth_map.cpp, voteWord), a dense copy
+  // that the lookups read instead of the whole texels.
+  std::vector<std::vector<std::uint32_t>> vote_words_;
 };
 
 // ---- Baking (§4.1, §4.3): CPU rasterizer ----------------------------------------------
@@ -404,11 +407,17 @@ class ReachCulledCollider final : public SignedDistanceShape {
   double farFraction() const;
 
  private:
+  static constexpr std::size_t kOutside = ~std::size_t{0};
+  // The cell holding `local_point` (x fastest), kOutside outside the box (or NaN).
+  std::size_t cellOf(glm::vec3 local_point) const;
+  bool farCell(std::size_t cell) const;  // kOutside counts as far
+
   std::shared_ptr<const DepthMapCollider> inner_;
   Bounds box_;
   glm::vec3 cell_{1.0f}, inv_cell_{1.0f};
   glm::ivec3 dims_{0};
-  std::vector<std::uint8_t> far_;  // per cell, x fastest: 1 = every point beyond reach
+  std::vector<std::uint64_t> far_bits_;  // bit per cell, x fastest: 1 = every point beyond reach
+  std::size_t far_count_ = 0;            // far cells
 };
 
 // ---- Exact reference: signed distance to a closed triangle mesh (BVH) ------------------

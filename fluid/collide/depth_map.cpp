@@ -54,61 +54,100 @@ inline std::uint16_t loadU16(const std::uint8_t* p) {
   return v;
 }
 
-// `ring` receives the votes of margin-ring texels (MapSpec::margin) of front_back16 maps baked
-// with one: equal front and back depth bits mark them. They are only a fallback (see sample).
-void orthoVotes(Winner& w, Winner& ring, const DepthMap& map, glm::vec3 p) {
-  const glm::vec3 q = transformPoint(map.collider_to_map, p);
-  const bool two = map.format == DepthMapFormat::front_back16;
-  // Outside the map's footprint: invalid vote (§4.1).
-  if (!(q.x >= 0.0f && q.x < 1.0f && q.y >= 0.0f && q.y < 1.0f)) {
+// The bits of a texel that its votes read, as one 32-bit word: front_back16 front | back << 16,
+// fixed8 and cube8 the 16-bit code, float32 the depth's bits. The collider keeps these words
+// beside the texels (DepthMapCollider::vote_words_): half (front_back16) or a quarter (float32) of
+// the texel bytes, so a lookup's scattered reads touch fewer cache lines. The normal indices are
+// read from the texels, once per point, for the winning vote only.
+std::uint32_t voteWord(const DepthMap& map, std::size_t texel) {
+  const std::uint8_t* t = map.texels.data() + texel * texelBytes(map.format);
+  switch (map.format) {
+    case DepthMapFormat::float32: {
+      std::uint32_t bits;
+      std::memcpy(&bits, t + 12, 4);
+      return bits;
+    }
+    case DepthMapFormat::front_back16:
+      return static_cast<std::uint32_t>(loadU16(t + 4)) | (static_cast<std::uint32_t>(loadU16(t + 6)) << 16);
+    case DepthMapFormat::fixed8:
+    case DepthMapFormat::cube8:
+      break;
+  }
+  return static_cast<std::uint32_t>((t[2] << 8) | t[3]);
+}
+
+// Where a point falls in an ortho map: P' = T·P and, inside the footprint, its texel (outside it
+// texel 0, never voted with: the batch query computes every point's texel without a branch and
+// fetches the texels of a block before it votes, so the cache misses of a block overlap).
+struct OrthoSpot {
+  glm::vec3 q;
+  std::uint32_t texel;
+  bool inside;
+};
+
+inline OrthoSpot orthoSpot(const DepthMap& map, glm::vec3 p) {
+  OrthoSpot s;
+  s.q = transformPoint(map.collider_to_map, p);
+  // Outside the map's footprint the vote is invalid (§4.1).
+  s.inside = s.q.x >= 0.0f && s.q.x < 1.0f && s.q.y >= 0.0f && s.q.y < 1.0f;
+  const int n = static_cast<int>(map.resolution);
+  const float nf = static_cast<float>(n);
+  const int i = std::min(static_cast<int>((s.inside ? s.q.x : 0.0f) * nf), n - 1);
+  const int j = std::min(static_cast<int>((s.inside ? s.q.y : 0.0f) * nf), n - 1);
+  s.texel = static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
+  return s;
+}
+
+// The votes of an ortho map at a located point (eq. (1)). `ring` receives the votes of
+// margin-ring texels (MapSpec::margin) of front_back16 maps baked with one: equal front and back
+// depth bits mark them. They are only a fallback (see finish). The format is a template argument
+// so the batch query picks it once per map; sample() and the batch run this same code.
+template <DepthMapFormat kFormat>
+inline void orthoVotes(Winner& w, Winner& ring, const DepthMap& map, const OrthoSpot& spot,
+                       const std::uint32_t* words) {
+  constexpr bool two = kFormat == DepthMapFormat::front_back16;
+  if (!spot.inside) {
     if (two) invalidVote(w, map);
     return invalidVote(w, map);
   }
+  const glm::vec3 q = spot.q;
+  const std::uint32_t texel = spot.texel;
   // Along the view direction a LESS map is valid up to its far plane and a GREATER map from
   // its near plane on: a point in front of the near plane is still in front of the first
   // surface, so eq. (1) holds there; behind the far plane it would wrongly read "inside".
   const bool less_ok = q.z <= 1.0f, greater_ok = q.z >= 0.0f;
-  const int n = static_cast<int>(map.resolution);
-  const float nf = static_cast<float>(n);
-  const int i = std::min(static_cast<int>(q.x * nf), n - 1);
-  const int j = std::min(static_cast<int>(q.y * nf), n - 1);
-  const std::uint32_t texel = static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
-  const std::uint8_t* t = map.texels.data() + texel * texelBytes(map.format);
-  const bool less = map.compare == DepthCompare::less;
-  const float sign_less = less ? 1.0f : -1.0f;
-  switch (map.format) {
-    case DepthMapFormat::float32: {
+  const std::uint32_t word = words[texel];  // voteWord of the texel
+  if constexpr (kFormat == DepthMapFormat::front_back16) {
+    const std::uint16_t front_bits = static_cast<std::uint16_t>(word & 0xFFFFu);
+    const std::uint16_t back_bits = static_cast<std::uint16_t>(word >> 16);
+    const float front = depthHalf(front_bits);
+    const float back = depthHalf(back_bits);
+    Winner& to = map.margin_ring && front_bits == back_bits && front >= 0.0f ? ring : w;
+    if (front < 0.0f || !less_ok) {
+      invalidVote(w, map);
+    } else {
+      vote(to, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
+    }
+    if (back < 0.0f || !greater_ok) {
+      invalidVote(w, map);
+    } else {
+      vote(to, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
+    }
+  } else {
+    const bool less = map.compare == DepthCompare::less;
+    const float sign_less = less ? 1.0f : -1.0f;
+    if constexpr (kFormat == DepthMapFormat::float32) {
       float depth;
-      std::memcpy(&depth, t + 12, 4);
+      std::memcpy(&depth, &word, 4);
       if (depth < 0.0f || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
-      return vote(w, sign_less * map.z_scale * (depth - q.z), &map, texel, 0);
-    }
-    case DepthMapFormat::fixed8: {
-      const std::uint16_t code = static_cast<std::uint16_t>((t[2] << 8) | t[3]);
+      vote(w, sign_less * map.z_scale * (depth - q.z), &map, texel, 0);
+    } else {
+      static_assert(kFormat == DepthMapFormat::fixed8, "cube8 is handled by cubeVote");
+      const std::uint16_t code = static_cast<std::uint16_t>(word);
       if (code == kFixedBackground || !(less ? less_ok : greater_ok)) return invalidVote(w, map);
-      return vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
+      vote(w, sign_less * map.z_scale * (decodeFixedDepth(code) - q.z), &map, texel, 0);
     }
-    case DepthMapFormat::front_back16: {
-      const std::uint16_t front_bits = loadU16(t + 4), back_bits = loadU16(t + 6);
-      const float front = depthHalf(front_bits);
-      const float back = depthHalf(back_bits);
-      Winner& to = map.margin_ring && front_bits == back_bits && front >= 0.0f ? ring : w;
-      if (front < 0.0f || !less_ok) {
-        invalidVote(w, map);
-      } else {
-        vote(to, map.z_scale * (front - q.z), &map, texel, 0);  // eq. (1), LESS
-      }
-      if (back < 0.0f || !greater_ok) {
-        invalidVote(w, map);
-      } else {
-        vote(to, map.z_scale * (q.z - back), &map, texel, 1);  // GREATER: negated eq. (1)
-      }
-      return;
-    }
-    case DepthMapFormat::cube8:
-      break;
   }
-  assert(false && "cube8 handled by cubeVote");
 }
 
 // Cube face and face-local (sc, tc) by the OpenGL cube-map table (collide.hpp).
@@ -144,11 +183,22 @@ inline int cubeFace(glm::vec3 d, float& sc, float& tc, float& ma) {
   return 5;
 }
 
-void cubeVote(Winner& w, const DepthMap& map, glm::vec3 p) {
-  glm::vec3 q = transformPoint(map.collider_to_map, p);
-  if (!(std::fabs(q.x) <= 1.0f && std::fabs(q.y) <= 1.0f && std::fabs(q.z) <= 1.0f)) return invalidVote(w, map);
-  float length = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
-  glm::vec3 dir = length > 0.0f ? q / length : glm::vec3(0.0f, 0.0f, 1.0f);
+// Where a point falls in a depth cube: inside the view volume, its distance L from the centre,
+// the direction and the texel (outside: those of the centre, never voted with; see OrthoSpot).
+struct CubeSpot {
+  glm::vec3 dir;
+  float length;
+  std::uint32_t texel;
+  bool inside;
+};
+
+inline CubeSpot cubeSpot(const DepthMap& map, glm::vec3 p) {
+  CubeSpot spot;
+  const glm::vec3 mapped = transformPoint(map.collider_to_map, p);
+  spot.inside = std::fabs(mapped.x) <= 1.0f && std::fabs(mapped.y) <= 1.0f && std::fabs(mapped.z) <= 1.0f;
+  const glm::vec3 q = spot.inside ? mapped : glm::vec3(0.0f);
+  const float length = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+  const glm::vec3 dir = length > 0.0f ? q / length : glm::vec3(0.0f, 0.0f, 1.0f);
   float sc, tc, ma;
   const int face = cubeFace(length > 0.0f ? q : dir, sc, tc, ma);
   const int n = static_cast<int>(map.resolution);
@@ -157,16 +207,22 @@ void cubeVote(Winner& w, const DepthMap& map, glm::vec3 p) {
   const float t = (tc / ma + 1.0f) * 0.5f;
   const int i = std::clamp(static_cast<int>(s * nf), 0, n - 1);
   const int j = std::clamp(static_cast<int>(t * nf), 0, n - 1);
-  const std::uint32_t texel = static_cast<std::uint32_t>(face) * map.resolution * map.resolution +
-                              static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
-  const std::uint8_t* tx = map.texels.data() + texel * 4u;
-  const std::uint16_t code = static_cast<std::uint16_t>((tx[2] << 8) | tx[3]);
+  spot.texel = static_cast<std::uint32_t>(face) * map.resolution * map.resolution +
+               static_cast<std::uint32_t>(j) * map.resolution + static_cast<std::uint32_t>(i);
+  spot.length = length;
+  spot.dir = dir;
+  return spot;
+}
+
+inline void cubeVote(Winner& w, const DepthMap& map, const CubeSpot& spot, const std::uint32_t* words) {
+  if (!spot.inside) return invalidVote(w, map);
+  const std::uint16_t code = static_cast<std::uint16_t>(words[spot.texel]);
   if (code == kFixedBackground) return invalidVote(w, map);
   const float r = static_cast<float>(code) * kCubeRadiusStep;
   // §4.3: (1 − r/L)·|S·P'| = (L − r)·|S·dir|, signed so a LESS cube calls the centre side outside.
-  const float along = glm::length(map.cube_scale * dir);
-  const float f = (map.compare == DepthCompare::less ? (r - length) : (length - r)) * along;
-  vote(w, f, &map, texel, 0);
+  const float along = glm::length(map.cube_scale * spot.dir);
+  const float f = (map.compare == DepthCompare::less ? (r - spot.length) : (spot.length - r)) * along;
+  vote(w, f, &map, spot.texel, 0);
 }
 
 }  // namespace
@@ -178,6 +234,13 @@ DepthMapCollider::DepthMapCollider(std::vector<DepthMap> maps, int normal_resolu
   normal_table_.resize(rgb.size() / 3);
   for (std::size_t k = 0; k < normal_table_.size(); ++k)
     normal_table_[k] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
+  vote_words_.resize(maps_.size());
+  for (std::size_t m = 0; m < maps_.size(); ++m) {
+    const DepthMap& map = maps_[m];
+    std::vector<std::uint32_t>& words = vote_words_[m];
+    words.resize(map.texels.size() / texelBytes(map.format));
+    for (std::size_t t = 0; t < words.size(); ++t) words[t] = voteWord(map, t);
+  }
 }
 
 int DepthMapCollider::depthMapCount() const {
@@ -194,25 +257,77 @@ std::size_t DepthMapCollider::bytes() const {
   return total;
 }
 
-ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
+namespace {
+
+// The votes of every map at one point, in map order.
+inline void allVotes(Winner& main, Winner& ring, const std::vector<DepthMap>& maps,
+                     const std::vector<std::vector<std::uint32_t>>& vote_words, glm::vec3 p) {
+  for (std::size_t m = 0; m < maps.size(); ++m) {
+    const DepthMap& map = maps[m];
+    const std::uint32_t* words = vote_words[m].data();
+    switch (map.format) {
+      case DepthMapFormat::float32:
+        orthoVotes<DepthMapFormat::float32>(main, ring, map, orthoSpot(map, p), words);
+        break;
+      case DepthMapFormat::fixed8:
+        orthoVotes<DepthMapFormat::fixed8>(main, ring, map, orthoSpot(map, p), words);
+        break;
+      case DepthMapFormat::front_back16:
+        orthoVotes<DepthMapFormat::front_back16>(main, ring, map, orthoSpot(map, p), words);
+        break;
+      case DepthMapFormat::cube8:
+        cubeVote(main, map, cubeSpot(map, p), words);
+        break;
+    }
+  }
+}
+
+// One map's votes over a block of points, in two loops: every point's texel first (and a
+// prefetch of it), then the votes. The texel reads are what a lookup waits for (the maps are
+// megabytes, the particles' texels scattered over them); the first loop has no branch, so the
+// block's misses overlap instead of coming one vote at a time. Each point receives the same
+// votes as from allVotes, in map order.
+template <DepthMapFormat kFormat>
+void orthoBlock(Winner* main, Winner* ring, const DepthMap& map, const std::uint32_t* words, const glm::vec3* points,
+                std::size_t count, OrthoSpot* spots) {
+  for (std::size_t k = 0; k < count; ++k) {
+    spots[k] = orthoSpot(map, points[k]);
+    __builtin_prefetch(words + spots[k].texel);
+  }
+  for (std::size_t k = 0; k < count; ++k) orthoVotes<kFormat>(main[k], ring[k], map, spots[k], words);
+}
+
+void cubeBlock(Winner* main, const DepthMap& map, const std::uint32_t* words, const glm::vec3* points,
+               std::size_t count, CubeSpot* spots) {
+  for (std::size_t k = 0; k < count; ++k) {
+    spots[k] = cubeSpot(map, points[k]);
+    __builtin_prefetch(words + spots[k].texel);
+  }
+  for (std::size_t k = 0; k < count; ++k) cubeVote(main[k], map, spots[k], words);
+}
+
+// Rule (2)'s result from the winners (one normal decoded per point).
+// The winner whose vote is the answer. Margin-ring votes only measure the depth offset to the
+// nearest silhouette point (never "inside", but short of the lateral offset), so they decide only
+// where no map sees the point outside: with no vote, only "far outside" votes, or only inside
+// votes (a point beside a silhouette that the other maps place between their surfaces).
+inline const Winner& decisive(const Winner& main, const Winner& ring) {
+  const bool main_outside = main.any_vote && main.map != nullptr && main.f >= 0.0f;
+  return ring.any_vote && !main_outside ? ring : main;
+}
+
+// The winning texel's bytes (where its normal index is), or null when there is no answer.
+inline const std::uint8_t* winningTexel(const Winner& w) {
+  if (!w.any_vote || w.map == nullptr) return nullptr;
+  return w.map->texels.data() + static_cast<std::size_t>(w.texel) * texelBytes(w.map->format);
+}
+
+ColliderSample finish(const Winner& main, const Winner& ring, const std::vector<glm::vec3>& normal_table,
+                      int normal_resolution) {
   ColliderSample out;
   out.valid = false;
   out.distance = FLT_MAX;
-  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return out;
-  Winner main, ring;
-  for (const DepthMap& map : maps_) {
-    if (map.format == DepthMapFormat::cube8) {
-      cubeVote(main, map, p);
-    } else {
-      orthoVotes(main, ring, map, p);
-    }
-  }
-  // Margin-ring votes only measure the depth offset to the nearest silhouette point (never
-  // "inside", but short of the lateral offset), so they decide only where no map sees the
-  // point outside: with no vote, only "far outside" votes, or only inside votes (a point beside
-  // a silhouette that the other maps place between their surfaces).
-  const bool main_outside = main.any_vote && main.map != nullptr && main.f >= 0.0f;
-  const Winner& w = ring.any_vote && !main_outside ? ring : main;
+  const Winner& w = decisive(main, ring);
   if (!w.any_vote || w.map == nullptr) return out;  // no opinion, or only "far outside"
   out.valid = true;
   out.distance = w.f;
@@ -228,22 +343,82 @@ ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
     }
     case DepthMapFormat::fixed8:
     case DepthMapFormat::cube8:
-      index = static_cast<std::uint32_t>(t[1]) * static_cast<std::uint32_t>(normal_resolution_) + t[0];
+      index = static_cast<std::uint32_t>(t[1]) * static_cast<std::uint32_t>(normal_resolution) + t[0];
       break;
     case DepthMapFormat::front_back16: {
       const std::uint16_t packed = loadU16(t + 2 * w.layer);
       index =
-          static_cast<std::uint32_t>(packed >> 8) * static_cast<std::uint32_t>(normal_resolution_) + (packed & 0xFFu);
+          static_cast<std::uint32_t>(packed >> 8) * static_cast<std::uint32_t>(normal_resolution) + (packed & 0xFFu);
       break;
     }
   }
-  out.normal = normal_table_[index];
+  out.normal = normal_table[index];
   return out;
 }
 
+}  // namespace
+
+ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+    ColliderSample out;
+    out.valid = false;
+    out.distance = FLT_MAX;
+    return out;
+  }
+  Winner main, ring;
+  allVotes(main, ring, maps_, vote_words_, p);
+  return finish(main, ring, normal_table_, normal_resolution_);
+}
+
+// Batch form of sample(), bit-identical to it: blocks of points, each map's votes cast over the
+// whole block before the next map's (every point still sees the maps in order, so ties go to the
+// same map), and the format switch and the map's constants are paid once per block, not per point.
 void DepthMapCollider::query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const {
   assert(local_points.size() == out.size());
-  for (std::size_t k = 0; k < local_points.size(); ++k) out[k] = sample(local_points[k]);
+  if (local_points.size() == 1) {
+    out[0] = sample(local_points[0]);
+    return;
+  }
+  constexpr std::size_t kBlock = 64;
+  glm::vec3 points[kBlock];
+  bool finite[kBlock];
+  Winner main[kBlock], ring[kBlock];
+  OrthoSpot ortho_spots[kBlock];
+  CubeSpot cube_spots[kBlock];
+  for (std::size_t b = 0; b < local_points.size(); b += kBlock) {
+    const std::size_t count = std::min(kBlock, local_points.size() - b);
+    for (std::size_t k = 0; k < count; ++k) {
+      const glm::vec3 p = local_points[b + k];
+      finite[k] = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+      points[k] = finite[k] ? p : glm::vec3(0.0f);  // voted on, then answered as sample() does
+      main[k] = Winner{};
+      ring[k] = Winner{};
+    }
+    for (std::size_t m = 0; m < maps_.size(); ++m) {
+      const DepthMap& map = maps_[m];
+      const std::uint32_t* words = vote_words_[m].data();
+      switch (map.format) {
+        case DepthMapFormat::float32:
+          orthoBlock<DepthMapFormat::float32>(main, ring, map, words, points, count, ortho_spots);
+          break;
+        case DepthMapFormat::fixed8:
+          orthoBlock<DepthMapFormat::fixed8>(main, ring, map, words, points, count, ortho_spots);
+          break;
+        case DepthMapFormat::front_back16:
+          orthoBlock<DepthMapFormat::front_back16>(main, ring, map, words, points, count, ortho_spots);
+          break;
+        case DepthMapFormat::cube8:
+          cubeBlock(main, map, words, points, count, cube_spots);
+          break;
+      }
+    }
+    // The winners' texels (their normal indices) are not among the vote words read above.
+    for (std::size_t k = 0; k < count; ++k)
+      if (const std::uint8_t* t = winningTexel(decisive(main[k], ring[k]))) __builtin_prefetch(t);
+    for (std::size_t k = 0; k < count; ++k)
+      out[b + k] = finite[k] ? finish(main[k], ring[k], normal_table_, normal_resolution_)
+                             : ColliderSample{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};
+  }
 }
 
 // ---- batch ---------------------------------------------------------------------------

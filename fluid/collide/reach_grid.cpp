@@ -334,7 +334,8 @@ ReachCulledCollider::ReachCulledCollider(std::shared_ptr<const DepthMapCollider>
   }
   inv_cell_ = 1.0f / cell_;
   dims_ = count(cell_);
-  far_.assign(static_cast<std::size_t>(dims_.x) * dims_.y * dims_.z, 0);
+  const std::size_t cells = static_cast<std::size_t>(dims_.x) * dims_.y * dims_.z;
+  std::vector<std::uint8_t> far_bytes(cells, 0);  // bytes while the blocks resolve in parallel, then bits
   // Slack for the float rounding of the votes (collider units): far below any useful reach.
   const float slack = 1e-4f * desc.reach + 1e-6f;
   const glm::vec3 pad = 1e-4f * cell_ + 1e-5f * (glm::abs(box_.lo) + glm::abs(box_.hi));
@@ -382,7 +383,7 @@ ReachCulledCollider::ReachCulledCollider(std::shared_ptr<const DepthMapCollider>
     }
     for (int z = lo.z; z < hi.z; ++z)
       for (int y = lo.y; y < hi.y; ++y)
-        for (int x = lo.x; x < hi.x; ++x) far_[(static_cast<std::size_t>(z) * dims_.y + y) * dims_.x + x] = whole;
+        for (int x = lo.x; x < hi.x; ++x) far_bytes[(static_cast<std::size_t>(z) * dims_.y + y) * dims_.x + x] = whole;
   };
   const glm::ivec3 blocks = (dims_ + (kBlock - 1)) / kBlock;
   par::parallelFor(par::Range<int>(0, blocks.z, 1), [&](const par::Range<int>& r) {
@@ -393,32 +394,75 @@ ReachCulledCollider::ReachCulledCollider(std::shared_ptr<const DepthMapCollider>
           resolve(resolve, lo, glm::min(lo + kBlock, dims_));
         }
   });
+  // One bit per cell: the grid is read once per particle and collider, at scattered cells, and a
+  // byte per cell (megabytes) made those reads cache misses.
+  far_bits_.assign((cells + 63) / 64, 0);
+  for (std::size_t k = 0; k < cells; ++k)
+    far_bits_[k / 64] |= static_cast<std::uint64_t>(far_bytes[k] != 0) << (k % 64);
+  far_count_ = static_cast<std::size_t>(std::count(far_bytes.begin(), far_bytes.end(), std::uint8_t{1}));
 }
 
 double ReachCulledCollider::farFraction() const {
-  if (far_.empty()) return 0.0;
-  return static_cast<double>(std::count(far_.begin(), far_.end(), std::uint8_t{1})) / static_cast<double>(far_.size());
+  const double cells = static_cast<double>(dims_.x) * dims_.y * dims_.z;
+  return far_bits_.empty() ? 0.0 : static_cast<double>(far_count_) / cells;
 }
 
-bool ReachCulledCollider::culled(glm::vec3 p) const {
+std::size_t ReachCulledCollider::cellOf(glm::vec3 p) const {
   if (!(p.x >= box_.lo.x && p.x <= box_.hi.x && p.y >= box_.lo.y && p.y <= box_.hi.y && p.z >= box_.lo.z &&
         p.z <= box_.hi.z))
-    return true;  // also NaN points
+    return kOutside;  // also NaN points
   const glm::vec3 c = (p - box_.lo) * inv_cell_;
   const int x = std::min(static_cast<int>(c.x), dims_.x - 1);
   const int y = std::min(static_cast<int>(c.y), dims_.y - 1);
   const int z = std::min(static_cast<int>(c.z), dims_.z - 1);
-  return far_[(static_cast<std::size_t>(z) * dims_.y + y) * dims_.x + x] != 0;
+  return (static_cast<std::size_t>(z) * dims_.y + y) * dims_.x + x;
 }
+
+bool ReachCulledCollider::farCell(std::size_t cell) const {
+  return cell == kOutside || ((far_bits_[cell / 64] >> (cell % 64)) & 1u) != 0;
+}
+
+bool ReachCulledCollider::culled(glm::vec3 p) const { return farCell(cellOf(p)); }
 
 ColliderSample ReachCulledCollider::sample(glm::vec3 p) const {
   if (culled(p)) return ColliderSample{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};
   return inner_->sample(p);
 }
 
+// The points that survive the cull go to the collider as one batch per block (its batch query
+// answers like its sample), so the maps' per-block set-up is shared by every point near a surface.
 void ReachCulledCollider::query(std::span<const glm::vec3> points, std::span<ColliderSample> out) const {
   assert(points.size() == out.size());
-  for (std::size_t k = 0; k < points.size(); ++k) out[k] = sample(points[k]);
+  if (points.size() == 1) {
+    out[0] = sample(points[0]);
+    return;
+  }
+  constexpr std::size_t kBlock = 256;
+  glm::vec3 kept[kBlock];
+  std::uint32_t where[kBlock];
+  std::size_t cell[kBlock];
+  ColliderSample answers[kBlock];
+  for (std::size_t b = 0; b < points.size(); b += kBlock) {
+    const std::size_t count = std::min(kBlock, points.size() - b);
+    // The block's cells first (with a prefetch of their bits), then the tests: the bit reads of a
+    // block overlap instead of waiting one by one.
+    for (std::size_t k = 0; k < count; ++k) {
+      cell[k] = cellOf(points[b + k]);
+      if (cell[k] != kOutside) __builtin_prefetch(far_bits_.data() + cell[k] / 64);
+    }
+    std::size_t q = 0;
+    for (std::size_t k = b; k < b + count; ++k) {
+      if (farCell(cell[k - b])) {
+        out[k] = ColliderSample{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};
+      } else {
+        kept[q] = points[k];
+        where[q++] = static_cast<std::uint32_t>(k);
+      }
+    }
+    if (q == 0) continue;
+    inner_->query(std::span<const glm::vec3>(kept, q), std::span<ColliderSample>(answers, q));
+    for (std::size_t k = 0; k < q; ++k) out[where[k]] = answers[k];
+  }
 }
 
 }  // namespace fluid

@@ -278,6 +278,17 @@ void sampleBoundary(StepContext& context) {
       n, 0.0f,
       [&](std::size_t b, std::size_t e, float& acc) {
         std::uint32_t which[kGrain];
+        // Per particle, once for all colliders: the particle it was at the end of the last step,
+        // if it is still where that step's collision passes sampled it (else kNone).
+        std::uint32_t from[kGrain];
+        if (reuse != 0)
+          for (std::size_t i = b; i < e; ++i) {
+            const std::uint32_t p = carry.index[i];
+            from[i - b] = p != SphScratch::SampleCarry::kNone && sameBits(carry.position[p], positions[i])
+                              ? p
+                              : SphScratch::SampleCarry::kNone;
+          }
+        const std::uint32_t* const stale = scratch.collide_stale.data();
         for (std::size_t c = 0; c < collider_count; ++c) {
           std::vector<ColliderSample>& samples = scratch.start_samples[c];
           std::uint32_t q = 0;
@@ -285,9 +296,8 @@ void sampleBoundary(StepContext& context) {
           if (reuse & bit) {
             const std::vector<ColliderSample>& carried = scratch.end_samples[c];
             for (std::size_t i = b; i < e; ++i) {
-              const std::uint32_t p = carry.index[i];
-              if (p != SphScratch::SampleCarry::kNone && !(scratch.collide_stale[p] & bit) &&
-                  sameBits(carry.position[p], positions[i]))
+              const std::uint32_t p = from[i - b];
+              if (p != SphScratch::SampleCarry::kNone && !(stale[p] & bit))
                 samples[i] = carried[p];
               else
                 which[q++] = static_cast<std::uint32_t>(i);

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <span>
 #include <vector>
 
@@ -89,25 +90,54 @@ struct ColliderQuery {
   ColliderPose pose;
   glm::quat inverse_rotation;
   bool rotated;
+  bool identity;  // no rotation and a translation of +0 bits: x - translation == x, bit for bit
   ColliderQuery(const SphCollider& c, const ColliderPose& p)
       : collider(c),
         pose(p),
         inverse_rotation(glm::inverse(p.rotation)),
-        rotated(!(p.rotation.w == 1.0f && p.rotation.x == 0.0f && p.rotation.y == 0.0f && p.rotation.z == 0.0f)) {}
+        rotated(!(p.rotation.w == 1.0f && p.rotation.x == 0.0f && p.rotation.y == 0.0f && p.rotation.z == 0.0f)),
+        identity(!rotated && isPositiveZero(p.translation)) {}
+  // `which` ascends (the callers list particles in index order).
   void run(const std::vector<glm::vec3>& points, const std::uint32_t* which, std::uint32_t q,
            std::vector<ColliderSample>& out) const {
     if (q == 0) return;
+    if (which[q - 1] - which[0] == q - 1) {
+      // A run of consecutive particles (every particle of the chunk, the usual case): the shape
+      // writes straight into `out`, and a still collider at the origin (a level baked in world
+      // coordinates) reads the positions in place. The same samples, without the copies.
+      const std::uint32_t first = which[0];
+      ColliderSample* o = out.data() + first;
+      if (identity) {
+        collider.shape->query(std::span<const glm::vec3>(points.data() + first, q), std::span<ColliderSample>(o, q));
+      } else {
+        glm::vec3 local[kGrain];
+        for (std::uint32_t k = 0; k < q; ++k) local[k] = toLocal(points[first + k]);
+        collider.shape->query(std::span<const glm::vec3>(local, q), std::span<ColliderSample>(o, q));
+      }
+      for (std::uint32_t k = 0; k < q; ++k) finishSample(o[k]);
+      return;
+    }
     glm::vec3 local[kGrain];
     ColliderSample samples[kGrain];
-    for (std::uint32_t k = 0; k < q; ++k)
-      local[k] =
-          rotated ? inverse_rotation * (points[which[k]] - pose.translation) : points[which[k]] - pose.translation;
+    for (std::uint32_t k = 0; k < q; ++k) local[k] = toLocal(points[which[k]]);
     collider.shape->query(std::span<const glm::vec3>(local, q), std::span<ColliderSample>(samples, q));
     for (std::uint32_t k = 0; k < q; ++k) {
-      if (rotated) samples[k].normal = pose.rotation * samples[k].normal;
-      if (!std::isfinite(samples[k].distance)) samples[k].valid = false;  // never let a bad shape spread NaN
+      finishSample(samples[k]);
       out[which[k]] = samples[k];
     }
+  }
+
+ private:
+  static bool isPositiveZero(glm::vec3 v) {
+    const glm::vec3 zero(0.0f);
+    return std::memcmp(&v, &zero, sizeof(glm::vec3)) == 0;
+  }
+  glm::vec3 toLocal(glm::vec3 x) const {
+    return rotated ? inverse_rotation * (x - pose.translation) : x - pose.translation;
+  }
+  void finishSample(ColliderSample& s) const {
+    if (rotated) s.normal = pose.rotation * s.normal;
+    if (!std::isfinite(s.distance)) s.valid = false;  // never let a bad shape spread NaN
   }
 };
 

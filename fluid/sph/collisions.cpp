@@ -82,14 +82,17 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
       [&](std::size_t b, std::size_t e, Hits& acc) {
         std::uint32_t which[kGrain];
         std::uint32_t q = 0;
+        // Local pointers: the stores below could alias the vectors' own fields, so reading them
+        // through `scratch` would reload them for every particle.
+        std::uint32_t* const stale = scratch.collide_stale.data();
+        if (pass == 0 && k == 0) {
+          std::fill(stale + b, stale + e, all_colliders);
+          std::fill(scratch.push_plane.begin() + b, scratch.push_plane.begin() + e, glm::vec4(0.0f));
+          std::fill(scratch.pushed.begin() + b, scratch.pushed.begin() + e, 0);
+        }
         for (std::size_t i = b; i < e; ++i) {
-          if (pass == 0 && k == 0) {
-            scratch.collide_stale[i] = all_colliders;
-            scratch.push_plane[i] = glm::vec4(0.0f);
-            scratch.pushed[i] = 0;
-          }
-          if (track_stale && pass > 0 && !(scratch.collide_stale[i] & bit)) continue;  // unchanged: same sample
-          scratch.collide_stale[i] &= ~bit;
+          if (track_stale && pass > 0 && !(stale[i] & bit)) continue;  // unchanged: same sample
+          stale[i] &= ~bit;
           const ColliderSample& s0 = start_samples[i];
           if (skip_far && s0.valid) {
             const glm::vec3 p = positions[i], p0 = scratch.old_position[i];

@@ -5,11 +5,14 @@
 // by the game's own game::stepSphFluid, the jet still running.
 //
 //   bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.key=value ...]
-//                       [--ab-carry 1] [--mesh 1]
+//                       [--ab-carry 1] [--ab-batch 1] [--mesh 1]
 // --ab-carry 1 adds a row "fresh shapes" per thread count: a copy of the same filled fountain
 // whose colliders get a new shape object after every step, so the step carries no collider
 // sample from one step to the next (SphScratch::SampleCarry); the copies step frame by frame in
 // turn (the same machine load for both), and their state hashes must be equal.
+// --ab-batch 1 adds a row "point by point" the same way: a copy whose colliders are each wrapped
+// once in a shape that hands the collider one point per query, so the depth-map lookups run one
+// point at a time as before the batch query (DepthMapCollider::query); the hashes must be equal.
 // --mesh 1 adds the game's meshing (game::meshFluidSurface with the scene's `fluid_surface` section,
 // eye and view from its camera): after each frame's steps the frame's particles are handed to the
 // mesher, which, asynchronous as in the game (Janisz §3.2.6), meshes them on its worker while the
@@ -125,7 +128,8 @@ bool buildFluid(const std::string& scene_file, const std::vector<std::string>& a
 // One timed copy of the filled fountain and what its frames measured.
 struct Run {
   game::SphFluid f;
-  bool fresh = false;  // a new shape object for every collider after every step (nothing carried)
+  bool fresh = false;           // a new shape object for every collider after every step (nothing carried)
+  bool point_by_point = false;  // colliders queried one point per call
   std::vector<std::shared_ptr<const fluid::SignedDistanceShape>> inner;
   std::vector<double> ms, cpu_ms;
   // --mesh: the game's mesher, its frames' steps + mesh wait (ms) and the worker's ms per mesh.
@@ -142,6 +146,18 @@ class FreshShape final : public fluid::SignedDistanceShape {
   explicit FreshShape(std::shared_ptr<const fluid::SignedDistanceShape> inner) : inner_(std::move(inner)) {}
   void query(std::span<const glm::vec3> points, std::span<fluid::ColliderSample> out) const override {
     inner_->query(points, out);
+  }
+
+ private:
+  std::shared_ptr<const fluid::SignedDistanceShape> inner_;
+};
+
+// Forwards one point per call to the shape it wraps: the same samples, without the batch path.
+class PointByPointShape final : public fluid::SignedDistanceShape {
+ public:
+  explicit PointByPointShape(std::shared_ptr<const fluid::SignedDistanceShape> inner) : inner_(std::move(inner)) {}
+  void query(std::span<const glm::vec3> points, std::span<fluid::ColliderSample> out) const override {
+    for (std::size_t k = 0; k < points.size(); ++k) inner_->query(points.subspan(k, 1), out.subspan(k, 1));
   }
 
  private:
@@ -271,7 +287,7 @@ int main(int argc, char** argv) {
   std::string scene_file = std::string(FLUIDDEMO_SOURCE_DIR) + "/content/scenes/fountain.json";
   std::vector<int> threads{1, 2};
   int frames = 60;
-  bool ab_carry = false, with_mesh = false;
+  bool ab_carry = false, ab_batch = false, with_mesh = false;
   int mesh_reps = 0;
   std::string dump_frame;
   std::vector<std::string> common{"sph_fluid.max_particles=10000"};
@@ -280,6 +296,8 @@ int main(int argc, char** argv) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--ab-carry") {
       ab_carry = v == "1";
+    } else if (k == "--ab-batch") {
+      ab_batch = v == "1";
     } else if (k == "--mesh") {
       with_mesh = v == "1";
     } else if (k == "--mesh-reps") {
@@ -313,7 +331,8 @@ int main(int argc, char** argv) {
   if (argc % 2 == 0 || frames < 1 || threads.empty()) {
     std::fprintf(stderr,
                  "usage: bench_game_fountain [--scene FILE] [--threads 1,2] [--frames N] [--set sph_fluid.k=v] "
-                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--mesh 1] [--mesh-reps N] [--dump-frame FILE]\n");
+                 "[--config \"k=v,k=v\"]... [--ab-carry 1] [--ab-batch 1] [--mesh 1] [--mesh-reps N] "
+                 "[--dump-frame FILE]\n");
     return 2;
   }
 
@@ -350,10 +369,12 @@ int main(int argc, char** argv) {
       // --ab-carry: a second copy whose colliders get a new shape object after every step, so no
       // collider sample is carried to the next step (SphScratch::SampleCarry); the two copies step
       // frame by frame in turn, so both see the same machine load.
-      std::vector<Run> runs(ab_carry ? 2 : 1);
+      // --ab-batch: likewise, a copy whose colliders take one point per query.
+      std::vector<Run> runs(1 + (ab_carry ? 1 : 0) + (ab_batch ? 1 : 0));
       for (std::size_t k = 0; k < runs.size(); ++k) {
         runs[k].f = filled;
-        runs[k].fresh = k == 1;
+        runs[k].fresh = ab_carry && k == 1;
+        runs[k].point_by_point = ab_batch && k + 1 == runs.size();
         runs[k].mesh = with_mesh;
         runs[k].view = view;
         runs[k].surface.params = surface_params;
@@ -364,6 +385,9 @@ int main(int argc, char** argv) {
           return 1;
         }
         for (const fluid::SphCollider& c : filled.world.colliders) runs[k].inner.push_back(c.shape);
+        if (runs[k].point_by_point)
+          for (fluid::SphCollider& c : runs[k].f.world.colliders)
+            c.shape = std::make_shared<PointByPointShape>(c.shape);
       }
       CALLGRIND_START_INSTRUMENTATION;
       for (int frame = 0; frame < frames; ++frame)
@@ -373,7 +397,8 @@ int main(int argc, char** argv) {
             return 1;
           }
       CALLGRIND_STOP_INSTRUMENTATION;
-      for (const Run& r : runs) printRow(config.label + (r.fresh ? " fresh shapes" : ""), t, frames, r);
+      for (const Run& r : runs)
+        printRow(config.label + (r.fresh ? " fresh shapes" : r.point_by_point ? " point by point" : ""), t, frames, r);
       if (t == threads.front() && (mesh_reps > 0 || !dump_frame.empty())) {
         const fluid::SphPositionArrays pa = fluid::sphPositionArrays(runs[0].f.world);
         last_frame.x.assign(pa.x.begin(), pa.x.end());

@@ -555,4 +555,65 @@ TEST(Bake, InvertedWindingGivesTheSameCollider) {
   }
 }
 
+// The batch query (blocks of points, each map over the block, the texels fetched before the
+// votes) must answer exactly like the one-point sample(): same distance and normal bits, same
+// validity, for every format, margin rings, a LESS cavity cube, points outside every map, points on
+// texel borders and non-finite points, whatever the span length (block edges at 64).
+TEST(DepthMap, BatchQueryEqualsPointSamplesBitForBit) {
+  const Mesh basin = collide_test::makeBasin(48);
+  const fluid::Bounds bounds = fluid::meshBounds(basin.view());
+  auto ringed = fluid::defaultMapSpecs(bounds, 64, DepthMapFormat::front_back16);
+  for (fluid::MapSpec& s : ringed) s.margin = 0.1f;
+  fluid::MapSpec cavity;
+  cavity.kind = fluid::MapKind::cube;
+  cavity.format = DepthMapFormat::cube8;
+  cavity.compare = fluid::DepthCompare::less;
+  cavity.resolution = 64;
+  cavity.cube.center = collide_test::kBasinCavityCenter;
+  cavity.cube.half_extent = glm::vec3(collide_test::kBasinCavityHalf);
+  ringed.push_back(cavity);
+  std::vector<std::pair<const char*, fluid::DepthMapCollider>> colliders;
+  for (DepthMapFormat format : kFormats) colliders.emplace_back(fluid::formatName(format), sphereCollider(format, 64));
+  colliders.emplace_back("basin, margin rings and a LESS cavity cube", bake(basin, ringed));
+  std::vector<glm::vec3> points = randomPoints(3000, glm::vec3(-1.6f), glm::vec3(1.6f), 11);
+  // Texel borders of the sphere's maps (a 64-texel map over the padded bounds) and the map volumes' faces.
+  for (int k = -70; k <= 70; ++k) points.push_back(glm::vec3(static_cast<float>(k) / 32.0f, 0.25f, -0.5f));
+  for (float v : {-1.2f, 1.2f, 0.0f}) points.push_back(glm::vec3(v, v, v));
+  points.insert(points.begin() + 63, glm::vec3(NAN, 0.0f, 0.0f));
+  points.insert(points.begin() + 64, glm::vec3(0.0f, INFINITY, 0.0f));
+  points.push_back(glm::vec3(0.0f, 0.0f, -INFINITY));
+  auto same = [](const fluid::ColliderSample& a, const fluid::ColliderSample& b) {
+    return a.valid == b.valid && std::memcmp(&a.distance, &b.distance, sizeof(float)) == 0 &&
+           std::memcmp(&a.normal, &b.normal, sizeof(glm::vec3)) == 0;
+  };
+  for (const auto& [name, collider] : colliders) {
+    SCOPED_TRACE(name);
+    std::size_t inside = 0, outside = 0;
+    for (const std::size_t length :
+         {std::size_t{1}, std::size_t{2}, std::size_t{63}, std::size_t{64}, std::size_t{65}, points.size()}) {
+      std::vector<fluid::ColliderSample> batch(points.size());
+      for (std::size_t b = 0; b < points.size(); b += length) {
+        const std::size_t count = std::min(length, points.size() - b);
+        collider.query(std::span<const glm::vec3>(points).subspan(b, count),
+                       std::span<fluid::ColliderSample>(batch).subspan(b, count));
+      }
+      std::size_t differ = 0;
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        const fluid::ColliderSample one = collider.sample(points[k]);
+        if (!same(batch[k], one) && ++differ <= 3)
+          ADD_FAILURE() << "length " << length << " point " << points[k].x << " " << points[k].y << " " << points[k].z
+                        << ": batch " << batch[k].distance << " sample " << one.distance;
+        if (length == 1) {
+          inside += isInside(one);
+          outside += one.valid && one.distance >= 0.0f;
+        }
+      }
+      EXPECT_EQ(differ, 0u) << "length " << length;
+    }
+    // The points reach both sides of the surface (a collider answering nothing would pass above).
+    EXPECT_GT(inside, 100u);
+    EXPECT_GT(outside, 100u);
+  }
+}
+
 }  // namespace
