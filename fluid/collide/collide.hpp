@@ -375,7 +375,7 @@ CollideCounts collideParticles(const SignedDistanceShape& shape, const ColliderP
 // ---- Reach culling: a coarse grid of cells the maps place beyond reach -----------------
 
 struct ReachGridDesc {
-  float reach = 0.0f;               // distances >= reach are "beyond reach" for the caller (SPH: the support H)
+  float reach = 0.0f;                // distances >= reach are "beyond reach" for the caller (SPH: the support H)
   float cell = 0.0f;                 // cell edge (collider units); 0 = reach / 4
   std::size_t max_cells = 1u << 21;  // beyond it the edge along the axis with the most cells grows
 };
@@ -417,7 +417,6 @@ class ReachCulledCollider final : public SignedDistanceShape {
   glm::vec3 cell_{1.0f}, inv_cell_{1.0f};
   glm::ivec3 dims_{0};
   std::vector<std::uint64_t> far_bits_;  // bit per cell, x fastest: 1 = every point beyond reach
-  std::size_t far_count_ = 0;            // far cells
 };
 
 // ---- Exact reference: signed distance to a closed triangle mesh (BVH) ------------------

@@ -54,6 +54,9 @@ inline std::uint16_t loadU16(const std::uint8_t* p) {
   return v;
 }
 
+// The answer of a collider with no opinion: "far outside" (invalid), the normal a default sample has.
+constexpr ColliderSample kNoOpinion{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};
+
 // The bits of a texel that its votes read, as one 32-bit word: front_back16 front | back << 16,
 // fixed8 and cube8 the 16-bit code, float32 the depth's bits. The collider keeps these words
 // beside the texels (DepthMapCollider::vote_words_): half (front_back16) or a quarter (float32) of
@@ -259,29 +262,6 @@ std::size_t DepthMapCollider::bytes() const {
 
 namespace {
 
-// The votes of every map at one point, in map order.
-inline void allVotes(Winner& main, Winner& ring, const std::vector<DepthMap>& maps,
-                     const std::vector<std::vector<std::uint32_t>>& vote_words, glm::vec3 p) {
-  for (std::size_t m = 0; m < maps.size(); ++m) {
-    const DepthMap& map = maps[m];
-    const std::uint32_t* words = vote_words[m].data();
-    switch (map.format) {
-      case DepthMapFormat::float32:
-        orthoVotes<DepthMapFormat::float32>(main, ring, map, orthoSpot(map, p), words);
-        break;
-      case DepthMapFormat::fixed8:
-        orthoVotes<DepthMapFormat::fixed8>(main, ring, map, orthoSpot(map, p), words);
-        break;
-      case DepthMapFormat::front_back16:
-        orthoVotes<DepthMapFormat::front_back16>(main, ring, map, orthoSpot(map, p), words);
-        break;
-      case DepthMapFormat::cube8:
-        cubeVote(main, map, cubeSpot(map, p), words);
-        break;
-    }
-  }
-}
-
 // One map's votes over a block of points, in two loops: every point's texel first (and a
 // prefetch of it), then the votes. The texel reads are what a lookup waits for (the maps are
 // megabytes, the particles' texels scattered over them); the first loop has no branch, so the
@@ -306,7 +286,31 @@ void cubeBlock(Winner* main, const DepthMap& map, const std::uint32_t* words, co
   for (std::size_t k = 0; k < count; ++k) cubeVote(main[k], map, spots[k], words);
 }
 
-// Rule (2)'s result from the winners (one normal decoded per point).
+// Every map's votes over a block of points (finite ones), map after map: each point sees the maps
+// in order, so ties go to the same map whatever the block. `spots` are caller scratch of `count`.
+void votesOverBlock(Winner* main, Winner* ring, const std::vector<DepthMap>& maps,
+                    const std::vector<std::vector<std::uint32_t>>& vote_words, const glm::vec3* points,
+                    std::size_t count, OrthoSpot* ortho_spots, CubeSpot* cube_spots) {
+  for (std::size_t m = 0; m < maps.size(); ++m) {
+    const DepthMap& map = maps[m];
+    const std::uint32_t* words = vote_words[m].data();
+    switch (map.format) {
+      case DepthMapFormat::float32:
+        orthoBlock<DepthMapFormat::float32>(main, ring, map, words, points, count, ortho_spots);
+        break;
+      case DepthMapFormat::fixed8:
+        orthoBlock<DepthMapFormat::fixed8>(main, ring, map, words, points, count, ortho_spots);
+        break;
+      case DepthMapFormat::front_back16:
+        orthoBlock<DepthMapFormat::front_back16>(main, ring, map, words, points, count, ortho_spots);
+        break;
+      case DepthMapFormat::cube8:
+        cubeBlock(main, map, words, points, count, cube_spots);
+        break;
+    }
+  }
+}
+
 // The winner whose vote is the answer. Margin-ring votes only measure the depth offset to the
 // nearest silhouette point (never "inside", but short of the lateral offset), so they decide only
 // where no map sees the point outside: with no vote, only "far outside" votes, or only inside
@@ -322,17 +326,16 @@ inline const std::uint8_t* winningTexel(const Winner& w) {
   return w.map->texels.data() + static_cast<std::size_t>(w.texel) * texelBytes(w.map->format);
 }
 
+// Rule (2)'s result from the winners (one normal decoded per point).
 ColliderSample finish(const Winner& main, const Winner& ring, const std::vector<glm::vec3>& normal_table,
                       int normal_resolution) {
-  ColliderSample out;
-  out.valid = false;
-  out.distance = FLT_MAX;
   const Winner& w = decisive(main, ring);
-  if (!w.any_vote || w.map == nullptr) return out;  // no opinion, or only "far outside"
+  const std::uint8_t* t = winningTexel(w);
+  if (t == nullptr) return kNoOpinion;  // no opinion, or only "far outside"
+  ColliderSample out;
   out.valid = true;
   out.distance = w.f;
   const DepthMap& m = *w.map;
-  const std::uint8_t* t = m.texels.data() + static_cast<std::size_t>(w.texel) * texelBytes(m.format);
   std::uint32_t index = 0;
   switch (m.format) {
     case DepthMapFormat::float32: {
@@ -359,14 +362,11 @@ ColliderSample finish(const Winner& main, const Winner& ring, const std::vector<
 }  // namespace
 
 ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
-  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
-    ColliderSample out;
-    out.valid = false;
-    out.distance = FLT_MAX;
-    return out;
-  }
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return kNoOpinion;
   Winner main, ring;
-  allVotes(main, ring, maps_, vote_words_, p);
+  OrthoSpot ortho_spot;
+  CubeSpot cube_spot;
+  votesOverBlock(&main, &ring, maps_, vote_words_, &p, 1, &ortho_spot, &cube_spot);
   return finish(main, ring, normal_table_, normal_resolution_);
 }
 
@@ -394,30 +394,12 @@ void DepthMapCollider::query(std::span<const glm::vec3> local_points, std::span<
       main[k] = Winner{};
       ring[k] = Winner{};
     }
-    for (std::size_t m = 0; m < maps_.size(); ++m) {
-      const DepthMap& map = maps_[m];
-      const std::uint32_t* words = vote_words_[m].data();
-      switch (map.format) {
-        case DepthMapFormat::float32:
-          orthoBlock<DepthMapFormat::float32>(main, ring, map, words, points, count, ortho_spots);
-          break;
-        case DepthMapFormat::fixed8:
-          orthoBlock<DepthMapFormat::fixed8>(main, ring, map, words, points, count, ortho_spots);
-          break;
-        case DepthMapFormat::front_back16:
-          orthoBlock<DepthMapFormat::front_back16>(main, ring, map, words, points, count, ortho_spots);
-          break;
-        case DepthMapFormat::cube8:
-          cubeBlock(main, map, words, points, count, cube_spots);
-          break;
-      }
-    }
+    votesOverBlock(main, ring, maps_, vote_words_, points, count, ortho_spots, cube_spots);
     // The winners' texels (their normal indices) are not among the vote words read above.
     for (std::size_t k = 0; k < count; ++k)
       if (const std::uint8_t* t = winningTexel(decisive(main[k], ring[k]))) __builtin_prefetch(t);
     for (std::size_t k = 0; k < count; ++k)
-      out[b + k] = finite[k] ? finish(main[k], ring[k], normal_table_, normal_resolution_)
-                             : ColliderSample{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};
+      out[b + k] = finite[k] ? finish(main[k], ring[k], normal_table_, normal_resolution_) : kNoOpinion;
   }
 }
 
@@ -445,7 +427,7 @@ std::size_t queryParallel(const SignedDistanceShape& shape, std::span<const glm:
     const glm::vec3 p = points[k];
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
       ++non_finite;
-      out[k] = ColliderSample{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};  // whatever the shape wrote
+      out[k] = kNoOpinion;  // whatever the shape wrote
     }
   }
   return non_finite;
@@ -469,7 +451,6 @@ namespace {
 // No coordinate is inf or NaN: x * 0 is NaN exactly then, so one compare checks all three (this
 // runs for every particle and collider, most of which then need nothing else).
 bool finitePoint(glm::vec3 p) { return glm::dot(p, glm::vec3(0.0f)) == 0.0f; }
-constexpr ColliderSample kNoOpinion{FLT_MAX, {0.0f, 0.0f, 1.0f}, false};
 
 // The posed collider as collideParticles samples it: the pose, its inverse and whether it is the
 // identity (a level's colliders, baked in world coordinates: no transform needed, the same samples).

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cassert>
 #include <cfloat>
 #include <cmath>
@@ -399,12 +400,13 @@ ReachCulledCollider::ReachCulledCollider(std::shared_ptr<const DepthMapCollider>
   far_bits_.assign((cells + 63) / 64, 0);
   for (std::size_t k = 0; k < cells; ++k)
     far_bits_[k / 64] |= static_cast<std::uint64_t>(far_bytes[k] != 0) << (k % 64);
-  far_count_ = static_cast<std::size_t>(std::count(far_bytes.begin(), far_bytes.end(), std::uint8_t{1}));
 }
 
 double ReachCulledCollider::farFraction() const {
   const double cells = static_cast<double>(dims_.x) * dims_.y * dims_.z;
-  return far_bits_.empty() ? 0.0 : static_cast<double>(far_count_) / cells;
+  std::size_t far = 0;
+  for (const std::uint64_t word : far_bits_) far += static_cast<std::size_t>(std::popcount(word));
+  return far_bits_.empty() ? 0.0 : static_cast<double>(far) / cells;
 }
 
 std::size_t ReachCulledCollider::cellOf(glm::vec3 p) const {
@@ -424,8 +426,11 @@ bool ReachCulledCollider::farCell(std::size_t cell) const {
 
 bool ReachCulledCollider::culled(glm::vec3 p) const { return farCell(cellOf(p)); }
 
+// What a culled point answers: beyond reach (invalid), as the maps would.
+constexpr ColliderSample kCulled{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};
+
 ColliderSample ReachCulledCollider::sample(glm::vec3 p) const {
-  if (culled(p)) return ColliderSample{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};
+  if (culled(p)) return kCulled;
   return inner_->sample(p);
 }
 
@@ -453,7 +458,7 @@ void ReachCulledCollider::query(std::span<const glm::vec3> points, std::span<Col
     std::size_t q = 0;
     for (std::size_t k = b; k < b + count; ++k) {
       if (farCell(cell[k - b])) {
-        out[k] = ColliderSample{FLT_MAX, glm::vec3(0.0f, 1.0f, 0.0f), false};
+        out[k] = kCulled;
       } else {
         kept[q] = points[k];
         where[q++] = static_cast<std::uint32_t>(k);
