@@ -1,6 +1,6 @@
 #pragma once
 // Timing helpers shared by the benchmarks that print tables (not the Google Benchmark ones):
-// wall-clock and thread-CPU milliseconds of one call, and the median of repeated runs.
+// wall-clock, thread-CPU and process-CPU milliseconds, and the median of repeated runs.
 #include <algorithm>
 #include <chrono>
 #include <vector>
@@ -30,6 +30,15 @@ double timeMs(F&& f) {
 inline double threadCpuMs() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
+// CPU time of the whole process (every thread). Over a several-thread run, a figure near the
+// one-thread CPU time with a wall time that does not drop says the other threads waited for a
+// core rather than that the work did not split.
+inline double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
 }
 

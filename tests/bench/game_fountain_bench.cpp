@@ -230,12 +230,6 @@ void printRow(const std::string& label, int t, int frames, const Run& r) {
   std::fflush(stdout);
 }
 
-double processCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
-
 // --mesh-reps: the frame's particles meshed by the game's mesher settings, 1 and 2 threads interleaved.
 void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfaceParams& game_params, int reps) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
@@ -260,10 +254,10 @@ void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfacePara
   run(1);
   for (int r = 0; r < reps; ++r)
     for (int k : {1, 0}) {
-      const double c0 = benchtiming::threadCpuMs(), p0 = processCpuMs();
+      const double c0 = benchtiming::threadCpuMs(), p0 = benchtiming::processCpuMs();
       wall[k].push_back(benchtiming::timeMs([&] { run(k); }));
       cpu[k].push_back(benchtiming::threadCpuMs() - c0);
-      if (k == 1) process2.push_back(processCpuMs() - p0);
+      if (k == 1) process2.push_back(benchtiming::processCpuMs() - p0);
     }
   const fluid::SurfaceStats& st = mesh[0].stats;
   std::printf(

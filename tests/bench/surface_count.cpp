@@ -21,6 +21,7 @@
 // untimed one with the same extractor (as bench_surface's thread-scaling table), and prints both
 // medians and their ratio (and, for the several threads, the calling thread's and the process's CPU ms): a quick check
 // of the two-thread bar between full bench_surface runs.
+#include "bench_timing.hpp"
 #include "fluid/io/particle_io.hpp"
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -96,21 +97,17 @@ int main(int argc, char** argv) {
       std::printf("block (%d %d %d) triangles %u vertices %u\n", b.bx, b.by, b.bz, b.indices.count / 3, b.vertexCount);
   if (const char* rr = std::getenv("SURFACE_COUNT_RATIO")) {
     const int rounds = std::max(1, std::atoi(rr));
-    auto cpuMs = [] {
-      timespec ts{};
-      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-      return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-    };
+    using benchtiming::threadCpuMs;
     fluid::BaselineExtractor base;
     fluid::SurfaceMesh other;
     std::vector<double> t1, t3;
     for (int r = 0; r < rounds; ++r) {
-      double c0 = cpuMs();
+      double c0 = threadCpuMs();
       (void)extractor.extract(in, params, mesh);
-      t1.push_back(cpuMs() - c0);
-      c0 = cpuMs();
+      t1.push_back(threadCpuMs() - c0);
+      c0 = threadCpuMs();
       (void)base.extract(fluid::BaselineMethod::hashed, in, params, other);
-      t3.push_back(cpuMs() - c0);
+      t3.push_back(threadCpuMs() - c0);
     }
     std::sort(t1.begin(), t1.end());
     std::sort(t3.begin(), t3.end());
@@ -125,22 +122,16 @@ int main(int argc, char** argv) {
     pn.threads = params.threads > 1 ? params.threads : 2;
     fluid::SurfaceExtractor e1, en;
     fluid::SurfaceMesh m1, mn;
-    auto cpuMs = [](clockid_t clock) {
-      timespec ts{};
-      clock_gettime(clock, &ts);
-      return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-    };
-    // Also the CPU ms of the calling thread and of the whole process over the timed extraction: on
-    // a loaded machine, a process CPU time near the one-thread time with a wall time that does not
-    // drop says the other threads waited for a core rather than that the work did not split.
+    // Also the CPU ms of the calling thread and of the whole process over the timed extraction
+    // (benchtiming::processCpuMs says what they show on a loaded machine).
     double callingCpu = 0, processCpu = 0;
     auto wallMs = [&](fluid::SurfaceExtractor& e, const fluid::SurfaceParams& p, fluid::SurfaceMesh& m) {
       (void)e.extract(in, p, m);  // untimed: steady state, as when a game meshes every frame
-      const double c0 = cpuMs(CLOCK_THREAD_CPUTIME_ID), p0 = cpuMs(CLOCK_PROCESS_CPUTIME_ID);
+      const double c0 = benchtiming::threadCpuMs(), p0 = benchtiming::processCpuMs();
       const auto t0 = std::chrono::steady_clock::now();
       (void)e.extract(in, p, m);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      callingCpu = cpuMs(CLOCK_THREAD_CPUTIME_ID) - c0, processCpu = cpuMs(CLOCK_PROCESS_CPUTIME_ID) - p0;
+      callingCpu = benchtiming::threadCpuMs() - c0, processCpu = benchtiming::processCpuMs() - p0;
       return ms;
     };
     std::vector<double> t1, tn, ratio, cn, pcn;

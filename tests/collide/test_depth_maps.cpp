@@ -317,14 +317,7 @@ TEST(DepthMap, ConcaveBasinNeedsTheExtraMap) {
   const fluid::Bounds bounds = fluid::meshBounds(basin.view());
   auto specs = fluid::defaultMapSpecs(bounds, 128, DepthMapFormat::front_back16);
   const fluid::DepthMapCollider plain = bake(basin, specs);
-  fluid::MapSpec cavity;
-  cavity.kind = fluid::MapKind::cube;
-  cavity.format = DepthMapFormat::cube8;
-  cavity.compare = fluid::DepthCompare::less;  // the cavity centre is outside the basin
-  cavity.resolution = 128;
-  cavity.cube.center = collide_test::kBasinCavityCenter;
-  cavity.cube.half_extent = glm::vec3(collide_test::kBasinCavityHalf);
-  specs.push_back(cavity);
+  specs.push_back(collide_test::basinCavityCube(128));
   const fluid::DepthMapCollider extra = bake(basin, specs);
   const fluid::MeshDistance exact(basin.view());
   // Points in the cavity under the overhanging rim: invisible from above.
@@ -564,14 +557,7 @@ TEST(DepthMap, BatchQueryEqualsPointSamplesBitForBit) {
   const fluid::Bounds bounds = fluid::meshBounds(basin.view());
   auto ringed = fluid::defaultMapSpecs(bounds, 64, DepthMapFormat::front_back16);
   for (fluid::MapSpec& s : ringed) s.margin = 0.1f;
-  fluid::MapSpec cavity;
-  cavity.kind = fluid::MapKind::cube;
-  cavity.format = DepthMapFormat::cube8;
-  cavity.compare = fluid::DepthCompare::less;
-  cavity.resolution = 64;
-  cavity.cube.center = collide_test::kBasinCavityCenter;
-  cavity.cube.half_extent = glm::vec3(collide_test::kBasinCavityHalf);
-  ringed.push_back(cavity);
+  ringed.push_back(collide_test::basinCavityCube(64));
   std::vector<std::pair<const char*, fluid::DepthMapCollider>> colliders;
   for (DepthMapFormat format : kFormats) colliders.emplace_back(fluid::formatName(format), sphereCollider(format, 64));
   colliders.emplace_back("basin, margin rings and a LESS cavity cube", bake(basin, ringed));

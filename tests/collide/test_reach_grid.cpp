@@ -99,14 +99,7 @@ TEST(ReachGrid, BasinWithCavityCubeAndMarginRings) {
   const float reach = 0.12f;
   auto specs = fluid::defaultMapSpecs(fluid::meshBounds(basin.view()), 128, DepthMapFormat::front_back16);
   for (fluid::MapSpec& s : specs) s.margin = reach;
-  fluid::MapSpec cavity;
-  cavity.kind = fluid::MapKind::cube;
-  cavity.format = DepthMapFormat::cube8;
-  cavity.compare = fluid::DepthCompare::less;
-  cavity.resolution = 128;
-  cavity.cube.center = collide_test::kBasinCavityCenter;
-  cavity.cube.half_extent = glm::vec3(collide_test::kBasinCavityHalf);
-  specs.push_back(cavity);
+  specs.push_back(collide_test::basinCavityCube(128));
   // Lower share: near the cavity cube's centre a cell spans many of its texels (directions).
   checkGrid(basin, bake(basin, specs), reach, 0.65);
 }

@@ -71,6 +71,14 @@ inline Topology checkTopology(const fluid::SurfaceMesh& m) {
   return t;
 }
 
+// The four shipped test sets with the lattice cube S each is meshed at (bench_surface's, too).
+struct TestSet {
+  const char* name;
+  float cube;
+};
+inline constexpr TestSet kTestSets[] = {
+    {"fountain.xyz", 1.0f}, {"blob.xyz", 0.3f}, {"explosion.xyz", 0.6f}, {"spray.xyz", 1.0f}};
+
 inline fluid::ParticlePositions loadSet(const std::string& name) {
   fluid::ParticlePositions p;
   const fluid::IoStatus st = fluid::readParticleFile(std::string(FLUIDDEMO_TEST_DATA_DIR) + "/" + name, p);

@@ -58,9 +58,7 @@ fluid::SurfaceMesh expectRoutesAgree(const fluid::SurfaceInput& in, const fluid:
 }
 
 TEST(FieldRoutes, SliceSplatIsTheCacheMeshBitForBitOnTheTestSets) {
-  const std::tuple<const char*, float> sets[] = {
-      {"fountain.xyz", 1.0f}, {"blob.xyz", 0.3f}, {"explosion.xyz", 0.6f}, {"spray.xyz", 1.0f}};
-  for (const auto& [name, cube] : sets) {
+  for (const auto& [name, cube] : kTestSets) {
     const fluid::ParticlePositions ps = loadSet(name);
     for (int variant = 0; variant < 3; ++variant) {
       fluid::SurfaceParams p;

@@ -208,9 +208,7 @@ TEST(MarchingSlices, ParticleOrderIsZThenIndexForRadixAndComparisonSorts) {
 
 TEST(MarchingSlices, Avx2AndPortableCacheFillGiveTheSameMesh) {
   if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2: only the portable fill runs";
-  const std::tuple<const char*, float> sets[] = {
-      {"fountain.xyz", 1.0f}, {"blob.xyz", 0.3f}, {"explosion.xyz", 0.6f}, {"spray.xyz", 1.0f}};
-  for (const auto& [name, cube] : sets) {
+  for (const auto& [name, cube] : kTestSets) {
     const fluid::ParticlePositions ps = loadSet(name);
     for (int order = 0; order < 2; ++order) {
       fluid::SurfaceParams p;
