@@ -9,9 +9,11 @@ cd "$(dirname "$0")/.."
 build=${1:-build/dev}
 bins=(game/fluiddemo tests/engine/gl_engine tests/gpu/gl_gpu_particles tests/gpu/gl_fluid_render
       tests/gpu/gl_goo_texture tests/gpu/gl_fluid_methods
-      tests/bench/bench_gpu_particles tests/bench/bench_fluid_render)
-rm -rf .gpurun/bin .gpurun/lib
-mkdir -p .gpurun/bin .gpurun/lib .gl
+      tests/bench/bench_gpu_particles tests/bench/bench_fluid_render tests/bench/bench_game_fountain)
+rm -rf .gpurun
+mkdir -p .gpurun/bin .gpurun/lib .gpurun/data .gl
+# The mesher's two-thread sets (../shared does not travel with the repository).
+cp ../shared/bench-data/explosion.xyz ../shared/bench-data/spray.xyz .gpurun/data/
 for b in "${bins[@]}"; do
   strip --strip-unneeded -o ".gpurun/bin/$(basename "$b")" "$build/$b"
 done
@@ -22,6 +24,8 @@ for b in .gpurun/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $1, $3}' | so
     [[ $name =~ $skip ]] && continue
     strip --strip-unneeded -o ".gpurun/lib/$name" "$path"
   done
+# One compressed payload: the working tree that travels to the device machine is capped at 64 MiB.
+tar -C .gpurun -czf .gpurun/payload.tar.gz bin lib && rm -rf .gpurun/bin .gpurun/lib
 cp scripts/gpu_check.sh .gpurun/run.sh
 # The source path compiled into the test binaries (FLUIDDEMO_SOURCE_DIR): gpu_check.sh links it.
 sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt" > .gpurun/source_dir
