@@ -6,8 +6,9 @@
 # our packages; EGL through glvnd, SDL's offscreen driver). Results go to $OUT (default /tmp/gpu_check).
 #   usage: .gpurun/run.sh [SECTION...]   (after scripts/gpu_bundle.sh; copy .gpurun, .gl and the repository)
 # Sections, all by default, in this order: tests (the gl_* test binaries), tours (rendered on all
-# cores), pinned (two pinned cores: tours, the mesher's two-thread gain and block sizes, the fountain's
-# frame budget against its particle count), benches (bench_gpu_particles, bench_fluid_render).
+# cores), pinned (two pinned cores: the fountain tours and the fountain's frame budget against its
+# particle count), mesher (two pinned cores: one and two threads per block size, MESHER_ROUNDS rounds
+# over MESHER_BLOCKS), benches (bench_gpu_particles, bench_fluid_render).
 cd "$(dirname "$0")/.." || exit 1  # the repository root
 OUT=${OUT:-/tmp/gpu_check}
 mkdir -p "$OUT"
@@ -72,9 +73,18 @@ section_pinned() {
     timeout 150 $pin $B/fluiddemo replay content/replays/$tour.replay --threads 2 \
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12
   done
+  echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
+  # shellcheck disable=SC2046
+  timeout 300 $pin $B/bench_game_fountain --threads 2 --frames 300 --mesh 1 \
+    --set sph_fluid.max_particles=2500 $(sweep_configs) 2>&1 | grep '^|'
+}
+section_mesher() {
+  command -v taskset >/dev/null || { echo "=== mesher: no taskset, skipped"; return; }
+  local pin round block t set name cube reps
+  pin="taskset -c $(pick_two_cores)"
   echo "=== mesher, 1 and 2 threads on 2 pinned cores, interleaved, per block size (issue 20 bar 2)"
-  for round in 1 2 3; do
-    for block in 0 64 32; do
+  for round in $(seq "${MESHER_ROUNDS:-3}"); do
+    for block in ${MESHER_BLOCKS:-0 64 32}; do
       for t in 1 2; do
         for set in explosion:0.6:41 spray:1:21; do
           IFS=: read -r name cube reps <<<"$set"
@@ -85,10 +95,6 @@ section_pinned() {
       done
     done
   done
-  echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
-  # shellcheck disable=SC2046
-  timeout 300 $pin $B/bench_game_fountain --threads 2 --frames 300 --mesh 1 \
-    --set sph_fluid.max_particles=2500 $(sweep_configs) 2>&1 | grep '^|'
 }
 section_benches() {
   echo "=== bench_gpu_particles"
@@ -96,7 +102,7 @@ section_benches() {
   echo "=== bench_fluid_render"
   timeout 120 $B/bench_fluid_render --frames 20 --sizes 1280x720 --counts 2500,13000,50000 2>&1 | tail -14
 }
-sections=${*:-tests tours pinned benches}
+sections=${*:-tests tours pinned mesher benches}
 {
   nvidia-smi -L
   echo "cores: $(nproc); $(ldd --version | head -1); sections: $sections"
