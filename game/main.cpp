@@ -17,7 +17,7 @@ constexpr Subcommand kSubcommands[] = {
     {"play", "play a scene in a window (headless when no display): play [SCENE] [options]", game::playCommand},
     {"smoke", "run scenes headless and check each frame: smoke [--scene S | --all] [--frames N] [--out DIR]",
      game::smokeCommand},
-    {"soak", "long headless runs with crate throws, checked every frame: soak [--scene S | --all] [--seconds T]",
+    {"soak", "long headless runs with crate and explosive throws, checked every frame: soak [--scene S | --all] [--seconds T]",
      game::soakCommand},
     {"replay", "play a replay file, check its hashes, time each frame: replay FILE [--csv OUT] [--png OUT]",
      game::replayCommand},

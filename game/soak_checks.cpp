@@ -109,7 +109,7 @@ Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::Sig
 }
 
 Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
-                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> still, float radius,
+                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> blockers, float radius,
                                  PenetrationScratch& scratch, std::size_t& squeezed) {
   Penetration worst;
   squeezed = 0;
@@ -121,7 +121,7 @@ Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid:
     // The way out: the surface point along the outward normal (world space).
     const glm::vec3 exit = points[i] - s.distance * fluid::toWorldDirection(pose, s.normal);
     bool blocked = false;
-    for (const PlacedShape& other : still) {
+    for (const PlacedShape& other : blockers) {
       const glm::vec3 local = fluid::toColliderSpace(other.pose, exit);
       fluid::ColliderSample o;
       other.shape->query(std::span<const glm::vec3>(&local, 1), std::span<fluid::ColliderSample>(&o, 1));
@@ -149,9 +149,9 @@ ThrowSchedule makeThrowSchedule(const ThrowScheduleDesc& desc, std::uint32_t see
   return s;
 }
 
-std::optional<CrateThrow> throwDue(ThrowSchedule& s, std::uint64_t step) {
+std::optional<PlayerThrow> throwDue(ThrowSchedule& s, std::uint64_t step) {
   if (step < s.next_step) return std::nullopt;
-  CrateThrow t;
+  PlayerThrow t;
   t.step = step;
   const float two_pi = 2.0f * std::numbers::pi_v<float>;
   const float stand_angle = two_pi * uniform01(s.rng);
@@ -164,6 +164,8 @@ std::optional<CrateThrow> throwDue(ThrowSchedule& s, std::uint64_t step) {
   const float target_radius = s.desc.target_radius * std::sqrt(uniform01(s.rng));
   t.target = glm::vec3(std::cos(target_angle) * target_radius, uniformIn(s.rng, 0.0f, s.desc.target_height_max),
                        std::sin(target_angle) * target_radius);
+  // Drawn for every throw, whatever the share, so the share changes what is thrown and nothing else.
+  t.explosive = uniform01(s.rng) < s.desc.explosive_share;
   s.next_step = step + stepsUntilNext(s);
   return t;
 }

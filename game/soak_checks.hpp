@@ -82,30 +82,33 @@ struct PenetrationScratch {
 Penetration worstPenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
                              const fluid::ColliderPose& pose, float radius, float offset, PenetrationScratch& scratch);
 
-// A still collider (placed) for worstFreePenetration.
+// A placed collider that can block a particle's way out (worstFreePenetration).
 struct PlacedShape {
   const fluid::SignedDistanceShape* shape = nullptr;
   fluid::ColliderPose pose;
 };
 
 // Deepest penetration of the points into a collider that moves (a crate coupled to the SPH fluid),
-// leaving out the points that have no free position there: the SPH solver's rule where a moving
-// collider overlaps a still one is that the still one wins (fluid/sph/sph.hpp, sphColliderMoves),
-// so a particle squeezed between a crate and the basin ends outside the basin and inside the crate.
-// A point counts as squeezed when its way out of `shape`, the nearest point of its surface
-// (p - distance * normal), lies inside one of `still` (distance < 0): the crate reaches into the
-// basin there. `squeezed` receives how many points were left out for that reason.
+// leaving out the points that have no free position there. Where a moving collider overlaps a still
+// one the SPH solver lets the still one win (fluid/sph/sph.hpp, sphColliderMoves), so a particle
+// squeezed between a crate and the basin ends outside the basin and inside the crate; where two
+// crates overlap (a blast presses them together), the one resolved last wins. A point counts as
+// squeezed when its way out of `shape`, the nearest point of its surface (p - distance * normal),
+// lies inside one of `blockers` (distance < 0): the other colliders, still or moving. `squeezed`
+// receives how many points were left out for that reason.
 Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
-                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> still, float radius,
+                                 const fluid::ColliderPose& pose, std::span<const PlacedShape> blockers, float radius,
                                  PenetrationScratch& scratch, std::size_t& squeezed);
 
-// ---- crate throws -----------------------------------------------------------------------------
+// ---- the player's throws: crates and fused explosives -----------------------------------------
 
 // Where soak throws come from and go: the thrower stands on a ring around the fountain (so throws
 // come from every side and the camera, which the surface is meshed for, sees it from everywhere)
-// and aims at a random point of the basin and the yard around it.
+// and aims at a random point of the basin and the yard around it. A share of the throws are fused
+// explosives (the right mouse button), so blasts hit the water, the crates and the sprites too.
 struct ThrowScheduleDesc {
   double mean_interval_s = 2.0;  // intervals uniform in [0.5, 1.5] x this; <= 0: never throw
+  double explosive_share = 0.25;  // chance that a throw is an explosive, [0, 1]; 0 = crates only
   double step_seconds = 1.0 / 60.0;
   float stand_radius_min = 6.0f, stand_radius_max = 10.0f;  // m from the fountain's axis
   float stand_height_min = 1.5f, stand_height_max = 4.0f;   // eye height, m
@@ -113,10 +116,11 @@ struct ThrowScheduleDesc {
   float target_height_max = 1.0f;                           // targets at y in [0, this]
 };
 
-struct CrateThrow {
+struct PlayerThrow {
   std::uint64_t step = 0;  // thrown just before this step (world.steps == step)
   glm::vec3 from{0.0f};
   glm::vec3 target{0.0f};
+  bool explosive = false;  // a fused explosive instead of a crate
 };
 
 struct ThrowSchedule {
@@ -128,7 +132,8 @@ struct ThrowSchedule {
 ThrowSchedule makeThrowSchedule(const ThrowScheduleDesc& desc, std::uint32_t seed);
 
 // The throw due before `step`, if any (at most one per step); advances the schedule past it.
-// Call with every step in increasing order: the sequence depends only on the seed and desc.
-std::optional<CrateThrow> throwDue(ThrowSchedule& schedule, std::uint64_t step);
+// Call with every step in increasing order: the sequence depends only on the seed and desc, and
+// the steps, places and targets not on explosive_share (which only decides what is thrown).
+std::optional<PlayerThrow> throwDue(ThrowSchedule& schedule, std::uint64_t step);
 
 }  // namespace game

@@ -1,5 +1,6 @@
 #include "game/soak_monitor.hpp"
 
+#include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
@@ -23,19 +24,28 @@ std::string describe(const char* what, const Penetration& p, float tolerance) {
   return text;
 }
 
-// Moves the camera to the thrower's place and throws along a lob that lands near the target: the
-// crate leaves along the camera's forward axis at throw_speed, so aim above the target by the drop
-// over the flight (flight time from the straight distance, ignoring the arc's extra length).
-void throwCrateAt(World& world, const CrateThrow& t) {
+// Moves the camera to the thrower's place and throws along a lob that lands near the target: a
+// crate leaves along the camera's forward axis at its throw_speed, so aim above the target by the
+// drop over the flight (flight time from the straight distance, ignoring the arc's extra length).
+// An explosive leaves at its own throw speed, lobbed above the camera's axis by lob_degrees (its
+// fuse, not the landing point, decides where it blows: near enough for the soak). Returns whether
+// an explosive was thrown (a scene without the explosives effect throws a crate instead).
+bool throwAt(World& world, const PlayerThrow& t) {
   const RigidBodies& bodies = *findState<RigidBodies>(world);
+  const bool explosive = t.explosive && world.links.explosives != nullptr;
+  const float speed = explosive ? world.links.explosives->params.throw_speed : bodies.params.throw_speed;
   const glm::vec3 to_target = t.target - t.from;
-  const float flight = glm::length(to_target) / std::max(bodies.params.throw_speed, 0.1f);
+  const float flight = glm::length(to_target) / std::max(speed, 0.1f);
   const glm::vec3 aim = to_target - 0.5f * bodies.params.gravity * flight * flight;
   const glm::vec3 dir = glm::normalize(aim);
   world.camera.position = t.from;
   world.camera.yaw_degrees = glm::degrees(std::atan2(dir.z, dir.x));
   world.camera.pitch_degrees = std::clamp(glm::degrees(std::asin(std::clamp(dir.y, -1.0f, 1.0f))), -89.0f, 89.0f);
-  playerThrow(world);
+  if (explosive)
+    playerThrowExplosive(world);
+  else
+    playerThrow(world);
+  return explosive;
 }
 
 void trackCount(std::size_t count, bool first, std::size_t& lo, std::size_t& hi) {
@@ -49,6 +59,23 @@ float maxSpeed(std::span<const glm::vec3> velocities) {
   return std::sqrt(fastest);
 }
 
+// Where a failing SPH particle is: its signed distance to every collider within a particle
+// radius of it, so a report tells a particle squeezed between two crates from one that went through a wall.
+std::string collidersNear(const fluid::SphWorld& sph, glm::vec3 position, PenetrationScratch& scratch) {
+  const float radius = sph.params.particle_radius;
+  std::string out;
+  for (std::size_t c = 0; c < sph.colliders.size(); ++c) {
+    const fluid::SphCollider& collider = sph.colliders[c];
+    const Penetration p = worstPenetration(std::span(&position, 1), *collider.shape, collider.pose, radius, radius, scratch);
+    if (p.depth <= 0.0f) continue;
+    char part[96];
+    std::snprintf(part, sizeof(part), "%s collider %zu%s %.4f m", out.empty() ? "; within a radius of" : ",", c,
+                  fluid::sphColliderMoves(collider) ? " (moving)" : "", static_cast<double>(radius - p.depth));
+    out += part;
+  }
+  return out;
+}
+
 // SPH particles against every collider the solver knows (the fountain and the coupled crates, at
 // the poses the solver ended the step with); sprites against the fountain; crate centres against
 // the fountain with their half edge as offset.
@@ -58,20 +85,24 @@ void checkPenetration(SoakMonitor& m, const World& world) {
   if (const SphFluid* fluid = findState<SphFluid>(world)) {
     const fluid::SphWorld& sph = fluid->world;
     const float radius = sph.params.particle_radius;
-    // Where a moving collider (a crate) overlaps a still one (the fountain), the solver leaves a
-    // particle between them outside the still one (fluid/sph: still colliders win): inside the
-    // crate there only counts where the crate does not reach into a still collider.
-    m.still.clear();
-    for (const fluid::SphCollider& collider : sph.colliders)
-      if (!fluid::sphColliderMoves(collider)) m.still.push_back({collider.shape.get(), collider.pose});
+    // Where a moving collider (a crate) overlaps another (the fountain, or a crate a blast pressed
+    // into it), no position is outside both and the solver leaves a particle between them inside
+    // one (fluid/sph: still colliders win, else the last resolved): inside a crate only counts
+    // where its way out is not inside another collider (worstFreePenetration).
     std::size_t squeezed_now = 0;
-    for (const fluid::SphCollider& collider : sph.colliders) {
+    for (std::size_t c = 0; c < sph.colliders.size(); ++c) {
+      const fluid::SphCollider& collider = sph.colliders[c];
       std::size_t squeezed = 0;
-      const Penetration p =
-          fluid::sphColliderMoves(collider)
-              ? worstFreePenetration(sph.particles.position, *collider.shape, collider.pose, m.still, radius, m.scratch,
-                                     squeezed)
-              : worstPenetration(sph.particles.position, *collider.shape, collider.pose, radius, 0.0f, m.scratch);
+      Penetration p;
+      if (fluid::sphColliderMoves(collider)) {
+        m.blockers.clear();
+        for (std::size_t o = 0; o < sph.colliders.size(); ++o)
+          if (o != c) m.blockers.push_back({sph.colliders[o].shape.get(), sph.colliders[o].pose});
+        p = worstFreePenetration(sph.particles.position, *collider.shape, collider.pose, m.blockers, radius, m.scratch,
+                                 squeezed);
+      } else {
+        p = worstPenetration(sph.particles.position, *collider.shape, collider.pose, radius, 0.0f, m.scratch);
+      }
       squeezed_now += squeezed;
       if (p.ratio > s.worst_sph) {
         s.worst_sph = p.ratio;
@@ -79,8 +110,11 @@ void checkPenetration(SoakMonitor& m, const World& world) {
       }
       if (p.ratio > m.desc.particle_tolerance) {
         fail(m, step,
-             describe(("sph particle id " + std::to_string(sph.particles.id[p.index])).c_str(), p,
-                      m.desc.particle_tolerance));
+             describe(("sph particle id " + std::to_string(sph.particles.id[p.index]) + " (SPH collider " +
+                       std::to_string(c) + (fluid::sphColliderMoves(collider) ? ", moving)" : ", still)"))
+                          .c_str(),
+                      p, m.desc.particle_tolerance) +
+                 collidersNear(sph, p.position, m.scratch));
       }
     }
     s.sph_squeezed_frames += squeezed_now > 0 ? 1u : 0u;
@@ -163,8 +197,8 @@ void soakBeforeStep(SoakMonitor& m, World& world, std::uint64_t step) {
   // The sprites live on the GPU: read them back after every step so the NaN and penetration
   // checks see every live sprite (World::nonfinite_state and checkPenetration use the sample).
   if (SpriteParticles* sprites = findState<SpriteParticles>(world)) sprites->readback_every = 1;
-  if (const std::optional<CrateThrow> due = throwDue(m.schedule, step); due && findState<RigidBodies>(world)) {
-    throwCrateAt(world, *due);
+  if (const std::optional<PlayerThrow> due = throwDue(m.schedule, step); due && findState<RigidBodies>(world)) {
+    m.stats.explosives += throwAt(world, *due) ? 1 : 0;
     ++m.stats.throws;
   }
 }
@@ -226,13 +260,14 @@ std::string soakSummary(const SoakMonitor& m) {
     out += part;
   };
   std::string line, worst;
-  add(line, "%llu steps, %d throws", static_cast<unsigned long long>(s.steps), s.throws);
+  add(line, "%llu steps, %d throws (%d explosives)", static_cast<unsigned long long>(s.steps), s.throws,
+      s.explosives);
   if (s.has_sph) {
     add(line, ", sph %zu..%zu", s.sph_min, s.sph_max);
     add(worst, " sph %.3f (step %llu)", static_cast<double>(s.worst_sph),
         static_cast<unsigned long long>(s.worst_sph_step));
     if (s.sph_squeezed_frames > 0)
-      add(worst, " [squeezed between a crate and the fountain: up to %zu particles, in %llu frames]",
+      add(worst, " [squeezed between a crate and another collider: up to %zu particles, in %llu frames]",
           s.sph_squeezed_max, static_cast<unsigned long long>(s.sph_squeezed_frames));
   }
   if (s.has_sprites) {

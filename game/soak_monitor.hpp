@@ -29,9 +29,9 @@ struct SoakDesc {
   // Tolerated penetration as a fraction of the particle radius (SPH particle_radius, sprite size).
   // The SPH solver and the sprites end every step with the particle centre on or outside every
   // collider surface (Kolb et al. 2004 §3.3.2 push-out, fluid/core/collider.hpp), except water
-  // squeezed where a crate reaches into the fountain: no position is outside both, the solver keeps
-  // it outside the fountain (still colliders win), and the check leaves out the particles inside a
-  // crate there (worstFreePenetration). What remains is float rounding and the projections'
+  // squeezed where a crate reaches into the fountain or into another crate: no position is outside
+  // both, the solver keeps it outside the fountain (still colliders win) or the crate resolved last,
+  // and the check leaves out the particles inside a crate there (worstFreePenetration). What remains is float rounding and the projections'
   // remainder at corners. A quarter radius is far above rounding and far below the depth of a
   // particle that went through a wall.
   float particle_tolerance = 0.25f;
@@ -47,7 +47,8 @@ struct SoakDesc {
 
 struct SoakStats {
   std::uint64_t steps = 0;
-  int throws = 0;
+  int throws = 0;      // crates and explosives
+  int explosives = 0;  // of them
   bool has_sph = false, has_sprites = false, has_crates = false;  // which systems the world has
   std::size_t sph_min = 0, sph_max = 0;                           // SPH particle count over the run's frames
   std::size_t sprite_min = 0, sprite_max = 0;                     // sprite particles
@@ -71,7 +72,7 @@ struct SoakMonitor {
   std::vector<std::uint64_t> rss_samples;  // after warm-up; reserved up front
   PenetrationScratch scratch;
   std::vector<glm::vec3> points;   // crate centres
-  std::vector<PlacedShape> still;  // the SPH colliders that do not move this frame
+  std::vector<PlacedShape> blockers;  // the SPH colliders other than the crate being checked
   // The level's baked colliders the crates are checked against: the world's (EffectLinks::
   // colliders) or, in a scene without particles, loaded at the first check.
   std::shared_ptr<const LevelColliders> level;
@@ -81,8 +82,8 @@ struct SoakMonitor {
 
 SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds);
 
-// FrameHooks::before_steps: reports progress, throws a crate when one is due (the camera moves to
-// the thrower's place and looks along the throw, so the surface is meshed for that view).
+// FrameHooks::before_steps: reports progress, throws a crate or an explosive when one is due (the
+// camera moves to the thrower's place and looks along the throw, so the surface is meshed for that view).
 void soakBeforeStep(SoakMonitor& monitor, World& world, std::uint64_t step);
 
 // FrameHooks::after_frame: every check on the world as this frame left it. False (stop) on the

@@ -1,7 +1,8 @@
 #!/bin/bash
 # fluiddemo's GL paths on a real GPU: the headless GL tests and the tour replays with rendering
 # (their per-frame CSVs and a screenshot each), the frame budget and the mesher's two-thread gain
-# on two pinned cores of a quiet machine, then the GPU benchmarks. Made to run from the bundle
+# on two pinned CPUs of that machine (16 vCPUs, none of them busy with other work of ours), then the
+# GPU benchmarks. Made to run from the bundle
 # that scripts/gpu_bundle.sh packs (as .gpurun/run.sh, on a machine with an NVIDIA driver and none of
 # our packages; EGL through glvnd, SDL's offscreen driver). Results go to $OUT (default /tmp/gpu_check).
 #   usage: .gpurun/run.sh [SECTION...]   (after scripts/gpu_bundle.sh; copy .gpurun, .gl and the repository)

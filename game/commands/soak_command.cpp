@@ -1,7 +1,7 @@
 // `fluiddemo soak`: every scene (or the named ones) for a long stretch of game time at a tiny
-// headless viewport, one fixed step per frame and every frame rendered, with seeded crate throws;
-// fails on an abort, a NaN/inf or solver/mesher error, a particle or crate inside a collider, or
-// memory that grows after warm-up (game/soak_monitor.hpp, game/soak_checks.hpp).
+// headless viewport, one fixed step per frame and every frame rendered, with seeded throws of
+// crates and explosives; fails on an abort, a NaN/inf or solver/mesher error, a particle or crate
+// inside a collider, or memory that grows after warm-up (game/soak_monitor.hpp, game/soak_checks.hpp).
 //
 // Each scene runs in a child process (this executable again, `soak --scene S --in-process`): an
 // assertion or a crash kills only that child, and the parent still names the scene and the step it
@@ -37,6 +37,7 @@ struct SoakOptions {
   int width = 160;
   int height = 90;
   double throw_every = 2.0;
+  double explosive_share = 0.25;
   std::vector<std::string> overrides;
   bool no_memory_check = false;
   int progress_fd = -1;
@@ -68,6 +69,7 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   desc.steps = static_cast<std::uint64_t>(std::llround(o.seconds / step_seconds));
   desc.seed = o.seed;
   desc.throws.mean_interval_s = o.throw_every;
+  desc.throws.explosive_share = o.explosive_share;
   desc.progress_fd = o.progress_fd;
   desc.check_memory = !o.no_memory_check;
   SoakMonitor monitor = makeSoakMonitor(desc, step_seconds);
@@ -146,6 +148,8 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
                                     std::to_string(o.height),
                                     "--throw-every",
                                     std::to_string(o.throw_every),
+                                    "--explosive-share",
+                                    std::to_string(o.explosive_share),
                                     "--progress-fd",
                                     std::to_string(fds[1])};
   for (const std::string& assignment : o.overrides) words.insert(words.end(), {"--set", assignment});
@@ -213,7 +217,7 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
 
 int soakCommand(const Args& args) {
   CLI::App app{
-      "Run scenes headless for a long stretch of game time with crate throws; fail on an abort, a "
+      "Run scenes headless for a long stretch of game time with crate and explosive throws; fail on an abort, a "
       "NaN, a particle inside a collider or memory growth.",
       "soak"};
   SoakOptions o;
@@ -224,11 +228,15 @@ int soakCommand(const Args& args) {
   app.add_option("--seconds", o.seconds, "game time per scene, s (60 = 3,600 steps at 60 Hz)")
       ->check(CLI::Range(0.1, 1e6))
       ->capture_default_str();
-  app.add_option("--seed", o.seed, "seed of the crate throws")->capture_default_str();
+  app.add_option("--seed", o.seed, "seed of the throws")->capture_default_str();
   app.add_option("--width", o.width, "framebuffer width")->check(CLI::Range(64, 4096))->capture_default_str();
   app.add_option("--height", o.height, "framebuffer height")->check(CLI::Range(64, 4096))->capture_default_str();
-  app.add_option("--throw-every", o.throw_every, "mean seconds between crate throws (uniform in 0.5x..1.5x; 0 = none)")
+  app.add_option("--throw-every", o.throw_every, "mean seconds between throws (uniform in 0.5x..1.5x; 0 = none)")
       ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  app.add_option("--explosive-share", o.explosive_share,
+                 "chance that a throw is a fused explosive instead of a crate (0 = crates only)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--set", o.overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--in-process", in_process, "run the scenes in this process (no child per scene)");
