@@ -141,20 +141,21 @@ struct ColliderQuery {
   }
 };
 
-// Collider samples at the step-start positions; per particle the boundary volume, its gradient,
-// its flux (wall velocity . grad V) and prod_c (1 - V_c); sets context.collider_speed.
+// Collider samples at the step-start positions; per particle the boundary volume, its gradient
+// (and each collider's share of it), its flux (wall velocity . grad V) and prod_c (1 - V_c); sets
+// context.collider_speed.
 void sampleBoundary(StepContext& context);
 
-// Boundary-pressure coupling of collider c with particle i, F_c = -m dv_ic / dt where the
-// boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0 grad V_ic over the step
-// (scratch.kappa holds the impulse kappa_i; old_position the step-start positions).
+// Boundary-pressure coupling of collider c (one with boundary_pressure) with particle i,
+// F_c = -m dv_ic / dt where the boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0
+// grad V_ic over the step (scratch.kappa holds the impulse kappa_i; old_position the step-start
+// positions; boundary_share the grad V_ic that sampleBoundary found there).
 inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size_t i, ForceTorque& acc) {
   const SphScratch& scratch = context.scratch;
   const ColliderSample& sample = scratch.start_samples[c][i];
   if (!sample.valid || sample.distance >= context.support) return;
   const SphCollider& collider = context.world.colliders[c];
-  const glm::vec3 grad =
-      boundaryShare(colliderVolume(scratch, collider, c, sample, scratch.old_position[i]), scratch.boundary_product[i]);
+  const glm::vec3 grad = scratch.boundary_share[c][i];
   const glm::vec3 f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
   acc.force += f;
   acc.torque += glm::cross(scratch.old_position[i] - collider.pose.translation, f);

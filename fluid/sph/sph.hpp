@@ -280,7 +280,10 @@ struct SphScratch {
   std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
-  std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
+  // Per collider with boundary pressure (empty for the others): collider c's share of grad V at
+  // each particle's step-start position (sampleBoundary), which the coupling force reuses.
+  std::vector<std::vector<glm::vec3>> boundary_share;
+  std::vector<std::vector<ColliderSample>> end_samples;  // per collider, at the end-of-step positions
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after
   // collider c's last query).
   std::vector<std::uint32_t> collide_stale;
