@@ -329,7 +329,9 @@ void sampleBoundary(StepContext& context) {
             const SphCollider& collider = world.colliders[c];
             const ColliderSample& sample = scratch.start_samples[c][i];
             const bool moving = scratch.collider_moving[c] != 0;
-            if (collider.boundary_pressure) {
+            // Out of reach, V_c = 0 and grad V_c = 0: the share would be a zero vector, which leaves
+            // the gradient and flux sums unchanged, and addCouplingTerm does not read it.
+            if (collider.boundary_pressure && withinSupport(sample, support)) {
               const glm::vec3 grad = boundaryShare(c < kKept ? kept[c] : term(c, i), product);
               scratch.boundary_share[c][i] = grad;
               gradient += grad;
