@@ -96,9 +96,11 @@ void DfsphStep::densityPass() {
   const SumMax error = reduceChunks(
       n_, SumMax{},
       [&](std::size_t b, std::size_t end, SumMax& acc) {
+        DensitySums chunk_sums[kGrain];
+        loops_.density_range(consts, scratch_.pos4.data(), store_.id.data(), neighbors, offsets, candidate_end,
+                             static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(end), blocks, chunk_sums);
         for (std::size_t i = b; i < end; ++i) {
-          const DensitySums sums = loops_.density(consts, scratch_.pos4.data(), store_.id.data(), neighbors, offsets[i],
-                                                  candidate_end[i], static_cast<std::uint32_t>(i), blocks);
+          const DensitySums& sums = chunk_sums[i - b];
           store_.density[i] = mass * (self_weight + sums.w) + rho0 * scratch_.boundary_volume[i];
           const float rho = store_.density[i];
           scratch_.vel4[i].w = 10.0f * nu / rho;  // read with the neighbour's velocity by the viscosity loop
@@ -126,8 +128,8 @@ void DfsphStep::densityPass() {
       joinSumMax);
   context_.stats.avg_density_error = n_ ? static_cast<float>(error.sum / static_cast<double>(n_)) : 0.0f;
   context_.stats.max_density_error = error.max;
-  iteration_args_ = IterationArgs{scratch_.vel4.data(),    blocks.gx, blocks.gy, blocks.gz, blocks.nb16, start,
-                                  context_.neighbor_counts};
+  const std::uint32_t* counts = context_.neighbor_counts;
+  iteration_args_ = IterationArgs{scratch_.vel4.data(), blocks.gx, blocks.gy, blocks.gz, blocks.nb16, start, counts};
 }
 
 // Non-pressure accelerations: gravity + the Laplacian viscosity (Monaghan 2005 eq. 6.3 form,
@@ -145,12 +147,12 @@ void DfsphStep::viscosityAndFirstDivergenceError() {
   const AccelError result = reduceChunks(
       n_, AccelError{},
       [&](std::size_t b, std::size_t e, AccelError& acc) {
+        glm::vec3 viscous_sums[kGrain];
+        if (viscous)
+          loops_.viscosity_range(scratch_.pos4.data(), a, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e),
+                                 eps, viscous_sums);
         for (std::size_t i = b; i < e; ++i) {
-          if (viscous)
-            scratch_.accel[i] =
-                params_.gravity + loops_.viscosity(scratch_.pos4.data(), a, static_cast<std::uint32_t>(i), eps);
-          else
-            scratch_.accel[i] = params_.gravity;
+          scratch_.accel[i] = viscous ? params_.gravity + viscous_sums[i - b] : params_.gravity;
           acc.amax = std::max(acc.amax, glm::length(scratch_.accel[i]));
         }
         if (divergence_) divergenceError(b, e, acc.err);

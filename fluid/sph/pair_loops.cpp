@@ -78,6 +78,12 @@ DensitySums densityPortable(const DensityConsts& c, const glm::vec4* positions, 
   return sums;
 }
 
+void densityRangePortable(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+                          const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e, std::uint32_t i0,
+                          std::uint32_t i1, const PairBlocks& out, DensitySums* sums) {
+  for (std::uint32_t i = i0; i < i1; ++i) sums[i - i0] = densityPortable(c, positions, id, nbr, b[i], e[i], i, out);
+}
+
 glm::vec3 viscosityPortable(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
   const glm::vec4* velocities = a.vel4;
@@ -95,6 +101,11 @@ glm::vec3 viscosityPortable(const glm::vec4* positions, const IterationArgs& a, 
     az[l] += coef * a.gz[k];
   }
   return {hsum8(ax), hsum8(ay), hsum8(az)};
+}
+
+void viscosityRangePortable(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0, std::uint32_t i1,
+                            float eps, glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = viscosityPortable(positions, a, i, eps);
 }
 
 inline float divergencePortable(const IterationArgs& a, std::uint32_t i) {
@@ -135,7 +146,8 @@ void kappaRangePortable(const IterationArgs& a, const glm::vec4* kr4, std::uint3
   for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = kappaSumPortable(a, kr4, i);
 }
 
-constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergenceRangePortable, &kappaRangePortable};
+constexpr PairLoops kPortableLoops{&densityRangePortable, &viscosityRangePortable, &divergenceRangePortable,
+                                   &kappaRangePortable};
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define FLUID_SPH_AVX2_PAIRS 1
@@ -212,9 +224,11 @@ FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o)
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
-FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+// One particle's density pass into its five lane accumulators acc[0..4]: W, the three gradient
+// components and |gradient|^2.
+FLUID_AVX2 inline void densityAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
                                    const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
-                                   const PairBlocks& out) {
+                                   const PairBlocks& out, __m256* acc) {
   const glm::vec4 xi = positions[i];
   const __m256 pix = _mm256_set1_ps(xi.x), piy = _mm256_set1_ps(xi.y), piz = _mm256_set1_ps(xi.z);
   const __m256 inv_h = _mm256_set1_ps(c.inv_support), sigma = _mm256_set1_ps(c.sigma),
@@ -286,15 +300,16 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* posi
     sq = _mm256_add_ps(
         sq, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(g0, g0), _mm256_mul_ps(g1, g1)), _mm256_mul_ps(g2, g2)));
   }
-  DensitySums sums;
-  sums.w = hsum8(sw);
-  sums.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
-  sums.sq = hsum8(sq);
-  return sums;
+  acc[0] = sw;
+  acc[1] = sx;
+  acc[2] = sy;
+  acc[3] = sz;
+  acc[4] = sq;
 }
 
 // The loops below run over i's whole lane blocks [start[i], start[i + 1]) with aligned loads.
-FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps) {
+FLUID_AVX2 inline void viscosityAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps,
+                                     __m256* acc) {
   const glm::vec4* velocities = a.vel4;
   const __m256 pix = _mm256_set1_ps(positions[i].x), piy = _mm256_set1_ps(positions[i].y),
                piz = _mm256_set1_ps(positions[i].z);
@@ -317,23 +332,113 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* positions, const IterationAr
     ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_load_ps(a.gy + k)));
     az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_load_ps(a.gz + k)));
   }
-  return {hsum8(ax), hsum8(ay), hsum8(az)};
+  acc[0] = ax;
+  acc[1] = ay;
+  acc[2] = az;
 }
 
-FLUID_AVX2 inline float divergenceAvx2(const IterationArgs& a, std::uint32_t i) {
-  const glm::vec4 vi = a.vel4[i];
-  const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
-  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
-  for (std::uint32_t k = a.start[i], e = a.start[i + 1]; k < e; k += kLanes) {
-    __m256 vx, vy, vz;
-    load8xyz16(a.vel4, a.nb16 + k, vx, vy, vz);
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_load_ps(a.gx + k)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_load_ps(a.gy + k)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_load_ps(a.gz + k)));
+// hsum8's tree for eight particles at once: lane p of the result is hsum8(v[p]). The same adds
+// on the same pairs (t_l = s_l + s_(l+4), then (t0 + t2) + (t1 + t3)), done across registers, so
+// a range pays one short reduction per eight particles instead of a dependent chain per particle.
+FLUID_AVX2 inline __m256 laneHalves(__m256 x, __m256 y) {  // [t(x) | t(y)]
+  return _mm256_add_ps(_mm256_permute2f128_ps(x, y, 0x20), _mm256_permute2f128_ps(x, y, 0x31));
+}
+FLUID_AVX2 inline __m256 lanePairs(__m256 x, __m256 y) {  // per 128-bit half: t0 + t2, t1 + t3 of x, then of y
+  return _mm256_add_ps(_mm256_shuffle_ps(x, y, _MM_SHUFFLE(1, 0, 1, 0)),
+                       _mm256_shuffle_ps(x, y, _MM_SHUFFLE(3, 2, 3, 2)));
+}
+FLUID_AVX2 inline __m256 hsum8x8(const __m256* v) {
+  const __m256 u0 = lanePairs(laneHalves(v[0], v[1]), laneHalves(v[2], v[3]));  // particles 0, 2 | 1, 3
+  const __m256 u1 = lanePairs(laneHalves(v[4], v[5]), laneHalves(v[6], v[7]));  // particles 4, 6 | 5, 7
+  const __m256 s = _mm256_add_ps(_mm256_shuffle_ps(u0, u1, _MM_SHUFFLE(2, 0, 2, 0)),
+                                 _mm256_shuffle_ps(u0, u1, _MM_SHUFFLE(3, 1, 3, 1)));  // 0 2 4 6 | 1 3 5 7
+  return _mm256_permutevar8x32_ps(s, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7));
+}
+
+// The density pass of a range, eight particles per group (a short last group gets zero
+// accumulators for its missing particles, which are not stored).
+FLUID_AVX2 void densityRangeAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+                                 const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e,
+                                 std::uint32_t i0, std::uint32_t i1, const PairBlocks& out, DensitySums* sums) {
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[5][kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 one[5];
+      if (p < m)
+        densityAvx2(c, positions, id, nbr, b[g + p], e[g + p], g + p, out, one);
+      else
+        one[0] = one[1] = one[2] = one[3] = one[4] = _mm256_setzero_ps();
+      for (int q = 0; q < 5; ++q) acc[q][p] = one[q];
+    }
+    alignas(32) float t[5][kLanes];
+    for (int q = 0; q < 5; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    for (std::uint32_t p = 0; p < m; ++p) {
+      DensitySums& out_sums = sums[g - i0 + p];
+      out_sums.w = t[0][p];
+      out_sums.grad = glm::vec3(t[1][p], t[2][p], t[3][p]);
+      out_sums.sq = t[4][p];
+    }
   }
-  return hsum8(_mm256_add_ps(_mm256_add_ps(ax, ay), az));
 }
 
+// The viscosity sums of a range, eight particles per group (as densityRangeAvx2).
+FLUID_AVX2 void viscosityRangeAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0,
+                                   std::uint32_t i1, float eps, glm::vec3* out) {
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[3][kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 one[3];
+      if (p < m)
+        viscosityAvx2(positions, a, g + p, eps, one);
+      else
+        one[0] = one[1] = one[2] = _mm256_setzero_ps();
+      for (int q = 0; q < 3; ++q) acc[q][p] = one[q];
+    }
+    alignas(32) float t[3][kLanes];
+    for (int q = 0; q < 3; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    for (std::uint32_t p = 0; p < m; ++p) out[g - i0 + p] = glm::vec3(t[0][p], t[1][p], t[2][p]);
+  }
+}
+
+// The solver iterations' divergence loop, eight particles per group (a short last group gets
+// zero accumulators for its missing particles, which are not stored).
+FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
+  const glm::vec4* const vel = a.vel4;
+  const float *const gx = a.gx, *const gy = a.gy, *const gz = a.gz;
+  const std::uint32_t *const nb16 = a.nb16, *const start = a.start;
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+      if (p < m) {
+        const glm::vec4 vi = vel[g + p];
+        const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
+        for (std::uint32_t k = start[g + p], e = start[g + p + 1]; k < e; k += kLanes) {
+          __m256 vx, vy, vz;
+          load8xyz16(vel, nb16 + k, vx, vy, vz);
+          ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_load_ps(gx + k)));
+          ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_load_ps(gy + k)));
+          az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_load_ps(gz + k)));
+        }
+      }
+      acc[p] = _mm256_add_ps(_mm256_add_ps(ax, ay), az);
+    }
+    const __m256 sums = hsum8x8(acc);
+    if (m == kLanes) {
+      _mm256_storeu_ps(out + (g - i0), sums);
+    } else {
+      alignas(32) float t[kLanes];
+      _mm256_store_ps(t, sums);
+      for (std::uint32_t p = 0; p < m; ++p) out[g - i0 + p] = t[p];
+    }
+  }
+}
+
+// The kappa loop keeps one reduction per particle: with three sums a particle, staging eight
+// particles' accumulators for hsum8x8 cost more instructions than it saved (callgrind).
 FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i) {
   const __m256 vk = _mm256_set1_ps(kr4[i].x);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
@@ -345,16 +450,13 @@ FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const IterationArgs& a, const glm::vec4
   }
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
-FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
-  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = divergenceAvx2(a, i);
-}
 FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
                                glm::vec3* out) {
   for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = kappaSumAvx2(a, kr4, i);
 }
 #undef FLUID_AVX2
 
-constexpr PairLoops kAvx2Loops{&densityAvx2, &viscosityAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
+constexpr PairLoops kAvx2Loops{&densityRangeAvx2, &viscosityRangeAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
 #endif
 
 }  // namespace

@@ -90,14 +90,17 @@ struct IterationArgs {
 };
 
 struct PairLoops {
-  // DFSPH density pass of particle i over its neighbours nbr[b, e): fills i's lane blocks of `out`
-  // (gradients and nb16, pads included) and returns the sums.
-  DensitySums (*density)(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
-                         const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
-                         const PairBlocks& out);
-  // sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] over i's pairs (Laplacian viscosity, see
-  // stepSph), with c_j = 10 nu / rho_j in a.vel4[j].w.
-  glm::vec3 (*viscosity)(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps);
+  // DFSPH density pass of the particles [i0, i1) (i1 - i0 <= kGrain): i's neighbours are
+  // nbr[b[i], e[i]); fills i's lane blocks of `out` (gradients and nb16, pads included) and
+  // sums[i - i0].
+  void (*density_range)(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+                        const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e, std::uint32_t i0,
+                        std::uint32_t i1, const PairBlocks& out, DensitySums* sums);
+  // out[i - i0] = sum_k c_j (v_ij . x_ij) / (|x_ij|^2 + eps) G[k] over i's pairs for the particles
+  // [i0, i1) (i1 - i0 <= kGrain; Laplacian viscosity, see stepSph), with c_j = 10 nu / rho_j in
+  // a.vel4[j].w.
+  void (*viscosity_range)(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0, std::uint32_t i1,
+                          float eps, glm::vec3* out);
   // The two solver-iteration loops for the particles [i0, i1) (i1 - i0 <= kGrain): out[i - i0].
   void (*divergence_range)(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out);
   // kr4[j].x = kappa_j / rho_j (16-byte records, addressed like vel4).
