@@ -254,6 +254,9 @@ void sampleBoundary(StepContext& context) {
   scratch.boundary_gradient.resize(n);
   scratch.boundary_flux.resize(n);
   scratch.boundary_product.resize(n);
+  scratch.boundary_share.resize(collider_count);
+  for (std::size_t c = 0; c < collider_count; ++c)
+    scratch.boundary_share[c].resize(world.colliders[c].boundary_pressure ? n : 0);
   // Whether collider c moves (its wall velocity enters the flux and the speed bound): once per
   // step, not per particle.
   scratch.collider_moving.resize(collider_count);
@@ -326,8 +329,11 @@ void sampleBoundary(StepContext& context) {
             const SphCollider& collider = world.colliders[c];
             const ColliderSample& sample = scratch.start_samples[c][i];
             const bool moving = scratch.collider_moving[c] != 0;
-            if (collider.boundary_pressure) {
+            // Out of reach, V_c = 0 and grad V_c = 0: the share would be a zero vector, which leaves
+            // the gradient and flux sums unchanged, and addCouplingTerm does not read it.
+            if (collider.boundary_pressure && withinSupport(sample, support)) {
               const glm::vec3 grad = boundaryShare(c < kKept ? kept[c] : term(c, i), product);
+              scratch.boundary_share[c][i] = grad;
               gradient += grad;
               if (moving) flux += glm::dot(colliderVelocityAt(collider.pose, positions[i]), grad);
             }

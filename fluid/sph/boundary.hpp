@@ -35,6 +35,12 @@ inline float lookupWallTable(const std::vector<float>& table, float s, float sup
   return table[i] + f * (table[i + 1] - table[i]);
 }
 
+// Whether a sample can give a boundary volume: valid and closer than the support H (beyond it
+// the collider misses the particle's kernel support; V_c = 0 and grad V_c = 0).
+inline bool withinSupport(const ColliderSample& sample, float support) {
+  return sample.valid && !(sample.distance >= support);
+}
+
 // 1 - V_c: the part of a particle's support that collider c leaves to fluid (V_c = its boundary
 // volume from the wall table at that distance; 1 when c does not push back or is out of reach).
 // Several colliders combine by the union rule of sampleBoundary: the product over colliders.
@@ -42,7 +48,7 @@ inline float lookupWallTable(const std::vector<float>& table, float s, float sup
 // is exact for solid boxes.
 inline float openFraction(const SphScratch& scratch, const SphCollider& collider, const ColliderSample& sample) {
   const float support = scratch.kernel.support;
-  if (!collider.boundary_pressure || !sample.valid || sample.distance >= support) return 1.0f;
+  if (!collider.boundary_pressure || !withinSupport(sample, support)) return 1.0f;
   return 1.0f - lookupWallTable(scratch.wall_volume, sample.distance + scratch.wall_shift, support);
 }
 
@@ -67,7 +73,7 @@ BoundaryVolume boxBoundaryVolume(const SphScratch& scratch, glm::vec3 half, cons
 inline BoundaryVolume colliderVolume(const SphScratch& scratch, const SphCollider& collider, std::size_t c,
                                      const ColliderSample& sample, glm::vec3 x) {
   const float support = scratch.kernel.support;
-  if (!collider.boundary_pressure || !sample.valid || sample.distance >= support) return {};
+  if (!collider.boundary_pressure || !withinSupport(sample, support)) return {};
   const glm::vec4 box = scratch.collider_box[c];
   if (box.w != 0.0f) return boxBoundaryVolume(scratch, glm::vec3(box), collider.pose, x);
   const float s = sample.distance + scratch.wall_shift;
@@ -141,20 +147,21 @@ struct ColliderQuery {
   }
 };
 
-// Collider samples at the step-start positions; per particle the boundary volume, its gradient,
-// its flux (wall velocity . grad V) and prod_c (1 - V_c); sets context.collider_speed.
+// Collider samples at the step-start positions; per particle the boundary volume, its gradient
+// (and each collider's share of it), its flux (wall velocity . grad V) and prod_c (1 - V_c); sets
+// context.collider_speed.
 void sampleBoundary(StepContext& context);
 
-// Boundary-pressure coupling of collider c with particle i, F_c = -m dv_ic / dt where the
-// boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0 grad V_ic over the step
-// (scratch.kappa holds the impulse kappa_i; old_position the step-start positions).
+// Boundary-pressure coupling of collider c (one with boundary_pressure) with particle i,
+// F_c = -m dv_ic / dt where the boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0
+// grad V_ic over the step (scratch.kappa holds the impulse kappa_i; old_position the step-start
+// positions; boundary_share the grad V_ic that sampleBoundary found there).
 inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size_t i, ForceTorque& acc) {
   const SphScratch& scratch = context.scratch;
   const ColliderSample& sample = scratch.start_samples[c][i];
-  if (!sample.valid || sample.distance >= context.support) return;
+  if (!withinSupport(sample, context.support)) return;
   const SphCollider& collider = context.world.colliders[c];
-  const glm::vec3 grad =
-      boundaryShare(colliderVolume(scratch, collider, c, sample, scratch.old_position[i]), scratch.boundary_product[i]);
+  const glm::vec3 grad = scratch.boundary_share[c][i];
   const glm::vec3 f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
   acc.force += f;
   acc.torque += glm::cross(scratch.old_position[i] - collider.pose.translation, f);

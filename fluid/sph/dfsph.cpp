@@ -9,12 +9,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace fluid::sph_step {
 namespace {
 
 // Share of the last step's summed stiffness that warm-starts the constant-density solve.
 constexpr float kWarmShare = 0.2f;
+
+// The 32-byte aligned view of `count` elements of v (a 4-byte type), resized to fit: the AVX2 pair
+// loops load whole lane blocks with aligned loads that never straddle a cache line.
+template <typename T>
+T* alignedView(std::vector<T>& v, std::size_t count) {
+  static_assert(sizeof(T) == 4);
+  v.resize(count + 7);
+  const auto address = reinterpret_cast<std::uintptr_t>(v.data());
+  return v.data() + ((32 - address % 32) % 32) / sizeof(T);
+}
 
 class DfsphStep {
  public:
@@ -62,11 +73,17 @@ class DfsphStep {
 // boundary volume's share), the per-pair m grad W_ij reused by every solver iteration, and the
 // sums alpha_i needs, then the per-particle terms that need only the particle's own density.
 void DfsphStep::densityPass() {
-  const std::size_t pair_count = scratch_.neighbors.indices.size();
-  scratch_.grad_x.resize(pair_count);
-  scratch_.grad_y.resize(pair_count);
-  scratch_.grad_z.resize(pair_count);
-  scratch_.pair_offset.resize(pair_count);  // n < 2^28 (validateSphParams), so 16 j fits
+  const std::uint32_t* neighbors = context_.neighbor_indices;
+  const std::uint32_t* offsets = context_.neighbor_offsets;
+  const std::uint32_t* candidate_end = context_.candidate_end;
+  // The lane blocks (pair_loops.hpp): i's pairs from pair_start[i], padded to a multiple of 8.
+  scratch_.pair_start.resize(n_ + 1);
+  std::uint32_t* start = scratch_.pair_start.data();
+  start[0] = 0;
+  for (std::size_t i = 0; i < n_; ++i) start[i + 1] = start[i] + roundUpToBlock(candidate_end[i] - offsets[i]);
+  const std::size_t slots = start[n_];  // n < 2^28 (validateSphParams), so 16 j fits in 32 bits
+  const PairBlocks blocks{start, alignedView(scratch_.grad_x, slots), alignedView(scratch_.grad_y, slots),
+                          alignedView(scratch_.grad_z, slots), alignedView(scratch_.pair_offset, slots)};
   for (auto* v : {&scratch_.vec_b, &scratch_.accel, &scratch_.old_position, &scratch_.vec_a}) v->resize(n_);
   for (auto* v : {&scratch_.factor, &scratch_.float_tmp, &scratch_.kappa, &scratch_.kappa_scale, &scratch_.kappa_v})
     v->resize(n_);
@@ -76,17 +93,14 @@ void DfsphStep::densityPass() {
       DensityConsts::make(scratch_.kernel, mass, 1e-6f * support, scratch_.kernel.derivative(support / 3.0f));
   const float nu = params_.viscosity, previous_dt = previous_dt_;
   const float min_denominator = 1e-9f * rho0 * rho0 / (support * support);
-  const std::uint32_t* neighbors = context_.neighbor_indices;
-  const std::uint32_t* offsets = context_.neighbor_offsets;
-  const std::uint32_t* candidate_end = context_.candidate_end;
   const SumMax error = reduceChunks(
       n_, SumMax{},
       [&](std::size_t b, std::size_t end, SumMax& acc) {
+        DensitySums chunk_sums[kGrain];
+        loops_.density_range(consts, scratch_.pos4.data(), store_.id.data(), neighbors, offsets, candidate_end,
+                             static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(end), blocks, chunk_sums);
         for (std::size_t i = b; i < end; ++i) {
-          const DensitySums sums =
-              loops_.density(consts, scratch_.pos4.data(), store_.id.data(), neighbors, offsets[i], candidate_end[i],
-                             static_cast<std::uint32_t>(i), scratch_.grad_x.data(), scratch_.grad_y.data(),
-                             scratch_.grad_z.data(), scratch_.pair_offset.data());
+          const DensitySums& sums = chunk_sums[i - b];
           store_.density[i] = mass * (self_weight + sums.w) + rho0 * scratch_.boundary_volume[i];
           const float rho = store_.density[i];
           scratch_.vel4[i].w = 10.0f * nu / rho;  // read with the neighbour's velocity by the viscosity loop
@@ -114,14 +128,8 @@ void DfsphStep::densityPass() {
       joinSumMax);
   context_.stats.avg_density_error = n_ ? static_cast<float>(error.sum / static_cast<double>(n_)) : 0.0f;
   context_.stats.max_density_error = error.max;
-  iteration_args_ = IterationArgs{scratch_.vel4.data(),
-                                  scratch_.grad_x.data(),
-                                  scratch_.grad_y.data(),
-                                  scratch_.grad_z.data(),
-                                  neighbors,
-                                  scratch_.pair_offset.data(),
-                                  offsets,
-                                  context_.neighbor_counts};
+  const std::uint32_t* counts = context_.neighbor_counts;
+  iteration_args_ = IterationArgs{scratch_.vel4.data(), blocks.gx, blocks.gy, blocks.gz, blocks.nb16, start, counts};
 }
 
 // Non-pressure accelerations: gravity + the Laplacian viscosity (Monaghan 2005 eq. 6.3 form,
@@ -139,13 +147,12 @@ void DfsphStep::viscosityAndFirstDivergenceError() {
   const AccelError result = reduceChunks(
       n_, AccelError{},
       [&](std::size_t b, std::size_t e, AccelError& acc) {
+        glm::vec3 viscous_sums[kGrain];
+        if (viscous)
+          loops_.viscosity_range(scratch_.pos4.data(), a, static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e),
+                                 eps, viscous_sums);
         for (std::size_t i = b; i < e; ++i) {
-          if (viscous)
-            scratch_.accel[i] =
-                params_.gravity + loops_.viscosity(scratch_.pos4.data(), scratch_.vel4.data(), a.gx, a.gy, a.gz, a.nbr,
-                                                   a.off[i], a.off[i] + a.cnt[i], static_cast<std::uint32_t>(i), eps);
-          else
-            scratch_.accel[i] = params_.gravity;
+          scratch_.accel[i] = viscous ? params_.gravity + viscous_sums[i - b] : params_.gravity;
           acc.amax = std::max(acc.amax, glm::length(scratch_.accel[i]));
         }
         if (divergence_) divergenceError(b, e, acc.err);

@@ -45,103 +45,118 @@ inline void densityLane(const DensityConsts& c, glm::vec3 x, std::uint32_t id_i,
 
 // Portable lanes.
 DensitySums densityPortable(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
-                            const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i, float* gx,
-                            float* gy, float* gz, std::uint32_t* nb16) {
+                            const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
+                            const PairBlocks& out) {
   float sw[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {}, sz[kLanes] = {}, sq[kLanes] = {};
   const glm::vec4 xi = positions[i];
+  const std::uint32_t p = out.start[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
-    const std::uint32_t j = nbr[k];
-    nb16[k] = j << 4;
+    const std::uint32_t j = nbr[k], d = p + (k - b);
+    out.nb16[d] = j << 4;
     const glm::vec4 xj = positions[j];
     float wv;
     glm::vec3 g;
     densityLane(c, glm::vec3(xi.x - xj.x, xi.y - xj.y, xi.z - xj.z), id[i], id[j], wv, g);
-    gx[k] = g.x;
-    gy[k] = g.y;
-    gz[k] = g.z;
+    out.gx[d] = g.x;
+    out.gy[d] = g.y;
+    out.gz[d] = g.z;
     sw[l] += wv;
     sx[l] += g.x;
     sy[l] += g.y;
     sz[l] += g.z;
     sq[l] += (g.x * g.x + g.y * g.y) + g.z * g.z;
   }
-  DensitySums out;
-  out.w = hsum8(sw);
-  out.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
-  out.sq = hsum8(sq);
-  return out;
+  for (std::uint32_t d = p + (e - b); d < out.start[i + 1]; ++d) {
+    out.nb16[d] = 0;
+    out.gx[d] = out.gy[d] = out.gz[d] = 0.0f;
+  }
+  DensitySums sums;
+  sums.w = hsum8(sw);
+  sums.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
+  sums.sq = hsum8(sq);
+  return sums;
 }
 
-glm::vec3 viscosityPortable(const glm::vec4* positions, const glm::vec4* velocities, const float* gx, const float* gy,
-                            const float* gz, const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e,
-                            std::uint32_t i, float eps) {
+void densityRangePortable(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+                          const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e, std::uint32_t i0,
+                          std::uint32_t i1, const PairBlocks& out, DensitySums* sums) {
+  for (std::uint32_t i = i0; i < i1; ++i) sums[i - i0] = densityPortable(c, positions, id, nbr, b[i], e[i], i, out);
+}
+
+glm::vec3 viscosityPortable(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  const glm::vec4* velocities = a.vel4;
   const glm::vec4 xi = positions[i], vi = velocities[i];
+  const std::uint32_t b = a.start[i], e = b + a.cnt[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
-    const std::uint32_t j = nbr[k];
+    const std::uint32_t j = a.nb16[k] >> 4;
     const float x = xi.x - positions[j].x, y = xi.y - positions[j].y, z = xi.z - positions[j].z;
     const float vx = ((vi.x - velocities[j].x) * x + (vi.y - velocities[j].y) * y) + (vi.z - velocities[j].z) * z;
     const float denom = ((x * x + y * y) + z * z) + eps;
     const float coef = velocities[j].w * (vx / denom);
-    ax[l] += coef * gx[k];
-    ay[l] += coef * gy[k];
-    az[l] += coef * gz[k];
+    ax[l] += coef * a.gx[k];
+    ay[l] += coef * a.gy[k];
+    az[l] += coef * a.gz[k];
   }
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 
-inline float divergencePortable(const glm::vec4* velocities, const float* gx, const float* gy, const float* gz,
-                                const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
+void viscosityRangePortable(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0, std::uint32_t i1,
+                            float eps, glm::vec3* out) {
+  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = viscosityPortable(positions, a, i, eps);
+}
+
+inline float divergencePortable(const IterationArgs& a, std::uint32_t i) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  const glm::vec3 vi(a.vel4[i]);
+  const std::uint32_t b = a.start[i], e = b + a.cnt[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
-    const glm::vec4 vj = velocities[nbr[k]];
-    ax[l] += (vi.x - vj.x) * gx[k];
-    ay[l] += (vi.y - vj.y) * gy[k];
-    az[l] += (vi.z - vj.z) * gz[k];
+    const glm::vec4 vj = a.vel4[a.nb16[k] >> 4];
+    ax[l] += (vi.x - vj.x) * a.gx[k];
+    ay[l] += (vi.y - vj.y) * a.gy[k];
+    az[l] += (vi.z - vj.z) * a.gz[k];
   }
   float s[kLanes];
   for (int l = 0; l < kLanes; ++l) s[l] = (ax[l] + ay[l]) + az[l];
   return hsum8(s);
 }
 
-inline glm::vec3 kappaSumPortable(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
-                                  const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, float ki) {
+inline glm::vec3 kappaSumPortable(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i) {
   float ax[kLanes] = {}, ay[kLanes] = {}, az[kLanes] = {};
+  const float ki = kr4[i].x;
+  const std::uint32_t b = a.start[i], e = b + a.cnt[i];
   for (std::uint32_t k = b; k < e; ++k) {
     const int l = static_cast<int>((k - b) % kLanes);
-    const float s = ki + kr4[nbr[k]].x;
-    ax[l] += s * gx[k];
-    ay[l] += s * gy[k];
-    az[l] += s * gz[k];
+    const float s = ki + kr4[a.nb16[k] >> 4].x;
+    ax[l] += s * a.gx[k];
+    ay[l] += s * a.gy[k];
+    az[l] += s * a.gz[k];
   }
   return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 
 void divergenceRangePortable(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
-  for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] =
-        divergencePortable(a.vel4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = divergencePortable(a, i);
 }
 void kappaRangePortable(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
                         glm::vec3* out) {
-  for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = kappaSumPortable(kr4, a.gx, a.gy, a.gz, a.nbr, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
+  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = kappaSumPortable(a, kr4, i);
 }
 
-constexpr PairLoops kPortableLoops{&densityPortable, &viscosityPortable, &divergenceRangePortable, &kappaRangePortable};
+constexpr PairLoops kPortableLoops{&densityRangePortable, &viscosityRangePortable, &divergenceRangePortable,
+                                   &kappaRangePortable};
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define FLUID_SPH_AVX2_PAIRS 1
 // AVX2 lanes. Neighbour data come in by one 16-byte load per neighbour (pos4 / vel4) or
 // scalar loads (load8): on the Zen 3 machine we measure on, vgatherdps was slower than the
-// SSE2 loop it replaced. In the last block of a list (fewer than 8 pairs) the lanes past the
-// end read particle 0 (valid data) and are zeroed by a lane mask (masked loads of the
-// gradients, or an and with the mask), so they add exact zeros: an accumulator that starts at +0
-// is never -0, so adding +-0 leaves it unchanged, and the sums equal the portable loop's, which
-// skips those lanes.
+// SSE2 loop it replaced. In the density pass's last block of a list (fewer than 8 pairs) the
+// lanes past the end read particle 0 (valid data) and are zeroed by a lane mask, so they add
+// exact zeros and store the zero pads of the lane blocks (pair_loops.hpp); the other loops read
+// whole blocks.
 #define FLUID_AVX2 __attribute__((target("avx2")))
 FLUID_AVX2 inline __m256i laneMask(std::uint32_t left) {
   return _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(std::min<std::uint32_t>(left, 8))),
@@ -171,12 +186,6 @@ FLUID_AVX2 inline void load8xyz(const glm::vec4* base, const std::uint32_t* idx,
   transposeRows(loadPair(base, idx[0], idx[4]), loadPair(base, idx[1], idx[5]), loadPair(base, idx[2], idx[6]),
                 loadPair(base, idx[3], idx[7]), x, y, z, nullptr);
 }
-// The same with the 4th component.
-FLUID_AVX2 inline void load8xyzw(const glm::vec4* base, const std::uint32_t* idx, __m256& x, __m256& y, __m256& z,
-                                 __m256& w) {
-  transposeRows(loadPair(base, idx[0], idx[4]), loadPair(base, idx[1], idx[5]), loadPair(base, idx[2], idx[6]),
-                loadPair(base, idx[3], idx[7]), x, y, z, &w);
-}
 // The last block of a list: lanes past `left` read particle 0 (valid data; their gradient
 // lanes are masked to 0, so they add exact zeros).
 FLUID_AVX2 inline const std::uint32_t* tailIndices(const std::uint32_t* nbr, std::uint32_t left, std::uint32_t* buf) {
@@ -195,6 +204,12 @@ FLUID_AVX2 inline void load8xyz16(const glm::vec4* base, const std::uint32_t* o,
   transposeRows(loadPair16(base, o[0], o[4]), loadPair16(base, o[1], o[5]), loadPair16(base, o[2], o[6]),
                 loadPair16(base, o[3], o[7]), x, y, z, nullptr);
 }
+// The same with the 4th component.
+FLUID_AVX2 inline void load8xyzw16(const glm::vec4* base, const std::uint32_t* o, __m256& x, __m256& y, __m256& z,
+                                   __m256& w) {
+  transposeRows(loadPair16(base, o[0], o[4]), loadPair16(base, o[1], o[5]), loadPair16(base, o[2], o[6]),
+                loadPair16(base, o[3], o[7]), x, y, z, &w);
+}
 // base[idx[l]].x for byte offsets o[l] = 16 idx[l], by scalar loads (Zen 3 runs these faster
 // than vgatherdps).
 FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o) {
@@ -209,9 +224,11 @@ FLUID_AVX2 inline __m256 load8x16(const glm::vec4* base, const std::uint32_t* o)
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
-FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+// One particle's density pass into its five lane accumulators acc[0..4]: W, the three gradient
+// components and |gradient|^2.
+FLUID_AVX2 inline void densityAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
                                    const std::uint32_t* nbr, std::uint32_t b, std::uint32_t e, std::uint32_t i,
-                                   float* gx, float* gy, float* gz, std::uint32_t* nb16) {
+                                   const PairBlocks& out, __m256* acc) {
   const glm::vec4 xi = positions[i];
   const __m256 pix = _mm256_set1_ps(xi.x), piy = _mm256_set1_ps(xi.y), piz = _mm256_set1_ps(xi.z);
   const __m256 inv_h = _mm256_set1_ps(c.inv_support), sigma = _mm256_set1_ps(c.sigma),
@@ -220,12 +237,14 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* posi
                half = _mm256_set1_ps(0.5f), six = _mm256_set1_ps(6.0f), c18 = _mm256_set1_ps(18.0f),
                c12 = _mm256_set1_ps(12.0f);
   __m256 sw = _mm256_setzero_ps(), sx = sw, sy = sw, sz = sw, sq = sw;
-  std::uint32_t buf[kLanes];
-  for (std::uint32_t k = b; k < e; k += kLanes) {
+  alignas(32) std::uint32_t buf[kLanes];
+  // d: the block's place in i's lane blocks (aligned; the last block's pad lanes get zeros).
+  for (std::uint32_t k = b, d = out.start[i]; k < e; k += kLanes, d += kLanes) {
     const __m256i mi = laneMask(e - k);
     const __m256 m = _mm256_castsi256_ps(mi);
+    const std::uint32_t* idx = e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf);
     __m256 x, y, z;
-    load8xyz(positions, e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf), x, y, z);
+    load8xyz(positions, idx, x, y, z);
     x = _mm256_sub_ps(pix, x);
     y = _mm256_sub_ps(piy, y);
     z = _mm256_sub_ps(piz, z);
@@ -268,26 +287,12 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* posi
     g0 = _mm256_and_ps(g0, m);
     g1 = _mm256_and_ps(g1, m);
     g2 = _mm256_and_ps(g2, m);
-    // Full blocks use plain stores; only the last (partial) block goes through a buffer, since
-    // masked stores (vmaskmovps) are microcoded and slow on the AMD machines we measure on.
-    if (e - k >= kLanes) {
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(nb16 + k),
-                          _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(nbr + k)), 4));
-      _mm256_storeu_ps(gx + k, g0);
-      _mm256_storeu_ps(gy + k, g1);
-      _mm256_storeu_ps(gz + k, g2);
-    } else {
-      alignas(32) float t0[kLanes], t1[kLanes], t2[kLanes];
-      _mm256_store_ps(t0, g0);
-      _mm256_store_ps(t1, g1);
-      _mm256_store_ps(t2, g2);
-      for (std::uint32_t l = 0; l < e - k; ++l) {
-        nb16[k + l] = nbr[k + l] << 4;
-        gx[k + l] = t0[l];
-        gy[k + l] = t1[l];
-        gz[k + l] = t2[l];
-      }
-    }
+    // Whole blocks, pads included (tailIndices left 0 in the pad lanes, so 16 j = 0 there).
+    _mm256_store_si256(reinterpret_cast<__m256i*>(out.nb16 + d),
+                       _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx)), 4));
+    _mm256_store_ps(out.gx + d, g0);
+    _mm256_store_ps(out.gy + d, g1);
+    _mm256_store_ps(out.gz + d, g2);
     sw = _mm256_add_ps(sw, wv);
     sx = _mm256_add_ps(sx, g0);
     sy = _mm256_add_ps(sy, g1);
@@ -295,29 +300,27 @@ FLUID_AVX2 DensitySums densityAvx2(const DensityConsts& c, const glm::vec4* posi
     sq = _mm256_add_ps(
         sq, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(g0, g0), _mm256_mul_ps(g1, g1)), _mm256_mul_ps(g2, g2)));
   }
-  DensitySums out;
-  out.w = hsum8(sw);
-  out.grad = glm::vec3(hsum8(sx), hsum8(sy), hsum8(sz));
-  out.sq = hsum8(sq);
-  return out;
+  acc[0] = sw;
+  acc[1] = sx;
+  acc[2] = sy;
+  acc[3] = sz;
+  acc[4] = sq;
 }
 
-FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* positions, const glm::vec4* velocities, const float* gx,
-                                   const float* gy, const float* gz, const std::uint32_t* nbr, std::uint32_t b,
-                                   std::uint32_t e, std::uint32_t i, float eps) {
+// The loops below run over i's whole lane blocks [start[i], start[i + 1]) with aligned loads.
+FLUID_AVX2 inline void viscosityAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i, float eps,
+                                     __m256* acc) {
+  const glm::vec4* velocities = a.vel4;
   const __m256 pix = _mm256_set1_ps(positions[i].x), piy = _mm256_set1_ps(positions[i].y),
                piz = _mm256_set1_ps(positions[i].z);
   const __m256 vix = _mm256_set1_ps(velocities[i].x), viy = _mm256_set1_ps(velocities[i].y),
                viz = _mm256_set1_ps(velocities[i].z);
   const __m256 ve = _mm256_set1_ps(eps);
   __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
-  std::uint32_t buf[kLanes];
-  for (std::uint32_t k = b; k < e; k += kLanes) {
-    const __m256i mi = laneMask(e - k);
-    const std::uint32_t* idx = e - k >= kLanes ? nbr + k : tailIndices(nbr + k, e - k, buf);
+  for (std::uint32_t k = a.start[i], e = a.start[i + 1]; k < e; k += kLanes) {
     __m256 xj, yj, zj, vcj, uj, vj, wj;
-    load8xyz(positions, idx, xj, yj, zj);
-    load8xyzw(velocities, idx, uj, vj, wj, vcj);
+    load8xyz16(positions, a.nb16 + k, xj, yj, zj);
+    load8xyzw16(velocities, a.nb16 + k, uj, vj, wj, vcj);
     const __m256 x = _mm256_sub_ps(pix, xj), y = _mm256_sub_ps(piy, yj), z = _mm256_sub_ps(piz, zj);
     const __m256 vx =
         _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(vix, uj), x), _mm256_mul_ps(_mm256_sub_ps(viy, vj), y)),
@@ -325,69 +328,135 @@ FLUID_AVX2 glm::vec3 viscosityAvx2(const glm::vec4* positions, const glm::vec4* 
     const __m256 denom =
         _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)), ve);
     const __m256 coef = _mm256_mul_ps(vcj, _mm256_div_ps(vx, denom));
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(coef, _mm256_maskload_ps(gx + k, mi)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_maskload_ps(gy + k, mi)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_maskload_ps(gz + k, mi)));
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(coef, _mm256_load_ps(a.gx + k)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(coef, _mm256_load_ps(a.gy + k)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(coef, _mm256_load_ps(a.gz + k)));
   }
-  return {hsum8(ax), hsum8(ay), hsum8(az)};
+  acc[0] = ax;
+  acc[1] = ay;
+  acc[2] = az;
 }
 
-FLUID_AVX2 inline float divergenceAvx2(const glm::vec4* velocities, const float* gx, const float* gy, const float* gz,
-                                       const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, glm::vec3 vi) {
-  const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
-  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
-  std::uint32_t k = b;
-  __m256 vx, vy, vz;
-  for (; k + kLanes <= e; k += kLanes) {
-    load8xyz16(velocities, nb16 + k, vx, vy, vz);
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_loadu_ps(gx + k)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_loadu_ps(gy + k)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_loadu_ps(gz + k)));
-  }
-  if (k < e) {
-    const __m256i mi = laneMask(e - k);
-    std::uint32_t buf[kLanes];
-    load8xyz16(velocities, tailIndices(nb16 + k, e - k, buf), vx, vy, vz);
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_maskload_ps(gx + k, mi)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_maskload_ps(gy + k, mi)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_maskload_ps(gz + k, mi)));
-  }
-  return hsum8(_mm256_add_ps(_mm256_add_ps(ax, ay), az));
+// hsum8's tree for eight particles at once: lane p of the result is hsum8(v[p]). The same adds
+// on the same pairs (t_l = s_l + s_(l+4), then (t0 + t2) + (t1 + t3)), done across registers, so
+// a range pays one short reduction per eight particles instead of a dependent chain per particle.
+FLUID_AVX2 inline __m256 laneHalves(__m256 x, __m256 y) {  // [t(x) | t(y)]
+  return _mm256_add_ps(_mm256_permute2f128_ps(x, y, 0x20), _mm256_permute2f128_ps(x, y, 0x31));
+}
+FLUID_AVX2 inline __m256 lanePairs(__m256 x, __m256 y) {  // per 128-bit half: t0 + t2, t1 + t3 of x, then of y
+  return _mm256_add_ps(_mm256_shuffle_ps(x, y, _MM_SHUFFLE(1, 0, 1, 0)),
+                       _mm256_shuffle_ps(x, y, _MM_SHUFFLE(3, 2, 3, 2)));
+}
+FLUID_AVX2 inline __m256 hsum8x8(const __m256* v) {
+  const __m256 u0 = lanePairs(laneHalves(v[0], v[1]), laneHalves(v[2], v[3]));  // particles 0, 2 | 1, 3
+  const __m256 u1 = lanePairs(laneHalves(v[4], v[5]), laneHalves(v[6], v[7]));  // particles 4, 6 | 5, 7
+  const __m256 s = _mm256_add_ps(_mm256_shuffle_ps(u0, u1, _MM_SHUFFLE(2, 0, 2, 0)),
+                                 _mm256_shuffle_ps(u0, u1, _MM_SHUFFLE(3, 1, 3, 1)));  // 0 2 4 6 | 1 3 5 7
+  return _mm256_permutevar8x32_ps(s, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7));
 }
 
-FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const glm::vec4* kr4, const float* gx, const float* gy, const float* gz,
-                                         const std::uint32_t* nb16, std::uint32_t b, std::uint32_t e, float ki) {
-  const __m256 vk = _mm256_set1_ps(ki);
-  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
-  std::uint32_t k = b;
-  for (; k + kLanes <= e; k += kLanes) {
-    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, nb16 + k));
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_loadu_ps(gx + k)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_loadu_ps(gy + k)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_loadu_ps(gz + k)));
+// The density pass of a range, eight particles per group (a short last group gets zero
+// accumulators for its missing particles, which are not stored).
+FLUID_AVX2 void densityRangeAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
+                                 const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e,
+                                 std::uint32_t i0, std::uint32_t i1, const PairBlocks& out, DensitySums* sums) {
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[5][kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 one[5];
+      if (p < m)
+        densityAvx2(c, positions, id, nbr, b[g + p], e[g + p], g + p, out, one);
+      else
+        one[0] = one[1] = one[2] = one[3] = one[4] = _mm256_setzero_ps();
+      for (int q = 0; q < 5; ++q) acc[q][p] = one[q];
+    }
+    alignas(32) float t[5][kLanes];
+    for (int q = 0; q < 5; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    for (std::uint32_t p = 0; p < m; ++p) {
+      DensitySums& out_sums = sums[g - i0 + p];
+      out_sums.w = t[0][p];
+      out_sums.grad = glm::vec3(t[1][p], t[2][p], t[3][p]);
+      out_sums.sq = t[4][p];
+    }
   }
-  if (k < e) {
-    const __m256i mi = laneMask(e - k);
-    std::uint32_t buf[kLanes];
-    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, tailIndices(nb16 + k, e - k, buf)));
-    ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_maskload_ps(gx + k, mi)));
-    ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_maskload_ps(gy + k, mi)));
-    az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_maskload_ps(gz + k, mi)));
-  }
-  return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
+
+// The viscosity sums of a range, eight particles per group (as densityRangeAvx2).
+FLUID_AVX2 void viscosityRangeAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0,
+                                   std::uint32_t i1, float eps, glm::vec3* out) {
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[3][kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 one[3];
+      if (p < m)
+        viscosityAvx2(positions, a, g + p, eps, one);
+      else
+        one[0] = one[1] = one[2] = _mm256_setzero_ps();
+      for (int q = 0; q < 3; ++q) acc[q][p] = one[q];
+    }
+    alignas(32) float t[3][kLanes];
+    for (int q = 0; q < 3; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    for (std::uint32_t p = 0; p < m; ++p) out[g - i0 + p] = glm::vec3(t[0][p], t[1][p], t[2][p]);
+  }
+}
+
+// The solver iterations' divergence loop, eight particles per group (a short last group gets
+// zero accumulators for its missing particles, which are not stored).
 FLUID_AVX2 void divergenceRangeAvx2(const IterationArgs& a, std::uint32_t i0, std::uint32_t i1, float* out) {
-  for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = divergenceAvx2(a.vel4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], glm::vec3(a.vel4[i]));
+  const glm::vec4* const vel = a.vel4;
+  const float *const gx = a.gx, *const gy = a.gy, *const gz = a.gz;
+  const std::uint32_t *const nb16 = a.nb16, *const start = a.start;
+  for (std::uint32_t g = i0; g < i1; g += kLanes) {
+    const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
+    __m256 acc[kLanes];
+    for (std::uint32_t p = 0; p < kLanes; ++p) {
+      __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+      if (p < m) {
+        const glm::vec4 vi = vel[g + p];
+        const __m256 vix = _mm256_set1_ps(vi.x), viy = _mm256_set1_ps(vi.y), viz = _mm256_set1_ps(vi.z);
+        for (std::uint32_t k = start[g + p], e = start[g + p + 1]; k < e; k += kLanes) {
+          __m256 vx, vy, vz;
+          load8xyz16(vel, nb16 + k, vx, vy, vz);
+          ax = _mm256_add_ps(ax, _mm256_mul_ps(_mm256_sub_ps(vix, vx), _mm256_load_ps(gx + k)));
+          ay = _mm256_add_ps(ay, _mm256_mul_ps(_mm256_sub_ps(viy, vy), _mm256_load_ps(gy + k)));
+          az = _mm256_add_ps(az, _mm256_mul_ps(_mm256_sub_ps(viz, vz), _mm256_load_ps(gz + k)));
+        }
+      }
+      acc[p] = _mm256_add_ps(_mm256_add_ps(ax, ay), az);
+    }
+    const __m256 sums = hsum8x8(acc);
+    if (m == kLanes) {
+      _mm256_storeu_ps(out + (g - i0), sums);
+    } else {
+      alignas(32) float t[kLanes];
+      _mm256_store_ps(t, sums);
+      for (std::uint32_t p = 0; p < m; ++p) out[g - i0 + p] = t[p];
+    }
+  }
+}
+
+// The kappa loop keeps one reduction per particle: with three sums a particle, staging eight
+// particles' accumulators for hsum8x8 cost more instructions than it saved (callgrind).
+FLUID_AVX2 inline glm::vec3 kappaSumAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i) {
+  const __m256 vk = _mm256_set1_ps(kr4[i].x);
+  __m256 ax = _mm256_setzero_ps(), ay = ax, az = ax;
+  for (std::uint32_t k = a.start[i], e = a.start[i + 1]; k < e; k += kLanes) {
+    const __m256 s = _mm256_add_ps(vk, load8x16(kr4, a.nb16 + k));
+    ax = _mm256_add_ps(ax, _mm256_mul_ps(s, _mm256_load_ps(a.gx + k)));
+    ay = _mm256_add_ps(ay, _mm256_mul_ps(s, _mm256_load_ps(a.gy + k)));
+    az = _mm256_add_ps(az, _mm256_mul_ps(s, _mm256_load_ps(a.gz + k)));
+  }
+  return {hsum8(ax), hsum8(ay), hsum8(az)};
 }
 FLUID_AVX2 void kappaRangeAvx2(const IterationArgs& a, const glm::vec4* kr4, std::uint32_t i0, std::uint32_t i1,
                                glm::vec3* out) {
-  for (std::uint32_t i = i0; i < i1; ++i)
-    out[i - i0] = kappaSumAvx2(kr4, a.gx, a.gy, a.gz, a.nb16, a.off[i], a.off[i] + a.cnt[i], kr4[i].x);
+  for (std::uint32_t i = i0; i < i1; ++i) out[i - i0] = kappaSumAvx2(a, kr4, i);
 }
 #undef FLUID_AVX2
 
-constexpr PairLoops kAvx2Loops{&densityAvx2, &viscosityAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
+constexpr PairLoops kAvx2Loops{&densityRangeAvx2, &viscosityRangeAvx2, &divergenceRangeAvx2, &kappaRangeAvx2};
 #endif
 
 }  // namespace

@@ -256,9 +256,12 @@ struct SphScratch {
   std::vector<glm::vec3> verlet_position;
   float verlet_radius = 0.0f;
   bool verlet_valid = false;
-  // Per neighbour pair k (same index as neighbors.indices): m_j grad W_ij, one array per component
-  // (SoA: the solver's pair loops read them eight pairs at a time).
+  // Per neighbour pair: m_j grad W_ij, one array per component (SoA: the solver's pair loops read
+  // them eight pairs at a time). WCSPH: pair k as in neighbors.indices. DFSPH: i's pairs from
+  // pair_start[i], zero-padded to a multiple of 8 and read through 32-byte aligned views
+  // (pair_loops.hpp), so the arrays are a few entries longer than the pairs.
   std::vector<float> grad_x, grad_y, grad_z;
+  std::vector<std::uint32_t> pair_start;  // DFSPH: n + 1 entries, multiples of 8 (pair_loops.hpp PairBlocks)
   // per particle
   std::vector<glm::vec3> vec_a, vec_b, boundary_gradient, old_position, accel;
   // Step-start positions and the velocities padded to 16 bytes, so the eight-lane pair loops load
@@ -267,7 +270,7 @@ struct SphScratch {
   // viscosity pass (the density pass reads pos4 of the neighbours, so it cannot write there).
   std::vector<glm::vec4> vel4, pos4;
   std::vector<glm::vec4> kappa4;           // DFSPH: .x = kappa_i / rho_i of the current iteration (16-byte records)
-  std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair, 16 j (byte offset of j's 16-byte record)
+  std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair (as grad_x), 16 j (byte offset of j's record)
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
   std::vector<std::uint32_t> u32_tmp;
@@ -277,7 +280,10 @@ struct SphScratch {
   std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step
   std::vector<std::vector<ColliderSample>> start_samples;  // per collider, at the step-start positions
-  std::vector<std::vector<ColliderSample>> end_samples;    // per collider, at the end-of-step positions
+  // Per collider with boundary pressure (empty for the others): collider c's share of grad V at
+  // each particle's step-start position (sampleBoundary), which the coupling force reuses.
+  std::vector<std::vector<glm::vec3>> boundary_share;
+  std::vector<std::vector<ColliderSample>> end_samples;  // per collider, at the end-of-step positions
   // Collision passes: bit c set while particle i's end_samples[c][i] is out of date (it moved after
   // collider c's last query).
   std::vector<std::uint32_t> collide_stale;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -341,6 +342,43 @@ TEST(SphSolvers, NoAllocationPerStepAfterWarmUp) {
       EXPECT_EQ(g_allocations.load() - before, 0) << sphSolverName(solver);
     });
   }
+}
+
+// DFSPH's pair arrays in lane blocks (fluid/sph/pair_loops.hpp): i's pairs start at a multiple of
+// 8 (pair_start[i]) of 32-byte aligned views of grad_x/y/z and pair_offset, and the slots after
+// its last pair up to the next block hold zero gradients and neighbour 0 (what the AVX2 loops add
+// as exact zeros). Dam break with stacked particles: lists of many lengths, coincident pairs.
+TEST(SphSolvers, DfsphPairBlocksAreAlignedAndZeroPadded) {
+  SphScene s = scene("dambreak", SphSolverKind::dfsph, {{"width", "0.1"}, {"spacing", "0.01"}});
+  for (int i = 0; i < 13; ++i) addSphParticle(s.world, glm::vec3(0.03f, 0.05f, 0.05f));
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(stepSph(s.world, 0.0f).ok());
+  const SphScratch& w = s.world.scratch;
+  const std::size_t n = s.world.particles.size();
+  ASSERT_EQ(w.pair_start.size(), n + 1);
+  // The views start at the first 32-byte aligned element of each array.
+  auto view = [](const auto& v) {
+    const auto address = reinterpret_cast<std::uintptr_t>(v.data());
+    return v.data() + ((32 - address % 32) % 32) / sizeof(v[0]);
+  };
+  const float *gx = view(w.grad_x), *gy = view(w.grad_y), *gz = view(w.grad_z);
+  const std::uint32_t* nb16 = view(w.pair_offset);
+  ASSERT_LE(static_cast<std::size_t>(gx - w.grad_x.data()) + w.pair_start[n], w.grad_x.size());
+  std::size_t padded = 0, pairs = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t b = w.pair_start[i], e = w.pair_start[i + 1], count = w.neighbors.counts[i];
+    ASSERT_EQ(b % 8, 0u) << i;
+    ASSERT_EQ(e - b, (count + 7) / 8 * 8) << i;
+    for (std::uint32_t k = b; k < b + count; ++k)
+      ASSERT_EQ(nb16[k], w.neighbors.indices[w.neighbors.offsets[i] + (k - b)] << 4) << i;
+    for (std::uint32_t k = b + count; k < e; ++k) {
+      ASSERT_EQ(nb16[k], 0u) << i;
+      ASSERT_TRUE(gx[k] == 0.0f && gy[k] == 0.0f && gz[k] == 0.0f) << i;
+      ++padded;
+    }
+    pairs += count;
+  }
+  EXPECT_GT(padded, 0u);  // the layout was exercised: some lists are not whole blocks
+  EXPECT_GT(pairs, 20 * n);
 }
 
 TEST(SphSolvers, FountainEmitsDrainsAndRespectsBudget) {
