@@ -184,6 +184,7 @@ SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds) {
                             static_cast<std::uint64_t>(std::llround(desc.min_warmup_seconds / step_seconds)));
   // Reserved now so the samples' own storage never shows up as growth.
   m.rss_samples.reserve(static_cast<std::size_t>(desc.steps / std::max<std::uint64_t>(desc.memory_every, 1) + 2));
+  m.heap_samples.reserve(m.rss_samples.capacity());
   return m;
 }
 
@@ -235,19 +236,27 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   const bool go_on = m.failure.empty() && world.steps < m.desc.steps;
   if (world.steps >= m.warmup_steps && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
     releaseFreeMemory();
-    const std::uint64_t rss = residentBytes();
-    if (m.rss_samples.empty()) s.rss_warmup = rss;
+    const std::uint64_t rss = residentBytes(), heap = heapInUseBytes();
+    if (m.rss_samples.empty()) s.rss_warmup = rss, s.heap_warmup = heap;
     m.rss_samples.push_back(rss);
+    m.heap_samples.push_back(heap);
     s.rss_end = rss;
+    s.heap_end = heap;
   }
   return go_on;
 }
 
 void finishSoak(SoakMonitor& m) {
-  m.stats.memory = checkMemoryGrowth(m.rss_samples, m.desc.memory);
+  // The resident set on its trend, the heap in use on its trend and final level (checkMemoryGrowth
+  // says why); no heap figure (not glibc): the resident set on both.
+  const bool have_heap = !m.heap_samples.empty() && m.heap_samples.front() > 0;
+  m.stats.memory = checkMemoryGrowth(m.rss_samples, m.desc.memory, !have_heap);
+  if (have_heap) m.stats.heap_memory = checkMemoryGrowth(m.heap_samples, m.desc.memory);
+  const std::string& failure =
+      !m.stats.memory.failure.empty() ? m.stats.memory.failure : m.stats.heap_memory.failure;
   // A run that already failed stopped early: its samples say nothing about the trend.
-  if (m.desc.check_memory && m.failure.empty() && !m.stats.memory.failure.empty())
-    fail(m, m.stats.steps, m.stats.memory.failure);
+  if (m.desc.check_memory && m.failure.empty() && !failure.empty())
+    fail(m, m.stats.steps, (&failure == &m.stats.memory.failure ? "" : "heap in use: ") + failure);
 }
 
 std::string soakSummary(const SoakMonitor& m) {
@@ -285,6 +294,9 @@ std::string soakSummary(const SoakMonitor& m) {
     add(line, ", RSS not judged (%zu samples after warm-up)", m.rss_samples.size());
   } else {
     add(line, ", RSS %.1f -> %.1f MiB", static_cast<double>(s.rss_warmup) / mib, static_cast<double>(s.rss_end) / mib);
+    if (s.heap_warmup > 0)
+      add(line, " (heap in use %.1f -> %.1f)", static_cast<double>(s.heap_warmup) / mib,
+          static_cast<double>(s.heap_end) / mib);
   }
   if (!worst.empty()) line += ", worst penetration/radius:" + worst;
   return line;

@@ -55,13 +55,15 @@ struct SoakStats {
   float max_speed = 0.0f;                                         // m/s, fastest SPH or sprite particle seen
   float max_crate_speed = 0.0f;                                   // m/s, fastest crate seen
   std::uint64_t rss_warmup = 0, rss_end = 0;  // resident set at the end of warm-up and at the last frame
+  std::uint64_t heap_warmup = 0, heap_end = 0;  // heap in use (heapInUseBytes), the same samples
   float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
   std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
   // SPH particles inside a crate where the crate reaches into the fountain (no free position; not
   // failures, see worstFreePenetration): the most in one frame, and the frames with any.
   std::size_t sph_squeezed_max = 0;
   std::uint64_t sph_squeezed_frames = 0;
-  MemoryGrowth memory;
+  MemoryGrowth memory;       // the resident set's verdict (its trend; the final level too without a heap figure)
+  MemoryGrowth heap_memory;  // the heap in use's verdict (trend and final level)
 };
 
 struct SoakMonitor {
@@ -69,7 +71,8 @@ struct SoakMonitor {
   std::uint64_t warmup_steps = 0;  // from desc.warmup_fraction and min_warmup_seconds
   ThrowSchedule schedule;
   SoakStats stats;
-  std::vector<std::uint64_t> rss_samples;  // after warm-up; reserved up front
+  std::vector<std::uint64_t> rss_samples;   // after warm-up; reserved up front
+  std::vector<std::uint64_t> heap_samples;  // heap in use at the same samples
   PenetrationScratch scratch;
   std::vector<glm::vec3> points;   // crate centres
   std::vector<PlacedShape> blockers;  // the SPH colliders other than the crate being checked
