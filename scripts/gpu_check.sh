@@ -81,8 +81,10 @@ section_pinned() {
 }
 section_mesher() {
   command -v taskset >/dev/null || { echo "=== mesher: no taskset, skipped"; return; }
-  local pin round block t set name cube reps
-  pin="taskset -c $(pick_two_cores)"
+  local cores pin round block t set name cube reps
+  cores=$(pick_two_cores)
+  pin="taskset -c $cores"
+  echo "=== pinned to cpus $cores: $(lscpu 2>/dev/null | grep -m1 'Model name')"
   echo "=== mesher, 1 and 2 threads on 2 pinned cores, interleaved, per block size (issue 20 bar 2)"
   for round in $(seq "${MESHER_ROUNDS:-3}"); do
     for block in ${MESHER_BLOCKS:-0 64 32}; do

@@ -71,7 +71,7 @@ def main():
         log = open(os.path.join(run_dir, "gpu_check_log.txt")).read()
         gpu = re.search(r"^GPU 0: ([^(]+)", log, re.M)
         cpu = re.search(r"Model name:\s+(.+)$", log, re.M)
-        print(f"#### {run_dir}: {gpu[1].strip() if gpu else '?'}, CPU {cpu[1].strip() if cpu else '?'}\n")
+        print(f"#### {run_dir}: {gpu[1].strip() if gpu else '?'}, CPU {cpu[1].strip() if cpu else 'not in the log'}\n")
         print("\n".join(replay_table(run_dir)) + "\n")
         mesher = mesher_table(log)
         if mesher:
