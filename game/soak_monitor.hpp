@@ -19,7 +19,8 @@ struct SoakDesc {
   std::uint64_t steps = 3600;  // run length; the monitor asks to stop after this many steps
   // Memory is judged on the samples after warm-up: this share of the run, and at least
   // min_warmup_seconds of game time (twice what the fountain takes to fill its 2,500-particle budget
-  // at 500 particles/s, after which its buffers have their working size). A run too short to leave
+  // at 500 particles/s, after which its buffers have their working size). The samples also start
+  // again at the first blast, whose allocations every later one reuses. A run too short to leave
   // 3 samples after it is not judged.
   double warmup_fraction = 0.2;
   double min_warmup_seconds = 10.0;
@@ -62,6 +63,7 @@ struct SoakStats {
   // failures, see worstFreePenetration): the most in one frame, and the frames with any.
   std::size_t sph_squeezed_max = 0;
   std::uint64_t sph_squeezed_frames = 0;
+  std::uint64_t memory_restart_step = 0;  // > 0: the samples started again at the first blast, this step
   MemoryGrowth memory;       // the resident set's verdict (its trend; the final level too without a heap figure)
   MemoryGrowth heap_memory;  // the heap in use's verdict (trend and final level)
 };
@@ -80,6 +82,7 @@ struct SoakMonitor {
   // colliders) or, in a scene without particles, loaded at the first check.
   std::shared_ptr<const LevelColliders> level;
   bool have_counts = false;
+  std::uint64_t detonations_seen = 0;  // the explosives' detonation count at the last frame
   std::string failure;  // the first failure, naming the step and what
 };
 

@@ -5,6 +5,7 @@
 #include "tests/support/fountain_shape.hpp"
 
 #include "fluid/sph/analytic_colliders.hpp"
+#include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
 #include "game/world/world.hpp"
 
@@ -319,6 +320,31 @@ TEST_F(SoakMonitorOnFountain, InsideTwoOverlappingCratesIsSqueezedButInsideOneFr
   EXPECT_NE(monitor.failure.find("within a radius of collider " + std::to_string(first) + " (moving) -0.02"),
             std::string::npos)
       << monitor.failure;
+}
+
+// The first blast's allocations are warm-up: the memory samples start again at it, once.
+TEST_F(SoakMonitorOnFountain, MemorySamplesStartAgainAtTheFirstBlast) {
+  game::SoakDesc desc;
+  desc.steps = 1000;
+  desc.warmup_fraction = 0.0;
+  desc.min_warmup_seconds = 0.0;
+  desc.memory_every = 1;
+  desc.throws.mean_interval_s = 0.0;
+  game::SoakMonitor m = game::makeSoakMonitor(desc, world.step_seconds);
+  ASSERT_NE(world.links.explosives, nullptr);
+  ASSERT_EQ(world.links.explosives->detonated, 0u);
+  ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
+  ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
+  EXPECT_EQ(m.rss_samples.size(), 2u);
+  world.links.explosives->detonated = 1;
+  ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
+  EXPECT_EQ(m.rss_samples.size(), 1u);
+  EXPECT_EQ(m.heap_samples.size(), 1u);
+  EXPECT_EQ(m.stats.memory_restart_step, world.steps);
+  world.links.explosives->detonated = 2;  // later blasts: the samples go on
+  ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
+  EXPECT_EQ(m.rss_samples.size(), 2u);
+  EXPECT_NE(game::soakSummary(m).find("memory from step"), std::string::npos) << game::soakSummary(m);
 }
 
 TEST_F(SoakMonitorOnFountain, ASpriteUnderTheGroundFails) {
