@@ -64,8 +64,7 @@ void releaseFreeMemory() {
 #endif
 }
 
-MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const MemoryGrowthDesc& desc,
-                               bool judge_final) {
+MemoryGrowth checkMemoryGrowth(std::span<const std::uint64_t> samples, const MemoryGrowthDesc& desc, bool judge_final) {
   MemoryGrowth out;
   if (samples.size() < 3) return out;
   const std::size_t third = samples.size() / 3;

@@ -116,7 +116,7 @@ Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid:
 // and aims at a random point of the basin and the yard around it. A share of the throws are fused
 // explosives (the right mouse button), so blasts hit the water, the crates and the sprites too.
 struct ThrowScheduleDesc {
-  double mean_interval_s = 2.0;  // intervals uniform in [0.5, 1.5] x this; <= 0: never throw
+  double mean_interval_s = 2.0;   // intervals uniform in [0.5, 1.5] x this; <= 0: never throw
   double explosive_share = 0.25;  // chance that a throw is an explosive, [0, 1]; 0 = crates only
   double step_seconds = 1.0 / 60.0;
   float stand_radius_min = 6.0f, stand_radius_max = 10.0f;  // m from the fountain's axis

@@ -66,7 +66,8 @@ std::string collidersNear(const fluid::SphWorld& sph, glm::vec3 position, Penetr
   std::string out;
   for (std::size_t c = 0; c < sph.colliders.size(); ++c) {
     const fluid::SphCollider& collider = sph.colliders[c];
-    const Penetration p = worstPenetration(std::span(&position, 1), *collider.shape, collider.pose, radius, radius, scratch);
+    const Penetration p =
+        worstPenetration(std::span(&position, 1), *collider.shape, collider.pose, radius, radius, scratch);
     if (p.depth <= 0.0f) continue;
     char part[96];
     std::snprintf(part, sizeof(part), "%s collider %zu%s %.4f m", out.empty() ? "; within a radius of" : ",", c,
@@ -261,11 +262,10 @@ void finishSoak(SoakMonitor& m) {
   const bool have_heap = !m.heap_samples.empty() && m.heap_samples.front() > 0;
   m.stats.memory = checkMemoryGrowth(m.rss_samples, m.desc.memory, !have_heap);
   if (have_heap) m.stats.heap_memory = checkMemoryGrowth(m.heap_samples, m.desc.memory);
-  const std::string& failure =
-      !m.stats.memory.failure.empty() ? m.stats.memory.failure : m.stats.heap_memory.failure;
+  std::string failure = m.stats.memory.failure;
+  if (failure.empty() && !m.stats.heap_memory.failure.empty()) failure = "heap in use: " + m.stats.heap_memory.failure;
   // A run that already failed stopped early: its samples say nothing about the trend.
-  if (m.desc.check_memory && m.failure.empty() && !failure.empty())
-    fail(m, m.stats.steps, (&failure == &m.stats.memory.failure ? "" : "heap in use: ") + failure);
+  if (m.desc.check_memory && m.failure.empty() && !failure.empty()) fail(m, m.stats.steps, failure);
 }
 
 std::string soakSummary(const SoakMonitor& m) {
@@ -278,8 +278,7 @@ std::string soakSummary(const SoakMonitor& m) {
     out += part;
   };
   std::string line, worst;
-  add(line, "%llu steps, %d throws (%d explosives)", static_cast<unsigned long long>(s.steps), s.throws,
-      s.explosives);
+  add(line, "%llu steps, %d throws (%d explosives)", static_cast<unsigned long long>(s.steps), s.throws, s.explosives);
   if (s.has_sph) {
     add(line, ", sph %zu..%zu", s.sph_min, s.sph_max);
     add(worst, " sph %.3f (step %llu)", static_cast<double>(s.worst_sph),

@@ -32,9 +32,9 @@ struct SoakDesc {
   // collider surface (Kolb et al. 2004 §3.3.2 push-out, fluid/core/collider.hpp), except water
   // squeezed where a crate reaches into the fountain or into another crate: no position is outside
   // both, the solver keeps it outside the fountain (still colliders win) or the crate resolved last,
-  // and the check leaves out the particles inside a crate there (worstFreePenetration). What remains is float rounding and the projections'
-  // remainder at corners. A quarter radius is far above rounding and far below the depth of a
-  // particle that went through a wall.
+  // and the check leaves out the particles inside a crate there (worstFreePenetration). What
+  // remains is float rounding and the projections' remainder at corners. A quarter radius is far
+  // above rounding and far below the depth of a particle that went through a wall.
   float particle_tolerance = 0.25f;
   // Crates: the box reaches at least (half edge - centre distance) into the fountain's solid. Resting
   // contacts stay within Bullet's few-centimetre margin, but a thrown crate (14 m/s) travels 0.12 m,
@@ -48,14 +48,14 @@ struct SoakDesc {
 
 struct SoakStats {
   std::uint64_t steps = 0;
-  int throws = 0;      // crates and explosives
-  int explosives = 0;  // of them
+  int throws = 0;                                                 // crates and explosives
+  int explosives = 0;                                             // of them
   bool has_sph = false, has_sprites = false, has_crates = false;  // which systems the world has
   std::size_t sph_min = 0, sph_max = 0;                           // SPH particle count over the run's frames
   std::size_t sprite_min = 0, sprite_max = 0;                     // sprite particles
   float max_speed = 0.0f;                                         // m/s, fastest SPH or sprite particle seen
   float max_crate_speed = 0.0f;                                   // m/s, fastest crate seen
-  std::uint64_t rss_warmup = 0, rss_end = 0;  // resident set at the end of warm-up and at the last frame
+  std::uint64_t rss_warmup = 0, rss_end = 0;    // resident set at the end of warm-up and at the last frame
   std::uint64_t heap_warmup = 0, heap_end = 0;  // heap in use (heapInUseBytes), the same samples
   float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
   std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
@@ -76,14 +76,14 @@ struct SoakMonitor {
   std::vector<std::uint64_t> rss_samples;   // after warm-up; reserved up front
   std::vector<std::uint64_t> heap_samples;  // heap in use at the same samples
   PenetrationScratch scratch;
-  std::vector<glm::vec3> points;   // crate centres
+  std::vector<glm::vec3> points;      // crate centres
   std::vector<PlacedShape> blockers;  // the SPH colliders other than the crate being checked
   // The level's baked colliders the crates are checked against: the world's (EffectLinks::
   // colliders) or, in a scene without particles, loaded at the first check.
   std::shared_ptr<const LevelColliders> level;
   bool have_counts = false;
   std::uint64_t detonations_seen = 0;  // the explosives' detonation count at the last frame
-  std::string failure;  // the first failure, naming the step and what
+  std::string failure;                 // the first failure, naming the step and what
 };
 
 SoakMonitor makeSoakMonitor(const SoakDesc& desc, double step_seconds);
