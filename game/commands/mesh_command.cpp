@@ -1,10 +1,11 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
-//                  [--block N] [--field auto|cache|splat] [--reps N] [--stats] [--force]
+//                  [--block N] [--field auto|cache|splat] [--reps N] [--idle-ms MS] [--stats] [--force]
 // Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
 // --reps N times N more extractions with the same extractor after the first (warm: scratch and
 // output capacity kept, as in a game meshing every frame) and prints their median and min, the first
-// (cold) one separately.
+// (cold) one separately. --idle-ms MS sleeps that long before each of them, as a game's mesher
+// waits for the next frame: the threads go idle in between, and waking them is part of the time.
 #include "game/commands.hpp"
 #include "game/commands/cli_parse.hpp"
 
@@ -22,6 +23,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -93,6 +95,10 @@ int meshCommand(const Args& args) {
   app.add_option("--reps", reps, "time N warm extractions after the first and print their median and min")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
+  double idle_ms = 0.0;
+  app.add_option("--idle-ms", idle_ms, "with --reps: sleep this long before each timed extraction (a frame's idle)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
@@ -161,12 +167,17 @@ int meshCommand(const Args& args) {
   }
   if (reps > 0) {
     std::vector<double> warm(static_cast<std::size_t>(reps));
-    for (double& w : warm) (void)timedExtract(w);  // same input and params: cannot fail where the first did not
+    for (double& w : warm) {
+      if (idle_ms > 0.0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(idle_ms));
+      (void)timedExtract(w);  // same input and params: cannot fail where the first did not
+    }
     std::sort(warm.begin(), warm.end());
     const std::size_t n = warm.size();
     const double med = n % 2 ? warm[n / 2] : 0.5 * (warm[n / 2 - 1] + warm[n / 2]);
     std::printf("first (cold)         %.3f ms\n", ms);
-    std::printf("warm, %d reps         median %.3f ms, min %.3f ms\n", reps, med, warm.front());
+    std::printf("warm, %d reps         median %.3f ms, min %.3f ms", reps, med, warm.front());
+    if (idle_ms > 0.0) std::printf(", each after %g ms idle", idle_ms);
+    std::printf("\n");
   }
   fluid::MeshWriteOptions options;
   options.overwrite = force ? fluid::OverwritePolicy::replace : fluid::OverwritePolicy::refuse;
