@@ -7,6 +7,7 @@ fluid::SurfaceParams surfaceParamsFor(const FluidSurfaceParams& p, float spacing
   sp.rc = p.smoothing * spacing;
   sp.cube = p.cube * spacing;
   sp.threshold = p.threshold;
+  sp.fieldRoute = p.field;
   // Paper §5: sweep along the axis nearest the view, farthest blocks first, so blending the
   // triangles in index order composites back-to-front.
   sp.order = p.order == SurfaceOrderChoice::unsorted ? fluid::SurfaceOrder::none : fluid::SurfaceOrder::backToFront;
