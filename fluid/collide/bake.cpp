@@ -431,17 +431,19 @@ std::vector<MapSpec> defaultMapSpecs(const Bounds& bounds, int resolution, Depth
       specs.push_back(s);
     }
   }
-  if (with_cube) {
-    MapSpec c;
-    c.kind = MapKind::cube;
-    c.format = DepthMapFormat::cube8;
-    c.compare = DepthCompare::greater;
-    c.resolution = resolution;
-    c.cube.center = center;
-    c.cube.half_extent = padded * 1.01f;
-    specs.push_back(c);
-  }
+  if (with_cube) specs.push_back(cubeMapSpec(center, padded * 1.01f, resolution, DepthCompare::greater));
   return specs;
+}
+
+MapSpec cubeMapSpec(glm::vec3 center, glm::vec3 half_extent, int resolution, DepthCompare compare) {
+  MapSpec c;
+  c.kind = MapKind::cube;
+  c.format = DepthMapFormat::cube8;
+  c.compare = compare;
+  c.resolution = resolution;
+  c.cube.center = center;
+  c.cube.half_extent = half_extent;
+  return c;
 }
 
 bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution, DepthMapFormat format,
@@ -472,11 +474,7 @@ bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution,
         error = "--maps: bad item '" + item + "' (expected cube@X:Y:Z:H with H > 0)";
         return false;
       }
-      MapSpec c = axes.back();
-      c.compare = DepthCompare::less;
-      c.cube.center = {x, y, z};
-      c.cube.half_extent = glm::vec3(h);
-      out.push_back(c);
+      out.push_back(cubeMapSpec({x, y, z}, glm::vec3(h), resolution, DepthCompare::less));
     } else {
       error = "--maps: unknown item '" + item + "' (expected axes, x, y, z, cube, cube-less or cube@X:Y:Z:H)";
       return false;

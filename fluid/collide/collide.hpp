@@ -258,6 +258,11 @@ struct Bounds {
 };
 Bounds meshBounds(const MeshView& mesh);
 
+// One depth cube (Kolb §4.1, format cube8) centred at `center` over the box of `half_extent`.
+// GREATER when the centre is inside the collider, LESS when it is outside (a concave region's
+// cavity, seen from within).
+MapSpec cubeMapSpec(glm::vec3 center, glm::vec3 half_extent, int resolution, DepthCompare compare);
+
 // Default set, §5.2: three front-back pairs along x, y, z in `format` (float32/fixed8 give a
 // LESS and a GREATER map per axis) plus, when with_cube, one depth cube at the bounds centre
 // (GREATER: the centre is assumed inside; pass with_cube = false for shapes where it is not).

@@ -18,9 +18,8 @@ constexpr std::string_view kOrderNames[] = {"sorted", "unsorted", "exact"};
 constexpr SurfaceOrderChoice kOrderValues[] = {SurfaceOrderChoice::sorted, SurfaceOrderChoice::unsorted,
                                                SurfaceOrderChoice::exact};
 constexpr std::string_view kFieldNames[] = {"splat", "cache", "auto"};
-constexpr fluid::SurfaceFieldRoute kFieldValues[] = {fluid::SurfaceFieldRoute::sliceSplat,
-                                                     fluid::SurfaceFieldRoute::particleCache,
-                                                     fluid::SurfaceFieldRoute::automatic};
+constexpr fluid::SurfaceFieldRoute kFieldValues[] = {
+    fluid::SurfaceFieldRoute::sliceSplat, fluid::SurfaceFieldRoute::particleCache, fluid::SurfaceFieldRoute::automatic};
 constexpr std::string_view kNeeds[] = {"sph_fluid"};
 
 engine::FluidMethod methodOf(SurfaceMethodChoice method) {

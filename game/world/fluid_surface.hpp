@@ -27,9 +27,9 @@ enum class SurfaceMethodChoice { mesh, screen_space, raycast };
 struct FluidSurfaceParams {
   SurfaceMethodChoice method = SurfaceMethodChoice::mesh;
   SurfaceOrderChoice order = SurfaceOrderChoice::sorted;
-  float smoothing = 2.0f;    // Rc in particle spacings
-  float cube = 0.5f;         // lattice cube edge S in particle spacings
-  float threshold = 0.2f;    // iso level T in (0, 0.25)
+  float smoothing = 2.0f;  // Rc in particle spacings
+  float cube = 0.5f;       // lattice cube edge S in particle spacings
+  float threshold = 0.2f;  // iso level T in (0, 0.25)
   // How the mesher sums a corner's field (fluid::SurfaceFieldRoute; every route gives the same
   // mesh). Slice splat by default: at the game's lattice (Rc = 4 S) it costs about 30 % less
   // than the paper's §6 cache on the fountain's frames (docs/surface.md, "The game's scale"),
@@ -58,10 +58,10 @@ struct FluidSurface {
   FluidSurfaceParams params;
   fluid::SurfaceExtractor extractor;                        // params.async false
   std::unique_ptr<fluid::AsyncSurfaceExtractor> async_job;  // params.async true, made at first use
-  fluid::SurfaceMesh mesh;        // the surface drawn this frame (async: the previous frame's particles)
-  double mesh_worker_ms = 0.0;    // async: the worker's time on `mesh` (0 when synchronous)
-  std::uint64_t meshes = 0;       // frames meshed
-  std::string error;              // last extraction error (mesh cleared then)
+  fluid::SurfaceMesh mesh;      // the surface drawn this frame (async: the previous frame's particles)
+  double mesh_worker_ms = 0.0;  // async: the worker's time on `mesh` (0 when synchronous)
+  std::uint64_t meshes = 0;     // frames meshed
+  std::string error;            // last extraction error (mesh cleared then)
   // Method raycast, last frame (written by the engine's water pass): fragment-list records asked
   // for and records dropped because the pool was full, and the pool's size in records after the
   // frame (it grows with the demand up to pool_bound).

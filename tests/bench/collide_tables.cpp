@@ -90,10 +90,7 @@ std::vector<Config> configsFor(const std::string& shape, const Mesh& mesh, int r
     std::vector<fluid::MapSpec> paper = {with_cube[2], with_cube[0], less, greater};  // z and x front-back
     out.push_back({"paper Fig. 6: 2 cube8 + 2 front-back16", paper});
   } else if (shape == "basin") {
-    fluid::MapSpec cavity = with_cube.back();
-    cavity.compare = fluid::DepthCompare::less;
-    cavity.cube.center = collide_test::kBasinCavityCenter;
-    cavity.cube.half_extent = glm::vec3(collide_test::kBasinCavityHalf);
+    const fluid::MapSpec cavity = collide_test::basinCavityCube(res);
     auto specs = fluid::defaultMapSpecs(b, res, DepthMapFormat::front_back16);
     specs.push_back(cavity);
     out.push_back({"axes front-back16 + cavity cube8", specs});

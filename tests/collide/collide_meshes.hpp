@@ -32,14 +32,7 @@ inline constexpr glm::vec3 kBasinCavityCenter{0.0f, 0.0f, 0.55f};
 inline constexpr float kBasinCavityHalf = 1.02f;
 // That cube: a LESS cube8 map (the cavity centre is outside the basin, so LESS calls it outside).
 inline fluid::MapSpec basinCavityCube(int resolution) {
-  fluid::MapSpec cavity;
-  cavity.kind = fluid::MapKind::cube;
-  cavity.format = fluid::DepthMapFormat::cube8;
-  cavity.compare = fluid::DepthCompare::less;
-  cavity.resolution = resolution;
-  cavity.cube.center = kBasinCavityCenter;
-  cavity.cube.half_extent = glm::vec3(kBasinCavityHalf);
-  return cavity;
+  return fluid::cubeMapSpec(kBasinCavityCenter, glm::vec3(kBasinCavityHalf), resolution, fluid::DepthCompare::less);
 }
 
 }  // namespace collide_test

@@ -66,14 +66,7 @@ TestCollider makeSphereCollider(glm::vec3 centre, float radius, int resolution, 
   const fluid::MeshView mesh{positions, indices};
   std::vector<fluid::MapSpec> specs;
   if (format == fluid::DepthMapFormat::cube8) {
-    fluid::MapSpec c;
-    c.kind = fluid::MapKind::cube;
-    c.format = fluid::DepthMapFormat::cube8;
-    c.compare = fluid::DepthCompare::greater;
-    c.resolution = resolution;
-    c.cube.center = centre;
-    c.cube.half_extent = glm::vec3(radius * 1.2f);
-    specs.push_back(c);
+    specs.push_back(fluid::cubeMapSpec(centre, glm::vec3(radius * 1.2f), resolution, fluid::DepthCompare::greater));
   } else {
     specs = fluid::defaultMapSpecs(fluid::meshBounds(mesh), resolution, format, false);
   }
