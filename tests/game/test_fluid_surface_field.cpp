@@ -70,6 +70,42 @@ TEST(FluidSurfaceField, SplatAndCacheMeshTheGamesFramesBitForBit) {
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
 }
 
+// The key is live (the overlay's combo): switching the route between frames of one world, the
+// extractor's scratch switching with it, meshes exactly what a world on one route meshes.
+TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
+  game::SceneConfig scene;
+  ASSERT_TRUE(parseFountain("splat", scene).ok());
+  game::World fixed_world, switching_world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), fixed_world, error)) << error;
+  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), switching_world, error)) << error;
+  game::SectionConfig* section = nullptr;
+  for (game::SectionConfig& effect : switching_world.scene.effects)
+    if (effect.name == "fluid_surface") section = &effect;
+  ASSERT_NE(section, nullptr);
+  const game::FluidSurface& fixed = *game::findState<game::FluidSurface>(fixed_world);
+  const game::FluidSurface& switching = *game::findState<game::FluidSurface>(switching_world);
+  int cache_frames = 0;
+  for (int frame = 0; frame < 90; ++frame) {
+    const bool cache = frame % 3 == 1;  // splat, cache, splat, splat, cache, ...
+    section->params["field"].text = cache ? "cache" : "splat";
+    game::applyLiveParams(switching_world);
+    ASSERT_EQ(switching.params.field,
+              cache ? fluid::SurfaceFieldRoute::particleCache : fluid::SurfaceFieldRoute::sliceSplat);
+    game::stepWorld(fixed_world, nullptr);
+    game::stepWorld(switching_world, nullptr);
+    game::meshWorld(fixed_world, nullptr);
+    game::meshWorld(switching_world, nullptr);
+    ASSERT_EQ(switching.error, "") << "frame " << frame;
+    ASSERT_EQ(test_support::meshBitsDiffer(switching.mesh, fixed.mesh), "") << "frame " << frame;
+    if (cache && !switching.mesh.indices.empty()) {
+      EXPECT_EQ(switching.mesh.stats.splatBlocks, 0u) << "frame " << frame;
+      ++cache_frames;
+    }
+  }
+  EXPECT_GE(cache_frames, 25);
+}
+
 TEST(FluidSurfaceField, AnUnknownRouteIsRefusedNamingTheKeyAndValue) {
   game::SceneConfig scene;
   const game::SceneStatus status = parseFountain("dense", scene);
