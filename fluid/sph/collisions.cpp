@@ -108,6 +108,7 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           which[q++] = static_cast<std::uint32_t>(i);
         }
         query.run(positions, which, q, end_samples);
+        std::uint32_t again = 0;  // particles this still collider projected (checked below)
         // Only the particles just queried can react: one skipped as unchanged since its last query
         // has the sample that gave no reaction then (a reaction marks every sample stale), and one
         // skipped as far has no reaction. Ascending i, so the sums add in the same order.
@@ -157,6 +158,31 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           // starting at +0 never becomes -0), so skipping them gives the same sums.
           acc.reaction.force += reaction;
           acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+          if (still && !crossed && !res.held_back) which[again++] = static_cast<std::uint32_t>(i);
+        }
+        // A still collider's projection is checked where it landed: a depth map measures distance
+        // along its axis, so near an edge the projected point can lie under another face of the
+        // part (a crate resting on the basin rim hands a particle back into the rim's side every
+        // pass). Projected again along the new sample's normal while inside, so a particle leaves
+        // a still collider's pass outside it (still colliders win, resolveCollisions).
+        for (int round = 0; round < 2 && again > 0; ++round) {
+          query.run(positions, which, again, end_samples);
+          std::uint32_t still_inside = 0;
+          for (std::uint32_t w = 0; w < again; ++w) {
+            const std::size_t i = which[w];
+            const ColliderSample& s = end_samples[i];
+            if (!s.valid || s.distance >= 0.0f) continue;
+            const glm::vec3 vc = colliderVelocityAt(pose, positions[i]);
+            const glm::vec3 velocity = collisionResponse(velocities[i] - vc, s.normal, collider.material) + vc;
+            const glm::vec3 reaction = -mass * (velocity - velocities[i]) / dt;
+            positions[i] += s.normal * (skin - s.distance);
+            velocities[i] = velocity;
+            acc.depth = std::max(acc.depth, -s.distance);
+            acc.reaction.force += reaction;
+            acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+            which[still_inside++] = static_cast<std::uint32_t>(i);
+          }
+          again = still_inside;
         }
       },
       [](Hits a, const Hits& b) {
