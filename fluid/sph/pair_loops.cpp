@@ -355,24 +355,33 @@ FLUID_AVX2 inline __m256 hsum8x8(const __m256* v) {
   return _mm256_permutevar8x32_ps(s, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7));
 }
 
-// The density pass of a range, eight particles per group (a short last group gets zero
-// accumulators for its missing particles, which are not stored).
+// The per-particle sums of a group of eight, particles g .. g + m - 1 (m <= 8): lane(i, one) leaves
+// particle i's Q accumulators in one, a short group's missing particles get zero accumulators, and
+// t[q][p] is hsum8 of particle g + p's q-th accumulator (hsum8x8's tree, the same adds as hsum8).
+template <int Q, class Lane>
+FLUID_AVX2 inline void groupSums(std::uint32_t g, std::uint32_t m, const Lane& lane, float (&t)[Q][kLanes]) {
+  __m256 acc[Q][kLanes];
+  for (std::uint32_t p = 0; p < kLanes; ++p) {
+    __m256 one[Q];
+    if (p < m)
+      lane(g + p, one);
+    else
+      for (int q = 0; q < Q; ++q) one[q] = _mm256_setzero_ps();
+    for (int q = 0; q < Q; ++q) acc[q][p] = one[q];
+  }
+  for (int q = 0; q < Q; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+}
+
+// The density pass of a range, eight particles per group (missing particles are not stored).
 FLUID_AVX2 void densityRangeAvx2(const DensityConsts& c, const glm::vec4* positions, const std::uint32_t* id,
                                  const std::uint32_t* nbr, const std::uint32_t* b, const std::uint32_t* e,
                                  std::uint32_t i0, std::uint32_t i1, const PairBlocks& out, DensitySums* sums) {
+  const auto lane = [&](std::uint32_t i, __m256* one)
+                        FLUID_AVX2 { densityAvx2(c, positions, id, nbr, b[i], e[i], i, out, one); };
   for (std::uint32_t g = i0; g < i1; g += kLanes) {
     const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
-    __m256 acc[5][kLanes];
-    for (std::uint32_t p = 0; p < kLanes; ++p) {
-      __m256 one[5];
-      if (p < m)
-        densityAvx2(c, positions, id, nbr, b[g + p], e[g + p], g + p, out, one);
-      else
-        one[0] = one[1] = one[2] = one[3] = one[4] = _mm256_setzero_ps();
-      for (int q = 0; q < 5; ++q) acc[q][p] = one[q];
-    }
     alignas(32) float t[5][kLanes];
-    for (int q = 0; q < 5; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    groupSums(g, m, lane, t);
     for (std::uint32_t p = 0; p < m; ++p) {
       DensitySums& out_sums = sums[g - i0 + p];
       out_sums.w = t[0][p];
@@ -385,19 +394,11 @@ FLUID_AVX2 void densityRangeAvx2(const DensityConsts& c, const glm::vec4* positi
 // The viscosity sums of a range, eight particles per group (as densityRangeAvx2).
 FLUID_AVX2 void viscosityRangeAvx2(const glm::vec4* positions, const IterationArgs& a, std::uint32_t i0,
                                    std::uint32_t i1, float eps, glm::vec3* out) {
+  const auto lane = [&](std::uint32_t i, __m256* one) FLUID_AVX2 { viscosityAvx2(positions, a, i, eps, one); };
   for (std::uint32_t g = i0; g < i1; g += kLanes) {
     const std::uint32_t m = std::min<std::uint32_t>(kLanes, i1 - g);
-    __m256 acc[3][kLanes];
-    for (std::uint32_t p = 0; p < kLanes; ++p) {
-      __m256 one[3];
-      if (p < m)
-        viscosityAvx2(positions, a, g + p, eps, one);
-      else
-        one[0] = one[1] = one[2] = _mm256_setzero_ps();
-      for (int q = 0; q < 3; ++q) acc[q][p] = one[q];
-    }
     alignas(32) float t[3][kLanes];
-    for (int q = 0; q < 3; ++q) _mm256_store_ps(t[q], hsum8x8(acc[q]));
+    groupSums(g, m, lane, t);
     for (std::uint32_t p = 0; p < m; ++p) out[g - i0 + p] = glm::vec3(t[0][p], t[1][p], t[2][p]);
   }
 }
