@@ -14,11 +14,13 @@
 #include <array>
 #include <bit>
 #include <cfloat>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
+#include <string_view>
 #include <thread>
 #include <unordered_map>
 
@@ -446,6 +448,26 @@ MapSpec cubeMapSpec(glm::vec3 center, glm::vec3 half_extent, int resolution, Dep
   return c;
 }
 
+namespace {
+
+// "X:Y:Z:H" or "X:Y:Z:H:N", every field a whole number token (nothing before, between or after).
+bool parseCubeItem(std::string_view text, float& x, float& y, float& z, float& h, int& n) {
+  float* const values[4] = {&x, &y, &z, &h};
+  for (int field = 0; field < 5; ++field) {
+    const std::size_t colon = text.find(':');
+    const std::string_view part = text.substr(0, colon);
+    const char* const end = part.data() + part.size();
+    const auto result =
+        field < 4 ? std::from_chars(part.data(), end, *values[field]) : std::from_chars(part.data(), end, n);
+    if (part.empty() || result.ec != std::errc() || result.ptr != end) return false;
+    if (colon == std::string_view::npos) return field >= 3;
+    text.remove_prefix(colon + 1);
+  }
+  return false;  // a sixth field
+}
+
+}  // namespace
+
 bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution, DepthMapFormat format,
                   std::vector<MapSpec>& out, std::string& error) {
   out.clear();
@@ -467,16 +489,20 @@ bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution,
       if (item == "cube-less") c.compare = DepthCompare::less;
       out.push_back(c);
     } else if (item.rfind("cube@", 0) == 0) {
-      float x, y, z, h;
-      char tail;
-      if (std::sscanf(item.c_str() + 5, "%f:%f:%f:%f%c", &x, &y, &z, &h, &tail) != 4 || !(h > 0.0f) ||
-          !std::isfinite(x + y + z + h)) {
-        error = "--maps: bad item '" + item + "' (expected cube@X:Y:Z:H with H > 0)";
+      // An optional fifth field is the cube's own resolution: the automatic map choice
+      // (coverage.cpp) sizes a cube's texels to the ortho maps' at the surface it sees, so a
+      // cube near its surface costs fewer bytes than one at the collider's resolution.
+      float x = 0.0f, y = 0.0f, z = 0.0f, h = 0.0f;
+      int n = resolution;
+      if (!parseCubeItem(std::string_view(item).substr(5), x, y, z, h, n) || !(h > 0.0f) ||
+          !std::isfinite(x + y + z + h) || n < 4 || n > 4096) {
+        error = "--maps: bad item '" + item + "' (expected cube@X:Y:Z:H or cube@X:Y:Z:H:N with H > 0, N in 4..4096)";
         return false;
       }
-      out.push_back(cubeMapSpec({x, y, z}, glm::vec3(h), resolution, DepthCompare::less));
+      out.push_back(cubeMapSpec({x, y, z}, glm::vec3(h), n, DepthCompare::less));
     } else {
-      error = "--maps: unknown item '" + item + "' (expected axes, x, y, z, cube, cube-less or cube@X:Y:Z:H)";
+      error = "--maps: unknown item '" + item +
+              "' (expected axes, x, y, z, cube, cube-less or cube@X:Y:Z:H[:N]; auto only alone, in bake-collider)";
       return false;
     }
   }

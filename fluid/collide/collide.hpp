@@ -90,6 +90,7 @@
 #include <glm/glm.hpp>
 
 #include <array>
+#include <cfloat>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -172,6 +173,13 @@ class DepthMapCollider final : public SignedDistanceShape {
   // valid = false too (it is outside and far). Returned normals are unit, collider space.
   void query(std::span<const glm::vec3> local_points, std::span<ColliderSample> out) const override;
   ColliderSample sample(glm::vec3 local_point) const;
+
+  // Which vote decides sample(p): a map's own vote (eq. (1) or the §4.3 cube distance), a
+  // margin-ring vote (MapSpec::margin: a guess from the nearest silhouette point, taken only where
+  // no map sees the point outside), or none (no finite answer). The coverage check (coverage.hpp)
+  // holds ring answers to a stricter standard.
+  enum class Decider { map, ring, none };
+  Decider decider(glm::vec3 local_point) const;
 
   const std::vector<DepthMap>& maps() const { return maps_; }
   int normalResolution() const { return normal_resolution_; }
@@ -277,6 +285,9 @@ std::vector<MapSpec> defaultMapSpecs(const Bounds& bounds, int resolution,
 //   "cube"          a GREATER depth cube at the bounds centre over the padded bounds
 //   "cube-less"     a LESS depth cube at the bounds centre
 //   "cube@X:Y:Z:H"  a LESS depth cube centred at (X,Y,Z) with half size H (concave regions)
+//   "cube@X:Y:Z:H:N" the same with its own resolution N (4..4096) instead of `resolution`
+// ("auto", the bake-collider default, is resolved by chooseConcaveCubes in coverage.hpp first: it
+// needs the mesh, not only its bounds.)
 // Error names the bad item.
 bool parseMapSpec(const std::string& spec, const Bounds& bounds, int resolution, DepthMapFormat format,
                   std::vector<MapSpec>& out, std::string& error);
@@ -435,6 +446,15 @@ class MeshDistance final : public SignedDistanceShape {
   ColliderSample sample(glm::vec3 p) const;
   // Brute force over all triangles (no BVH), for checking the BVH and for the benchmark.
   ColliderSample sampleBruteForce(glm::vec3 p) const;
+  // The first surface crossing of the ray origin + t·dir (t > 0, in units of |dir|): its t, or
+  // +inf when the ray misses. What a depth cube centred at `origin` records along that ray (§4.3);
+  // fluid/collide/coverage.cpp predicts the votes of a candidate cube with it.
+  float firstHit(glm::vec3 origin, glm::vec3 dir) const;
+  // Unsigned distance to the nearest triangle, or `limit` when none is nearer (the search prunes
+  // at the limit, so far points cost little; no inside test).
+  float unsignedDistance(glm::vec3 p, float limit = FLT_MAX) const;
+  // Bytes the BVH and its triangles take (the exact fallback's memory, docs/collide.md).
+  std::size_t bytes() const { return (a_.size() * 3) * sizeof(glm::vec3) + nodes_.size() * sizeof(Node); }
 
  private:
   struct Node {
@@ -443,7 +463,8 @@ class MeshDistance final : public SignedDistanceShape {
   };
   std::vector<glm::vec3> a_, b_, c_;  // triangles (degenerate ones kept: they still bound)
   std::vector<Node> nodes_;
-  float closest(glm::vec3 p, glm::vec3& closest_point) const;
+  // Squared distance to the nearest triangle (closest_point set) when it is below `best`, else `best`.
+  float closest(glm::vec3 p, glm::vec3& closest_point, float best = FLT_MAX) const;
   int crossings(glm::vec3 origin, glm::vec3 dir) const;
   bool inside(glm::vec3 p) const;
 };

@@ -370,6 +370,17 @@ ColliderSample DepthMapCollider::sample(glm::vec3 p) const {
   return finish(main, ring, normal_table_, normal_resolution_);
 }
 
+DepthMapCollider::Decider DepthMapCollider::decider(glm::vec3 p) const {
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return Decider::none;
+  Winner main, ring;
+  OrthoSpot ortho_spot;
+  CubeSpot cube_spot;
+  votesOverBlock(&main, &ring, maps_, vote_words_, &p, 1, &ortho_spot, &cube_spot);
+  const Winner& w = decisive(main, ring);
+  if (winningTexel(w) == nullptr) return Decider::none;
+  return &w == &ring ? Decider::ring : Decider::map;
+}
+
 // Batch form of sample(), bit-identical to it: blocks of points, each map's votes cast over the
 // whole block before the next map's (every point still sees the maps in order, so ties go to the
 // same map), and the format switch and the map's constants are paid once per block, not per point.

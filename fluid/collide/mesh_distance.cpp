@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace fluid {
@@ -74,6 +75,34 @@ bool rayHitsTriangle(glm::vec3 of, glm::vec3 df, glm::vec3 af, glm::vec3 bf, glm
   return glm::dot(e2, qv) * inv > 0.0;
 }
 
+// The ray parameter t > 0 of the hit of (o, d) with the triangle, or +inf (double precision).
+double rayTriangleT(glm::vec3 of, glm::vec3 df, glm::vec3 af, glm::vec3 bf, glm::vec3 cf) {
+  const glm::dvec3 o(of), d(df), a(af), b(bf), c(cf);
+  const glm::dvec3 e1 = b - a, e2 = c - a;
+  const glm::dvec3 pv = glm::cross(d, e2);
+  const double det = glm::dot(e1, pv);
+  constexpr double kMiss = std::numeric_limits<double>::infinity();
+  if (det == 0.0) return kMiss;
+  const double inv = 1.0 / det;
+  const glm::dvec3 tv = o - a;
+  const double u = glm::dot(tv, pv) * inv;
+  if (u < 0.0 || u > 1.0) return kMiss;
+  const glm::dvec3 qv = glm::cross(tv, e1);
+  const double v = glm::dot(d, qv) * inv;
+  if (v < 0.0 || u + v > 1.0) return kMiss;
+  const double t = glm::dot(e2, qv) * inv;
+  return t > 0.0 ? t : kMiss;
+}
+
+// Entry parameter of the ray into the box (0 when it starts inside), +inf when it misses.
+float rayBoxEntry(glm::vec3 o, glm::vec3 inv_dir, glm::vec3 lo, glm::vec3 hi) {
+  const glm::vec3 t0 = (lo - o) * inv_dir, t1 = (hi - o) * inv_dir;
+  const glm::vec3 tmin = glm::min(t0, t1), tmax = glm::max(t0, t1);
+  const float enter = std::max({tmin.x, tmin.y, tmin.z, 0.0f});
+  const float leave = std::min({tmax.x, tmax.y, tmax.z});
+  return enter <= leave ? enter : std::numeric_limits<float>::infinity();
+}
+
 }  // namespace
 
 MeshDistance::MeshDistance(const MeshView& mesh) {
@@ -139,8 +168,7 @@ MeshDistance::MeshDistance(const MeshView& mesh) {
   }
 }
 
-float MeshDistance::closest(glm::vec3 p, glm::vec3& best_point) const {
-  float best = FLT_MAX;
+float MeshDistance::closest(glm::vec3 p, glm::vec3& best_point, float best) const {
   if (nodes_.empty()) return best;
   std::uint32_t stack[64];
   int top = 0;
@@ -194,6 +222,27 @@ int MeshDistance::crossings(glm::vec3 o, glm::vec3 d) const {
   return hits;
 }
 
+float MeshDistance::firstHit(glm::vec3 origin, glm::vec3 dir) const {
+  double best = std::numeric_limits<double>::infinity();
+  if (nodes_.empty() || !(glm::dot(dir, dir) > 0.0f)) return static_cast<float>(best);
+  const glm::vec3 inv = 1.0f / dir;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (!(rayBoxEntry(origin, inv, node.lo, node.hi) <= best)) continue;
+    if (node.count > 0) {
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
+        best = std::min(best, rayTriangleT(origin, dir, a_[k], b_[k], c_[k]));
+      continue;
+    }
+    stack[top++] = node.first;
+    stack[top++] = node.first + 1;
+  }
+  return static_cast<float>(best);
+}
+
 bool MeshDistance::inside(glm::vec3 p) const {
   // Directions with no simple rational relation to mesh axes.
   static constexpr glm::vec3 kDirs[3] = {{0.5773503f, 0.5773503f, 0.5773503f},
@@ -214,6 +263,13 @@ ColliderSample MeshDistance::sample(glm::vec3 p) const {
   s.distance = in ? -d : d;
   if (d > 0.0f) s.normal = (in ? q - p : p - q) / d;  // outward direction of the distance gradient
   return s;
+}
+
+float MeshDistance::unsignedDistance(glm::vec3 p, float limit) const {
+  glm::vec3 q(0.0f);
+  if (!(limit > 0.0f)) return 0.0f;
+  const float limit2 = limit < 1e18f ? limit * limit : FLT_MAX;
+  return std::sqrt(std::min(closest(p, q, limit2), limit2));
 }
 
 ColliderSample MeshDistance::sampleBruteForce(glm::vec3 p) const {

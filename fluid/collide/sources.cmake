@@ -7,4 +7,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/collider_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_distance.cpp
   ${CMAKE_CURRENT_LIST_DIR}/reach_grid.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/coverage.cpp
 )

@@ -1,5 +1,6 @@
 #include "collide_meshes.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -76,6 +77,101 @@ Mesh makeLathe(const std::vector<glm::vec2>& profile, int segments) {
       if (c != d) m.indices.insert(m.indices.end(), {a, c, d});
     }
   }
+  return m;
+}
+
+Mesh makeLatheLoop(const std::vector<glm::vec2>& profile, int segments) {
+  Mesh m;
+  const auto rows = static_cast<std::uint32_t>(profile.size());
+  for (const glm::vec2& p : profile) {
+    for (int s = 0; s < segments; ++s) {
+      const float a = 2.0f * kPi * static_cast<float>(s) / static_cast<float>(segments);
+      m.positions.push_back({p.x * std::cos(a), p.x * std::sin(a), p.y});
+    }
+  }
+  auto at = [&](std::uint32_t row, int s) {
+    return (row % rows) * static_cast<std::uint32_t>(segments) + static_cast<std::uint32_t>(s % segments);
+  };
+  for (std::uint32_t r = 0; r < rows; ++r) {
+    for (int s = 0; s < segments; ++s) {
+      const std::uint32_t a = at(r, s), b = at(r, s + 1), c = at(r + 1, s + 1), d = at(r + 1, s);
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  return m;
+}
+
+void orientOutward(Mesh& m) {
+  double volume6 = 0.0;
+  for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const glm::dvec3 a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]],
+                     c = m.positions[m.indices[t + 2]];
+    volume6 += glm::dot(a, glm::cross(b, c));
+  }
+  if (volume6 >= 0.0) return;
+  for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) std::swap(m.indices[t + 1], m.indices[t + 2]);
+}
+
+void append(Mesh& m, const Mesh& part) {
+  const auto base = static_cast<std::uint32_t>(m.positions.size());
+  m.positions.insert(m.positions.end(), part.positions.begin(), part.positions.end());
+  for (std::uint32_t i : part.indices) m.indices.push_back(base + i);
+}
+
+Mesh makeBowl(int segments) {
+  // Outer sphere from the bottom pole up to z = 0.2, the rim, the inner sphere back down.
+  const float outer = 0.5f, inner = 0.45f, rim = 0.2f;
+  const int steps = std::max(4, segments / 4);
+  std::vector<glm::vec2> profile;
+  const float outer_top = std::acos(-rim / outer), inner_top = std::acos(-rim / inner);
+  for (int i = 0; i <= steps; ++i) {
+    const float t = outer_top * static_cast<float>(i) / static_cast<float>(steps);
+    profile.push_back({outer * std::sin(t), -outer * std::cos(t)});
+  }
+  for (int i = steps; i >= 0; --i) {
+    const float t = inner_top * static_cast<float>(i) / static_cast<float>(steps);
+    profile.push_back({inner * std::sin(t), -inner * std::cos(t)});
+  }
+  profile.front().x = 0.0f;
+  profile.back().x = 0.0f;
+  Mesh m = makeLathe(profile, segments);
+  orientOutward(m);
+  return m;
+}
+
+Mesh makeMug(int segments) {
+  Mesh m = makeLathe({{0.0f, 0.0f}, {0.4f, 0.0f}, {0.4f, 1.0f}, {0.35f, 1.0f}, {0.35f, 0.1f}, {0.0f, 0.1f}}, segments);
+  orientOutward(m);
+  // The handle: a torus about z turned into the x-z plane (a rotation about x, so its winding
+  // stays outward), beside the wall.
+  Mesh handle = makeTorus(0.25f, 0.05f, segments, std::max(8, segments / 4));
+  for (glm::vec3& p : handle.positions) p = glm::vec3(p.x + 0.73f, -p.z, p.y + 0.5f);
+  orientOutward(handle);
+  append(m, handle);
+  return m;
+}
+
+Mesh makePipe(int segments) {
+  Mesh m = makeLatheLoop({{0.25f, -1.0f}, {0.3f, -1.0f}, {0.3f, 1.0f}, {0.25f, 1.0f}}, segments);
+  orientOutward(m);
+  return m;
+}
+
+Mesh makeDish(int segments) {
+  const int steps = std::max(4, segments / 4);
+  std::vector<glm::vec2> profile;
+  // Underside out to the rim, then the dished top back to the axis: one paraboloid 0.015 apart.
+  auto dished = [](float r) { return 0.06f * (r / 0.5f) * (r / 0.5f); };
+  for (int i = 0; i <= steps; ++i) {
+    const float r = 0.5f * static_cast<float>(i) / static_cast<float>(steps);
+    profile.push_back({r, dished(r)});
+  }
+  for (int i = steps; i >= 0; --i) {
+    const float r = 0.5f * static_cast<float>(i) / static_cast<float>(steps);
+    profile.push_back({r, 0.015f + dished(r)});
+  }
+  Mesh m = makeLathe(profile, segments);
+  orientOutward(m);
   return m;
 }
 
