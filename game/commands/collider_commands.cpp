@@ -4,11 +4,13 @@
 #include "game/commands.hpp"
 
 #include "fluid/collide/collide.hpp"
+#include "fluid/collide/coverage.hpp"
 #include "fluid/collide/mesh_checks.hpp"
 #include "fluid/core/fnv1a.hpp"
 #include "fluid/io/particle_io.hpp"
 #include "game/commands/cli_parse.hpp"
 #include "game/commands/collider_model.hpp"
+#include "game/world/sph_fluid.hpp"
 
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/postprocess.h>
@@ -334,15 +336,87 @@ int bakeLevelColliders(const std::string& content, const std::string& level, boo
   return 0;
 }
 
+// What the coverage check of a bake found (fluid/collide/coverage.hpp).
+struct CoverageOutcome {
+  std::string error;
+  std::string maps;  // --maps auto: the maps chosen ("axes,cube@...")
+  std::size_t cubes = 0;
+  fluid::CoverageReport before, after;  // the axis maps alone (auto), and the collider written
+  float spacing = 0.0f;
+  glm::vec3 first_point{0.0f};  // the first point not covered, its exact distance and the answer
+  float first_exact = 0.0f;
+  std::string first_answer;
+};
+
+// Measures the baked maps over the points within `reach` of the surface (exact mesh distance) and,
+// with auto_maps, adds the concave-region cubes to `baked`.
+bool coverBake(const fluid::MeshView& view, const std::vector<fluid::MapSpec>& specs, float reach, bool auto_maps,
+               const fluid::ConcaveCubesDesc& desc, std::vector<fluid::DepthMap>& baked, CoverageOutcome& out) {
+  const fluid::MeshDistance exact(view);
+  fluid::CoverageDesc cd;
+  cd.reach = reach;
+  cd.threads = desc.threads;
+  const fluid::NearSurfaceSamples samples = fluid::nearSurfaceSamples(exact, fluid::meshBounds(view), cd);
+  out.spacing = samples.spacing;
+  if (auto_maps) {
+    fluid::ConcaveCubesResult chosen = fluid::chooseConcaveCubes(view, exact, samples, specs, baked, desc);
+    if (!chosen.status.ok()) {
+      out.error = chosen.status.error;
+      return false;
+    }
+    baked.insert(baked.end(), chosen.maps.begin(), chosen.maps.end());
+    out.maps = "axes" + std::string(chosen.items.empty() ? "" : ",") + chosen.items;
+    out.cubes = chosen.cubes.size();
+    out.before = std::move(chosen.before);
+    out.after = std::move(chosen.after);
+  } else {
+    const fluid::DepthMapCollider collider(baked, desc.normal_resolution);
+    out.after = fluid::measureCoverage(collider, samples, fluid::coverageTolerance(specs), desc.threads);
+  }
+  if (out.after.uncovered() > 0) {
+    const std::uint32_t k = out.after.first_uncovered;
+    out.first_point = samples.points[k];
+    out.first_exact = samples.exact[k].distance;
+    const fluid::ColliderSample got = fluid::DepthMapCollider(baked, desc.normal_resolution).sample(out.first_point);
+    char text[64];
+    std::snprintf(text, sizeof text, "%g", static_cast<double>(got.distance));
+    out.first_answer = got.valid ? text : "inf (beyond reach)";
+  }
+  return true;
+}
+
+void printCoverage(const std::string& maps, bool auto_maps, float reach, const CoverageOutcome& c) {
+  if (auto_maps) {
+    std::printf("bake-collider: maps %s (auto: the six axis maps%s; they alone covered %.2f %%, measured %.2f %%)\n",
+                maps.c_str(),
+                c.cubes == 0
+                    ? ", no concave region needed a cube"
+                    : (" and " + std::to_string(c.cubes) + " concave-region cube" + (c.cubes > 1 ? "s" : "")).c_str(),
+                100.0 * c.before.coveredShare(), 100.0 * c.before.measuredShare());
+  } else {
+    std::printf("bake-collider: maps %s\n", maps.c_str());
+  }
+  const fluid::CoverageReport& r = c.after;
+  std::printf(
+      "bake-collider: %zu points within --reach %g of the surface (lattice %g): %.2f %% covered (finite, right "
+      "sign; %zu beyond reach, %zu wrong sign), %.2f %% measured (%zu margin-ring guesses, %zu read beyond "
+      "reach); mean |error| %.3g, max %.3g\n",
+      r.near, static_cast<double>(reach), static_cast<double>(c.spacing), 100.0 * r.coveredShare(), r.beyond_reach,
+      r.wrong_sign, 100.0 * r.measuredShare(), r.ring_guess, r.off_distance, r.mean_abs_error, r.max_abs_error);
+}
+
 }  // namespace
 
 int bakeColliderCommand(const Args& args) {
   CLI::App app{"Bake depth-map colliders (Kolb et al. 2004 §4) from a model (OBJ and anything assimp reads).",
                "fluiddemo bake-collider"};
-  std::string model, out_path, maps = "axes", format_name = "front-back16", level, content = "content";
-  int resolution = 256, normal_resolution = 256, threads = 0;
-  float margin = 0.0f;
-  bool force = false, allow_open = false, check = false;
+  std::string model, out_path, maps = "auto", format_name = "front-back16", level, content = "content";
+  int resolution = 256, normal_resolution = 256, threads = 0, max_cubes = 8;
+  // The reach a collider must answer within: the support H = 4r of the game's SPH particles
+  // (fluid/sph/sph.hpp), r the sph_fluid effect's particle_radius (0.04 m in the fountain scene).
+  float reach = 4.0f * SphFluidParams{}.particle_radius;
+  float margin = -1.0f;  // -1: --reach with --maps auto, 0 with a list
+  bool force = false, allow_open = false, check = false, strict = false;
   app.add_option("MODEL", model, "model file (OBJ, glTF, PLY, ...): a closed surface");
   app.add_option("--out", out_path, "collider file to write (with MODEL)");
   app.add_option("--level", level,
@@ -351,12 +425,23 @@ int bakeColliderCommand(const Args& args) {
   app.add_option("--content", content, "content directory of --level")->capture_default_str();
   app.add_flag("--check", check, "with --level: bake nothing, fail when a collider file is missing or stale");
   app.add_option("--margin", margin,
-                 "silhouette margin of the ortho maps (model units): points this close outside get a finite distance")
+                 "silhouette margin of the ortho maps (model units): points this close outside get a finite distance "
+                 "(default: --reach with --maps auto, else 0)");
+  app.add_option("--reach", reach,
+                 "the near-surface band (model units) every point of which should get a finite distance of the right "
+                 "sign: the SPH support 4r of the game's particles by default")
       ->capture_default_str();
   app.add_option("--maps", maps,
-                 "comma-separated maps: axes | x | y | z (front-back pairs along an axis), cube (GREATER cube at the "
-                 "centre), cube-less, cube@X:Y:Z:H (LESS cube for a concave region)")
+                 "auto (the six axis maps, then a LESS depth cube for each concave region they leave unmeasured "
+                 "within --reach, Kolb et al. 2004 §4.1), or comma-separated maps: axes | x | y | z (front-back pairs "
+                 "along an axis), cube (GREATER cube at the centre), cube-less, cube@X:Y:Z:H[:N] (LESS cube for a "
+                 "concave region, N its own resolution)")
       ->capture_default_str();
+  app.add_option("--max-cubes", max_cubes, "with --maps auto: at most this many concave-region cubes (0..64)")
+      ->capture_default_str();
+  app.add_flag("--strict", strict,
+               "fail (exit 1, nothing written) when a point within --reach of the surface gets no finite distance or "
+               "the wrong sign");
   app.add_option("--res", resolution, "texels per side of every map (4..4096)")->capture_default_str();
   app.add_option("--format", format_name, "ortho map format: float | fixed8 | front-back16 (cubes are always cube8)")
       ->capture_default_str();
@@ -387,6 +472,23 @@ int bakeColliderCommand(const Args& args) {
     std::fprintf(stderr, "bake-collider: --res %d out of range 4..4096\n", resolution);
     return 2;
   }
+  if (!(reach > 0.0f && reach <= 1e5f)) {
+    std::fprintf(stderr, "bake-collider: --reach %g must be positive and at most 1e5 (model units)\n",
+                 static_cast<double>(reach));
+    return 2;
+  }
+  if (margin < 0.0f && margin != -1.0f) {
+    std::fprintf(stderr, "bake-collider: --margin %g must be >= 0 (model units)\n", static_cast<double>(margin));
+    return 2;
+  }
+  if (max_cubes < 0 || max_cubes > 64) {
+    std::fprintf(stderr, "bake-collider: --max-cubes %d out of range 0..64\n", max_cubes);
+    return 2;
+  }
+  const bool auto_maps = maps == "auto";
+  // The default bake answers every point within reach, convex rims included: its ortho maps get a
+  // margin ring as wide as the reach. An explicit --maps list keeps the margin it is given (0).
+  if (margin == -1.0f) margin = auto_maps ? reach : 0.0f;
   if (!force && std::filesystem::exists(out_path)) {
     std::fprintf(stderr, "bake-collider: %s already exists (use --force to replace it)\n", out_path.c_str());
     return 1;
@@ -407,7 +509,7 @@ int bakeColliderCommand(const Args& args) {
   }
   const fluid::MeshView view{mesh.positions, mesh.indices};
   std::vector<fluid::MapSpec> specs;
-  const fluid::BakeRecipe recipe{maps, resolution, format, normal_resolution, margin};
+  fluid::BakeRecipe recipe{auto_maps ? "axes" : maps, resolution, format, normal_resolution, margin};
   if (!fluid::recipeMapSpecs(recipe, fluid::meshBounds(view), specs, error)) {
     std::fprintf(stderr, "bake-collider: %s\n", error.c_str());
     return 2;
@@ -427,6 +529,27 @@ int bakeColliderCommand(const Args& args) {
   }
   if (!status.ok()) {
     std::fprintf(stderr, "bake-collider: %s: %s\n", model.c_str(), status.error.c_str());
+    return 1;
+  }
+  // Near-surface coverage (coverage.hpp), and with --maps auto the concave-region cubes (§4.1).
+  CoverageOutcome coverage;
+  if (!coverBake(view, specs, reach, auto_maps, {0.0f, resolution, max_cubes, normal_resolution, threads}, baked,
+                 coverage)) {
+    std::fprintf(stderr, "bake-collider: %s: %s\n", model.c_str(), coverage.error.c_str());
+    return 1;
+  }
+  if (auto_maps) recipe.maps = coverage.maps;
+  printCoverage(recipe.maps, auto_maps, reach, coverage);
+  if (strict && coverage.after.uncovered() > 0) {
+    const glm::vec3 p = coverage.first_point;
+    std::fprintf(stderr,
+                 "bake-collider: --strict: %s: %zu of %zu points within --reach %g of the surface are not covered (%zu "
+                 "beyond reach, %zu with the wrong sign), the first at (%g, %g, %g), exact distance %g, answered %s; "
+                 "nothing written (add maps with --maps, e.g. cube@X:Y:Z:H in the cavity, or leave out --strict)\n",
+                 model.c_str(), coverage.after.uncovered(), coverage.after.near, static_cast<double>(reach),
+                 coverage.after.beyond_reach, coverage.after.wrong_sign, static_cast<double>(p.x),
+                 static_cast<double>(p.y), static_cast<double>(p.z), static_cast<double>(coverage.first_exact),
+                 coverage.first_answer.c_str());
     return 1;
   }
   const fluid::DepthMapCollider collider(std::move(baked), normal_resolution);

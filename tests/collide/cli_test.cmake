@@ -79,6 +79,40 @@ run(0 ${EXE} bake-collider ${SOURCE}/content/models/statue.obj --out ${WORK}/sta
 file(WRITE ${WORK}/pedestal.xyz "0 0.3 0\n0.3 0.25 0.1\n")
 run(0 ${EXE} query-collider ${WORK}/statue.fdm --points ${WORK}/pedestal.xyz)
 expect_match("${OUT}" "^-0\\.[0-9]+ [^\n]+\n-0\\.[0-9]+ [^\n]+\n$")
+# Issue 32: the default bake (--maps auto) chooses its maps from the model and prints them and the
+# covered share; in a torus's hole, 1 cm from the inner wall, the answer is about 0.01, not inf.
+run(0 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/torus.fdm --res 64 --strict)
+expect_match("${OUT}" "bake-collider: maps axes,cube@[-0-9.e]+:[-0-9.e]+:[-0-9.e]+:[0-9.e]+:[0-9]+ \\(auto: the six axis maps and 1 concave-region cube")
+expect_match("${OUT}" "[0-9]+ points within --reach 0.16 of the surface [^\n]*: 100.00 % covered \\(finite, right sign; 0 beyond reach, 0 wrong sign\\), [0-9.]+ % measured")
+file(WRITE ${WORK}/hole.xyz "0.39 0 0\n0.3 0 0\n")
+run(0 ${EXE} query-collider ${WORK}/torus.fdm --points ${WORK}/hole.xyz)
+expect_match("${OUT}" "^0\\.01[0-9]+ [^\n]+\n0\\.10[0-9]+ [^\n]+\n$")
+# --strict refuses a bake that leaves a near point without a finite distance of the right sign, and
+# writes nothing: the axis maps alone without a margin (the old default) leave the hole and the
+# convex rims beyond reach.
+run(1 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/strict.fdm --res 64 --maps axes --margin 0 --strict)
+expect_match("${OUT}" "bake-collider: maps axes\n.*[0-9.]+ % covered \\(finite, right sign; [1-9][0-9]* beyond reach")
+expect_match("${ERR}" "--strict: .*torus.obj: [0-9]+ of [0-9]+ points within --reach 0.16 of the surface are not covered \\([0-9]+ beyond reach, [0-9]+ with the wrong sign\\), the first at \\([^)]+\\), exact distance [0-9.e-]+, answered inf \\(beyond reach\\); nothing written")
+if(EXISTS ${WORK}/strict.fdm)
+  message(FATAL_ERROR "a --strict failure wrote its output")
+endif()
+run(0 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/loose.fdm --res 64 --maps axes --margin 0)
+# Bad values name the option and the value.
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --reach -1)
+expect_match("${ERR}" "--reach -1 must be positive")
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --reach nan)
+expect_match("${ERR}" "--reach nan must be positive")
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --margin -2)
+expect_match("${ERR}" "--margin -2 must be >= 0")
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --max-cubes 99)
+expect_match("${ERR}" "--max-cubes 99 out of range 0..64")
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --maps axes,auto)
+expect_match("${ERR}" "unknown item 'auto' .*auto only alone")
+run(2 ${EXE} bake-collider ${DATA}/torus.obj --out ${WORK}/b.fdm --maps axes,cube@0:0:0:1:3)
+expect_match("${ERR}" "bad item 'cube@0:0:0:1:3'")
+run(0 ${EXE} bake-collider --help)
+expect_match("${OUT}" "--strict")
+expect_match("${OUT}" "--reach")
 # A level's colliders (content/colliders/LEVEL.colliders): baked when missing, left alone when
 # fresh, and a changed model is caught by --check (naming the file) and re-baked by --level.
 file(MAKE_DIRECTORY ${WORK}/content/models ${WORK}/content/colliders)
