@@ -336,6 +336,33 @@ int bakeLevelColliders(const std::string& content, const std::string& level, boo
   return 0;
 }
 
+// One map at a time so a terminal sees how far the bake is; each map is baked exactly as in one
+// call (the maps do not depend on each other).
+fluid::BakeStatus bakeWithProgress(const fluid::MeshView& view, const std::vector<fluid::MapSpec>& specs,
+                                   const fluid::BakeDesc& desc, std::vector<fluid::DepthMap>& baked) {
+  fluid::BakeStatus status;
+  BakeProgress progress(specs.size());
+  for (std::size_t k = 0; k < specs.size() && status.ok(); ++k) {
+    progress.map(k, specs[k]);
+    fluid::DepthMapCollider one;
+    status = fluid::bakeDepthMaps(view, std::span(&specs[k], 1), desc, one);
+    if (status.ok()) baked.push_back(one.maps().front());
+  }
+  return status;
+}
+
+// The model's file name and hash and the recipe, so that a cache can tell when a file no longer
+// matches its model.
+fluid::ColliderSource sourceRecord(const std::string& model, const fluid::BakeRecipe& recipe) {
+  fluid::ColliderSource source;
+  source.model = std::filesystem::path(model).filename().string();
+  source.recipe = fluid::bakeRecipeText(recipe);
+  std::ifstream in(model, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  source.model_fnv1a64 = fluid::fnv1a64(bytes.data(), bytes.size());
+  return source;
+}
+
 // What the coverage check of a bake found (fluid/collide/coverage.hpp).
 struct CoverageOutcome {
   std::string error;
@@ -514,19 +541,8 @@ int bakeColliderCommand(const Args& args) {
     std::fprintf(stderr, "bake-collider: %s\n", error.c_str());
     return 2;
   }
-  // One map at a time so a terminal sees how far the bake is; each map is baked exactly as in
-  // one call (the maps do not depend on each other).
   std::vector<fluid::DepthMap> baked;
-  fluid::BakeStatus status;
-  {
-    BakeProgress progress(specs.size());
-    for (std::size_t k = 0; k < specs.size() && status.ok(); ++k) {
-      progress.map(k, specs[k]);
-      fluid::DepthMapCollider one;
-      status = fluid::bakeDepthMaps(view, std::span(&specs[k], 1), {normal_resolution, threads}, one);
-      if (status.ok()) baked.push_back(one.maps().front());
-    }
-  }
+  const fluid::BakeStatus status = bakeWithProgress(view, specs, {normal_resolution, threads}, baked);
   if (!status.ok()) {
     std::fprintf(stderr, "bake-collider: %s: %s\n", model.c_str(), status.error.c_str());
     return 1;
@@ -555,14 +571,7 @@ int bakeColliderCommand(const Args& args) {
   const fluid::DepthMapCollider collider(std::move(baked), normal_resolution);
   // The source record: the model's hash and the recipe, so a cache (fluid::loadOrBakeCollider)
   // can tell when this file no longer matches its model.
-  fluid::ColliderSource source;
-  source.model = std::filesystem::path(model).filename().string();
-  source.recipe = fluid::bakeRecipeText(recipe);
-  {
-    std::ifstream in(model, std::ios::binary);
-    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    source.model_fnv1a64 = fluid::fnv1a64(bytes.data(), bytes.size());
-  }
+  const fluid::ColliderSource source = sourceRecord(model, recipe);
   const fluid::FileStatus saved =
       fluid::saveCollider(out_path, collider, force ? fluid::Overwrite::replace : fluid::Overwrite::refuse, source);
   if (!saved.ok()) {

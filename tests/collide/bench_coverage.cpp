@@ -181,7 +181,12 @@ int main(int argc, char** argv) {
     std::vector<glm::vec3> in_fallback;
     for (const glm::vec3& p : measure.points)
       if (fallback.flagged(p)) in_fallback.push_back(p);
-    const std::string auto_maps = "axes" + std::string(cubes.items.empty() ? "" : ",") + cubes.items;
+    // The cubes by their resolutions (the items themselves are long; bake-collider prints them).
+    std::string auto_maps =
+        "axes + " + std::to_string(cubes.cubes.size()) + " cube" + (cubes.cubes.size() == 1 ? "" : "s");
+    for (std::size_t k = 0; k < cubes.cubes.size(); ++k)
+      auto_maps += (k == 0 ? " (" : ", ") + std::to_string(cubes.cubes[k].resolution) + "²" +
+                   (k + 1 == cubes.cubes.size() ? ")" : "");
     const glm::vec3 padded = bounds.hi - bounds.lo + glm::vec3(2.0f * reach);
     row(m.name, "axes", "axes", r_axes, axes.bytes(), nsPerQuery(axes, measure.points), axes_ms);
     row(m.name, "auto (cubes)", auto_maps, r_auto, with_cubes.bytes(), nsPerQuery(with_cubes, measure.points),
