@@ -3,7 +3,8 @@
 // Every scene is in metres with gravity 9.81 m/s^2 along -y, inside a closed box of six planes.
 //
 //   dambreak      column of width a, height height_ratio*a, thickness depth, against the wall
-//                 x = 0, released at t = 0 into a box reaching length_ratio*a along +x.
+//                 x = 0, released at t = 0 into a box reaching length_ratio*a along +x; water
+//                 (its viscosity key defaults to 1.0e-6 m^2/s, the other scenes' to 0.01).
 //   column        a block of water at rest filling the bottom of a box (hydrostatic test).
 //   fountain      a nozzle at the centre of a basin shooting up; a drain in one corner of the
 //                 floor removes particles; particle budget `budget`.

@@ -33,8 +33,12 @@ std::string keyHelp() {
     text += "  " + scene + ":\n";
     for (const auto& k : keys) {
       char line[256];
-      std::snprintf(line, sizeof line, "    %-20s %-10g %s\n", k.name.c_str(), static_cast<double>(k.value),
-                    k.help.c_str());
+      char value[32];
+      if (k.value < 0.0f)  // computed from the scene (fluid::sphSceneKeys)
+        std::snprintf(value, sizeof value, "auto");
+      else
+        std::snprintf(value, sizeof value, "%g", static_cast<double>(k.value));
+      std::snprintf(line, sizeof line, "    %-20s %-10s %s\n", k.name.c_str(), value, k.help.c_str());
       text += line;
     }
   }
