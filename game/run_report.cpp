@@ -39,13 +39,14 @@ void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions&
   if (report.has_sph) {
     const fluid::SphStepTotals& t = report.sph_totals;
     const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
-    std::fprintf(out,
-                 "sph health: %llu sub-steps, density error mean %.4f %% max %.3f %%, pushed out of colliders %llu "
-                 "(deepest %.2f mm), speed clamps %llu, dt held at min %llu, dt cut to the step's end %llu, "
-                 "NaN/inf %llu; frames warned %llu\n",
-                 ull(t.steps), 100.0 * t.meanDensityError(), 100.0 * t.max_density_error, ull(t.pushed_out),
-                 1000.0 * t.max_push_depth, ull(t.speed_clamps), ull(t.dt_min_clamps), ull(t.dt_request_cuts),
-                 ull(t.nonfinite), static_cast<unsigned long long>(report.warned_frames));
+    std::fprintf(
+        out,
+        "sph health: %llu sub-steps, density error mean %.4f %% p99 %.3f %% max %.3f %%, pushed out of colliders %llu "
+        "(deepest %.2f mm), speed clamps %llu, dt held at min %llu, dt cut to the step's end %llu, "
+        "NaN/inf %llu; frames warned %llu\n",
+        ull(t.steps), 100.0 * t.meanDensityError(), 100.0 * t.p99_density_error, 100.0 * t.max_density_error,
+        ull(t.pushed_out), 1000.0 * t.max_push_depth, ull(t.speed_clamps), ull(t.dt_min_clamps), ull(t.dt_request_cuts),
+        ull(t.nonfinite), static_cast<unsigned long long>(report.warned_frames));
   }
 }
 

@@ -179,6 +179,9 @@ struct SphStepStats {
   int divergence_iterations = 0;
   float avg_density_error = 0.0f;  // mean over particles of max(0, rho/rho_0 - 1), state at step start
   float max_density_error = 0.0f;  // max over particles of the same
+  // 99th percentile over particles of the same: the max is one particle (an impact at a wall
+  // within one step, docs/sph.md "Largest compression"), the p99 the water as a whole.
+  float p99_density_error = 0.0f;
   float kinetic_energy = 0.0f;     // J, after the step
   float max_acceleration = 0.0f;   // m/s^2, largest |a| used by the time-step bound
   float step_ms = 0.0f;            // wall time
@@ -209,6 +212,7 @@ struct SphStepTotals {
   std::size_t steps = 0;
   double density_error_sum = 0.0;  // sum over steps of avg_density_error (mean = sum / steps)
   float max_density_error = 0.0f;  // max over steps of max_density_error
+  float p99_density_error = 0.0f;  // max over steps of p99_density_error (the worst step's 99th percentile)
   std::size_t pushed_out = 0;
   float max_push_depth = 0.0f;  // m
   std::size_t speed_clamps = 0;
@@ -273,6 +277,7 @@ struct SphScratch {
   std::vector<std::uint32_t> pair_offset;  // DFSPH: per neighbour pair (as grad_x), 16 j (byte offset of j's record)
   std::vector<float> factor, kappa, kappa_v, warm_kappa, density_adv, kappa_scale, boundary_volume, boundary_flux,
       boundary_product, float_tmp;
+  std::vector<float> density_error;  // per particle max(0, rho/rho_0 - 1) at the step start (the p99's selection)
   std::vector<std::uint32_t> u32_tmp;
   std::vector<std::uint32_t> sorted_keys;     // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;            // per particle: 0 when inside a sink at the start of the step

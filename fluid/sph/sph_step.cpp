@@ -8,6 +8,7 @@
 #include "fluid/sph/neighbor_step.hpp"
 #include "fluid/sph/solvers.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -153,6 +154,17 @@ void finishStep(StepContext& context, float requested) {
   stats.dt_held_at_min = context.dt_held_at_min;
 }
 
+// The 99th percentile of the step-start density errors the solver just computed (store.density).
+float densityErrorP99(const ParticleStore& store, float rest_density, std::vector<float>& errors) {
+  const std::size_t n = store.size();
+  if (n == 0) return 0.0f;
+  errors.resize(n);
+  for (std::size_t i = 0; i < n; ++i) errors[i] = std::max(0.0f, store.density[i] / rest_density - 1.0f);
+  const std::size_t k = (99 * (n - 1)) / 100;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(k), errors.end());
+  return errors[k];
+}
+
 SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* stats_out) {
   const auto t_start = Clock::now();
   SphStepStats stats;
@@ -198,6 +210,7 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
     stepWcsph(context);
   else
     stepDfsph(context);
+  stats.p99_density_error = densityErrorP99(store, params.rest_density, scratch.density_error);
   advect(context);
   storeCouplingForces(context);
   resolveCollisions(context);

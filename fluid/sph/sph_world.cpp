@@ -130,7 +130,7 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel}) v->reserve(capacity);
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
-                  &w.boundary_flux, &w.float_tmp})
+                  &w.boundary_flux, &w.float_tmp, &w.density_error})
     v->reserve(capacity);
   w.vel4.reserve(capacity);
   w.kappa4.reserve(capacity);
@@ -287,10 +287,9 @@ void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out
     return;
   }
   const float s = static_cast<float>(f);
-  par::parallelFor(tbb::blocked_range<std::size_t>(0, x.size(), kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
-                    });
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = x0[i] + s * (x[i] - x0[i]);
+  });
 }
 
 void addStepTotals(SphStepTotals& totals, const SphStepStats& step) {
@@ -298,6 +297,7 @@ void addStepTotals(SphStepTotals& totals, const SphStepStats& step) {
   if (step.dt > 0.0f) {
     totals.density_error_sum += step.avg_density_error;
     totals.max_density_error = std::max(totals.max_density_error, step.max_density_error);
+    totals.p99_density_error = std::max(totals.p99_density_error, step.p99_density_error);
   }
   totals.pushed_out += step.pushed_out;
   totals.max_push_depth = std::max(totals.max_push_depth, step.max_push_depth);
@@ -311,6 +311,7 @@ void addStepTotals(SphStepTotals& totals, const SphStepTotals& more) {
   totals.steps += more.steps;
   totals.density_error_sum += more.density_error_sum;
   totals.max_density_error = std::max(totals.max_density_error, more.max_density_error);
+  totals.p99_density_error = std::max(totals.p99_density_error, more.p99_density_error);
   totals.pushed_out += more.pushed_out;
   totals.max_push_depth = std::max(totals.max_push_depth, more.max_push_depth);
   totals.speed_clamps += more.speed_clamps;

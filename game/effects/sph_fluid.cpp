@@ -99,8 +99,8 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     const ImVec4 red(1.0f, 0.35f, 0.35f, 1.0f), plain = ImGui::GetStyleColorVec4(ImGuiCol_Text);
     const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
     ImGui::Text("sph fluid: %zu particles, %llu sub-steps this step", state.world.particles.size(), ull(t.steps));
-    ImGui::Text("  density error: mean %.3f %%  max %.2f %%", 100.0 * t.meanDensityError(),
-                100.0 * t.max_density_error);
+    ImGui::Text("  density error: mean %.3f %%  p99 %.2f %%  max %.2f %%", 100.0 * t.meanDensityError(),
+                100.0 * t.p99_density_error, 100.0 * t.max_density_error);
     const float deep = sphDeepPush(state);
     ImGui::TextColored(t.max_push_depth > deep ? red : plain,
                        "  pushed out of colliders: %llu (deepest %.1f mm; warns beyond %.1f mm)  run %llu",

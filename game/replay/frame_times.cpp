@@ -23,7 +23,8 @@ std::string frameCsvHeader() {
     line += "_ms";
   }
   line +=
-      ",particles,sprites,triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,"
+      ",particles,sprites,triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_"
+      "out,push_depth_mm,speed_clamps,"
       "dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash";
   return line;
 }
@@ -44,7 +45,7 @@ std::string frameCsvRow(const FrameRow& row) {
   line += ',' + std::to_string(row.truth.sph_steps);
   const FrameTruth& t = row.truth;
   // %.9g: a float's value survives the text round trip.
-  std::snprintf(number, sizeof number, ",%.9g,%.9g", t.density_err_mean, t.density_err_max);
+  std::snprintf(number, sizeof number, ",%.9g,%.9g,%.9g", t.density_err_mean, t.density_err_p99, t.density_err_max);
   line += number;
   line += ',' + std::to_string(t.pushed_out);
   std::snprintf(number, sizeof number, ",%.6g", t.push_depth_mm);
@@ -147,10 +148,10 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
     FrameTruth& t = row.truth;
     if (ok)
       ok = parseCell(cells[++c], t.sph_steps) && parseCell(cells[++c], t.density_err_mean) &&
-           parseCell(cells[++c], t.density_err_max) && parseCell(cells[++c], t.pushed_out) &&
-           parseCell(cells[++c], t.push_depth_mm) && parseCell(cells[++c], t.speed_clamps) &&
-           parseCell(cells[++c], t.dt_min_clamps) && parseCell(cells[++c], t.dt_request_cuts) &&
-           parseCell(cells[++c], t.nonfinite);
+           parseCell(cells[++c], t.density_err_p99) && parseCell(cells[++c], t.density_err_max) &&
+           parseCell(cells[++c], t.pushed_out) && parseCell(cells[++c], t.push_depth_mm) &&
+           parseCell(cells[++c], t.speed_clamps) && parseCell(cells[++c], t.dt_min_clamps) &&
+           parseCell(cells[++c], t.dt_request_cuts) && parseCell(cells[++c], t.nonfinite);
     if (ok) {
       int warned = 0;
       ok = parseCell(cells[++c], warned) && (warned == 0 || warned == 1);

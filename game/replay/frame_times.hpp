@@ -28,6 +28,7 @@ namespace game {
 struct FrameTruth {
   std::uint64_t sph_steps = 0;
   double density_err_mean = 0.0;  // mean over the sub-steps of the mean max(0, rho/rho_0 - 1)
+  double density_err_p99 = 0.0;  // the largest over the sub-steps of the 99th percentile over particles
   double density_err_max = 0.0;
   std::uint64_t pushed_out = 0;  // particles pushed out of colliders
   double push_depth_mm = 0.0;    // the deepest of them (mm)

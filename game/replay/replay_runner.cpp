@@ -130,8 +130,17 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
   if (const SphFluid* fluid = findState<SphFluid>(world)) {
     row.particles = fluid->world.particles.size();
     const auto& t = fluid->last_totals;  // the frame's one game step (the variable hides namespace fluid)
-    row.truth = {t.steps,        t.meanDensityError(), t.max_density_error, t.pushed_out, 1000.0 * t.max_push_depth,
-                 t.speed_clamps, t.dt_min_clamps,      t.dt_request_cuts,   t.nonfinite,  sphFluidWarns(*fluid, t)};
+    row.truth = {t.steps,
+                 t.meanDensityError(),
+                 t.p99_density_error,
+                 t.max_density_error,
+                 t.pushed_out,
+                 1000.0 * t.max_push_depth,
+                 t.speed_clamps,
+                 t.dt_min_clamps,
+                 t.dt_request_cuts,
+                 t.nonfinite,
+                 sphFluidWarns(*fluid, t)};
   }
   if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
   if (surface) {

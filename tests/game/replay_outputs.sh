@@ -24,7 +24,7 @@ import csv, struct, sys, pathlib
 work = pathlib.Path(sys.argv[1])
 rows = list(csv.reader(open(work / "f.csv")))
 want = ("frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,"
-        "triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
+        "triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
         "dt_request_cuts,nonfinite,warned,state_hash").split(",")
 assert rows[0] == want, rows[0]
 body = rows[1:]

@@ -30,6 +30,7 @@ assert sum(col("speed_clamps")) == int(clamps) and sum(col("dt_min_clamps")) == 
 assert sum(col("dt_request_cuts")) == int(cuts)
 assert int(nonfinite) == 0 and sum(col("nonfinite")) == 0, "NaN/inf"
 assert all(s >= 1 for s in col("sph_steps")), "a frame without SPH sub-steps"
+assert all(float(r["density_err_max"]) >= float(r["density_err_p99"]) >= 0 for r in rows)
 assert all(float(r["density_err_max"]) >= float(r["density_err_mean"]) for r in rows)
 flagged = [r["frame"] for r in rows if r["warned"] == "1"]
 assert len(flagged) == int(warned), (flagged, warned)

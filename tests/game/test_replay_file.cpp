@@ -144,7 +144,8 @@ TEST(ReplayFile, UnknownVersionRecordAndActionAreNamed) {
   EXPECT_TRUE(
       failsWith(replaceLine(validText(), "action 20 throw_crate", "jump 20"), "12: field 'jump'", "unknown record"));
   EXPECT_TRUE(failsWith(replaceLine(validText(), "action 20 throw_crate", "action 20 throw_grenade"),
-                        "12: field 'action.name'", "unknown action 'throw_grenade' (known: throw_crate, throw_explosive)"));
+                        "12: field 'action.name'",
+                        "unknown action 'throw_grenade' (known: throw_crate, throw_explosive)"));
 }
 
 TEST(ReplayFile, StepsGoingBackwardsAreNamed) {
@@ -289,13 +290,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
     rows[i].triangles = 7;
     rows[i].mesh_worker_ms = 0.125 * i;
   }
-  rows[1].truth = {17, 0.000412345f, 0.0213f, 42, 3.125, 5, 1, 2, 0, true};
+  rows[1].truth = {17, 0.000412345f, 0.00375f, 0.0213f, 42, 3.125, 5, 1, 2, 0, true};
   rows[2].truth.nonfinite = 9;
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
   EXPECT_EQ(game::frameCsvHeader(),
             "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,"
-            "mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
+            "mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_"
+            "clamps,dt_min_clamps,"
             "dt_request_cuts,nonfinite,warned,state_hash");
   const auto path = std::filesystem::temp_directory_path() / ("replay_csv_" + std::to_string(::getpid()) + ".csv");
   std::string error;
@@ -311,6 +313,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   const game::FrameTruth& t = back[1].truth;
   EXPECT_EQ(t.sph_steps, 17u);
   EXPECT_EQ(static_cast<float>(t.density_err_mean), 0.000412345f);
+  EXPECT_EQ(static_cast<float>(t.density_err_p99), 0.00375f);
   EXPECT_EQ(static_cast<float>(t.density_err_max), 0.0213f);
   EXPECT_EQ(t.pushed_out, 42u);
   EXPECT_EQ(t.push_depth_mm, 3.125);
@@ -327,14 +330,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   // A bad cell is named by file, line and column.
   {
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,\n";
+    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'fluid_ms': bad value 'x'"), std::string::npos) << error;
   {  // and so is a bad health cell (warned is 0 or 1)
     ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,2,\n";
+    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'warned': bad value '2'"), std::string::npos) << error;

@@ -1,8 +1,7 @@
 // The dam break against experiment: J. C. Martin & W. J. Moyce 1952, "An experimental study of the
 // collapse of liquid columns on a rigid horizontal plane", Phil. Trans. R. Soc. A 244, 312-324,
 // figure 3: the surge front Z = x / a against T = t sqrt(2 g / a) for a column of water of width
-// a = 2.25 in (0.05715 m) and height 2a (n^2 = 2). The points below are that figure's, as digitised
-// for the PySPH project's dam-break examples (pysph/examples/db_exp_data.py).
+// a = 2.25 in (0.05715 m) and height 2a (n^2 = 2); the points in tests/support/martin_moyce.hpp.
 //
 // Scene: `fluiddemo simulate --scene dambreak --set width=0.05715 --set height_ratio=2` (13,600
 // particles; the scene's viscosity is the least its spacing resolves, sph_scenes.cpp), with the box lengthened to 12 a
@@ -17,6 +16,7 @@
 // times as viscous as water (the scene's viscosity before, 0.01 m^2/s) is 18 % (in 1/200 s calls)
 // to a third (on the solver's own steps) behind at the last point and fails the per-point bound.
 #include "fluid/sph/sph_scenes.hpp"
+#include "tests/support/martin_moyce.hpp"
 
 #include <gtest/gtest.h>
 
@@ -31,21 +31,9 @@ namespace {
 
 using namespace fluid;
 
-struct FrontPoint {
-  double t_scaled;  // T = t sqrt(2 g / a)
-  double front;     // Z = x / a
-};
-constexpr std::array<FrontPoint, 10> kMartinMoyce2a = {{{0.832, 1.217},
-                                                        {1.219, 1.474},
-                                                        {1.997, 2.292},
-                                                        {2.547, 2.995},
-                                                        {3.345, 4.134},
-                                                        {4.034, 4.944},
-                                                        {4.418, 5.881},
-                                                        {5.091, 6.980},
-                                                        {5.685, 7.945},
-                                                        {6.306, 8.966}}};
-constexpr double kWidth = 0.05715;  // a (m): 2.25 in
+using fluid_test::FrontPoint;
+using fluid_test::kMartinMoyce2a;
+constexpr double kWidth = fluid_test::kMartinMoyceWidth;
 constexpr double kGravity = 9.81;
 
 double frontPercentile(const SphWorld& world) {
