@@ -39,11 +39,17 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_
                         std::isfinite(v[i].y) && std::isfinite(v[i].z);
         if (!ok && i < acc.bad) acc.bad = i;
         acc.nonfinite += ok ? 0 : 1;
-        bool inside = false;
-        for (const SphSink& k : world.sinks)
-          inside = inside || (p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x && p.y <= k.max.y &&
-                              p.z <= k.max.z);
-        keep[i] = inside ? 0u : 1u;
+        // keep: 1 stays, 0 removed, 2 to the pump (gutter), 3 to the pump if it has room (intake).
+        std::uint32_t fate = 1u;
+        for (const SphSink& k : world.sinks) {
+          if (!(p.x >= k.min.x && p.y >= k.min.y && p.z >= k.min.z && p.x <= k.max.x && p.y <= k.max.y &&
+                p.z <= k.max.z))
+            continue;
+          const std::uint32_t f = k.kind == SphSinkKind::remove ? 0u : k.kind == SphSinkKind::pump ? 2u : 3u;
+          if (fate == 1u || (f != 0u && (fate == 0u || f < fate))) fate = f;  // the pump before removal
+        }
+        const bool inside = fate != 1u;
+        keep[i] = fate;
         carry.index[i] = i < carry.count ? static_cast<std::uint32_t>(i) : SphScratch::SampleCarry::kNone;
         acc.inside += inside ? 1 : 0;
       },
@@ -69,15 +75,26 @@ SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_
 
 // Removes the particles checkFiniteAndSinks marked (`in_sinks` of them); nothing to do (and no
 // pass over the data) when none is inside a sink.
-std::size_t applySinks(SphWorld& world, std::size_t in_sinks) {
+std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumped) {
+  pumped = 0;
   if (in_sinks == 0) return 0;
   ParticleStore& store = world.particles;
   SphScratch& scratch = world.scratch;
+  SphPump& pump = world.pump;
   const std::size_t n = store.size();
   std::size_t out = 0;
-  // Stable compaction: survivors keep their relative order, so the result is deterministic.
+  // Stable compaction: survivors keep their relative order, so the result is deterministic. The
+  // pump takes in storage order (grid-cell order, the same at any thread count); an intake's
+  // particle stays in the water once the pump is at capacity.
   for (std::size_t i = 0; i < n; ++i) {
-    if (!scratch.keep[i]) continue;
+    std::uint32_t fate = scratch.keep[i];
+    if (fate == 3u) fate = pump.size() < pump.capacity ? 2u : 1u;
+    if (fate == 2u) {
+      pump.held.push_back({store.id[i], world.time + pump.delay});
+      ++pumped;
+      continue;
+    }
+    if (fate == 0u) continue;
     if (out != i) {
       store.position[out] = store.position[i];
       store.velocity[out] = store.velocity[i];
@@ -89,7 +106,7 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks) {
     }
     ++out;
   }
-  const std::size_t removed = n - out;
+  const std::size_t removed = n - out - pumped;
   store.position.resize(out);
   store.velocity.resize(out);
   store.density.resize(out);
@@ -233,7 +250,8 @@ std::size_t applyEmitters(SphWorld& world) {
     const double interval = std::max(static_cast<double>(layer) / e.rate, static_cast<double>(d) / e.speed);
     while (e.accumulator >= interval) {
       e.accumulator -= interval;
-      if (world.particles.size() + layer > world.params.max_particles) continue;  // over budget: layer dropped
+      if (!world.pump.feeds_emitters && world.particles.size() + layer > world.params.max_particles)
+        continue;  // over budget: layer dropped
       // The layer was due `accumulator` seconds ago and has travelled that far.
       const glm::vec3 base = e.position + dir * (e.speed * static_cast<float>(e.accumulator));
       // Layers placed earlier in this loop are existing particles here (d apart along the jet:
@@ -268,7 +286,18 @@ std::size_t applyEmitters(SphWorld& world) {
           return crowd_density[k] + wk <= rhoLimit;  // else it would compress an existing particle
         });
         if (!room_left || rho > rhoLimit) return;  // (rho > limit: it would start compressed)
-        if (!addSphParticle(world, p, dir * e.speed)) return;
+        if (world.pump.feeds_emitters) {
+          SphPump& pump = world.pump;
+          if (pump.size() == 0 || pump.held[pump.head].ready_time > world.time) return;  // the pipe is empty
+          if (!addSphParticleWithId(world, pump.held[pump.head].id, p, dir * e.speed)) return;
+          ++pump.head;
+          if (pump.head * 2 >= pump.held.size()) {  // drop the given-back front (amortised, no allocation)
+            pump.held.erase(pump.held.begin(), pump.held.begin() + static_cast<std::ptrdiff_t>(pump.head));
+            pump.head = 0;
+          }
+        } else if (!addSphParticle(world, p, dir * e.speed)) {
+          return;
+        }
         ++emitted;
         forSupport([&](std::size_t k, float wk) {
           crowd_density[k] += wk;

@@ -15,8 +15,8 @@ namespace fluid::sph_step {
 SphStatus checkFiniteAndSinks(SphWorld& world, std::size_t& in_sinks, std::size_t& nonfinite);
 
 // Removes the particles checkFiniteAndSinks marked (`in_sinks` of them), keeping the survivors'
-// order; returns the count removed.
-std::size_t applySinks(SphWorld& world, std::size_t in_sinks);
+// order: into the pump (`pumped` of them) or out of the world; returns the count removed.
+std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumped);
 
 // Emits the layers every emitter owes (its accumulator); returns the count of particles added.
 std::size_t applyEmitters(SphWorld& world);

@@ -167,10 +167,39 @@ struct SphEmitter {
   double accumulator = 0.0;  // internal: seconds since the last layer
 };
 
-// Drain: particles inside the axis-aligned box [min, max] are removed at the start of a step.
+// What a sink does with the particles inside its box at the start of a step.
+enum class SphSinkKind {
+  remove,  // a drain: they leave the world
+  pump,    // a gutter: they go into the world's pump (SphPump), however full it is
+  intake,  // the pump's intake: into the pump while it holds less than its capacity
+};
+
+// Drain, gutter or intake: the axis-aligned box [min, max], applied at the start of a step. A
+// particle inside boxes of several kinds goes to the pump before it is removed.
 struct SphSink {
   glm::vec3 min{0.0f};
   glm::vec3 max{0.0f};
+  SphSinkKind kind = SphSinkKind::remove;
+};
+
+// A fountain's pump: the water circulates instead of being made at the nozzle and destroyed in
+// the floor. Intakes and gutters (SphSink) take particles out of the store into `held` (each keeps
+// its id) and the emitters give them back after `delay` seconds (the pipe), oldest first; while
+// `feeds_emitters` is set an emitter creates no particle of its own, so the count of water (the
+// store plus the pump) never changes. An intake takes particles while the pump holds fewer than
+// `capacity` (what the nozzle returns in `delay` plus a layer, say): it draws what the jet gives
+// back, not the pool.
+struct SphPumped {
+  std::uint32_t id = 0;
+  double ready_time = 0.0;  // s: world time from which the nozzle may give it back
+};
+struct SphPump {
+  bool feeds_emitters = false;
+  double delay = 0.5;         // s in the pipe
+  std::size_t capacity = 0;   // intakes stop taking at this many held
+  std::vector<SphPumped> held;  // oldest at `head`; entries before it were given back
+  std::size_t head = 0;
+  std::size_t size() const { return held.size() - head; }
 };
 
 struct SphStepStats {
@@ -189,6 +218,7 @@ struct SphStepStats {
   std::size_t particles = 0;       // after the step
   std::size_t emitted = 0;
   std::size_t removed = 0;
+  std::size_t pumped = 0;  // particles the intakes and gutters took into the pump this step
   std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step, every pass
   bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
   // Health counters (they observe the step, never change it). The overlay, the replay CSV and
@@ -327,6 +357,7 @@ struct SphWorld {
   std::vector<SphCollider> colliders;
   std::vector<SphEmitter> emitters;
   std::vector<SphSink> sinks;
+  SphPump pump;
   double time = 0.0;  // s
   std::uint64_t step_count = 0;
   std::uint32_t next_id = 0;
@@ -341,8 +372,24 @@ float sphParticleMass(const SphParams& params);
 
 // Appends a particle (id = world.next_id++). Returns false (and adds nothing) over budget.
 bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity = glm::vec3(0.0f));
+// Appends a particle with a given id (the pump's return: its id is one the world made, so the
+// budget does not apply and next_id stays). The caller keeps ids unique.
+bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position, glm::vec3 velocity);
 // Fills the box [lo, hi] with a cubic lattice of spacing d starting at lo + r; returns the count added.
 std::size_t addSphBlock(SphWorld& world, glm::vec3 lo, glm::vec3 hi, glm::vec3 velocity = glm::vec3(0.0f));
+// Fills a basin from the bottom up: the cubic lattice of spacing d over the box [lo, hi] (first
+// point lo + r), layer by layer in y, keeping the points where `inside` is true and no collider
+// is nearer than the particle radius (each collider's own distance query), until `count`
+// particles are added. Returns the count added; `top` (optional) gets the y of the last layer
+// begun (m). At rest this lattice is at the solvers' rest density (sphParticleMass) and a radius
+// off every wall (the boundary's calibration), so it needs little settling.
+template <typename Inside>
+std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside,
+                       float* top = nullptr);
+// Whether a particle at `p` would be within `radius` of a collider (queried at the colliders'
+// current poses). Out-of-reach answers count as far.
+bool sphNearCollider(const SphWorld& world, glm::vec3 p, float radius);
+
 // Reserves every per-particle buffer for `capacity` particles (call once to avoid growth later).
 void reserveSph(SphWorld& world, std::size_t capacity);
 
@@ -408,7 +455,25 @@ void refreshSphPositionArrays(SphWorld& world);
 // [world.time - world.last_dt, world.time]; before the first step `out` is the current positions.
 void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out);
 
-// --- implementation of the template ---
+// --- implementation of the templates ---
+template <typename Inside>
+std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside, float* top) {
+  const float d = sphSpacing(world.params), r = world.params.particle_radius;
+  const glm::ivec3 n = glm::max(glm::ivec3(glm::floor((hi - lo) / d + 1e-4f)), glm::ivec3(0));
+  std::size_t added = 0;
+  for (int y = 0; y < n.y && added < count; ++y) {
+    if (top) *top = lo.y + r + d * static_cast<float>(y);
+    for (int z = 0; z < n.z && added < count; ++z)
+      for (int x = 0; x < n.x && added < count; ++x) {
+        const glm::vec3 p = lo + glm::vec3(r) + d * glm::vec3(x, y, z);
+        if (!inside(p) || sphNearCollider(world, p, r)) continue;
+        if (!addSphParticle(world, p)) return added;
+        ++added;
+      }
+  }
+  return added;
+}
+
 SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, const SphStepStats&), void* ctx,
                          std::size_t max_steps);
 

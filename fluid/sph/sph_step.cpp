@@ -184,7 +184,7 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
 
   // Keep persistent per-particle solver state in step with the store.
   scratch.warm_kappa.resize(store.size(), 0.0f);
-  stats.removed = applySinks(world, in_sinks);
+  stats.removed = applySinks(world, in_sinks, stats.pumped);
   stats.emitted = applyEmitters(world);
   const std::size_t n = store.size();
   scratch.warm_kappa.resize(n, 0.0f);
@@ -204,7 +204,7 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   context.previous_dt = world.last_dt > 0.0f ? world.last_dt : max_dt;
   context.dt = max_dt;
 
-  updateNeighbours(context, stats.emitted > 0 || stats.removed > 0);
+  updateNeighbours(context, stats.emitted > 0 || stats.removed > 0 || stats.pumped > 0);
   sampleBoundary(context);
   if (params.solver == SphSolverKind::wcsph)
     stepWcsph(context);

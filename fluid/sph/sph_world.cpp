@@ -92,8 +92,12 @@ SphStatus validateSphParams(const SphParams& p) {
 }
 
 bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity) {
+  if (world.particles.size() >= world.params.max_particles) return false;
+  return addSphParticleWithId(world, world.next_id++, position, velocity);
+}
+
+bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position, glm::vec3 velocity) {
   ParticleStore& s = world.particles;
-  if (s.size() >= world.params.max_particles) return false;
   s.position.push_back(position);
   s.position_x.push_back(position.x);
   s.position_y.push_back(position.y);
@@ -101,8 +105,18 @@ bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity) {
   s.velocity.push_back(velocity);
   s.density.push_back(world.params.rest_density);
   s.pressure.push_back(0.0f);
-  s.id.push_back(world.next_id++);
+  s.id.push_back(id);
   return true;
+}
+
+bool sphNearCollider(const SphWorld& world, glm::vec3 p, float radius) {
+  for (const SphCollider& c : world.colliders) {
+    const glm::vec3 local = toColliderSpace(c.pose, p);
+    ColliderSample sample;
+    c.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
+    if (sample.valid && sample.distance < radius) return true;
+  }
+  return false;
 }
 
 std::size_t addSphBlock(SphWorld& world, glm::vec3 lo, glm::vec3 hi, glm::vec3 velocity) {
