@@ -21,7 +21,8 @@ const ParamTable<SphFluidParams>& table() {
       choice<&P::solver>("solver", kSolverNames, kSolverValues,
                          "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)"),
       param<&P::max_particles>("max_particles", 1, 50000,
-                               "particle budget (fixed at construction; the jet pauses at it)"),
+                               "the water in particles (fixed at construction): with the pump the basin starts "
+                               "filled with all of it; without, the jet's budget"),
       param<&P::particle_radius>("particle_radius", 0.01, 0.2, "r (m); spacing 2r (fixed at construction)"),
       param<&P::jet_speed>("jet_speed", 0.1, 20.0,
                            "speed of the jet at the nozzle (m/s); live, with the speed cap, sound speed and top sink"),
@@ -29,7 +30,10 @@ const ParamTable<SphFluidParams>& table() {
                                "radius of the nozzle disc (m); particles per layer = lattice points inside"),
       param<&P::rate>("rate", 0.0, 50000.0, "particles emitted per second (capped: layers never overlap)"),
       param<&P::viscosity>("viscosity", 0.0, 1.0, "kinematic viscosity nu (m^2/s)"),
-      param<&P::drain>("drain", "four drains at the basin wall recycle the water"),
+      param<&P::pump>("pump",
+                      "circulate the water: an intake in the basin floor, a gutter round the basin, the nozzle "
+                      "gives the same particles back (fixed at construction); false = the nozzle makes water"),
+      param<&P::pump_delay>("pump_delay", 0.0, 10.0, "seconds a particle spends in the pump's pipe"),
       param<&P::cfl>("cfl", 0.05, 1.0, "CFL number: a step moves no particle more than cfl * 2r"),
       param<&P::max_time_step>("max_time_step", 0.0005, 0.05, "upper bound of one adaptive SPH step (s)"),
       param<&P::density_error>("density_error", 0.00001, 0.05,
@@ -61,7 +65,7 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     fresh.max_particles = built.max_particles;
     fresh.particle_radius = built.particle_radius;
     fresh.nozzle_radius = built.nozzle_radius;
-    fresh.drain = built.drain;
+    fresh.pump = built.pump;
     fresh.couple_bodies = built.couple_bodies;
     state.params = fresh;
     deriveSphFluid(fresh, level_, links.gravity, state.world);
@@ -99,6 +103,9 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     const ImVec4 red(1.0f, 0.35f, 0.35f, 1.0f), plain = ImGui::GetStyleColorVec4(ImGuiCol_Text);
     const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
     ImGui::Text("sph fluid: %zu particles, %llu sub-steps this step", state.world.particles.size(), ull(t.steps));
+    const WaterWhereabouts where = waterWhereabouts(state, level_);
+    ImGui::Text("  water: pool %zu (level %.0f cm)  jet and air %zu  ground %zu  pump %zu", where.pool,
+                100.0 * where.pool_level, where.jet_and_air, where.ground, where.pump);
     ImGui::Text("  density error: mean %.3f %%  p99 %.2f %%  max %.2f %%", 100.0 * t.meanDensityError(),
                 100.0 * t.p99_density_error, 100.0 * t.max_density_error);
     const float deep = sphDeepPush(state);
@@ -152,8 +159,11 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
 }
 
 const EffectDesc& sphFluidEffect() {
-  static const EffectDesc desc{
-      "sph_fluid", "SPH water (CPU): nozzle jet, baked fountain colliders, drains", table().specs, {}, &build};
+  static const EffectDesc desc{"sph_fluid",
+                               "SPH water (CPU): a filled basin, a pump and its jet, baked fountain colliders",
+                               table().specs,
+                               {},
+                               &build};
   return desc;
 }
 

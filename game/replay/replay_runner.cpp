@@ -128,7 +128,12 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
   row.step = world.steps;
   const FluidSurface* surface = findState<FluidSurface>(world);
   if (const SphFluid* fluid = findState<SphFluid>(world)) {
-    row.particles = fluid->world.particles.size();
+    const WaterWhereabouts where = waterWhereabouts(*fluid, world.links.level);
+    row.particles = fluid->world.particles.size() + where.pump;
+    row.water_pool = where.pool;
+    row.water_air = where.jet_and_air;
+    row.water_ground = where.ground;
+    row.water_pump = where.pump;
     const auto& t = fluid->last_totals;  // the frame's one game step (the variable hides namespace fluid)
     row.truth = {t.steps,
                  t.meanDensityError(),

@@ -64,6 +64,14 @@ std::uint64_t hashSph(const SphFluid& fluid, StateHashScratch& scratch) {
   h.add(w.next_id);
   h.add(w.last_dt);
   for (const fluid::SphEmitter& e : w.emitters) h.add(e.accumulator);
+  // The pump's water is part of the state (the ids it will give back, in order, and when).
+  if (w.pump.feeds_emitters || w.pump.size() > 0) {
+    h.add(static_cast<std::uint64_t>(w.pump.size()));
+    for (std::size_t k = w.pump.head; k < w.pump.held.size(); ++k) {
+      h.add(w.pump.held[k].id);
+      h.add(w.pump.held[k].ready_time);
+    }
+  }
   for (const fluid::SphCollider& c : w.colliders) {
     addQuat(h, c.pose.rotation);
     addVec3(h, c.pose.translation);

@@ -4,8 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace game {
+
+// Simulated seconds the pool settles at load, jet off (fillSphPool).
+constexpr double kPoolSettleSeconds = 1.0;
 
 void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.viscosity = params.viscosity;
@@ -31,28 +37,69 @@ void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& g, glm
     e.rate = params.rate;
   }
   world.sinks.clear();
-  if (params.drain) {
-    // Four drains in the basin floor against the wall (+x, -x, +z, -z), each 0.6 m wide.
-    const float inner = g.basin_inner_radius, depth = 0.5f, half = 0.3f;
-    const float y0 = g.basin_floor - 0.05f, y1 = g.basin_floor + 4.0f * params.particle_radius;
-    world.sinks.push_back({{inner - depth, y0, -half}, {inner + 0.1f, y1, half}});
-    world.sinks.push_back({{-inner - 0.1f, y0, -half}, {-inner + depth, y1, half}});
-    world.sinks.push_back({{-half, y0, inner - depth}, {half, y1, inner + 0.1f}});
-    world.sinks.push_back({{-half, y0, -inner - 0.1f}, {half, y1, -inner + depth}});
-  }
-  // Whatever escapes the basin onto the ground is drained too (it would only pile up there).
-  world.sinks.push_back({{-100.0f, -1.0f, -100.0f}, {100.0f, 0.12f, 100.0f}});
-  // Strays (a particle flung off the rim at the speed cap) are removed once they leave the
-  // fountain's neighbourhood: above the jet's reach or 0.8 m beyond the basin on any side.
+  // Everything that leaves the basin onto the ground (below the wall top outside it) and the strays
+  // (a particle flung off the rim at the speed cap) once they leave the fountain's neighbourhood:
+  // above the jet's reach or 0.8 m beyond the basin on any side. With the pump they are the gutter:
+  // into the pump; without it they leave the world.
+  const fluid::SphSinkKind gutter = params.pump ? fluid::SphSinkKind::pump : fluid::SphSinkKind::remove;
+  world.sinks.push_back({{-100.0f, -1.0f, -100.0f}, {100.0f, 0.12f, 100.0f}, gutter});
   const float reach = g.basin_outer_radius + 0.8f, far = 1000.0f;
   const float top =
       g.nozzle.y + params.jet_speed * params.jet_speed / (2.0f * std::max(glm::length(gravity), 0.1f)) + 1.0f;
-  world.sinks.push_back({{-far, top, -far}, {far, far, far}});
-  world.sinks.push_back({{reach, -far, -far}, {far, far, far}});
-  world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}});
-  world.sinks.push_back({{-far, -far, reach}, {far, far, far}});
-  world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}});
+  world.sinks.push_back({{-far, top, -far}, {far, far, far}, gutter});
+  world.sinks.push_back({{reach, -far, -far}, {far, far, far}, gutter});
+  world.sinks.push_back({{-far, -far, -far}, {-reach, far, far}, gutter});
+  world.sinks.push_back({{-far, -far, reach}, {far, far, far}, gutter});
+  world.sinks.push_back({{-far, -far, -far}, {far, far, -reach}, gutter});
+  world.pump.feeds_emitters = params.pump;
+  world.pump.delay = params.pump_delay;
+  if (params.pump) {
+    // The intake: a grate 0.4 m square in the basin floor against the wall at +x, one particle
+    // layer deep. It takes what the nozzle gives back in the pipe's delay, plus a few layers
+    // (the pump's capacity), so it draws at the jet's rate, not at the pool's head.
+    const float inner = g.basin_inner_radius, half = 0.2f, d = 2.0f * params.particle_radius;
+    world.sinks.push_back({{inner - 0.6f, g.basin_floor - 0.05f, -half},
+                           {inner - 0.2f, g.basin_floor + 1.5f * d, half},
+                           fluid::SphSinkKind::intake});
+    world.pump.capacity = static_cast<std::size_t>(std::ceil(params.rate * params.pump_delay)) + 64;
+  }
 }
+
+namespace {
+
+// Fills the basin with all the water (the annulus between the plinth and the basin wall, from the
+// floor up), then lets it settle for a second with the jet off: a lattice at rest is at the rest
+// density and a radius off the walls, so the pass only smooths the round walls' edges.
+bool fillSphPool(SphFluid& out, const FountainGeometry& g, std::string& error) {
+  fluid::SphWorld& w = out.world;
+  const float r = w.params.particle_radius;
+  const glm::vec3 lo(-g.basin_inner_radius, g.basin_floor, -g.basin_inner_radius);
+  const glm::vec3 hi(g.basin_inner_radius, g.basin_wall_top, g.basin_inner_radius);
+  const auto inBasin = [&](glm::vec3 p) {
+    const float radial = std::sqrt(p.x * p.x + p.z * p.z);
+    return radial < g.basin_inner_radius - r && radial > g.plinth_radius + r;
+  };
+  const std::size_t want = out.params.max_particles;
+  const std::size_t filled = fluid::addSphPool(w, lo, hi, want, inBasin);
+  if (filled < want) {
+    error = "sph_fluid: max_particles = " + std::to_string(want) + " does not fit in the basin below its wall top (" +
+            std::to_string(filled) + " do at particle_radius " + std::to_string(r) + ")";
+    return false;
+  }
+  std::vector<float> rates;
+  for (fluid::SphEmitter& e : w.emitters) rates.push_back(std::exchange(e.rate, 0.0f));
+  const fluid::SphStatus st = fluid::advanceSph(
+      w, kPoolSettleSeconds, [](const fluid::SphStepStats&) {}, 100000);
+  for (std::size_t k = 0; k < w.emitters.size(); ++k) w.emitters[k].rate = rates[k];
+  for (fluid::SphEmitter& e : w.emitters) e.accumulator = 0.0;
+  if (!st.ok()) {
+    error = "sph_fluid: settling the pool: " + st.error;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeometry& g,
                   const std::shared_ptr<const LevelColliders>& colliders, glm::vec3 gravity, std::string& error) {
@@ -93,7 +140,27 @@ bool initSphFluid(SphFluid& out, const SphFluidParams& params, const FountainGeo
     out.world.colliders.push_back(collider);
   }
   fluid::reserveSph(out.world, params.max_particles);
+  if (params.pump && !fillSphPool(out, g, error)) return false;
   return true;
+}
+
+WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry& g) {
+  WaterWhereabouts out;
+  const fluid::SphWorld& w = fluid.world;
+  for (const glm::vec3& p : w.particles.position) {
+    const float radial = std::sqrt(p.x * p.x + p.z * p.z);
+    if (radial > g.basin_inner_radius)
+      ++out.ground;
+    else if (p.y < g.basin_wall_top)
+      ++out.pool;
+    else
+      ++out.jet_and_air;
+  }
+  out.pump = w.pump.size();
+  const float d = fluid::sphSpacing(w.params);
+  const float area = 3.14159265f * (g.basin_inner_radius * g.basin_inner_radius - g.plinth_radius * g.plinth_radius);
+  out.pool_level = static_cast<float>(out.pool) * d * d * d / area;
+  return out;
 }
 
 bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step) {

@@ -1,10 +1,14 @@
 #pragma once
 // The `sph_fluid` effect: the fountain's water as a CPU SPH fluid (fluid/sph: DFSPH by default,
-// WCSPH selectable). A nozzle emitter on the spire shoots a jet upward; the water falls into the
-// dish and the basin, colliding with the level's baked depth-map colliders (ground, basin and
-// statue from content/colliders, game/world/fountain.hpp); four drains at the basin wall remove it again, so the
-// particle budget (max_particles, fixed at construction) is recycled. Stepped once per game
-// fixed step (the SPH solver sub-steps adaptively inside it, CFL-limited).
+// WCSPH selectable). The basin starts filled with max_particles of water, settled; a pump
+// (fluid::SphPump) circulates it as in a real fountain: an intake in the basin floor takes water,
+// and the nozzle on the spire gives the same particles back as a jet after the pipe's delay; the
+// jet falls into the dish and the basin, colliding with the level's baked depth-map colliders
+// (ground, basin and statue from content/colliders, game/world/fountain.hpp). Water thrown out of
+// the basin goes down the gutter round it into the pump. The count of water never changes.
+// Without the pump (pump = false) the nozzle makes new particles up to max_particles and water
+// that leaves the basin is gone. Stepped once per game fixed step (the SPH solver sub-steps
+// adaptively inside it, CFL-limited).
 
 #include "fluid/sph/sph.hpp"
 #include "game/scene/scene_config.hpp"
@@ -19,13 +23,14 @@ namespace game {
 
 struct SphFluidParams {
   fluid::SphSolverKind solver = fluid::SphSolverKind::dfsph;
-  std::size_t max_particles = 2500;
+  std::size_t max_particles = 13000;  // the water (with the pump: all of it, from the start)
   float particle_radius = 0.04f;  // m; spacing 2r
   float jet_speed = 4.5f;         // m/s at the nozzle
   float nozzle_radius = 0.12f;    // m
   float rate = 500.0f;            // particles per second
   float viscosity = 0.02f;        // m^2/s (SphParams::viscosity)
-  bool drain = true;
+  bool pump = true;         // circulate the water (intake, gutter, nozzle); fixed at construction
+  float pump_delay = 0.5f;  // s a particle spends in the pump's pipe
   // Solver quality knobs (fluid::SphParams): accuracy against time, see docs/sph.md.
   float cfl = 0.4f;
   float max_time_step = 0.005f;   // s
@@ -62,19 +67,28 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver);
 
 // Everything that follows from the tunable parameters, the gravity and the level: the solver
 // knobs, the speed cap and the WCSPH sound speed (from jet_speed), the nozzle's speed and rate,
-// and the drains and stray sinks (the top one from the jet's reach). initSphFluid calls it, and
+// and the pump's intake and gutters (or, without it, the sinks of strays; the top one from the jet's reach). initSphFluid calls it, and
 // so does a live edit, so raising jet_speed live moves the cap, the sound speed and the top sink
 // exactly as a rebuild would. Fixed-at-construction fields (solver, max_particles,
-// particle_radius, nozzle_radius, drain) must be the world's own.
+// particle_radius, nozzle_radius, pump) must be the world's own.
 void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& geometry, glm::vec3 gravity,
                     fluid::SphWorld& world);
 
 // Builds the SPH world: parameters, one collider per part of `colliders` (the level's baked
 // colliders, shared; ensureFountainColliders), the nozzle emitter at `nozzle`
-// (pointing up), the drains; reserves every buffer for max_particles. False + error (naming
-// the field and value) on invalid parameters.
+// (pointing up), the pump and the pool (fillSphPool); reserves every buffer for max_particles.
+// False + error (naming the field and value) on invalid parameters.
 bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainGeometry& geometry,
                   const std::shared_ptr<const LevelColliders>& colliders, glm::vec3 gravity, std::string& error);
+
+// Where the water is (the overlay, the replay CSV): in the basin below its wall top (pool), above
+// it or over the statue (jet and air: the jet, the dish, spray), outside the basin (ground), and
+// in the pump. Their sum is the count of water.
+struct WaterWhereabouts {
+  std::size_t pool = 0, jet_and_air = 0, ground = 0, pump = 0;
+  float pool_level = 0.0f;  // m above the basin floor: the pool's volume over the basin's floor area
+};
+WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry& geometry);
 
 // Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step),
 // calling `on_step` (when given) with each sub-step's statistics. Returns false and sets

@@ -79,7 +79,7 @@ void detachWorldGpu(World& world);
 
 // Re-reads the live-tunable parameters from world.scene (after the overlay edited them): the
 // camera, then Effect::applyLive of each effect in registry order. Parameters fixed at
-// construction (crates, crate_size, max_particles, particle_radius, solver, drain, scene.*) need
+// construction (crates, crate_size, max_particles, particle_radius, solver, pump, scene.*) need
 // a rebuild.
 void applyLiveParams(World& world);
 

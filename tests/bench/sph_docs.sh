@@ -62,7 +62,7 @@ fi
   echo
   echo "## Game aim: 10k-particle fountain"
   echo
-  echo "Command: \`build/dev/tests/bench/bench_game_fountain --threads 12 --config \"$GAME_DEFAULTS\"\` (the game's fountain, \`content/scenes/fountain.json\` built by \`game::initSphFluid\` with \`sph_fluid.max_particles=10000\`; filled once per configuration with the drains shut until one second of jet is left to the budget, then 60 frames of 1/60 s stepped as the game steps them, jet running; the first rows use the scene file's solver knobs, the others SphParams' defaults)."
+  echo "Command: \`build/dev/tests/bench/bench_game_fountain --threads 12 --config \"$GAME_DEFAULTS\"\` (the game's fountain, \`content/scenes/fountain.json\` built by \`game::initSphFluid\` with \`sph_fluid.max_particles=10000\`: the basin filled at load, the pump running the jet for 2 s once per configuration, then 60 frames of 1/60 s stepped as the game steps them, jet running; the first rows use the scene file's solver knobs, the others SphParams' defaults)."
   echo
   cat "$tmp/fountain.md"
   echo

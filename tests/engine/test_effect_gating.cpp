@@ -197,7 +197,7 @@ TEST(EffectGating, WithoutTheFluidEffectsNothingFluidIsBuiltOrRun) {
 TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 400},
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 400},
                                                     "fluid_surface": {}}})"),
                                game::contentDir(), world, error))
       << error;
@@ -233,7 +233,7 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
 TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200, "solver": "wcsph"}}})"),
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200, "solver": "wcsph"}}})"),
                                game::contentDir(), world, error))
       << error;
   EXPECT_EQ(game::findState<game::FluidSurface>(world), nullptr);
@@ -296,7 +296,7 @@ TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
     // Camera behind the fountain looking along +z: the plain +z sweep is then front-to-back.
     const std::string text =
         std::string(R"({"camera": {"position": [0.3, 3, -8], "yaw_degrees": 88, "pitch_degrees": -5},
-                        "effects": {"sph_fluid": {"max_particles": 400}, "fluid_surface": {"order": ")") +
+                        "effects": {"sph_fluid": {"pump": false, "max_particles": 400}, "fluid_surface": {"order": ")") +
         order + R"("}}})";
     EXPECT_TRUE(game::buildWorld(parse(text), game::contentDir(), world, error)) << error;
     engine::Profiler profiler;
@@ -328,13 +328,13 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
   std::string error;
   {
     game::World fluid_only, switched_off;
-    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 200}}})"), game::contentDir(),
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200}}})"), game::contentDir(),
                                  fluid_only, error))
         << error;
     EXPECT_EQ(game::findState<game::SphFluid>(fluid_only)->coupling, nullptr);
     ASSERT_TRUE(game::buildWorld(
         parse(
-            R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"max_particles": 200, "couple_bodies": false}}})"),
+            R"({"effects": {"rigid_bodies": {"crates": 0}, "sph_fluid": {"pump": false, "max_particles": 200, "couple_bodies": false}}})"),
         game::contentDir(), switched_off, error))
         << error;
     EXPECT_EQ(game::findState<game::SphFluid>(switched_off)->coupling, nullptr);
@@ -342,7 +342,7 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
   game::World world;
   ASSERT_TRUE(
       game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.4},
-                                                    "sph_fluid": {"max_particles": 800}}})"),
+                                                    "sph_fluid": {"pump": false, "max_particles": 800}}})"),
                        game::contentDir(), world, error))
       << error;
   ASSERT_NE(game::findState<game::SphFluid>(world)->coupling, nullptr);

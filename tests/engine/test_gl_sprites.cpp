@@ -128,7 +128,7 @@ TEST(RunSceneSprites, FountainSpritesAreAliveFiniteOutsideAndDrawn) {
   setenv("SDL_VIDEODRIVER", "offscreen", 0);
   auto scene_text = [](int rate, int budget) {
     return R"({"camera": {"position": [0.0, 2.8, 4.5], "yaw_degrees": -90, "pitch_degrees": -12},
-      "effects": {"sph_fluid": {"max_particles": 600}, "sprite_particles": {"size": 0.04, "rate": )" +
+      "effects": {"sph_fluid": {"pump": false, "max_particles": 600}, "sprite_particles": {"size": 0.04, "rate": )" +
            std::to_string(rate) + R"(, "max_particles": )" + std::to_string(budget) + "}}}";
   };
   game::RunOptions options;

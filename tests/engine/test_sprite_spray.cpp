@@ -66,7 +66,7 @@ class SprayFromSph : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string error;
-    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"max_particles": 600}}})"), game::contentDir(),
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 600}}})"), game::contentDir(),
                                  world, error))
         << error;
     for (int i = 0; i < 60; ++i) game::stepWorld(world, nullptr);  // the jet is up and falling

@@ -39,6 +39,11 @@ game::SphFluid fountain(const std::function<void(game::SphFluidParams&)>& tune =
   std::shared_ptr<const game::LevelColliders> colliders;
   std::string error;
   EXPECT_TRUE(game::sphParamsFrom(*section, params, error)) << error;
+  // These cases follow particles by id from the nozzle through sinks (ids made in order, never
+  // reused) in the jet-fed fountain of 2,500: the pump off. The pump's own cases (constant count,
+  // ids kept, a gutter's return, thread-count invariance) are tests/sph/test_pump.cpp.
+  params.pump = false;
+  params.max_particles = 2500;
   if (tune) tune(params);
   EXPECT_TRUE(game::ensureFountainColliders(kContent, colliders, error) &&
               game::initSphFluid(f, params, game::FountainGeometry{}, colliders, game::sceneGravity(scene), error))
@@ -269,7 +274,6 @@ TEST(FountainHardCases, BasinFilledToTheBrimAndOverflowingFor60Seconds) {
   // "whatever escapes the basin") takes the overflow, as the box-basin case does with its drains
   // outside the walls (tests/sph/test_blast.cpp).
   game::SphFluid f = fountain([](game::SphFluidParams& p) {
-    p.drain = false;
     p.max_particles = 40000;  // room for the fill (asserted); the budget is set just above it below
   });
   fluid::SphWorld& w = f.world;

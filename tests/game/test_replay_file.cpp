@@ -295,7 +295,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
   EXPECT_EQ(game::frameCsvHeader(),
-            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,"
+            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,sprites,triangles,"
             "mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_"
             "clamps,dt_min_clamps,"
             "dt_request_cuts,nonfinite,warned,state_hash");
@@ -330,14 +330,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   // A bad cell is named by file, line and column.
   {
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
+    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'fluid_ms': bad value 'x'"), std::string::npos) << error;
   {  // and so is a bad health cell (warned is 0 or 1)
     ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
+    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'warned': bad value '2'"), std::string::npos) << error;
