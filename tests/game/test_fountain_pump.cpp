@@ -1,0 +1,187 @@
+// Issue 33's hard cases on the game's pumped fountain (game::initSphFluid with content/scenes/
+// fountain.json: the basin filled with 13,000 particles, the pump circulating them): ten blasts in
+// one step in the pool, a blast on the intake, the pool thrown out by blasts and returning through
+// the gutter and the pump, a crate on the intake, a crate on the nozzle. Every game step checks no
+// NaN, the speed cap and the constant count of water (the store plus the pump); each case checks
+// that the ids are the ones the pool was made with.
+#include "fluid/sph/analytic_colliders.hpp"
+#include "fluid/sph/blast.hpp"
+#include "game/scene/scene_config.hpp"
+#include "game/world/fountain.hpp"
+#include "game/world/sph_fluid.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+namespace {
+
+const std::filesystem::path kContent = std::filesystem::path(FLUIDDEMO_SOURCE_DIR) / "content";
+
+game::SphFluid pumpedFountain() {
+  game::SphFluid f;
+  game::SceneConfig scene;
+  EXPECT_TRUE(game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), scene).ok());
+  game::SphFluidParams params;
+  std::shared_ptr<const game::LevelColliders> colliders;
+  std::string error;
+  EXPECT_TRUE(game::sphParamsFrom(*scene.effect("sph_fluid"), params, error)) << error;
+  EXPECT_TRUE(params.pump);
+  EXPECT_TRUE(game::ensureFountainColliders(kContent, colliders, error) &&
+              game::initSphFluid(f, params, game::FountainGeometry{}, colliders, game::sceneGravity(scene), error))
+      << error;
+  return f;
+}
+
+std::size_t water(const game::SphFluid& f) { return f.world.particles.size() + f.world.pump.size(); }
+
+std::vector<std::uint32_t> sortedIds(const game::SphFluid& f) {
+  std::vector<std::uint32_t> ids = f.world.particles.id;
+  for (std::size_t k = f.world.pump.head; k < f.world.pump.held.size(); ++k) ids.push_back(f.world.pump.held[k].id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+struct Watch {
+  float top_speed = 0.0f;
+  bool finite = true;
+  std::size_t fewest_in_pool = SIZE_MAX, most_in_pump = 0;
+};
+
+// Steps `seconds` of game steps, checking the count, finiteness and the speed cap after each.
+void stepAndWatch(game::SphFluid& f, double seconds, Watch& watch) {
+  const std::size_t count = water(f);
+  const game::FountainGeometry g;
+  for (int frame = 0; frame < static_cast<int>(std::lround(seconds * 60.0)); ++frame) {
+    ASSERT_TRUE(game::stepSphFluid(f, 1.0 / 60.0)) << f.error;
+    ASSERT_EQ(water(f), count) << "game step " << frame;
+    for (std::size_t i = 0; i < f.world.particles.size(); ++i) {
+      const glm::vec3 p = f.world.particles.position[i], v = f.world.particles.velocity[i];
+      if (!std::isfinite(p.x + p.y + p.z + v.x + v.y + v.z)) watch.finite = false;
+      watch.top_speed = std::max(watch.top_speed, glm::length(v));
+    }
+    const game::WaterWhereabouts where = game::waterWhereabouts(f, g);
+    watch.fewest_in_pool = std::min(watch.fewest_in_pool, where.pool);
+    watch.most_in_pump = std::max(watch.most_in_pump, where.pump);
+  }
+  EXPECT_TRUE(watch.finite);
+  EXPECT_LE(watch.top_speed, f.world.params.max_speed * 1.0001f);
+}
+
+void blast(game::SphFluid& f, glm::vec3 centre, float impulse_at_1m) {
+  fluid::Blast b;
+  b.centre = centre;
+  b.impulse_at_1m = impulse_at_1m;
+  ASSERT_TRUE(fluid::applyBlast(f.world, b, f.world.params.max_speed).ok());
+}
+
+TEST(FountainPump, ThePoolIsFilledAtLoad) {
+  game::SphFluid f = pumpedFountain();
+  const game::WaterWhereabouts where = game::waterWhereabouts(f, game::FountainGeometry{});
+  std::printf("[ metric ] at load: pool %zu (level %.3f m), air %zu, ground %zu, pump %zu\n", where.pool,
+              where.pool_level, where.jet_and_air, where.ground, where.pump);
+  EXPECT_EQ(water(f), 13000u);
+  EXPECT_EQ(where.pool + where.pump, 13000u);  // all of it in the basin or already in the pump
+  EXPECT_GE(where.pool_level, 0.15f);          // issue 33: at least 15 cm above the basin floor
+  // Not at rest: the basin's floor-wall corner (its baked maps' concave corner, issue 33 item 6)
+  // keeps kicking particles; v_rms 0.2 m/s measured. Bounded so that a blow-up fails.
+  double v2 = 0.0;
+  for (const glm::vec3& v : f.world.particles.velocity) v2 += glm::dot(v, v);
+  const double v_rms = std::sqrt(v2 / static_cast<double>(f.world.particles.size()));
+  std::printf("[ metric ] pool v_rms at load %.3f m/s\n", v_rms);
+  EXPECT_LT(v_rms, 0.5);
+}
+
+TEST(FountainPump, TenBlastsInOneStepInThePool) {
+  game::SphFluid f = pumpedFountain();
+  const auto ids = sortedIds(f);
+  const game::FountainGeometry g;
+  for (int k = 0; k < 10; ++k) {
+    const float angle = 0.628f * static_cast<float>(k);
+    blast(f, glm::vec3(2.0f * std::cos(angle), g.basin_floor + 0.1f, 2.0f * std::sin(angle)), 60.0f);
+  }
+  Watch watch;
+  stepAndWatch(f, 3.0, watch);
+  EXPECT_EQ(sortedIds(f), ids);
+  std::printf("[ metric ] ten blasts: top speed %.1f m/s, fewest in the pool %zu, most in the pump %zu\n",
+              watch.top_speed, watch.fewest_in_pool, watch.most_in_pump);
+}
+
+TEST(FountainPump, ABlastOnTheIntake) {
+  game::SphFluid f = pumpedFountain();
+  const auto ids = sortedIds(f);
+  const game::FountainGeometry g;
+  blast(f, glm::vec3(g.basin_inner_radius - 0.4f, g.basin_floor + 0.05f, 0.0f), 120.0f);
+  Watch watch;
+  stepAndWatch(f, 3.0, watch);
+  EXPECT_EQ(sortedIds(f), ids);
+}
+
+// Strong blasts round the basin throw much of the pool over the wall: the gutter takes it into the
+// pump, and the nozzle brings it back into the basin.
+TEST(FountainPump, ThePoolThrownOutReturnsThroughTheGutterAndThePump) {
+  game::SphFluid f = pumpedFountain();
+  const auto ids = sortedIds(f);
+  const game::FountainGeometry g;
+  const std::size_t pool0 = game::waterWhereabouts(f, g).pool;
+  for (int k = 0; k < 6; ++k) {
+    const float angle = 1.047f * static_cast<float>(k);
+    blast(f, glm::vec3(1.8f * std::cos(angle), g.basin_floor, 1.8f * std::sin(angle)), 600.0f);
+  }
+  Watch thrown;
+  stepAndWatch(f, 2.0, thrown);
+  const game::WaterWhereabouts after = game::waterWhereabouts(f, g);
+  Watch back;
+  stepAndWatch(f, 6.0, back);
+  const game::WaterWhereabouts later = game::waterWhereabouts(f, g);
+  std::printf("[ metric ] pool %zu at load, %zu after the blasts (pump %zu), %zu six seconds later (pump %zu)\n", pool0,
+              after.pool, after.pump, later.pool, later.pump);
+  EXPECT_LT(after.pool + 1000, pool0);           // the blasts threw a good part of it out
+  EXPECT_GT(after.pump, f.world.pump.capacity);  // the gutter took it past the intake's share
+  EXPECT_GT(later.pool, after.pool + 500);       // and the jet brought it back (a few hundred a second)
+  EXPECT_LT(later.pump, after.pump);
+  EXPECT_EQ(sortedIds(f), ids);
+}
+
+// A crate (a box collider) resting on the intake's grate: the intake takes what still reaches it,
+// the jet runs on what the pump holds.
+TEST(FountainPump, ACrateOnTheIntake) {
+  game::SphFluid f = pumpedFountain();
+  const auto ids = sortedIds(f);
+  const game::FountainGeometry g;
+  fluid::SphCollider crate;
+  crate.shape = std::make_shared<fluid::BoxShape>(glm::vec3(0.3f));
+  crate.pose.translation = glm::vec3(g.basin_inner_radius - 0.4f, g.basin_floor + 0.3f, 0.0f);
+  crate.integrate_pose = false;
+  crate.material.resilience = 0.0f;
+  f.world.colliders.push_back(crate);
+  Watch watch;
+  stepAndWatch(f, 3.0, watch);
+  EXPECT_EQ(sortedIds(f), ids);
+}
+
+// A crate on the nozzle: the emitter places no particle inside or against it, so the pump keeps
+// what the intake takes (up to its capacity) and the count stays.
+TEST(FountainPump, ACrateOnTheNozzle) {
+  game::SphFluid f = pumpedFountain();
+  const auto ids = sortedIds(f);
+  const game::FountainGeometry g;
+  fluid::SphCollider crate;
+  crate.shape = std::make_shared<fluid::BoxShape>(glm::vec3(0.3f));
+  crate.pose.translation = g.nozzle + glm::vec3(0.0f, 0.3f, 0.0f);
+  crate.integrate_pose = false;
+  crate.material.resilience = 0.0f;
+  f.world.colliders.push_back(crate);
+  Watch watch;
+  stepAndWatch(f, 3.0, watch);
+  EXPECT_EQ(sortedIds(f), ids);
+  EXPECT_GE(f.world.pump.size(), f.world.pump.capacity);  // the jet cannot give it back
+}
+
+}  // namespace
