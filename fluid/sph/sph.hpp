@@ -380,12 +380,10 @@ std::size_t addSphBlock(SphWorld& world, glm::vec3 lo, glm::vec3 hi, glm::vec3 v
 // Fills a basin from the bottom up: the cubic lattice of spacing d over the box [lo, hi] (first
 // point lo + r), layer by layer in y, keeping the points where `inside` is true and no collider
 // is nearer than the particle radius (each collider's own distance query), until `count`
-// particles are added. Returns the count added; `top` (optional) gets the y of the last layer
-// begun (m). At rest this lattice is at the solvers' rest density (sphParticleMass) and a radius
+// particles are added. Returns the count added. At rest this lattice is at the solvers' rest density (sphParticleMass) and a radius
 // off every wall (the boundary's calibration), so it needs little settling.
 template <typename Inside>
-std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside,
-                       float* top = nullptr);
+std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside);
 // Whether a particle at `p` would be within `radius` of a collider (queried at the colliders'
 // current poses). Out-of-reach answers count as far.
 bool sphNearCollider(const SphWorld& world, glm::vec3 p, float radius);
@@ -457,12 +455,11 @@ void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out
 
 // --- implementation of the templates ---
 template <typename Inside>
-std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside, float* top) {
+std::size_t addSphPool(SphWorld& world, glm::vec3 lo, glm::vec3 hi, std::size_t count, Inside&& inside) {
   const float d = sphSpacing(world.params), r = world.params.particle_radius;
   const glm::ivec3 n = glm::max(glm::ivec3(glm::floor((hi - lo) / d + 1e-4f)), glm::ivec3(0));
   std::size_t added = 0;
   for (int y = 0; y < n.y && added < count; ++y) {
-    if (top) *top = lo.y + r + d * static_cast<float>(y);
     for (int z = 0; z < n.z && added < count; ++z)
       for (int x = 0; x < n.x && added < count; ++x) {
         const glm::vec3 p = lo + glm::vec3(r) + d * glm::vec3(x, y, z);

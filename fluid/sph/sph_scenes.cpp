@@ -53,7 +53,7 @@ const KeySpec kSolver[] = {
     {"force_bound", 0.0025f, 0.0f, 1.0f, "DFSPH force condition |g| dt^2 <= force_bound * cfl * d; 0 = off"},
     {"warm_start", 0.0f, 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)"},
     {"max_dt", 0.005f, 1e-7f, 1.0f, "upper bound of the time step (s)"},
-    {"viscosity", 0.01f, 0.0f, 100.0f, "kinematic viscosity nu of the Laplacian term (m^2/s; dambreak: water's)"},
+    {"viscosity", 0.01f, 0.0f, 100.0f, "kinematic viscosity nu of the Laplacian term (m^2/s)"},
     {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},
     {"density_error", 0.0005f, 1e-7f, 1.0f, "DFSPH: mean density error tolerance (0.0005 = 0.05 %)"},
     {"divergence_error", 0.001f, 1e-7f, 1.0f, "DFSPH: divergence error tolerance"},
@@ -166,6 +166,17 @@ float sphSurgeFront(const SphWorld& world) {
   float front = 0.0f;
   for (const glm::vec3& p : world.particles.position) front = std::max(front, p.x);
   return front;
+}
+
+float sphSurgeFrontQuantile(const SphWorld& world, double q, std::vector<float>& scratch) {
+  const auto& position = world.particles.position;
+  if (position.empty()) return 0.0f;
+  scratch.resize(position.size());
+  for (std::size_t i = 0; i < position.size(); ++i) scratch[i] = position[i].x;
+  const std::size_t k =
+      static_cast<std::size_t>(std::floor(std::clamp(q, 0.0, 1.0) * static_cast<double>(scratch.size() - 1)));
+  std::nth_element(scratch.begin(), scratch.begin() + static_cast<std::ptrdiff_t>(k), scratch.end());
+  return scratch[k];
 }
 
 SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,

@@ -3,8 +3,9 @@
 // Every scene is in metres with gravity 9.81 m/s^2 along -y, inside a closed box of six planes.
 //
 //   dambreak      column of width a, height height_ratio*a, thickness depth, against the wall
-//                 x = 0, released at t = 0 into a box reaching length_ratio*a along +x; water
-//                 (its viscosity key defaults to 1.0e-6 m^2/s, the other scenes' to 0.01).
+//                 x = 0, released at t = 0 into a box reaching length_ratio*a along +x; its
+//                 viscosity key defaults to the least the spacing resolves (sph_scenes.cpp),
+//                 the other scenes' to 0.01.
 //   column        a block of water at rest filling the bottom of a box (hydrostatic test).
 //   fountain      a nozzle at the centre of a basin shooting up; a drain in one corner of the
 //                 floor removes particles; particle budget `budget`.
@@ -49,5 +50,9 @@ void addSphContainer(SphScene& scene, glm::vec3 lo, glm::vec3 hi, const Collisio
 
 // Largest x of any particle (m), the dam-break surge front; 0 without particles.
 float sphSurgeFront(const SphWorld& world);
+// The q-quantile of the particles' x (q in [0, 1]; m), a surge front that single drops thrown ahead
+// of the sheet do not move (q = 0.995 against Martin & Moyce); 0 without particles. `scratch` is
+// caller-owned and reused.
+float sphSurgeFrontQuantile(const SphWorld& world, double q, std::vector<float>& scratch);
 
 }  // namespace fluid

@@ -36,15 +36,6 @@ using fluid_test::kMartinMoyce2a;
 constexpr double kWidth = fluid_test::kMartinMoyceWidth;
 constexpr double kGravity = 9.81;
 
-double frontPercentile(const SphWorld& world) {
-  std::vector<float> x;
-  x.reserve(world.particles.size());
-  for (const glm::vec3& p : world.particles.position) x.push_back(p.x);
-  const std::size_t k = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(x.size() - 1)));
-  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(k), x.end());
-  return x[k];
-}
-
 enum class Route { frames, own_steps };
 
 // Z at each of the figure's T: `frames` steps with advanceSph to each sample time (the game's and
@@ -59,12 +50,13 @@ std::vector<double> simulatedFronts(SphSolverKind solver, Route route,
   const SphStatus made = makeSphScene("dambreak", solver, keys, scene);
   EXPECT_TRUE(made.ok()) << made.error;
   std::vector<double> fronts;
+  std::vector<float> scratch;
   for (const FrontPoint& point : kMartinMoyce2a) {
     const double t = point.t_scaled / std::sqrt(2.0 * kGravity / kWidth);
     const SphStatus st = route == Route::frames ? advanceSph(scene.world, t - scene.world.time, [](const auto&) {})
                                                 : advanceSphUntil(scene.world, t, [](const auto&) {});
     EXPECT_TRUE(st.ok()) << st.error;
-    fronts.push_back(frontPercentile(scene.world) / kWidth);
+    fronts.push_back(sphSurgeFrontQuantile(scene.world, 0.995, scratch) / kWidth);
   }
   return fronts;
 }
