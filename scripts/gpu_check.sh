@@ -56,7 +56,7 @@ section_tests() {
 }
 section_tours() {
   local tour shot
-  for tour in fountain_tour:600 blob_tour:400 fountain_tour_13k:900; do
+  for tour in fountain_tour:600 blob_tour:400; do
     IFS=: read -r tour shot <<<"$tour"
     echo "=== $tour (rendered, all cores)"
     timeout 150 $B/fluiddemo replay content/replays/$tour.replay --csv "$OUT/gpu_$tour.csv" \
@@ -69,7 +69,7 @@ section_pinned() {
   cores=$(pick_two_cores)
   pin="taskset -c $cores"
   echo "=== pinned to cpus $cores: $(lscpu 2>/dev/null | grep -m1 'Model name')"
-  for tour in fountain_tour fountain_tour_13k; do
+  for tour in fountain_tour; do
     echo "=== $tour on 2 pinned cores (rendered, async meshing)"
     timeout 150 $pin $B/fluiddemo replay content/replays/$tour.replay --threads 2 \
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12

@@ -208,6 +208,10 @@ void DfsphStep::applyKappa(float h, std::vector<float>& total) {
       total[i] += kappa4[i].x;
     }
   });
+  // The spray after the water (spray.hpp) keeps its velocities.
+  scratch_.vec_b.resize(store_.velocity.size());
+  std::copy(store_.velocity.begin() + static_cast<std::ptrdiff_t>(n_), store_.velocity.end(),
+            scratch_.vec_b.begin() + static_cast<std::ptrdiff_t>(n_));
   store_.velocity.swap(scratch_.vec_b);
 }
 

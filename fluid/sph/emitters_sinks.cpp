@@ -82,7 +82,8 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumpe
   SphScratch& scratch = world.scratch;
   SphPump& pump = world.pump;
   const std::size_t n = store.size();
-  std::size_t out = 0;
+  const std::size_t spray_begin = store.sphCount();
+  std::size_t out = 0, spray_gone = 0;
   // Stable compaction: survivors keep their relative order, so the result is deterministic. The
   // pump takes in storage order (grid-cell order, the same at any thread count); an intake's
   // particle stays in the water once the pump is at capacity.
@@ -92,9 +93,13 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumpe
     if (fate == 2u) {
       pump.held.push_back({store.id[i], world.time + pump.delay});
       ++pumped;
+      spray_gone += i >= spray_begin ? 1 : 0;
       continue;
     }
-    if (fate == 0u) continue;
+    if (fate == 0u) {
+      spray_gone += i >= spray_begin ? 1 : 0;
+      continue;
+    }
     if (out != i) {
       store.position[out] = store.position[i];
       store.velocity[out] = store.velocity[i];
@@ -103,9 +108,11 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumpe
       store.id[out] = store.id[i];
       scratch.warm_kappa[out] = scratch.warm_kappa[i];
       scratch.carry.index[out] = scratch.carry.index[i];
+      scratch.last_neighbours[out] = scratch.last_neighbours[i];
     }
     ++out;
   }
+  store.spray_count -= spray_gone;  // the order is kept, so the spray is still last
   const std::size_t removed = n - out - pumped;
   store.position.resize(out);
   store.velocity.resize(out);
@@ -114,6 +121,7 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumpe
   store.id.resize(out);
   scratch.warm_kappa.resize(out);
   scratch.carry.index.resize(out);
+  scratch.last_neighbours.resize(out);
   return removed;
 }
 

@@ -47,6 +47,19 @@ void resortByCell(StepContext& context, NeighborLists& lists) {
     soa_z[e] = x.z;
     order[e] = static_cast<std::uint32_t>(e);  // only this iteration reads order[e]
   });
+  // The spray after the SPH water (spray.hpp) keeps its place.
+  const std::size_t total = context.total;
+  for (auto* v : {&scratch.vec_a, &scratch.vec_b}) v->resize(total);
+  scratch.u32_tmp.resize(total);
+  scratch.float_tmp.resize(total);
+  carry.index_tmp.resize(total);
+  for (std::size_t i = n; i < total; ++i) {
+    scratch.vec_a[i] = store.position[i];
+    scratch.vec_b[i] = store.velocity[i];
+    scratch.u32_tmp[i] = store.id[i];
+    scratch.float_tmp[i] = scratch.warm_kappa[i];
+    carry.index_tmp[i] = carry.index[i];
+  }
   store.position.swap(scratch.vec_a);
   store.velocity.swap(scratch.vec_b);
   store.id.swap(scratch.u32_tmp);
@@ -85,17 +98,18 @@ void updateNeighbours(StepContext& context, bool store_changed) {
   if (rebuild) {
     // Cells 0.2 % wider than the search radius: the query then reaches one cell on each side
     // (neighborReach), with room for float slack at coordinates up to ~400 H from the origin.
-    buildNeighborGrid(scratch.grid, store.position, 1.002f * (support + verlet_skin), params.domain_min,
+    const std::span<const glm::vec3> water(store.position.data(), n);
+    buildNeighborGrid(scratch.grid, water, 1.002f * (support + verlet_skin), params.domain_min,
                       params.domain_max);
     resortByCell(context, verlet_skin > 0.0f ? scratch.verlet : scratch.neighbors);
     if (verlet_skin > 0.0f) {
-      findNeighbors(scratch.grid, store.position, support + verlet_skin, scratch.verlet, true);
+      findNeighbors(scratch.grid, water, support + verlet_skin, scratch.verlet, true);
       scratch.verlet_position.resize(n);
       forEach(n, [&](std::size_t i) { scratch.verlet_position[i] = store.position[i]; });
       scratch.verlet_radius = support + verlet_skin;
       scratch.verlet_valid = true;
     } else {
-      findNeighbors(scratch.grid, store.position, support, scratch.neighbors, true);
+      findNeighbors(scratch.grid, water, support, scratch.neighbors, true);
       scratch.verlet_valid = false;
     }
   }

@@ -1,6 +1,6 @@
 # Sources of fluid/sph, added to the `fluid` library. The step (sph_step.cpp) runs the units in
 # order: emitters_sinks, neighbor_step, boundary, one solver (wcsph / dfsph, with pair_loops and
-# time_step), collisions.
+# time_step), collisions, spray (ballistic drops outside the solve).
 target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/neighbor_grid.cpp
   ${CMAKE_CURRENT_LIST_DIR}/analytic_colliders.cpp
@@ -14,6 +14,7 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/wcsph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/dfsph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collisions.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/spray.cpp
   ${CMAKE_CURRENT_LIST_DIR}/blast.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_scenes.cpp
 )

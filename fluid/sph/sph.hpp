@@ -31,6 +31,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -64,6 +65,22 @@ struct SphParams {
   float min_time_step = 1e-6f;           // s, lower bound (a step never gets shorter, even if CFL asks)
   float max_speed = 0.0f;                // m/s, velocities are clamped to this after each step; 0 = no clamp
   std::size_t max_particles = 1u << 20;  // particle budget: emitters stop at this count; < 2^28
+
+  // Spray (after Ihmsen et al. 2012, "Unified spray, foam and bubbles for particle-based fluids",
+  // §4: a particle with fewer than 6 fluid neighbours is spray, advected with gravity and drag
+  // and no pressure). Here the neighbours that count are the calm ones (no faster than
+  // spray_speed): a particle faster than spray_speed with fewer than spray_neighbours calm
+  // neighbours in the last step has left the water, alone or in a sheet or lump thrown with it,
+  // and flies ballistic outside the SPH solve (gravity, quadratic air drag, the colliders' Kolb
+  // 2004 §3.3.2 reaction); it rejoins once it is among spray_neighbours calm SPH particles, or
+  // touches a collider no faster than spray_speed. The SPH's CFL step is then set by the bulk of
+  // the water, not by the fastest drop of a blast. Ids and mass are kept; the spray stays in the
+  // store (its last ParticleStore::spray_count entries).
+  float spray_speed = 0.0f;  // m/s; 0 = off (every particle stays in the SPH solve)
+  int spray_neighbours = 6;  // >= 1
+  // Speed at which the drag balances gravity (drag acceleration |g| |v| v / v_t^2, opposite v);
+  // 0 = no drag. A blast tears water into drops of millimetres, whose terminal speed is 6-9 m/s.
+  float spray_terminal_speed = 0.0f;
 
   // WCSPH (Becker & Teschner 2007)
   float sound_speed = 20.0f;          // c_s (m/s); accuracy knob: density error ~ (v_max / c_s)^2
@@ -114,8 +131,12 @@ struct ParticleStore {
   // in its last pass over the particles and addSphParticle appends to them; code that writes
   // `position` directly calls refreshSphPositionArrays before they are read.
   std::vector<float> position_x, position_y, position_z;
+  // Spray (SphParams::spray_speed): after a step the last spray_count particles fly ballistic,
+  // outside the SPH solve; the first size() - spray_count are the SPH water.
+  std::size_t spray_count = 0;
 
   std::size_t size() const { return position.size(); }
+  std::size_t sphCount() const { return position.size() - std::min(spray_count, position.size()); }
 };
 
 struct SphCollider {
@@ -219,6 +240,9 @@ struct SphStepStats {
   std::size_t emitted = 0;
   std::size_t removed = 0;
   std::size_t pumped = 0;  // particles the intakes and gutters took into the pump this step
+  std::size_t spray = 0;         // particles flying ballistic after the step (SphParams::spray_speed)
+  std::size_t spray_left = 0;    // particles that left the SPH solve as spray at the step's start
+  std::size_t spray_joined = 0;  // spray that rejoined the SPH solve at the step's start
   std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step, every pass
   bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
   // Health counters (they observe the step, never change it). The overlay, the replay CSV and
@@ -311,6 +335,13 @@ struct SphScratch {
   std::vector<std::uint32_t> u32_tmp;
   std::vector<std::uint32_t> sorted_keys;     // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;            // per particle: 0 when inside a sink at the start of the step
+  // Per particle, from the end of the last step (SphParams::spray_speed): a fast SPH particle's
+  // count of calm neighbours in that step, a spray particle's count of calm SPH particles within H
+  // of its end position (kJoinNeighbours: it touched a collider slowly); kUnknownNeighbours for
+  // slow SPH particles and those added since. The spray transitions read it.
+  static constexpr std::uint32_t kUnknownNeighbours = ~0u, kJoinNeighbours = ~0u - 1u;
+  std::vector<std::uint32_t> last_neighbours;
+  std::vector<std::uint32_t> spray_order;     // the spray transitions' permutation (new index -> old)
   std::vector<glm::vec3> emitter_crowd;       // applyEmitters: the particles near the layer being placed
   std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far
   std::vector<std::uint8_t> collider_moving;  // per collider: 1 when its pose has a velocity this step

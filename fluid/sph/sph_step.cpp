@@ -7,6 +7,7 @@
 #include "fluid/sph/emitters_sinks.hpp"
 #include "fluid/sph/neighbor_step.hpp"
 #include "fluid/sph/solvers.hpp"
+#include "fluid/sph/spray.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -109,23 +110,25 @@ void finishStep(StepContext& context, float requested) {
   stats.dt = dt;
   stats.density_iterations = context.density_iterations;
   stats.divergence_iterations = context.divergence_iterations;
-  stats.particles = context.count;
+  stats.particles = context.total;
+  stats.spray = context.total - context.count;
   stats.dt_limited_by_request = requested < params.max_time_step && dt >= requested;
   // The speed cap, the kinetic energy (of the capped velocities), the SoA position arrays the
   // surface mesher reads (sphPositionArrays) and the health counts in one pass. The energy sum
   // is added in the same order as without the counts (same blocks, same joins).
   ParticleStore& store = context.particles;
   std::vector<glm::vec3>& velocities = store.velocity;
-  for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(context.count);
+  const std::size_t total = context.total;
+  for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(total);
   SphScratch::SampleCarry& carry = context.scratch.carry;
-  carry.position.resize(context.count);
-  carry.count = context.count;
+  carry.position.resize(total);
+  carry.count = context.count;  // the spray's samples are not carried
   struct Pass {
     double sum_v2 = 0.0;
     std::size_t clamps = 0, nonfinite = 0;
   };
   const Pass pass = reduce(
-      context.count, Pass{},
+      total, Pass{},
       [&](std::size_t i, Pass& acc) {
         if (params.max_speed > 0.0f) {
           const float speed = glm::length(velocities[i]);
@@ -154,9 +157,9 @@ void finishStep(StepContext& context, float requested) {
   stats.dt_held_at_min = context.dt_held_at_min;
 }
 
-// The 99th percentile of the step-start density errors the solver just computed (store.density).
-float densityErrorP99(const ParticleStore& store, float rest_density, std::vector<float>& errors) {
-  const std::size_t n = store.size();
+// The 99th percentile of the step-start density errors the solver just computed (store.density
+// of the first n particles, the SPH water).
+float densityErrorP99(const ParticleStore& store, std::size_t n, float rest_density, std::vector<float>& errors) {
   if (n == 0) return 0.0f;
   errors.resize(n);
   for (std::size_t i = 0; i < n; ++i) errors[i] = std::max(0.0f, store.density[i] / rest_density - 1.0f);
@@ -184,6 +187,8 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
 
   // Keep persistent per-particle solver state in step with the store.
   scratch.warm_kappa.resize(store.size(), 0.0f);
+  scratch.last_neighbours.resize(store.size(), SphScratch::kUnknownNeighbours);
+  store.spray_count = std::min(store.spray_count, store.size());
   stats.removed = applySinks(world, in_sinks, stats.pumped);
   stats.emitted = applyEmitters(world);
   const std::size_t n = store.size();
@@ -191,9 +196,11 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   scratch.carry.index.resize(n, SphScratch::SampleCarry::kNone);  // emitted: nothing carried
   store.density.resize(n);
   store.pressure.resize(n);
+  const bool sprayed = applySprayTransitions(world, stats);
 
   StepContext context{world, params, scratch, store, stats};
-  context.count = n;
+  context.total = n;
+  context.count = store.sphCount();
   context.collider_count = world.colliders.size();
   context.support = scratch.kernel.support;
   context.spacing = sphSpacing(params);
@@ -204,16 +211,18 @@ SphStatus stepImpl(SphWorld& world, float max_dt, double span, SphStepStats* sta
   context.previous_dt = world.last_dt > 0.0f ? world.last_dt : max_dt;
   context.dt = max_dt;
 
-  updateNeighbours(context, stats.emitted > 0 || stats.removed > 0 || stats.pumped > 0);
+  updateNeighbours(context, stats.emitted > 0 || stats.removed > 0 || stats.pumped > 0 || sprayed);
   sampleBoundary(context);
   if (params.solver == SphSolverKind::wcsph)
     stepWcsph(context);
   else
     stepDfsph(context);
-  stats.p99_density_error = densityErrorP99(store, params.rest_density, scratch.density_error);
+  stats.p99_density_error = densityErrorP99(store, context.count, params.rest_density, scratch.density_error);
   advect(context);
   storeCouplingForces(context);
   resolveCollisions(context);
+  advanceSpray(context);
+  countCalmNeighbours(context);
   finishStep(context, requested);
   stats.step_ms = msSince(t_start);
   if (stats_out) *stats_out = stats;

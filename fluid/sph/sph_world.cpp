@@ -73,6 +73,9 @@ SphStatus validateSphParams(const SphParams& p) {
       {"max_density_error", p.max_density_error, 1e-7f, 1.0f, "1e-7 .. 1"},
       {"max_divergence_error", p.max_divergence_error, 1e-7f, 1.0f, "1e-7 .. 1"},
       {"collision_skin", p.collision_skin, 0.0f, 10.0f, "0 .. 10 m"},
+      {"spray_speed", p.spray_speed, 0.0f, 1e6f, "0 (off) .. 1e6 m/s"},
+      {"spray_terminal_speed", p.spray_terminal_speed, 0.0f, 1e6f, "0 (no drag) .. 1e6 m/s"},
+      {"spray_neighbours", static_cast<float>(p.spray_neighbours), 1.0f, 1000.0f, "1 .. 1000"},
   };
   for (const Check& c : checks) {
     if (!std::isfinite(c.value) || c.value < c.lo || c.value > c.hi) return {fieldError(c.name, c.value, c.range)};
@@ -98,6 +101,8 @@ bool addSphParticle(SphWorld& world, glm::vec3 position, glm::vec3 velocity) {
 
 bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position, glm::vec3 velocity) {
   ParticleStore& s = world.particles;
+  std::vector<std::uint32_t>& last = world.scratch.last_neighbours;
+  last.resize(s.size(), SphScratch::kUnknownNeighbours);
   s.position.push_back(position);
   s.position_x.push_back(position.x);
   s.position_y.push_back(position.y);
@@ -106,6 +111,21 @@ bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position,
   s.density.push_back(world.params.rest_density);
   s.pressure.push_back(0.0f);
   s.id.push_back(id);
+  last.push_back(SphScratch::kUnknownNeighbours);
+  // A new particle is SPH water: it goes in front of the spray, which stays last in the store.
+  const std::size_t spray = std::min(s.spray_count, s.size() - 1);
+  if (spray > 0) {
+    const auto toFront = [spray](auto& v) { std::rotate(v.end() - 1 - static_cast<std::ptrdiff_t>(spray), v.end() - 1, v.end()); };
+    toFront(s.position);
+    toFront(s.position_x);
+    toFront(s.position_y);
+    toFront(s.position_z);
+    toFront(s.velocity);
+    toFront(s.density);
+    toFront(s.pressure);
+    toFront(s.id);
+    toFront(last);
+  }
   return true;
 }
 
@@ -152,6 +172,8 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   w.u32_tmp.reserve(capacity);
   w.sorted_keys.reserve(capacity);
   w.keep.reserve(capacity);
+  w.last_neighbours.reserve(capacity);
+  w.spray_order.reserve(capacity);
   w.collide_stale.reserve(capacity);
   w.carry.position.reserve(capacity);
   w.carry.index.reserve(capacity);

@@ -88,7 +88,8 @@ struct StepContext {
   SphScratch& scratch;
   ParticleStore& particles;
   SphStepStats& stats;
-  std::size_t count = 0;           // particles after sinks and emitters
+  std::size_t count = 0;           // SPH particles after sinks, emitters and spray transitions
+  std::size_t total = 0;           // all particles: the SPH water [0, count), the spray [count, total) (spray.hpp)
   std::size_t collider_count = 0;  // world.colliders.size()
   float support = 0.0f;            // H
   float spacing = 0.0f;            // d

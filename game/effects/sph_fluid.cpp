@@ -34,6 +34,11 @@ const ParamTable<SphFluidParams>& table() {
                       "circulate the water: an intake in the basin floor, a gutter round the basin, the nozzle "
                       "gives the same particles back (fixed at construction); false = the nozzle makes water"),
       param<&P::pump_delay>("pump_delay", 0.0, 10.0, "seconds a particle spends in the pump's pipe"),
+      param<&P::spray_speed>("spray_speed", 0.0, 1000.0,
+                             "water faster than this (m/s) with fewer than 6 calm neighbours flies ballistic outside "
+                             "the SPH solve until it lands among water (Ihmsen et al. 2012 spray); 0 = off"),
+      param<&P::spray_terminal_speed>("spray_terminal_speed", 0.0, 1000.0,
+                                      "the spray's air drag as the speed at which it balances gravity (m/s); 0 = none"),
       param<&P::cfl>("cfl", 0.05, 1.0, "CFL number: a step moves no particle more than cfl * 2r"),
       param<&P::max_time_step>("max_time_step", 0.0005, 0.05, "upper bound of one adaptive SPH step (s)"),
       param<&P::density_error>("density_error", 0.00001, 0.05,
@@ -104,8 +109,8 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
     ImGui::Text("sph fluid: %zu particles, %llu sub-steps this step", state.world.particles.size(), ull(t.steps));
     const WaterWhereabouts where = waterWhereabouts(state, level_);
-    ImGui::Text("  water: pool %zu (level %.0f cm)  jet and air %zu  ground %zu  pump %zu", where.pool,
-                100.0 * where.pool_level, where.jet_and_air, where.ground, where.pump);
+    ImGui::Text("  water: pool %zu (level %.0f cm)  jet and air %zu (spray %zu)  ground %zu  pump %zu", where.pool,
+                100.0 * where.pool_level, where.jet_and_air, where.spray, where.ground, where.pump);
     ImGui::Text("  density error: mean %.3f %%  p99 %.2f %%  max %.2f %%", 100.0 * t.meanDensityError(),
                 100.0 * t.p99_density_error, 100.0 * t.max_density_error);
     const float deep = sphDeepPush(state);

@@ -134,6 +134,7 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
     row.water_air = where.jet_and_air;
     row.water_ground = where.ground;
     row.water_pump = where.pump;
+    row.water_spray = where.spray;
     const auto& t = fluid->last_totals;  // the frame's one game step (the variable hides namespace fluid)
     row.truth = {t.steps,
                  t.meanDensityError(),

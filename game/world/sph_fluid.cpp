@@ -21,6 +21,8 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.max_density_error = params.density_error;
   solver.force_bound = params.force_bound;
   solver.warm_start = params.warm_start;
+  solver.spray_speed = params.spray_speed;
+  solver.spray_terminal_speed = params.spray_terminal_speed;
 }
 
 void deriveSphFluid(const SphFluidParams& params, const FountainGeometry& g, glm::vec3 gravity,
@@ -164,6 +166,7 @@ WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry&
       ++out.jet_and_air;
   }
   out.pump = w.pump.size();
+  out.spray = w.particles.spray_count;
   const float d = fluid::sphSpacing(w.params);
   const float area = 3.14159265f * (g.basin_inner_radius * g.basin_inner_radius - g.plinth_radius * g.plinth_radius);
   out.pool_level = static_cast<float>(out.pool) * d * d * d / area;

@@ -31,6 +31,11 @@ struct SphFluidParams {
   float viscosity = 0.02f;        // m^2/s (SphParams::viscosity)
   bool pump = true;         // circulate the water (intake, gutter, nozzle); fixed at construction
   float pump_delay = 0.5f;  // s a particle spends in the pump's pipe
+  // Spray (fluid::SphParams::spray_speed): water faster than this with few calm neighbours flies
+  // ballistic outside the SPH solve until it lands among water; 0 = off. Above the jet's speed, so
+  // the jet stays water.
+  float spray_speed = 6.0f;            // m/s
+  float spray_terminal_speed = 8.0f;   // m/s: the drops' air drag (millimetre drops fall at 6-9 m/s)
   // Solver quality knobs (fluid::SphParams): accuracy against time, see docs/sph.md.
   float cfl = 0.4f;
   float max_time_step = 0.005f;   // s
@@ -86,6 +91,7 @@ bool initSphFluid(SphFluid& fluid, const SphFluidParams& params, const FountainG
 // in the pump. Their sum is the count of water.
 struct WaterWhereabouts {
   std::size_t pool = 0, jet_and_air = 0, ground = 0, pump = 0;
+  std::size_t spray = 0;  // of all these, flying ballistic (fluid::SphParams::spray_speed)
   float pool_level = 0.0f;  // m above the basin floor: the pool's volume over the basin's floor area
 };
 WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry& geometry);

@@ -139,6 +139,59 @@ TEST(FountainPump, ABlastOnTheIntake) {
   EXPECT_EQ(sortedIds(f), ids);
 }
 
+// Issue 33 item 3: a blast costs about what calm water costs. The fountain runs 4 s (the jet up, the
+// dish full), then 2 s calm, then an explosive's blast and 2 s after it; the
+// SPH steps per game step are compared (a count, so the comparison is exact on any machine; the
+// wall time is printed beside it). Without spray the drops the blast throws set every step.
+struct BlastCost {
+  double calm_steps = 0.0, blast_steps = 0.0, calm_ms = 0.0, blast_ms = 0.0;
+  std::size_t most_spray = 0;
+};
+BlastCost blastCost(float spray_speed, glm::vec3 centre, float impulse) {
+  game::SphFluid f = pumpedFountain();
+  f.params.spray_speed = spray_speed;
+  game::applySolverKnobs(f.params, f.world.params);
+  const game::FountainGeometry g;
+  BlastCost cost;
+  std::size_t steps = 0;
+  double ms = 0.0;
+  const auto run = [&](double seconds) {
+    steps = 0;
+    ms = 0.0;
+    const int frames = static_cast<int>(std::lround(seconds * 60.0));
+    for (int frame = 0; frame < frames; ++frame) {
+      EXPECT_TRUE(game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& s) {
+        ++steps;
+        ms += s.step_ms;
+        cost.most_spray = std::max(cost.most_spray, s.spray);
+      })) << f.error;
+    }
+    return frames;
+  };
+  run(4.0);
+  const int calm_frames = run(2.0);
+  cost.calm_steps = static_cast<double>(steps) / calm_frames;
+  cost.calm_ms = ms / calm_frames;
+  blast(f, centre, impulse);
+  const int blast_frames = run(2.0);
+  cost.blast_steps = static_cast<double>(steps) / blast_frames;
+  cost.blast_ms = ms / blast_frames;
+  return cost;
+}
+
+TEST(FountainSpray, ABlastInTheDishCostsAboutWhatCalmWaterCosts) {
+  // An explosive going off on the water in the statue's dish (content/scenes/fountain.json's impulse).
+  const glm::vec3 dish(0.7f, 1.7f, 0.0f);
+  const BlastCost on = blastCost(6.0f, dish, 60.0f), off = blastCost(0.0f, dish, 60.0f);
+  std::printf("[ metric ] SPH steps per game step, calm / 2 s after a blast: spray %.2f / %.2f (%.1f / %.1f ms), "
+              "without spray %.2f / %.2f (%.1f / %.1f ms); most spray %zu\n",
+              on.calm_steps, on.blast_steps, on.calm_ms, on.blast_ms, off.calm_steps, off.blast_steps, off.calm_ms,
+              off.blast_ms, on.most_spray);
+  EXPECT_GT(on.most_spray, 20u);
+  EXPECT_LE(on.blast_steps, 1.5 * on.calm_steps);
+  EXPECT_LT(on.blast_steps, off.blast_steps);
+}
+
 // Strong blasts round the basin throw much of the pool over the wall: the gutter takes it into the
 // pump, and the nozzle brings it back into the basin.
 TEST(FountainPump, ThePoolThrownOutReturnsThroughTheGutterAndThePump) {

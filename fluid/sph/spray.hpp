@@ -1,0 +1,35 @@
+#pragma once
+// Internal to fluid/sph: spray (SphParams::spray_speed; Ihmsen et al. 2012, "Unified spray, foam
+// and bubbles for particle-based fluids", §4: particles with fewer than 6 fluid neighbours are
+// spray, moved by gravity and drag alone). Drops that leave the water fly ballistic outside the
+// SPH solve, so the solve's CFL step (dt <= cfl d / v_max) follows the bulk of the water, not the
+// fastest drop of a blast; they rejoin where they land among water. The spray is the last
+// ParticleStore::spray_count particles of the store: the SPH units see only the first
+// sphCount() (StepContext::count).
+#include "fluid/sph/step_context.hpp"
+
+namespace fluid::sph_step {
+
+// At the step's start, after the sinks and emitters: an SPH particle that had fewer than
+// spray_neighbours calm neighbours (no faster than spray_speed) in the last step and is faster
+// than spray_speed now becomes spray; spray that ended the last step among spray_neighbours calm
+// SPH particles, or touched a collider no faster than spray_speed, rejoins (all of it when spray
+// is off). A
+// stable partition of every per-particle array: the SPH water first, the spray last, each in its
+// old order, so the result is the same for any thread count. Counts the moves in `stats`; returns
+// whether any particle moved.
+bool applySprayTransitions(SphWorld& world, SphStepStats& stats);
+
+// After the SPH collisions: moves the spray dt ballistic (gravity and quadratic drag, in sub-steps
+// of at most half a spacing), with the Kolb et al. 2004 §3.3.2 reaction against every collider at
+// its end-of-step pose (the reactions add to the colliders' force and torque, like the water's),
+// then counts each drop's calm SPH neighbours at the end positions for the next step's transitions.
+// Writes old_position for the spray (sphPositionsAt) and zero density and pressure.
+void advanceSpray(StepContext& context);
+
+// After advanceSpray: each SPH particle faster than spray_speed counts its calm neighbours (the
+// step's list, the end velocities) for the next step's transitions; the others are marked as
+// staying (kUnknownNeighbours). Nothing when spray is off.
+void countCalmNeighbours(StepContext& context);
+
+}  // namespace fluid::sph_step

@@ -1,0 +1,224 @@
+// Spray (SphParams::spray_speed, fluid/sph/spray.hpp): drops a blast throws out of the water fly
+// ballistic outside the SPH solve and rejoin it where they land. A pool 0.2 m deep in a 1 m box
+// (3,125 particles), blasted from just above its surface. Every case checks the count, the ids,
+// no NaN and that no particle leaves the box below its rim.
+#include "fluid/sph/blast.hpp"
+#include "fluid/sph/sph_scenes.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+namespace {
+
+using namespace fluid;
+
+constexpr double kFrame = 1.0 / 60.0;
+
+// The game's fountain regime (content/scenes/fountain.json): a CFL number of 0.9 and steps of up
+// to a frame, so calm water takes about one step per frame.
+SphScene sprayPool(float spray_speed) {
+  SphScene scene;
+  SphWorld& w = scene.world;
+  SphParams& p = w.params;
+  p.particle_radius = 0.02f;
+  p.viscosity = 0.01f;
+  p.cfl = 0.9f;
+  p.max_time_step = static_cast<float>(kFrame);
+  p.max_density_error = 0.005f;
+  p.force_bound = 0.0f;
+  p.max_particles = 100000;
+  p.domain_min = glm::vec3(-0.5f);
+  p.domain_max = glm::vec3(1.5f, 3.0f, 1.5f);
+  p.spray_speed = spray_speed;
+  p.spray_terminal_speed = 8.0f;
+  CollisionMaterial wall;
+  wall.resilience = 0.0f;
+  addSphContainer(scene, glm::vec3(0.0f), glm::vec3(1.0f, 1.5f, 1.0f), wall);
+  addSphBlock(w, glm::vec3(0.0f), glm::vec3(1.0f, 0.2f, 1.0f));  // 25 x 5 x 25
+  return scene;
+}
+
+Blast poolBlast(float impulse_at_1m) {
+  Blast b;
+  b.centre = glm::vec3(0.5f, 0.25f, 0.5f);
+  b.impulse_at_1m = impulse_at_1m;
+  b.core_radius = 0.1f;
+  b.reach = 1.0f;
+  return b;
+}
+
+std::multiset<std::uint32_t> ids(const SphWorld& w) { return {w.particles.id.begin(), w.particles.id.end()}; }
+
+// Every particle is finite, and none is inside the box's walls or floor below the rim (the
+// collision skin aside).
+void expectInsideTheBox(const SphWorld& w, const char* when) {
+  const float skin = 1e-4f;
+  std::size_t outside = 0, nonfinite = 0;
+  for (std::size_t i = 0; i < w.particles.size(); ++i) {
+    const glm::vec3 x = w.particles.position[i], v = w.particles.velocity[i];
+    if (!std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z)) ++nonfinite;
+    if (x.y < 1.5f && (x.y < -skin || x.x < -skin || x.z < -skin || x.x > 1.0f + skin || x.z > 1.0f + skin)) ++outside;
+  }
+  EXPECT_EQ(nonfinite, 0u) << when;
+  EXPECT_EQ(outside, 0u) << when;
+}
+
+struct BlastRun {
+  double calm_steps = 0.0;   // SPH steps per frame over the last 0.5 s before the blast
+  double blast_steps = 0.0;  // over the 2 s after it
+  std::size_t most_spray = 0, spray_at_end = 0, left = 0, joined = 0;
+  float top_speed = 0.0f;  // fastest particle right after the blast
+};
+
+// 0.5 s calm, the blast, 2 s after it, in frames of 1/60 s (advanceSph, as the game steps).
+BlastRun blastRun(SphScene& scene, const Blast& blast, float cap) {
+  SphWorld& w = scene.world;
+  const auto ids0 = ids(w);
+  BlastRun run;
+  std::size_t steps = 0;
+  const auto frames = [&](int count) {
+    for (int f = 0; f < count; ++f) {
+      const SphStatus st = advanceSph(w, kFrame, [&](const SphStepStats& s) {
+        ++steps;
+        run.most_spray = std::max(run.most_spray, s.spray);
+        run.left += s.spray_left;
+        run.joined += s.spray_joined;
+        EXPECT_EQ(s.particles, ids0.size());
+        EXPECT_EQ(s.nonfinite, 0u);
+      });
+      EXPECT_TRUE(st.ok()) << st.error;
+      EXPECT_LE(w.particles.spray_count, w.particles.size());
+    }
+  };
+  frames(30);
+  run.calm_steps = steps / 30.0;
+  EXPECT_TRUE(applyBlast(w, blast, cap).ok());
+  for (const glm::vec3& v : w.particles.velocity) run.top_speed = std::max(run.top_speed, glm::length(v));
+  steps = 0;
+  frames(120);
+  run.blast_steps = steps / 120.0;
+  run.spray_at_end = w.particles.spray_count;
+  EXPECT_EQ(ids(w), ids0) << "every particle keeps its id, none is lost or made";
+  expectInsideTheBox(w, "after the blast");
+  return run;
+}
+
+TEST(SphSpray, ABlastCostsAboutWhatCalmWaterCosts) {
+  SphScene with = sprayPool(3.0f), without = sprayPool(0.0f);
+  const BlastRun on = blastRun(with, poolBlast(6.0f), 20.0f);
+  const BlastRun off = blastRun(without, poolBlast(6.0f), 20.0f);
+  std::printf("steps per frame, calm / 2 s after the blast: spray %.2f / %.2f, without %.2f / %.2f; most spray %zu, "
+              "%zu left, %zu joined, %zu spray at the end; fastest drop %.1f m/s\n",
+              on.calm_steps, on.blast_steps, off.calm_steps, off.blast_steps, on.most_spray, on.left, on.joined,
+              on.spray_at_end, on.top_speed);
+  EXPECT_GT(on.top_speed, 15.0f) << "the blast throws water fast";
+  EXPECT_GT(on.most_spray, 100u) << "the blast makes spray";
+  // In a box this small the blast also sets the whole pool sloshing at 2-5 m/s, which the SPH must
+  // step; the drops no longer add to that (the game's fountain measures against calm water:
+  // tests/game/test_fountain_pump.cpp).
+  EXPECT_LT(on.blast_steps, 0.85 * off.blast_steps) << "without spray the fastest drop sets every step";
+  EXPECT_LT(on.spray_at_end, on.most_spray / 10) << "the drops rejoin the pool where they land";
+  EXPECT_EQ(off.most_spray, 0u);
+}
+
+TEST(SphSpray, ABlastThrowingWaterAtAHundredMetresPerSecondStaysInTheBox) {
+  SphScene scene = sprayPool(3.0f);
+  const BlastRun run = blastRun(scene, poolBlast(60.0f), 100.0f);
+  std::printf("100 m/s blast: fastest %.1f m/s, steps per frame %.2f (calm %.2f), most spray %zu\n", run.top_speed,
+              run.blast_steps, run.calm_steps, run.most_spray);
+  EXPECT_GT(run.top_speed, 99.0f);
+  SphScene without = sprayPool(0.0f);
+  const BlastRun off = blastRun(without, poolBlast(60.0f), 100.0f);
+  std::printf("without spray: steps per frame %.2f\n", off.blast_steps);
+  // Without spray the drops fly on up without drag and are still out of the box after 2 s; with it
+  // they fall back at their terminal speed and land in the pool, and the steps stay fewer still.
+  EXPECT_LE(run.blast_steps, off.blast_steps);
+  for (const glm::vec3& v : scene.world.particles.velocity) EXPECT_LT(glm::length(v), 100.0f);
+}
+
+TEST(SphSpray, SameStateForOneAndTwoThreads) {
+  std::vector<glm::vec3> x[2], v[2];
+  std::vector<std::uint32_t> id[2];
+  std::size_t spray[2];
+  for (int t = 0; t < 2; ++t) {
+    const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(t + 1));
+    SphScene scene = sprayPool(3.0f);
+    SphWorld& w = scene.world;
+    for (int f = 0; f < 10; ++f) ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+    ASSERT_TRUE(applyBlast(w, poolBlast(6.0f), 20.0f).ok());
+    for (int f = 0; f < 40; ++f) ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+    x[t] = w.particles.position;
+    v[t] = w.particles.velocity;
+    id[t] = w.particles.id;
+    spray[t] = w.particles.spray_count;
+  }
+  EXPECT_GT(spray[0], 0u) << "the comparison runs while there is spray";
+  EXPECT_EQ(spray[0], spray[1]);
+  EXPECT_EQ(id[0], id[1]);
+  ASSERT_EQ(x[0].size(), x[1].size());
+  for (std::size_t i = 0; i < x[0].size(); ++i) {
+    ASSERT_EQ(x[0][i], x[1][i]) << "particle " << i;
+    ASSERT_EQ(v[0][i], v[1][i]) << "particle " << i;
+  }
+}
+
+// A lone drop in empty space reaches the terminal speed and no more (the drag law).
+TEST(SphSpray, ADropFallsAtItsTerminalSpeed) {
+  SphWorld w;
+  w.params.spray_speed = 1.0f;
+  w.params.spray_terminal_speed = 6.0f;
+  w.params.max_time_step = static_cast<float>(kFrame);
+  ASSERT_TRUE(addSphParticle(w, glm::vec3(0.0f, 100.0f, 0.0f), glm::vec3(0.0f, -2.0f, 0.0f)));
+  for (int f = 0; f < 300; ++f) ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+  EXPECT_EQ(w.particles.spray_count, 1u);
+  EXPECT_NEAR(-w.particles.velocity[0].y, 6.0f, 0.06f);
+}
+
+// Drops thrown down at the floor land on it (outside it) and, once slow, are water again.
+TEST(SphSpray, DropsLandOnTheFloorAndRejoin) {
+  SphScene scene;
+  SphWorld& w = scene.world;
+  w.params.particle_radius = 0.02f;
+  w.params.spray_speed = 2.0f;
+  w.params.spray_terminal_speed = 0.0f;
+  w.params.max_time_step = static_cast<float>(kFrame);
+  CollisionMaterial floor;
+  floor.resilience = 0.0f;
+  floor.friction = 1.0f;
+  addSphContainer(scene, glm::vec3(-1.0f, 0.0f, -1.0f), glm::vec3(1.0f, 1.0f, 1.0f), floor);
+  for (int k = 0; k < 5; ++k)
+    ASSERT_TRUE(addSphParticle(w, glm::vec3(0.2f * static_cast<float>(k - 2), 0.5f, 0.0f), glm::vec3(0.0f, -30.0f, 0.0f)));
+  std::size_t most_spray = 0;
+  for (int f = 0; f < 60; ++f) {
+    ASSERT_TRUE(advanceSph(w, kFrame, [&](const SphStepStats& s) { most_spray = std::max(most_spray, s.spray); }).ok());
+    for (const glm::vec3& x : w.particles.position) ASSERT_GE(x.y, 0.0f) << "frame " << f;
+  }
+  EXPECT_EQ(most_spray, 5u);
+  EXPECT_EQ(w.particles.spray_count, 0u);
+}
+
+// A particle added while there is spray is water: it goes in front of the spray.
+TEST(SphSpray, ParticlesAddedWhileThereIsSprayAreWater) {
+  SphScene scene = sprayPool(3.0f);
+  SphWorld& w = scene.world;
+  ASSERT_TRUE(applyBlast(w, poolBlast(6.0f), 20.0f).ok());
+  for (int f = 0; f < 6 && w.particles.spray_count == 0; ++f)
+    ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+  const std::size_t spray = w.particles.spray_count;
+  ASSERT_GT(spray, 0u);
+  const std::uint32_t id = w.next_id;
+  ASSERT_TRUE(addSphParticle(w, glm::vec3(0.51f, 0.1f, 0.51f)));
+  EXPECT_EQ(w.particles.spray_count, spray);
+  const auto at = std::find(w.particles.id.begin(), w.particles.id.end(), id) - w.particles.id.begin();
+  EXPECT_EQ(static_cast<std::size_t>(at), w.particles.sphCount() - 1);
+  EXPECT_EQ(w.particles.position_x.size(), w.particles.size());
+  EXPECT_EQ(w.particles.position_x[static_cast<std::size_t>(at)], 0.51f);
+  ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+}
+
+}  // namespace
