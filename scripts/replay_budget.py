@@ -67,6 +67,47 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
     return lines
 
 
+AFTER_BLAST = 120  # frames (2 s at 60 Hz) counted as "after a blast"
+
+
+def blast_windows(rows):
+    """(calm, after): the frames no blast touched in the last AFTER_BLAST frames, and those it did.
+    Runs are concatenated; a frame number that does not grow starts the next run."""
+    calm, after = [], []
+    since, last_frame = None, None
+    for row in rows:
+        frame = int(row["frame"])
+        if last_frame is not None and frame <= last_frame:
+            since = None  # a new run
+        last_frame = frame
+        if int(row.get("blasts", 0) or 0) > 0:
+            since = 0
+        (after if since is not None and since < AFTER_BLAST else calm).append(row)
+        if since is not None:
+            since += 1
+    return calm, after
+
+
+def blast_table(frames):
+    """Markdown lines: SPH steps and simulation time per frame, calm and in the 2 s after a blast."""
+    lines = ["| meshing | blasts | frames calm / after a blast | SPH steps per frame, calm | after a blast | "
+             "steps ratio | simulation ms per frame, calm (mean) | after a blast (mean) | time ratio |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for mode in ("async", "sync"):
+        rows = frames[mode]
+        calm, after = blast_windows(rows)
+        if not calm or not after:
+            continue
+        mean = lambda rs, f: sum(f(r) for r in rs) / len(rs)
+        steps = lambda r: float(r["sph_steps"])
+        sim = lambda r: float(r["physics_ms"]) + float(r["fluid_ms"])
+        blasts = sum(int(r.get("blasts", 0) or 0) for r in rows)
+        lines.append(f"| {mode} | {blasts} | {len(calm)} / {len(after)} | {mean(calm, steps):.2f} | "
+                     f"{mean(after, steps):.2f} | {mean(after, steps) / mean(calm, steps):.2f} | "
+                     f"{mean(calm, sim):.2f} | {mean(after, sim):.2f} | {mean(after, sim) / mean(calm, sim):.2f} |")
+    return lines
+
+
 def replace_section(path, name, lines):
     begin, end = f"<!-- budget {name} begin -->", f"<!-- budget {name} end -->"
     text = open(path).read()
@@ -83,6 +124,8 @@ def main():
     load_before = os.getloadavg()[0]
     command, frames = run_modes(fluiddemo, replay, async_key)
     lines = budget_table(command, frames, async_key)
+    lines += ["", f"Around the blasts (every explosive that went off, the {AFTER_BLAST} frames from it on against the "
+              "other frames):", ""] + blast_table(frames)
     lines += ["", f"Written by `python3 scripts/replay_budget.py {' '.join(sys.argv[1:4])}` on {os.cpu_count()} cores, "
               f"load average {load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
     if len(sys.argv) > 4:

@@ -23,7 +23,7 @@ std::string frameCsvHeader() {
     line += "_ms";
   }
   line +=
-      ",particles,water_pool,water_air,water_ground,water_pump,water_spray,sprites,triangles,mesh_worker_ms,sph_steps,density_err_"
+      ",particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,triangles,mesh_worker_ms,sph_steps,density_err_"
       "mean,density_err_p99,density_err_max,pushed_"
       "out,push_depth_mm,speed_clamps,"
       "dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash";
@@ -38,8 +38,8 @@ std::string frameCsvRow(const FrameRow& row) {
     line += number;
   }
   for (std::uint64_t count :
-       {row.particles, row.water_pool, row.water_air, row.water_ground, row.water_pump, row.water_spray, row.sprites,
-        row.triangles}) {
+       {row.particles, row.water_pool, row.water_air, row.water_ground, row.water_pump, row.water_spray, row.blasts,
+        row.sprites, row.triangles}) {
     line += ',';
     line += std::to_string(count);
   }
@@ -149,7 +149,7 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
       ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.water_pool) &&
            parseCell(cells[++c], row.water_air) && parseCell(cells[++c], row.water_ground) &&
            parseCell(cells[++c], row.water_pump) && parseCell(cells[++c], row.water_spray) &&
-           parseCell(cells[++c], row.sprites) &&
+           parseCell(cells[++c], row.blasts) && parseCell(cells[++c], row.sprites) &&
            parseCell(cells[++c], row.triangles) && parseCell(cells[++c], row.mesh_worker_ms);
     FrameTruth& t = row.truth;
     if (ok)

@@ -48,6 +48,7 @@ struct FrameRow {
   // Where it is (game::waterWhereabouts): pool, jet and air, ground, pump.
   std::uint64_t water_pool = 0, water_air = 0, water_ground = 0, water_pump = 0;
   std::uint64_t water_spray = 0;  // of the water above, flying ballistic (fluid::SphParams::spray_speed)
+  std::uint64_t blasts = 0;       // explosives that went off in this step
   std::uint64_t sprites = 0;
   std::uint64_t triangles = 0;
   double mesh_worker_ms = 0.0;

@@ -3,6 +3,7 @@
 
 #include "engine/ui/overlay.hpp"
 #include "game/paths.hpp"
+#include "game/explosives/explosives.hpp"
 #include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
@@ -148,6 +149,7 @@ bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, Re
                  t.nonfinite,
                  sphFluidWarns(*fluid, t)};
   }
+  if (const Explosives* explosives = findState<Explosives>(world)) row.blasts = explosives->detonations.size();
   if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
   if (surface) {
     row.triangles = surface->mesh.indices.size() / 3;

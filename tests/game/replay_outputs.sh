@@ -23,7 +23,7 @@ grep -q "checkpoints: 1 matched of 4" "$work/out.txt" || fail "checkpoint 150 no
 import csv, struct, sys, pathlib
 work = pathlib.Path(sys.argv[1])
 rows = list(csv.reader(open(work / "f.csv")))
-want = ("frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,sprites,"
+want = ("frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,"
         "triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
         "dt_request_cuts,nonfinite,warned,state_hash").split(",")
 assert rows[0] == want, rows[0]

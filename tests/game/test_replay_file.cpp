@@ -289,6 +289,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
     rows[i].particles = 100u * static_cast<unsigned>(i);
     rows[i].triangles = 7;
     rows[i].water_spray = 3u * static_cast<unsigned>(i);
+    rows[i].blasts = static_cast<unsigned>(i % 2);
     rows[i].mesh_worker_ms = 0.125 * i;
   }
   rows[1].truth = {17, 0.000412345f, 0.00375f, 0.0213f, 42, 3.125, 5, 1, 2, 0, true};
@@ -296,7 +297,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
   EXPECT_EQ(game::frameCsvHeader(),
-            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,sprites,triangles,"
+            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,triangles,"
             "mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_"
             "clamps,dt_min_clamps,"
             "dt_request_cuts,nonfinite,warned,state_hash");
@@ -310,6 +311,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   EXPECT_EQ(back[1].phase_ms[4], 4.5);
   EXPECT_EQ(back[2].particles, 200u);
   EXPECT_EQ(back[2].water_spray, 6u);
+  EXPECT_EQ(back[1].blasts, 1u);
   EXPECT_EQ(back[2].mesh_worker_ms, 0.25);
   // The SPH health columns come back as written (a float density error survives %.9g).
   const game::FrameTruth& t = back[1].truth;
@@ -332,14 +334,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   // A bad cell is named by file, line and column.
   {
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
+    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'fluid_ms': bad value 'x'"), std::string::npos) << error;
   {  // and so is a bad health cell (warned is 0 or 1)
     ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
+    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'warned': bad value '2'"), std::string::npos) << error;
