@@ -52,13 +52,16 @@ std::string describe(const Json& value) {
   return text;
 }
 
-// A key from the file as quoted in a message: control bytes as '?', at most 60 bytes.
-std::string keyText(std::string_view key) {
+// Text from the file as quoted in a message: control bytes as '?', at most `limit` bytes.
+std::string printable(std::string_view text, std::size_t limit) {
   std::string out;
-  for (char c : key.substr(0, 60)) out += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
-  if (key.size() > 60) out += "...";
+  for (char c : text.substr(0, limit)) out += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+  if (text.size() > limit) out += "...";
   return out;
 }
+
+// A key from the file as quoted in a message.
+std::string keyText(std::string_view key) { return printable(key, 60); }
 
 // Records where a SAX parse stops, for the errors nlohmann reports without a position
 // (out_of_range 406: a number too large for a double).
@@ -95,19 +98,74 @@ std::string lineAndColumn(const std::string& text, std::size_t byte) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
 }
 
-// nlohmann's message without its "[json.exception.parse_error.101] " tag, and with the token it
-// quotes after "last read:" cut to 40 bytes (an unclosed string would quote the rest of the file).
+// nlohmann's message without its "[json.exception.parse_error.101] " tag, whole (position, what
+// was expected), with only the token it quotes after "last read:" cut to 40 bytes (an unclosed
+// string would quote the rest of the file). nlohmann words it
+//   parse error at line L, column C: syntax error while parsing CONTEXT - MESSAGE[; last read: 'TOKEN'][; expected E]
 std::string jsonErrorText(std::string_view what) {
   if (what.starts_with("[json.exception.")) {
     const std::size_t tag_end = what.find("] ");
     if (tag_end != std::string_view::npos) what.remove_prefix(tag_end + 2);
   }
   const std::size_t last = what.find("; last read: '");
-  if (last == std::string_view::npos) return keyText(what.substr(0, 300));
-  const std::string_view token = what.substr(last + 14);
-  return std::string(what.substr(0, last + 14)) + keyText(token.substr(0, std::min<std::size_t>(token.size(), 40))) +
-         (token.size() > 41 ? "...'" : "");
+  if (last == std::string_view::npos) return printable(what, 400);
+  const std::size_t token_begin = last + 14;
+  const std::size_t expected = what.rfind("'; expected ");
+  const std::size_t token_end =
+      expected != std::string_view::npos && expected >= token_begin ? expected : what.size() - 1;
+  return printable(what.substr(0, token_begin), 400) +
+         printable(what.substr(token_begin, token_end - token_begin), 40) + printable(what.substr(token_end), 200);
 }
+
+// The first key that appears twice in one object, as its dotted path ("scene.step_hz"). nlohmann
+// keeps the last value of a repeated key without a word, so a scene that sets a key twice would
+// silently lose the first value.
+struct DuplicateKeys : nlohmann::json_sax<Json> {
+  std::vector<std::vector<std::string>> objects;  // keys seen so far in each open object
+  std::vector<std::string> path;                  // the key of each open object and array
+  std::string pending_key;                        // the key whose value comes next
+  std::string duplicate;                          // dotted path of the first repeated key
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return open(); }
+  bool start_array(std::size_t) override { return open(); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+  bool key(string_t& name) override {
+    std::vector<std::string>& seen = objects.back();
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) {
+      for (const std::string& part : path) duplicate += part.empty() ? "" : part + ".";
+      duplicate += name;
+      return false;  // the first is enough
+    }
+    seen.push_back(name);
+    pending_key = name;
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+
+ private:
+  bool value() {
+    pending_key.clear();
+    return true;
+  }
+  bool open() {
+    path.push_back(pending_key);
+    pending_key.clear();
+    objects.emplace_back();
+    return true;
+  }
+  bool close() {
+    path.pop_back();
+    objects.pop_back();
+    return true;
+  }
+};
 
 std::string formatNumber(double value) {
   std::ostringstream out;
@@ -298,6 +356,8 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
             jsonErrorText(error.what())};
   }
   if (!root.is_object()) return {file_label + ": the top level must be an object (got " + describe(root) + ")"};
+  if (DuplicateKeys keys; !Json::sax_parse(json_text, &keys) && !keys.duplicate.empty())
+    return {file_label + ": " + keyText(keys.duplicate) + ": the key appears twice (one value would be lost)"};
 
   const SectionSpec* scene_spec = findSection("scene");
   const SectionSpec* camera_spec = findSection("camera");

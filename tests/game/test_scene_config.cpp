@@ -69,6 +69,35 @@ TEST(SceneConfig, TruncatedJsonNamesFileAndPosition) {
   EXPECT_TRUE(contains(status.error, "line 1"));
 }
 
+// nlohmann's whole message: where, what it was parsing and what it expected (it was cut to 60 bytes:
+// "parse error at line 2, column 26: syntax error while parsing...").
+TEST(SceneConfig, SyntaxErrorKeepsTheWholeMessage) {
+  SceneConfig scene;
+  const auto status =
+      game::parseSceneText("{\n \"scene\": {\"step_hz\": 60,, },\n \"effects\": {}\n}\n", "s.json", scene);
+  EXPECT_EQ(
+      status.error,
+      "s.json: invalid JSON: parse error at line 2, column 26: syntax error while parsing object key - unexpected "
+      "','; expected string literal");
+  // A quoted token is still cut (an unclosed string would quote the rest of the file), the rest is kept.
+  const auto cut = game::parseSceneText("{\"effects\": {\"" + std::string(100, 'x'), "c.json", scene);
+  EXPECT_TRUE(contains(cut.error, "last read: '\"xxxxxxxx")) << cut.error;
+  EXPECT_TRUE(contains(cut.error, "...'")) << cut.error;
+}
+
+// nlohmann keeps the last of two equal keys without a word: the scene would lose a value silently.
+TEST(SceneConfig, DuplicateKeyIsAnErrorNamingIt) {
+  SceneConfig scene;
+  auto status = game::parseSceneText(R"({"effects": {}, "scene": {"step_hz": 60, "step_hz": 30}})", "d.json", scene);
+  EXPECT_EQ(status.error, "d.json: scene.step_hz: the key appears twice (one value would be lost)");
+  status = game::parseSceneText(R"({"effects": {}, "effects": {}})", "d.json", scene);
+  EXPECT_EQ(status.error, "d.json: effects: the key appears twice (one value would be lost)");
+  // Equal keys in different objects, or inside arrays of objects, are not duplicates.
+  status = game::parseSceneText(R"({"effects": {}, "scene": {"seed": 1}, "camera": {"position": [0, 1, 2]}})",
+                                "ok.json", scene);
+  EXPECT_TRUE(status.ok()) << status.error;
+}
+
 TEST(SceneConfig, WrongTypeNamesKeyAndValue) {
   SceneConfig scene;
   auto status = game::parseSceneText(R"({"effects": {}, "scene": {"substeps": "two"}})", "t.json", scene);
