@@ -2,7 +2,10 @@
 
 #include <stb_image_write.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <string>
 #include <system_error>
 #include <vector>
 
@@ -24,8 +27,10 @@ bool writePngBottomUp(const std::filesystem::path& path, int width, int height, 
     std::copy(rgba.begin() + static_cast<std::ptrdiff_t>(src), rgba.begin() + static_cast<std::ptrdiff_t>(src + row),
               flipped.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * row));
   }
+  errno = 0;
   if (stbi_write_png(path.string().c_str(), width, height, 4, flipped.data(), static_cast<int>(row)) == 0) {
-    error = path.string() + ": cannot write PNG";
+    // stb fails without a reason of its own; fopen's (or fwrite's) errno is the one there is.
+    error = path.string() + ": cannot write PNG" + (errno != 0 ? std::string(": ") + std::strerror(errno) : "");
     return false;
   }
   return true;

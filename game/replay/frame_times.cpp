@@ -4,8 +4,10 @@
 #include "game/replay/replay_file.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 namespace game {
@@ -65,7 +67,7 @@ std::string frameCsvRow(const FrameRow& row) {
 bool writeFrameCsv(const std::filesystem::path& path, const std::vector<FrameRow>& rows, std::string& error) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) {
-    error = path.string() + ": cannot write";
+    error = path.string() + ": cannot write: " + std::strerror(errno);
     return false;
   }
   out << frameCsvHeader() << '\n';

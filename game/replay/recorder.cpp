@@ -52,7 +52,7 @@ bool startRecording(const std::filesystem::path& path, bool force, const std::st
   out.path = path;
   if (out.file == nullptr) {
     ::close(fd);
-    error = path.string() + ": cannot open for writing";
+    error = path.string() + ": cannot open for writing: " + std::strerror(errno);
     return false;
   }
   std::string header = "fluiddemo_replay " + std::to_string(kReplayFormatVersion) + "\n";
