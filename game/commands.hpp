@@ -1,6 +1,13 @@
 #pragma once
 // Subcommands of the fluiddemo executable. Each takes the arguments after its own name,
-// prints its own usage/errors, and returns the process exit code (0 ok, 1 failure, 2 usage).
+// prints its own usage/errors, and returns the process exit code, by one rule:
+//   0 ok;
+//   2 usage: an unknown option, a bad or conflicting value (--set included), a missing required
+//     argument, an output that exists without --force, a picture output not named .png;
+//   1 failure: an input that is missing or bad, an output folder that cannot be written in, and
+//     anything that fails while running.
+// Outputs are checked before any work (game/commands/cli_outputs.hpp); content is found through
+// game/paths.hpp whatever the working folder. tests/game/cli_exit_codes.sh checks the rule.
 
 #include <string>
 #include <vector>

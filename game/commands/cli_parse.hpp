@@ -13,10 +13,17 @@
 
 namespace game {
 
-// Parses `args` into `app`. Returns -1 to go on, otherwise the exit code: 0 after printing the
-// help (--help), 2 after a usage error, printed to stderr as
+// Prints a usage error as every subcommand words it and returns 2:
 //   fluiddemo COMMAND: MESSAGE
 //   run 'fluiddemo COMMAND --help' for the options
+inline int usageError(const std::string& command, const std::string& message) {
+  std::fprintf(stderr, "fluiddemo %s: %s\nrun 'fluiddemo %s --help' for the options\n", command.c_str(),
+               message.c_str(), command.c_str());
+  return 2;
+}
+
+// Parses `args` into `app`. Returns -1 to go on, otherwise the exit code: 0 after printing the
+// help (--help), 2 after a usage error (printed by usageError).
 inline int parseCommandLine(CLI::App& app, const std::string& command, const Args& args) {
   std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 consumes from the back
   try {
@@ -24,10 +31,17 @@ inline int parseCommandLine(CLI::App& app, const std::string& command, const Arg
   } catch (const CLI::CallForHelp&) {
     std::printf("%s", app.help().c_str());
     return 0;
+  } catch (const CLI::ExtrasError& error) {
+    // CLI11 joins the left-over words back to front (it expects them reversed, as parse() takes
+    // them), so "--fps 30" would read "30 --fps"; app.remaining() has them in command-line order.
+    const std::vector<std::string> left = app.remaining();
+    if (left.empty()) return usageError(command, error.what());
+    std::string message =
+        left.size() > 1 ? "The following arguments were not expected:" : "The following argument was not expected:";
+    for (const std::string& word : left) message += " " + word;
+    return usageError(command, message);
   } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "fluiddemo %s: %s\nrun 'fluiddemo %s --help' for the options\n", command.c_str(), error.what(),
-                 command.c_str());
-    return 2;
+    return usageError(command, error.what());
   }
   return -1;
 }

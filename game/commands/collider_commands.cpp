@@ -8,8 +8,10 @@
 #include "fluid/collide/mesh_checks.hpp"
 #include "fluid/core/fnv1a.hpp"
 #include "fluid/io/particle_io.hpp"
+#include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
 #include "game/commands/collider_model.hpp"
+#include "game/paths.hpp"
 #include "game/world/sph_fluid.hpp"
 
 #include <assimp/DefaultIOSystem.h>
@@ -437,7 +439,9 @@ void printCoverage(const std::string& maps, bool auto_maps, float reach, const C
 int bakeColliderCommand(const Args& args) {
   CLI::App app{"Bake depth-map colliders (Kolb et al. 2004 §4) from a model (OBJ and anything assimp reads).",
                "fluiddemo bake-collider"};
-  std::string model, out_path, maps = "auto", format_name = "front-back16", level, content = "content";
+  std::string model, out_path, maps = "auto", format_name = "front-back16", level;
+  // The content folder every subcommand uses (game/paths.hpp), not one relative to where it runs.
+  std::string content = contentDir().string();
   int resolution = 256, normal_resolution = 256, threads = 0, max_cubes = 8;
   // The reach a collider must answer within: the support H = 4r of the game's SPH particles
   // (fluid/sph/sph.hpp), r the sph_fluid effect's particle_radius (0.04 m in the fountain scene).
@@ -449,7 +453,9 @@ int bakeColliderCommand(const Args& args) {
   app.add_option("--level", level,
                  "instead of MODEL: bake the colliders listed in CONTENT/colliders/LEVEL.colliders whose files are "
                  "missing or stale (model hash or bake parameters changed)");
-  app.add_option("--content", content, "content directory of --level")->capture_default_str();
+  app.add_option("--content", content,
+                 "content directory of --level (default: the project's, as play uses; FLUIDDEMO_ROOT overrides it)")
+      ->capture_default_str();
   app.add_flag("--check", check, "with --level: bake nothing, fail when a collider file is missing or stale");
   app.add_option("--margin", margin,
                  "silhouette margin of the ortho maps (model units): points this close outside get a finite distance "
@@ -516,10 +522,7 @@ int bakeColliderCommand(const Args& args) {
   // The default bake answers every point within reach, convex rims included: its ortho maps get a
   // margin ring as wide as the reach. An explicit --maps list keeps the margin it is given (0).
   if (margin == -1.0f) margin = auto_maps ? reach : 0.0f;
-  if (!force && std::filesystem::exists(out_path)) {
-    std::fprintf(stderr, "bake-collider: %s already exists (use --force to replace it)\n", out_path.c_str());
-    return 1;
-  }
+  if (const int code = checkOutputFile("bake-collider", "--out", out_path, force); code >= 0) return code;
   ColliderModel mesh;
   std::string error;
   if (!loadColliderModel(model, mesh, error)) {

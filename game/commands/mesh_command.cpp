@@ -7,6 +7,7 @@
 // (cold) one separately. --idle-ms MS sleeps that long before each of them, as a game's mesher
 // waits for the next frame: the threads go idle in between, and waking them is part of the time.
 #include "game/commands.hpp"
+#include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
 
 #include "fluid/io/particle_io.hpp"
@@ -114,10 +115,7 @@ int meshCommand(const Args& args) {
       return 2;
     }
   }
-  if (!force && std::filesystem::exists(out)) {
-    std::fprintf(stderr, "fluiddemo mesh: %s exists; not overwriting (use --force to replace it)\n", out.c_str());
-    return 1;
-  }
+  if (const int code = checkOutputFile("mesh", "--out", out, force); code >= 0) return code;
 
   fluid::ParticlePositions particles;
   const fluid::IoStatus read = fluid::readParticleFile(in, particles);

@@ -1,5 +1,6 @@
 // `fluiddemo play` and `fluiddemo smoke`: command-line front ends of runScene().
 #include "game/commands.hpp"
+#include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 #include "game/replay/recorder.hpp"
@@ -19,22 +20,23 @@ namespace {
 struct SceneChoice {
   SceneConfig config;
   std::string error;
+  int exit_code = 0;  // 1: the scene is missing or its file is bad; 2: a --set the command line got wrong
 };
 
 SceneChoice loadScene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
   SceneChoice choice;
   std::filesystem::path path;
-  if (SceneStatus status = resolveScene(name_or_path, scenesDir(), path); !status.ok()) {
+  SceneStatus status = resolveScene(name_or_path, scenesDir(), path);
+  if (status.ok()) status = loadSceneFile(path, choice.config);
+  if (!status.ok()) {
     choice.error = status.error;
-    return choice;
-  }
-  if (SceneStatus status = loadSceneFile(path, choice.config); !status.ok()) {
-    choice.error = status.error;
+    choice.exit_code = 1;
     return choice;
   }
   for (const std::string& assignment : overrides) {
-    if (SceneStatus status = applyOverride(choice.config, assignment); !status.ok()) {
+    if (status = applyOverride(choice.config, assignment); !status.ok()) {
       choice.error = status.error;
+      choice.exit_code = 2;
       return choice;
     }
   }
@@ -46,7 +48,7 @@ constexpr int kDefaultHeadlessFrames = 240;
 }  // namespace
 
 int playCommand(const Args& args) {
-  CLI::App app{"Play a scene: a window when a display exists, otherwise headless.", "play"};
+  CLI::App app{"Play a scene: a window when a display exists, otherwise headless.", "fluiddemo play"};
   std::string scene_name = "fountain";
   std::vector<std::string> overrides;
   RunOptions options;
@@ -59,23 +61,24 @@ int playCommand(const Args& args) {
       ->check(CLI::Range(0, 10000000));
   app.add_option("--width", options.width, "framebuffer width")->check(CLI::Range(64, 8192))->capture_default_str();
   app.add_option("--height", options.height, "framebuffer height")->check(CLI::Range(64, 8192))->capture_default_str();
-  app.add_option("--screenshot", screenshot, "write the last frame to this PNG (an existing file needs --force)");
+  app.add_option("--screenshot", screenshot, "write the last frame to this .png file (an existing file needs --force)");
   app.add_flag("--force", force, "replace the --screenshot or --record file if it exists");
   app.add_option("--set", overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--no-ui", no_ui, "start with the overlay hidden");
   std::string record;
   app.add_option("--record", record, "record every input as a replay file (docs/replay.md), flushed as it goes");
   if (int code = parseCommandLine(app, "play", args); code >= 0) return code;
-  std::error_code exists_error;
-  if (!screenshot.empty() && !force && std::filesystem::exists(screenshot, exists_error)) {
-    std::fprintf(stderr, "fluiddemo play: %s already exists (use --force to replace it)\n", screenshot.c_str());
-    return 1;
+  if (!screenshot.empty()) {
+    if (const int code = checkPngOutput("play", "--screenshot", screenshot, force); code >= 0) return code;
+  }
+  if (!record.empty()) {
+    if (const int code = checkOutputFile("play", "--record", record, force); code >= 0) return code;
   }
 
   SceneChoice choice = loadScene(scene_name, overrides);
   if (!choice.error.empty()) {
     std::fprintf(stderr, "fluiddemo play: %s\n", choice.error.c_str());
-    return 1;
+    return choice.exit_code;
   }
   if (!displayAvailable()) options.headless = true;
   if (options.headless && options.frames == 0) options.frames = kDefaultHeadlessFrames;
@@ -91,7 +94,7 @@ int playCommand(const Args& args) {
   if (!record.empty()) {
     if (!startRecording(record, force, scene_name, choice.config, overrides, recorder, error)) {
       std::fprintf(stderr, "fluiddemo play: --record %s\n", error.c_str());
-      return 2;
+      return 1;  // checked above: what is left is the file system's answer (checkOutputFile)
     }
     attachRecorder(recorder, options.hooks);
   }
@@ -116,7 +119,7 @@ int playCommand(const Args& args) {
 }
 
 int smokeCommand(const Args& args) {
-  CLI::App app{"Run scenes headless for a few frames and check every frame for failure.", "smoke"};
+  CLI::App app{"Run scenes headless for a few frames and check every frame for failure.", "fluiddemo smoke"};
   std::string scene_name;
   bool all = false;
   int frames = 30;
@@ -142,12 +145,7 @@ int smokeCommand(const Args& args) {
     scenes.push_back(scene_name);
   }
   if (!out_dir.empty()) {
-    std::error_code error;
-    std::filesystem::create_directories(out_dir, error);
-    if (error) {
-      std::fprintf(stderr, "fluiddemo smoke: cannot create %s: %s\n", out_dir.c_str(), error.message().c_str());
-      return 1;
-    }
+    if (const int code = prepareOutputFolder("smoke", "--out", out_dir); code >= 0) return code;
   }
 
   int failures = 0;

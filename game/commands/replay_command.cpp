@@ -2,6 +2,7 @@
 // checks its checkpoints, prints per-phase percentiles and writes the per-frame CSV and its plot.
 // `fluiddemo replay --compare A.csv B.csv`: per-phase p50/p95 ratios B/A of two such CSVs.
 #include "game/commands.hpp"
+#include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 #include "game/replay/frame_times.hpp"
@@ -13,9 +14,12 @@
 #include <CLI/CLI.hpp>
 
 #include <unistd.h>
+#include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -93,9 +97,11 @@ int checkArgs(ReplayArgs& args) {
     return usageError("--update-hashes needs the whole replay: drop --frames");
   if (args.threads < 0)
     return usageError("--threads must be >= 0 (0 = all cores), got " + std::to_string(args.threads));
-  for (const std::string& out : {args.csv, args.png}) {
-    if (!out.empty() && std::filesystem::exists(out) && !args.force)
-      return usageError(out + " exists (pass --force to replace it)");
+  if (!args.csv.empty()) {
+    if (const int code = checkOutputFile("replay", "--csv", args.csv, args.force); code >= 0) return code;
+  }
+  if (!args.png.empty()) {
+    if (const int code = checkPngOutput("replay", "--png", args.png, args.force); code >= 0) return code;
   }
   for (const std::string& assignment : args.sets) {
     std::string error;
@@ -111,10 +117,42 @@ int checkArgs(ReplayArgs& args) {
         step == 0)
       return usageError("--screenshot-at expects STEP:FILE.png with STEP >= 1, got '" + spec + "'");
     const std::string path = spec.substr(colon + 1);
-    if (std::filesystem::exists(path) && !args.force) return usageError(path + " exists (pass --force to replace it)");
+    if (const int code = checkPngOutput("replay", "--screenshot-at", path, args.force); code >= 0) return code;
     args.run.screenshots.emplace_back(step, path);
   }
   return -1;
+}
+
+// --png plots with Python and matplotlib after the run: without them the run would be wasted.
+int checkPlotter(const ReplayArgs& args) {
+  if (args.png.empty()) return -1;
+  const std::string command = shellQuote(pythonCommand()) + " -c 'import matplotlib' >/dev/null 2>&1";
+  if (std::system(command.c_str()) == 0) return -1;
+  std::fprintf(stderr,
+               "fluiddemo replay: --png needs %s with matplotlib (Debian: python3-matplotlib; or set "
+               "FLUIDDEMO_PYTHON)\n",
+               pythonCommand().c_str());
+  return 1;
+}
+
+// A --screenshot-at step the run never reaches would write nothing and still exit 0.
+int checkScreenshotSteps(const ReplayArgs& args, const ReplayFile& replay) {
+  const std::uint64_t last = args.run.frames > 0
+                                 ? std::min<std::uint64_t>(static_cast<std::uint64_t>(args.run.frames), replay.end_step)
+                                 : replay.end_step;
+  for (const auto& [step, path] : args.run.screenshots) {
+    if (step > last)
+      return usageError("--screenshot-at " + std::to_string(step) + ":" + path.string() + ": the run ends at step " +
+                        std::to_string(last) + (args.run.frames > 0 && last < replay.end_step ? " (--frames)" : "") +
+                        ", so that frame is never drawn");
+  }
+  return -1;
+}
+
+// --update-hashes writes FILE.tmp beside the replay and renames it over the file.
+int checkReplayWritable(const ReplayArgs& args) {
+  if (!args.update_hashes) return -1;
+  return checkOutputFile("replay", "--update-hashes", args.file + ".tmp", true);
 }
 
 int writeOutputs(const ReplayArgs& args, const ReplayFile& replay, const ReplayResult& result) {
@@ -151,7 +189,8 @@ int updateHashes(const ReplayFile& replay, const ReplayResult& result) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out << rewritten;
     if (!out.flush()) {
-      std::fprintf(stderr, "fluiddemo replay --update-hashes: cannot write %s\n", temporary.c_str());
+      std::fprintf(stderr, "fluiddemo replay --update-hashes: cannot write %s: %s\n", temporary.c_str(),
+                   std::strerror(errno));
       return 1;
     }
   }
@@ -171,7 +210,7 @@ int replayCommand(const Args& args) {
   CLI::App app{
       "Play a replay file one fixed step per rendered frame, check its checkpoint hashes and time every "
       "frame per phase (docs/replay.md).",
-      "replay"};
+      "fluiddemo replay"};
   ReplayArgs a;
   a.run.run.width = 1280;
   a.run.run.height = 720;
@@ -208,17 +247,20 @@ int replayCommand(const Args& args) {
   if (const int code = parseCommandLine(app, "replay", args); code >= 0) return code;
   if (const int code = checkArgs(a); code >= 0) return code;
   if (!a.compare.empty()) return compareCommand(a);
+  if (no_render && !a.run.screenshots.empty()) return usageError("--screenshot-at needs rendering: drop --no-render");
 
   ReplayFile replay;
   if (ReplayStatus st = loadReplayFile(a.file, replay); !st.ok()) {
     std::fprintf(stderr, "fluiddemo replay: %s\n", st.error.c_str());
     return st.exit_code;
   }
+  if (const int code = checkScreenshotSteps(a, replay); code >= 0) return code;
+  if (const int code = checkReplayWritable(a); code >= 0) return code;
+  if (const int code = checkPlotter(a); code >= 0) return code;
   if (!displayAvailable()) a.run.run.headless = true;
   a.run.run.show_ui = !a.no_ui;
   a.run.update_hashes = a.update_hashes;
   a.run.render = !no_render;
-  if (no_render && !a.run.screenshots.empty()) return usageError("--screenshot-at needs rendering: drop --no-render");
   std::optional<tbb::global_control> limit;
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(a.threads));
 

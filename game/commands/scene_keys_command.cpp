@@ -2,7 +2,10 @@
 // schema, i.e. from the effects' parameter tables (game/effects/) and the scene/camera rows. The
 // docs' key tables are this command's output.
 #include "game/commands.hpp"
+#include "game/commands/cli_parse.hpp"
 #include "game/scene/scene_config.hpp"
+
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <string>
@@ -84,10 +87,13 @@ std::string rangeText(const ParamSpec& spec) {
 }  // namespace
 
 int sceneKeysCommand(const Args& args) {
-  if (!args.empty()) {
-    std::fprintf(stderr, "fluiddemo scene-keys: takes no arguments\n");
-    return 2;
-  }
+  // No options, but the same parser as every subcommand: --help works and a stray word is the same
+  // usage error everywhere.
+  CLI::App app{
+      "Every scene section and key with its type, range, default and meaning, as Markdown (the docs' "
+      "key tables are this output).",
+      "fluiddemo scene-keys"};
+  if (const int code = parseCommandLine(app, "scene-keys", args); code >= 0) return code;
   std::printf("<!-- written by `fluiddemo scene-keys` from the effects' parameter tables; do not edit -->\n");
   for (const SectionSpec& section : sceneSchema()) {
     const std::string name(section.name), doc(section.doc);

@@ -219,7 +219,7 @@ int soakCommand(const Args& args) {
   CLI::App app{
       "Run scenes headless for a long stretch of game time with crate and explosive throws; fail on an abort, a "
       "NaN, a particle inside a collider or memory growth.",
-      "soak"};
+      "fluiddemo soak"};
   SoakOptions o;
   std::vector<std::string> scene_names;
   bool all = false, in_process = false;
@@ -256,6 +256,20 @@ int soakCommand(const Args& args) {
     if (scenes.empty()) {
       std::fprintf(stderr, "fluiddemo soak: no scenes in %s\n", scenesDir().string().c_str());
       return 1;
+    }
+  }
+  // Every scene and --set checked before the first run, with play's exit codes: a scene that is
+  // missing or bad fails (1), a --set the command line got wrong is a usage error (2).
+  for (const std::string& name : scenes) {
+    std::filesystem::path path;
+    SceneConfig scene;
+    SceneStatus status = resolveScene(name, scenesDir(), path);
+    if (status.ok()) status = loadSceneFile(path, scene);
+    const bool scene_ok = status.ok();
+    for (std::size_t i = 0; status.ok() && i < o.overrides.size(); ++i) status = applyOverride(scene, o.overrides[i]);
+    if (!status.ok()) {
+      std::fprintf(stderr, "fluiddemo soak: %s\n", status.error.c_str());
+      return scene_ok ? 2 : 1;
     }
   }
   int failures = 0;

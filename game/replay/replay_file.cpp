@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -287,7 +289,7 @@ ReplayStatus parseReplayText(std::string_view text, const std::string& label, Re
 bool readTextFile(const std::filesystem::path& path, std::string& out, std::string& error) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    error = path.string() + ": cannot open";
+    error = path.string() + ": cannot open: " + std::strerror(errno);
     return false;
   }
   std::ostringstream buffer;
@@ -302,7 +304,7 @@ bool readTextFile(const std::filesystem::path& path, std::string& out, std::stri
 
 ReplayStatus loadReplayFile(const std::filesystem::path& path, ReplayFile& out) {
   std::string text, error;
-  if (!readTextFile(path, text, error)) return {error, 2};
+  if (!readTextFile(path, text, error)) return {error, 1};
   return parseReplayText(text, path.string(), out);
 }
 

@@ -74,8 +74,8 @@ struct ReplayFile {
   std::vector<ReplayEvent> events;  // file order == application order
 };
 
-// An error names file, line and field; `exit_code` is 1 for content errors, 2 for usage errors
-// (a file that cannot be opened).
+// An error names file, line and field; `exit_code` is 1 (a file that cannot be read is a failure,
+// like a bad record: game/commands.hpp's rule keeps 2 for usage errors).
 struct ReplayStatus {
   std::string error;
   int exit_code = 0;

@@ -50,7 +50,7 @@ set +e
 "$exe" replay "$replay" --headless --no-ui --width 160 --height 90 --frames 5 --csv "$work/f.csv" > "$work/o2.txt" 2>&1
 code=$?
 set -e
-[ "$code" -eq 2 ] && grep -q "f.csv exists (pass --force" "$work/o2.txt" || fail "--csv overwrote or wrong exit ($code)"
+[ "$code" -eq 2 ] && grep -q "f.csv: exists (pass --force" "$work/o2.txt" || fail "--csv overwrote or wrong exit ($code)"
 "$exe" replay "$replay" --headless --no-ui --width 160 --height 90 --frames 5 --csv "$work/f.csv" --force > /dev/null
 [ "$(wc -l < "$work/f.csv")" -eq 6 ] || fail "--force did not replace the CSV"
 
