@@ -152,6 +152,13 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
     out.error = "gpu particles: dt must be a positive finite number of seconds";
     return;
   }
+  for (std::size_t t = 0; t < desc.types.size(); ++t)
+    if (!std::isfinite(desc.types[t].gravity_scale) || !(desc.types[t].damping >= 0.0f) ||
+        !std::isfinite(desc.types[t].damping)) {
+      out.error = "gpu particles: type " + std::to_string(t) + " has a non-finite gravity_scale or a damping that is "
+                  "not finite and >= 0";
+      return;
+    }
   const std::filesystem::path dir = desc.shader_dir / "gpu_particles";
   auto program = [&](std::vector<ShaderStageFiles> stages, GLuint& id) {
     std::string error;
@@ -568,6 +575,13 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform1i(loc(prog, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
   glUniform3fv(loc(prog, "u_gravity"), 1, glm::value_ptr(params.gravity));
   glUniform3fv(loc(prog, "u_wind"), 1, glm::value_ptr(params.wind));
+  std::array<float, kMaxParticleTypes> type_gravity{}, type_damping{};
+  for (std::size_t t = 0; t < s.desc.types.size(); ++t) {
+    type_gravity[t] = s.desc.types[t].gravity_scale;
+    type_damping[t] = s.desc.types[t].damping;
+  }
+  glUniform1fv(loc(prog, "u_type_gravity"), kMaxParticleTypes, type_gravity.data());
+  glUniform1fv(loc(prog, "u_type_damping"), kMaxParticleTypes, type_damping.data());
   const int attractors = attractor_count;
   std::array<glm::vec4, kMaxAttractors> att{};
   std::array<float, kMaxAttractors> soft{};

@@ -69,6 +69,11 @@ struct ParticleKeyframe {
 
 struct ParticleTypeDesc {
   std::array<ParticleKeyframe, kParticleKeyframes> keys{};
+  // How the type moves, on top of the step's forces: gravity scaled by gravity_scale (1 falls, a
+  // negative value rises like hot gas or smoke), and a velocity damping a = -damping v (1/s) for
+  // what the air holds back (smoke, fire), so it drifts rather than flies.
+  float gravity_scale = 1.0f;
+  float damping = 0.0f;  // 1/s, >= 0
 };
 
 // ---- births (uploaded in small batches) -----------------------------------------------

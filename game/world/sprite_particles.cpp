@@ -28,7 +28,7 @@ float clampPotential(float value, float lo, float hi) {
 }
 
 std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& p) {
-  std::vector<engine::ParticleTypeDesc> types(4);
+  std::vector<engine::ParticleTypeDesc> types(5);
   const float d = 2.0f * p.size;  // key-frame sizes are diameters
   // Mist: pale, grows a little as it disperses, fades out.
   types[kMistType].keys = {{{glm::vec4(0.86f, 0.91f, 0.96f, 0.55f), d},
@@ -45,15 +45,27 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
                               {glm::vec4(0.25f, 0.22f, 0.18f, 1.0f), 0.7f * d},
                               {glm::vec4(0.28f, 0.25f, 0.21f, 0.8f), 0.6f * d},
                               {glm::vec4(0.30f, 0.27f, 0.23f, 0.0f), 0.5f * d}}};
-  // Explosion smoke: starts as a hot orange flash, turns grey, billows out and fades.
-  types[kSmokeType].keys = {{{glm::vec4(1.00f, 0.62f, 0.22f, 0.9f), 2.0f * d},
-                             {glm::vec4(0.45f, 0.42f, 0.40f, 0.6f), 5.0f * d},
-                             {glm::vec4(0.55f, 0.54f, 0.53f, 0.35f), 8.0f * d},
-                             {glm::vec4(0.62f, 0.62f, 0.62f, 0.0f), 10.0f * d}}};
+  // Explosion smoke: dark where it leaves the fire, turns grey, billows out to about 1.4 m (fountain sprites) and
+  // fades; it rises like warm air (a fifth of gravity, upward) and the air holds it back, so it
+  // drifts up at about 1.3 m/s instead of falling with the debris.
+  types[kSmokeType].keys = {{{glm::vec4(0.20f, 0.18f, 0.17f, 0.75f), 6.0f * d},
+                             {glm::vec4(0.35f, 0.34f, 0.33f, 0.55f), 16.0f * d},
+                             {glm::vec4(0.50f, 0.50f, 0.50f, 0.30f), 30.0f * d},
+                             {glm::vec4(0.60f, 0.60f, 0.60f, 0.0f), 40.0f * d}}};
+  types[kSmokeType].gravity_scale = -0.2f;
+  types[kSmokeType].damping = 1.5f;
+  // Explosion fireball: white-yellow at the centre, orange, then dark red as it cools and dies,
+  // swelling to about a metre (in the fountain, whose sprites are 0.018 m); hot gas, so it rises and the air stops its outward rush at once.
+  types[kFireType].keys = {{{glm::vec4(1.00f, 0.95f, 0.70f, 1.0f), 12.0f * d},
+                            {glm::vec4(1.00f, 0.62f, 0.18f, 0.95f), 24.0f * d},
+                            {glm::vec4(0.85f, 0.30f, 0.08f, 0.7f), 28.0f * d},
+                            {glm::vec4(0.40f, 0.12f, 0.05f, 0.0f), 30.0f * d}}};
+  types[kFireType].gravity_scale = -0.3f;
+  types[kFireType].damping = 6.0f;
   return types;
 }
 
-// Debris and smoke at each blast's centre (engine emitters, seeded by the step and the blast).
+// Debris, a fireball and smoke at each blast's centre (engine emitters, seeded by the step and the blast).
 void emitBlastSprites(SpriteParticles& s, std::span<const fluid::Blast> blasts) {
   for (std::size_t k = 0; k < blasts.size(); ++k) {
     const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
@@ -67,13 +79,23 @@ void emitBlastSprites(SpriteParticles& s, std::span<const fluid::Blast> blasts) 
     debris.type = kDebrisType;
     debris.seed = seed;
     engine::emit(debris, s.births);
+    engine::EmitterDesc fire;
+    fire.kind = engine::EmitterKind::mist;
+    fire.position = blasts[k].centre + glm::vec3(0.0f, 0.1f, 0.0f);
+    fire.speed = 4.0f;
+    fire.radius = 0.25f;
+    fire.count = 70;
+    fire.lifetime = 0.45f;
+    fire.type = kFireType;
+    fire.seed = seed ^ 0x27d4eb2full;
+    engine::emit(fire, s.births);
     engine::EmitterDesc smoke;
     smoke.kind = engine::EmitterKind::mist;
-    smoke.position = blasts[k].centre + glm::vec3(0.0f, 0.1f, 0.0f);
+    smoke.position = blasts[k].centre + glm::vec3(0.0f, 0.2f, 0.0f);
     smoke.speed = 2.5f;
-    smoke.radius = 0.3f;
-    smoke.count = 60;
-    smoke.lifetime = 2.5f;
+    smoke.radius = 0.4f;
+    smoke.count = 90;
+    smoke.lifetime = 3.5f;
     smoke.type = kSmokeType;
     smoke.seed = seed ^ 0x5bd1e995ull;
     engine::emit(smoke, s.births);
@@ -258,20 +280,24 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
     s.spray_last_step = static_cast<std::uint32_t>(
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
-  const std::size_t before_blasts = s.births.size();
-  emitBlastSprites(s, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
-  // spawn takes the batch in order until the budget is full: mist, then spray, then blast sprites.
+  // spawn takes the batch in order until the budget is full: mist, then spray.
   const std::size_t mist_born = std::min(born, mist);
-  const std::size_t spray_born = std::min(born, before_blasts) - mist_born;
   s.born_mist += mist_born;
-  s.born_spray += spray_born;
-  s.born_blast += born - mist_born - spray_born;
+  s.born_spray += born - mist_born;
   s.dropped += s.births.size() - born;
   engine::GpuStepParams params = stepParams(s.params);
   params.blast_count = static_cast<int>(std::min<std::size_t>(blasts.size(), engine::kMaxBlasts));
   for (int k = 0; k < params.blast_count; ++k) params.blasts[static_cast<std::size_t>(k)] = blasts[static_cast<std::size_t>(k)];
   engine::step(s.gpu, params);
+  // The blast's own debris, fire and smoke are born after the step that gave every live sprite its
+  // push: born before it, they would take the push of the blast they come from (up to the
+  // sprites' 40 m/s cap at the centre) and fly out as a ring instead of a ball.
+  s.births.clear();
+  emitBlastSprites(s, blasts);
+  const std::size_t blast_born = engine::spawn(s.gpu, s.births);
+  s.born_blast += blast_born;
+  s.dropped += s.births.size() - blast_born;
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
 }

@@ -70,6 +70,7 @@ inline constexpr std::uint32_t kMistType = 0;
 inline constexpr std::uint32_t kSprayType = 1;
 inline constexpr std::uint32_t kDebrisType = 2;  // explosion debris: dark grit thrown out, falls
 inline constexpr std::uint32_t kSmokeType = 3;   // explosion smoke: grows, rises slowly, fades
+inline constexpr std::uint32_t kFireType = 4;    // explosion fireball: a bright burst that rises and dies within half a second
 
 struct SpriteParticles {
   SpriteParticleParams params;

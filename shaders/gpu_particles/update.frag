@@ -13,6 +13,8 @@ uniform float u_dt;
 uniform int u_verlet;
 uniform vec3 u_gravity;
 uniform vec3 u_wind;
+uniform float u_type_gravity[16];  // per particle type: gravity scale (ParticleTypeDesc)
+uniform float u_type_damping[16];  // per particle type: velocity damping, 1/s
 uniform int u_attractor_count;
 uniform vec4 u_attractors[4];    // xyz position, w strength
 uniform float u_softening[4];
@@ -77,8 +79,8 @@ vec3 flowVelocity(vec3 p) {
 // Optional terms are compiled in only when used (ATTRACTORS, DRAG, FLOW, COLLIDERS are
 // #defined per program variant): on llvmpipe an untaken "if (count > 0)" on a uniform still
 // cost most of its body's price (measured, docs/gpu.md).
-vec3 acceleration(vec3 p, vec3 v) {
-  vec3 a = u_gravity + u_wind;
+vec3 acceleration(vec3 p, vec3 v, int type) {
+  vec3 a = u_gravity * u_type_gravity[type] + u_wind - u_type_damping[type] * v;
 #ifdef ATTRACTORS
   for (int k = 0; k < u_attractor_count; ++k) {
     vec3 d = u_attractors[k].xyz - p;
@@ -111,6 +113,7 @@ void main() {
   vec4 s0 = texelFetch(u_state0, texel, 0);
   vec4 s1 = texelFetch(u_state1, texel, 0);
   vec4 attributes = texelFetch(u_attributes, texel, 0);
+  int type = clamp(int(attributes.z + 0.5), 0, 15);
   // §3.3.1: the GPU finds dead particles by their age; they are flagged (w = 0) and no longer
   // move, drawn or sorted in front.
   if (s0.w == 0.0 || u_time >= attributes.y) {
@@ -125,7 +128,7 @@ void main() {
 #ifdef BLASTS
     v += blastVelocityChange(p);
 #endif
-    next_v = v + acceleration(p, v) * u_dt;
+    next_v = v + acceleration(p, v, type) * u_dt;
     next_p = p + next_v * u_dt;
     collide(p, next_p, next_v);
     next_s1 = next_v;
@@ -135,7 +138,7 @@ void main() {
     p2 -= blastVelocityChange(p) * u_dt;  // Verlet keeps no velocity: dv moves P_{i-2} back
 #endif
     vec3 v = (p - p2) / u_dt;
-    next_p = 2.0 * p - p2 + acceleration(p, v) * (u_dt * u_dt);
+    next_p = 2.0 * p - p2 + acceleration(p, v, type) * (u_dt * u_dt);
     next_v = (next_p - p) / u_dt;
     next_s1 = p;
     if (collide(p, next_p, next_v)) next_s1 = next_p - next_v * u_dt;

@@ -643,3 +643,41 @@ TEST_F(GpuParticlesTest, AnInvalidBlastIsSkippedAndMovesNothing) {
   readState1(system_, state1);
   for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(glm::vec3(state1[k]), glm::vec3(0.0f)) << k;
 }
+
+// Per-type motion (ParticleTypeDesc::gravity_scale, damping): a type that rises against gravity
+// and is held back by the air, like smoke, beside one that falls freely. Euler steps of dt:
+// v_{n+1} = v_n + dt (s g - c v_n), so v_n = v_inf (1 - (1 - c dt)^n) with v_inf = s g / c.
+TEST_F(GpuParticlesTest, EachTypeFallsOrRisesWithItsOwnGravityScaleAndDamping) {
+  GpuParticlesDesc d;
+  d.width = 16;
+  d.height = 16;
+  d.integrator = Integrator::euler;
+  d.shader_dir = kShaders;
+  d.types.resize(2);
+  d.types[1].gravity_scale = -0.2f;
+  d.types[1].damping = 1.5f;
+  createGpuParticles(d, system_);
+  ASSERT_TRUE(system_.ready) << system_.error;
+  BirthBatch births;
+  births.push({0.0f, 1.0f, 0.0f}, glm::vec3(0.0f), 10.0f, 0, 0.0f);
+  births.push({1.0f, 1.0f, 0.0f}, glm::vec3(0.0f), 10.0f, 1, 0.0f);
+  ASSERT_EQ(spawn(system_, births), 2u);
+  GpuStepParams params;
+  params.gravity = {0.0f, -9.81f, 0.0f};
+  const int steps = 120;
+  for (int n = 0; n < steps; ++n) step(system_, params);
+  std::vector<glm::vec4> velocity;
+  readState1(system_, velocity);
+  const float dt = system_.desc.dt;
+  const double falling = -9.81 * dt * steps;
+  const double v_inf = 0.2 * 9.81 / 1.5;
+  const double rising = v_inf * (1.0 - std::pow(1.0 - 1.5 * dt, steps));
+  EXPECT_NEAR(velocity[0].y, falling, 1e-3 * std::abs(falling));
+  EXPECT_NEAR(velocity[1].y, rising, 1e-3 * rising);
+  EXPECT_GT(velocity[1].y, 0.0f) << "the smoke-like type rises";
+  destroyGpuParticles(system_);
+  d.types[1].damping = -1.0f;
+  createGpuParticles(d, system_);
+  EXPECT_FALSE(system_.ready);
+  EXPECT_NE(system_.error.find("type 1"), std::string::npos) << system_.error;
+}
