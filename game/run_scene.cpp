@@ -13,6 +13,7 @@
 #include "engine/render/image_write.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/ui/overlay.hpp"
+#include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
 #include "game/scene_panel.hpp"
 #include "game/world/level_assets.hpp"
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -32,6 +34,29 @@ std::filesystem::path shaderDirectory() {
 }
 
 // Everything one run keeps between frames (the GL objects live in runScene's inner scope).
+// An explosion's flash: a point light at the newest blast, brightest when it goes off and gone
+// within half a second. Rendering only: the game state never reads it.
+struct BlastFlash {
+  glm::vec3 position{0.0f};
+  double age = 1e9;  // s since the blast
+};
+
+void advanceFlash(BlastFlash& flash, const World& world) {
+  flash.age += world.step_seconds;
+  if (const Explosives* explosives = findState<Explosives>(world); explosives && !explosives->detonations.empty()) {
+    flash.position = explosives->detonations.back().centre;
+    flash.age = 0.0;
+  }
+}
+
+void lightFlash(const BlastFlash& flash, engine::Lighting& lighting) {
+  constexpr double kDecay = 0.08;  // s: a detonation's light dies in a few tenths of a second
+  constexpr float kPeak = 60.0f;   // radiance at 1 m, ~20x the sun's
+  const float strength = flash.age < 0.5 ? kPeak * static_cast<float>(std::exp(-flash.age / kDecay)) : 0.0f;
+  lighting.flash_position = flash.position + glm::vec3(0.0f, 0.3f, 0.0f);
+  lighting.flash_colour = strength * glm::vec3(1.0f, 0.62f, 0.28f);
+}
+
 struct Session {
   Session(const RunOptions& run_options, RunReport& run_report, World& run_world, engine::Platform& run_platform,
           engine::Renderer& run_renderer, engine::Overlay& run_overlay, const LevelAssets& level)
@@ -53,6 +78,7 @@ struct Session {
   engine::Profiler profiler;
   engine::InputState input;
   engine::Lighting lighting;
+  BlastFlash flash;
   std::vector<std::uint8_t> pixels;
   std::vector<PlayerAction> actions;
   std::filesystem::path hook_screenshot;
@@ -207,7 +233,11 @@ int runFrames(Session& s, const std::filesystem::path& content_dir, engine::Fram
       break;
     }
     const int steps = engine::advanceFrame(clock, frame_dt);
-    for (int i = 0; i < steps; ++i) stepWorld(world, &s.profiler);
+    for (int i = 0; i < steps; ++i) {
+      stepWorld(world, &s.profiler);
+      advanceFlash(s.flash, world);
+    }
+    lightFlash(s.flash, s.lighting);
     steps_done += static_cast<std::uint64_t>(steps);
     // With a fixed frame time the accumulator is always empty: show the newest state.
     const float alpha = options.fixed_frame_time ? 1.0f : static_cast<float>(engine::interpolationAlpha(clock));

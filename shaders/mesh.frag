@@ -19,6 +19,8 @@ uniform vec3 u_sky_zenith;
 uniform vec3 u_sky_horizon;
 uniform vec3 u_ground_ambient;
 uniform float u_fog_density;
+uniform vec3 u_flash_position;  // an explosion's flash (engine::Lighting), a point light
+uniform vec3 u_flash_colour;    // zero: no flash
 out vec4 out_colour;
 
 vec3 toneMap(vec3 c) { return pow(c / (1.0 + c), vec3(1.0 / 2.2)); }
@@ -50,6 +52,9 @@ void main() {
   vec3 h = normalize(v + u_sun_direction);
   float specular = u_specular * pow(max(dot(n, h), 0.0), u_shininess) * n_dot_l * sun;
   vec3 colour = albedo * (ambient * 0.85 + u_sun_colour * n_dot_l * sun * 0.8) + u_sun_colour * specular;
+  vec3 to_flash = u_flash_position - v_world;
+  float flash_d2 = max(dot(to_flash, to_flash), 1e-6);
+  colour += albedo * u_flash_colour * max(dot(n, to_flash * inversesqrt(flash_d2)), 0.0) / (1.0 + flash_d2);
   float fog = 1.0 - exp(-distance * u_fog_density);
   colour = mix(colour, u_sky_horizon, fog);
   out_colour = vec4(toneMap(colour), 1.0);

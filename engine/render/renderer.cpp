@@ -239,6 +239,8 @@ void renderScene(Renderer& r, const FrameView& view, const Lighting& lighting, s
   setUniform(mesh, "u_sky_horizon", lighting.sky_horizon);
   setUniform(mesh, "u_ground_ambient", lighting.ground_ambient);
   setUniform(mesh, "u_fog_density", lighting.fog_density);
+  setUniform(mesh, "u_flash_position", lighting.flash_position);
+  setUniform(mesh, "u_flash_colour", lighting.flash_colour);
   setUniform(mesh, "u_albedo", 0);
   setUniform(mesh, "u_shadow_map", 1);
   setUniform(mesh, "u_shadow_texel", 1.0f / static_cast<float>(r.shadow_size));

@@ -64,6 +64,10 @@ struct Lighting {
   // Directional shadow map: an orthographic box of 2*shadow_extent metres around a point ahead
   // of the camera, snapped to whole texels so shadows do not shimmer as the camera moves.
   float shadow_extent = 16.0f;  // m; 0 disables shadows
+  // A point light for an explosion's flash: radiance falls off as 1 / (1 + d^2) with the distance
+  // d in metres; a zero colour is no flash.
+  glm::vec3 flash_position{0.0f};
+  glm::vec3 flash_colour{0.0f};
 };
 
 struct Renderer {

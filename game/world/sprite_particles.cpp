@@ -280,24 +280,22 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
     s.spray_last_step = static_cast<std::uint32_t>(
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
+  const std::size_t before_blasts = s.births.size();
+  emitBlastSprites(s, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
-  // spawn takes the batch in order until the budget is full: mist, then spray.
+  // spawn takes the batch in order until the budget is full: mist, then spray, then blast sprites.
+  // A blast's own sprites, born in its step, do not take its push (update.frag): they start as a
+  // ball at the centre, and the step's collision check puts any born under a surface outside it.
   const std::size_t mist_born = std::min(born, mist);
+  const std::size_t spray_born = std::min(born, before_blasts) - mist_born;
   s.born_mist += mist_born;
-  s.born_spray += born - mist_born;
+  s.born_spray += spray_born;
+  s.born_blast += born - mist_born - spray_born;
   s.dropped += s.births.size() - born;
   engine::GpuStepParams params = stepParams(s.params);
   params.blast_count = static_cast<int>(std::min<std::size_t>(blasts.size(), engine::kMaxBlasts));
   for (int k = 0; k < params.blast_count; ++k) params.blasts[static_cast<std::size_t>(k)] = blasts[static_cast<std::size_t>(k)];
   engine::step(s.gpu, params);
-  // The blast's own debris, fire and smoke are born after the step that gave every live sprite its
-  // push: born before it, they would take the push of the blast they come from (up to the
-  // sprites' 40 m/s cap at the centre) and fly out as a ring instead of a ball.
-  s.births.clear();
-  emitBlastSprites(s, blasts);
-  const std::size_t blast_born = engine::spawn(s.gpu, s.births);
-  s.born_blast += blast_born;
-  s.dropped += s.births.size() - blast_born;
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
 }

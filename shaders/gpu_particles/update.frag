@@ -123,10 +123,13 @@ void main() {
   }
   vec3 p = s0.xyz;
   vec3 next_p, next_v, next_s1;
+  // A sprite born in this step (a blast's own debris, fire and smoke) does not take the push of
+  // this step's blasts: it starts with its own velocity at the centre instead of flying out as a ring.
+  bool pushable = attributes.x < u_time - 1.5 * u_dt;  // born at this step's start: u_time - dt
   if (u_verlet == 0) {
     vec3 v = s1.xyz;
 #ifdef BLASTS
-    v += blastVelocityChange(p);
+    if (pushable) v += blastVelocityChange(p);
 #endif
     next_v = v + acceleration(p, v, type) * u_dt;
     next_p = p + next_v * u_dt;
@@ -135,7 +138,7 @@ void main() {
   } else {
     vec3 p2 = s1.xyz;
 #ifdef BLASTS
-    p2 -= blastVelocityChange(p) * u_dt;  // Verlet keeps no velocity: dv moves P_{i-2} back
+    if (pushable) p2 -= blastVelocityChange(p) * u_dt;  // Verlet keeps no velocity: dv moves P_{i-2} back
 #endif
     vec3 v = (p - p2) / u_dt;
     next_p = 2.0 * p - p2 + acceleration(p, v, type) * (u_dt * u_dt);

@@ -25,8 +25,8 @@ run(0 ${EXE} query-collider ${WORK}/box.fdm --points ${DATA}/points.xyz)
 expect_match("${OUT}" "^-0\\.49[0-9]+ [^\n]+\n0\\.49[0-9]+ [0-9.e-]+ [0-9.e-]+ 0\\.999[0-9]+\n1\\.49[0-9]+ 0\\.999[0-9]+ [^\n]+\n0\\.2[45][0-9]+ [0-9.e-]+ [0-9.e-]+ -0\\.999[0-9]+\ninf 0 0 0\n$")
 expect_match("${ERR}" "1 of 5 points")
 # Errors: existing output, bad model, missing model, bad format, bad map item, wrong file kinds.
-run(1 ${EXE} bake-collider ${DATA}/box.obj --out ${WORK}/box.fdm)
-expect_match("${ERR}" "already exists")
+run(2 ${EXE} bake-collider ${DATA}/box.obj --out ${WORK}/box.fdm)  # an existing output without --force: a usage error
+expect_match("${ERR}" "exists")
 run(0 ${EXE} bake-collider ${DATA}/box.obj --out ${WORK}/box.fdm --res 32 --format fixed8 --force)
 run(1 ${EXE} bake-collider ${DATA}/broken.obj --out ${WORK}/b.fdm)
 expect_match("${ERR}" "broken.obj:2: v with 2 numbers")

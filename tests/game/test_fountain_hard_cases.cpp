@@ -179,8 +179,18 @@ TEST(FountainHardCases, WaterThrownAt100MetresPerSecondStaysOutOfTheBasinWallAnd
   w.params.max_speed = 0.0f;
   // One charge in the basin water against the +x wall, one in the dish against its rim.
   std::size_t pushed = 0;
-  for (const glm::vec3 centre : {glm::vec3(g.basin_inner_radius - 0.5f, g.basin_floor + 0.05f, 0.0f),
-                                 glm::vec3(g.dish_inner_radius - 0.3f, g.dish_floor + 0.03f, 0.0f)}) {
+  // Each charge goes off at the water particle nearest the aimed point, so its core holds water
+  // (the film's particles move from run to run of the jet).
+  for (const glm::vec3 aim : {glm::vec3(g.basin_inner_radius - 0.5f, g.basin_floor + 0.05f, 0.0f),
+                              glm::vec3(g.dish_inner_radius - 0.3f, g.dish_floor + 0.03f, 0.0f)}) {
+    glm::vec3 centre = aim;
+    float nearest = 1e30f;
+    for (const glm::vec3& x : w.particles.position)
+      if (glm::length(x - aim) < nearest) {
+        nearest = glm::length(x - aim);
+        centre = x;
+      }
+    ASSERT_LT(nearest, 0.6f) << "no water near the charge";
     fluid::Blast blast;
     blast.centre = centre;
     blast.impulse_at_1m = 400.0f;

@@ -603,6 +603,7 @@ BirthBatch restingLine(int n) {
 
 }  // namespace
 
+// A sprite takes each blast's push once; one born in the blast's own step takes none.
 TEST_F(GpuParticlesTest, BlastGivesEachSpriteTheSharedModelsVelocityChangeOnce) {
   for (const Integrator integrator : {Integrator::euler, Integrator::verlet}) {
     destroyGpuParticles(system_);
@@ -610,9 +611,14 @@ TEST_F(GpuParticlesTest, BlastGivesEachSpriteTheSharedModelsVelocityChangeOnce) 
     const BirthBatch births = restingLine(64);
     ASSERT_EQ(spawn(system_, births), 64u);
     const GpuStepParams with_blast = blastStep({0.0f, 0.5f, 0.2f});
-    step(system_, with_blast);
     GpuStepParams calm = with_blast;
     calm.blast_count = 0;
+    step(system_, calm);  // born before the blast's step: it takes the push
+    // A second line born in the blast's own step (as a blast's fire and smoke are) does not.
+    BirthBatch late = restingLine(64);
+    for (glm::vec3& x : late.positions) x.z += 0.05f;
+    ASSERT_EQ(spawn(system_, late), 64u);
+    step(system_, with_blast);
     step(system_, calm);  // the push is given once, then the sprite coasts
     std::vector<glm::vec4> positions, state1;
     readPositions(system_, positions);
@@ -630,6 +636,14 @@ TEST_F(GpuParticlesTest, BlastGivesEachSpriteTheSharedModelsVelocityChangeOnce) 
     }
     EXPECT_GT(fastest, 10.0f);  // the line crosses the core: the test sees a real push
     EXPECT_LT(max_error, 1e-3f * fastest) << (integrator == Integrator::euler ? "euler" : "verlet");
+    float late_fastest = 0.0f;
+    for (std::size_t k = 64; k < 128; ++k) {
+      const glm::vec3 velocity = integrator == Integrator::euler
+                                     ? glm::vec3(state1[k])
+                                     : (glm::vec3(positions[k]) - glm::vec3(state1[k])) / system_.desc.dt;
+      late_fastest = std::max(late_fastest, glm::length(velocity));
+    }
+    EXPECT_LT(late_fastest, 1e-4f) << "a sprite born in the blast's step took its push";
   }
 }
 

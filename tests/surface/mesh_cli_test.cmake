@@ -33,7 +33,7 @@ if(nnormals EQUAL 0)
 endif()
 
 # Existing output: refused without --force, replaced with it.
-run_mesh(1 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob.obj" --cube 0.3)
+run_mesh(2 out err --in "${DATA}/blob.xyz" --out "${WORK}/blob.obj" --cube 0.3)  # a usage error (exit 2)
 if(NOT err MATCHES "exists")
   message(FATAL_ERROR "expected a refusal to overwrite, got: ${err}")
 endif()
