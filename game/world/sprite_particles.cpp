@@ -65,40 +65,39 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
   return types;
 }
 
-// Debris, a fireball and smoke at each blast's centre (engine emitters, seeded by the step and the blast).
+// One burst of a blast: `count` sprites of `type` from within `radius` of the centre raised by
+// `rise`, at `speed`, living `lifetime` seconds (engine emitters).
+struct BlastBurst {
+  engine::EmitterKind kind;
+  float rise, speed, radius;
+  std::uint32_t count;
+  float lifetime;
+  std::uint32_t type;
+  std::uint64_t salt;  // decorrelates the bursts' seeds
+};
+// Debris thrown hard, the fireball, and the smoke that rises after it.
+constexpr BlastBurst kBlastBursts[] = {
+    {engine::EmitterKind::debris, 0.0f, 9.0f, 0.15f, 160, 1.6f, kDebrisType, 0},
+    {engine::EmitterKind::mist, 0.1f, 4.0f, 0.25f, 70, 0.45f, kFireType, 0x27d4eb2full},
+    {engine::EmitterKind::mist, 0.2f, 2.5f, 0.4f, 90, 3.5f, kSmokeType, 0x5bd1e995ull},
+};
+
+// Debris, a fireball and smoke at each blast's centre, seeded by the step and the blast.
 void emitBlastSprites(SpriteParticles& s, std::span<const fluid::Blast> blasts) {
   for (std::size_t k = 0; k < blasts.size(); ++k) {
     const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
-    engine::EmitterDesc debris;
-    debris.kind = engine::EmitterKind::debris;
-    debris.position = blasts[k].centre;
-    debris.speed = 9.0f;
-    debris.radius = 0.15f;
-    debris.count = 160;
-    debris.lifetime = 1.6f;
-    debris.type = kDebrisType;
-    debris.seed = seed;
-    engine::emit(debris, s.births);
-    engine::EmitterDesc fire;
-    fire.kind = engine::EmitterKind::mist;
-    fire.position = blasts[k].centre + glm::vec3(0.0f, 0.1f, 0.0f);
-    fire.speed = 4.0f;
-    fire.radius = 0.25f;
-    fire.count = 70;
-    fire.lifetime = 0.45f;
-    fire.type = kFireType;
-    fire.seed = seed ^ 0x27d4eb2full;
-    engine::emit(fire, s.births);
-    engine::EmitterDesc smoke;
-    smoke.kind = engine::EmitterKind::mist;
-    smoke.position = blasts[k].centre + glm::vec3(0.0f, 0.2f, 0.0f);
-    smoke.speed = 2.5f;
-    smoke.radius = 0.4f;
-    smoke.count = 90;
-    smoke.lifetime = 3.5f;
-    smoke.type = kSmokeType;
-    smoke.seed = seed ^ 0x5bd1e995ull;
-    engine::emit(smoke, s.births);
+    for (const BlastBurst& burst : kBlastBursts) {
+      engine::EmitterDesc desc;
+      desc.kind = burst.kind;
+      desc.position = blasts[k].centre + glm::vec3(0.0f, burst.rise, 0.0f);
+      desc.speed = burst.speed;
+      desc.radius = burst.radius;
+      desc.count = burst.count;
+      desc.lifetime = burst.lifetime;
+      desc.type = burst.type;
+      desc.seed = seed ^ burst.salt;
+      engine::emit(desc, s.births);
+    }
   }
 }
 
