@@ -18,6 +18,7 @@
 #include "fluid/collide/collide.hpp"
 
 #include <bit>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -305,7 +306,7 @@ FileStatus saveCollider(const std::filesystem::path& path, const DepthMapCollide
   {
     std::ofstream file(partial, std::ios::binary | std::ios::trunc);
     if (!file) {
-      st.error = path.string() + ": cannot open for writing";
+      st.error = path.string() + ": cannot open for writing: " + std::strerror(errno);
       return st;
     }
     file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
@@ -322,7 +323,7 @@ FileStatus loadCollider(const std::filesystem::path& path, DepthMapCollider& out
   FileStatus st;
   std::ifstream file(path, std::ios::binary);
   if (!file) {
-    st.error = path.string() + ": cannot open";
+    st.error = path.string() + ": cannot open: " + std::strerror(errno);
     return st;
   }
   std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());

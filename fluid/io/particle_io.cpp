@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -405,7 +406,7 @@ IoStatus openForWrite(const std::filesystem::path& path, OverwritePolicy overwri
     return {path.string() + ": already exists (not overwritten)"};
   }
   file.open(path, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
-  if (!file) return {path.string() + ": cannot open for writing"};
+  if (!file) return {path.string() + ": cannot open for writing: " + std::strerror(errno)};
   return {};
 }
 
@@ -439,7 +440,7 @@ IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& 
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) return {name + ": is a directory, not a particle file"};
   std::ifstream in(path, std::ios::binary);
-  if (!in) return {name + ": cannot open for reading"};
+  if (!in) return {name + ": cannot open for reading: " + std::strerror(errno)};
   IoStatus status = extension == ".ply" ? readPly(in, name, out) : parseLines(in, extension == ".csv", name, out);
   if (!status.ok()) out.clear();
   return status;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <numeric>
 #include <string>
@@ -67,7 +69,7 @@ IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& 
     if (i >= mesh.positions.size()) return {path.string() + ": index out of range"};
   const Welded w = weld(mesh, options);
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) return {path.string() + ": cannot open for writing"};
+  if (!f) return {path.string() + ": cannot open for writing: " + std::strerror(errno)};
   if (ext == ".obj") {
     f << "# fluiddemo mesh: " << w.positions.size() << " vertices, " << w.indices.size() / 3 << " triangles\n";
     char buf[128];
