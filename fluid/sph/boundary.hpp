@@ -103,6 +103,14 @@ struct ColliderQuery {
         inverse_rotation(glm::inverse(p.rotation)),
         rotated(!(p.rotation.w == 1.0f && p.rotation.x == 0.0f && p.rotation.y == 0.0f && p.rotation.z == 0.0f)),
         identity(!rotated && isPositiveZero(p.translation)) {}
+  // The sample at one world point (the spray's drops, queried one by one).
+  ColliderSample at(glm::vec3 point) const {
+    const glm::vec3 local = toLocal(point);
+    ColliderSample sample;
+    collider.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
+    finishSample(sample);
+    return sample;
+  }
   // `which` ascends (the callers list particles in index order).
   void run(const std::vector<glm::vec3>& points, const std::uint32_t* which, std::uint32_t q,
            std::vector<ColliderSample>& out) const {

@@ -93,10 +93,8 @@ std::size_t applySinks(SphWorld& world, std::size_t in_sinks, std::size_t& pumpe
     if (fate == 2u) {
       pump.held.push_back({store.id[i], world.time + pump.delay});
       ++pumped;
-      spray_gone += i >= spray_begin ? 1 : 0;
-      continue;
     }
-    if (fate == 0u) {
+    if (fate == 0u || fate == 2u) {
       spray_gone += i >= spray_begin ? 1 : 0;
       continue;
     }

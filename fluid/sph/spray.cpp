@@ -1,6 +1,7 @@
 // Spray: ballistic drops outside the SPH solve (spray.hpp).
 #include "fluid/sph/spray.hpp"
 
+#include "fluid/sph/boundary.hpp"
 #include "fluid/sph/collisions.hpp"
 
 #include <algorithm>
@@ -16,16 +17,6 @@ void permute(std::vector<T>& v, const std::vector<std::uint32_t>& order, std::ve
   tmp.resize(order.size());
   for (std::size_t e = 0; e < order.size(); ++e) tmp[e] = v[order[e]];
   v.swap(tmp);
-}
-
-// One collider's sample at a world point, the normal in world space (as ColliderQuery gives it).
-ColliderSample sampleAt(const SphCollider& collider, const ColliderPose& pose, glm::vec3 p) {
-  const glm::vec3 local = toColliderSpace(pose, p);
-  ColliderSample s;
-  collider.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&s, 1));
-  if (!std::isfinite(s.distance)) s.valid = false;
-  s.normal = pose.rotation * s.normal;
-  return s;
 }
 
 // The spray's reactions summed per collider (the first kMaxColliders; the others get none).
@@ -66,10 +57,9 @@ bool applySprayTransitions(SphWorld& world, SphStepStats& stats) {
   SphScratch& scratch = world.scratch;
   const SphParams& params = world.params;
   const std::size_t n = store.size();
-  store.spray_count = std::min(store.spray_count, n);
   if (params.spray_speed <= 0.0f && store.spray_count == 0) return false;
+  // Kept one per particle by stepImpl, applySinks and addSphParticleWithId.
   std::vector<std::uint32_t>& last = scratch.last_neighbours;
-  last.resize(n, SphScratch::kUnknownNeighbours);
   const std::size_t spray_begin = n - store.spray_count;
   const bool on = params.spray_speed > 0.0f;
   const float v2 = params.spray_speed * params.spray_speed;
@@ -129,7 +119,6 @@ void advanceSpray(StepContext& context) {
   SphScratch& scratch = context.scratch;
   const SphParams& params = context.params;
   scratch.old_position.resize(end);
-  scratch.last_neighbours.resize(end, SphScratch::kUnknownNeighbours);
   if (begin >= end) return;
   const float dt = context.dt, mass = context.mass;
   const glm::vec3 g = params.gravity;
@@ -167,16 +156,17 @@ void advanceSpray(StepContext& context) {
           // inside the same part near an edge, as the water's collision passes do.
           for (int pass = 0; pass < 4; ++pass) {
             bool moved = false;
-            for (std::size_t k = 0; k < colliders; ++k) {
-              const std::size_t c = scratch.collide_order[k];
+            for (std::size_t slot = 0; slot < colliders; ++slot) {
+              const std::size_t c = scratch.collide_order[slot];
               const SphCollider& collider = context.world.colliders[c];
               const ColliderPose& pose = poses[c];
-              const ColliderSample s1 = sampleAt(collider, pose, xn);
+              const ColliderQuery query(collider, pose);
+              const ColliderSample s1 = query.at(xn);
               if (!s1.valid || s1.distance >= 0.0f) continue;
               const glm::vec3 vc = colliderVelocityAt(pose, xn);
               glm::vec3 position, velocity;
               if (pass == 0) {
-                const CollisionResult res = resolveCollision(x, sampleAt(collider, pose, x), xn, v, s1, vc, h, skin,
+                const CollisionResult res = resolveCollision(x, query.at(x), xn, v, s1, vc, h, skin,
                                                              collider.material, depth_slack);
                 if (res.outcome == CollisionOutcome::none) continue;
                 position = res.position;

@@ -21,17 +21,20 @@
 
 namespace game {
 
+// Prints "fluiddemo COMMAND: FLAG PATH: REASON" (FLAG empty for a positional) and returns `code`.
+inline int outputProblem(int code, std::string_view command, std::string_view flag, const std::filesystem::path& path,
+                         const std::string& reason) {
+  std::fprintf(stderr, "fluiddemo %.*s: %.*s%s%s: %s\n", static_cast<int>(command.size()), command.data(),
+               static_cast<int>(flag.size()), flag.data(), flag.empty() ? "" : " ", path.c_str(), reason.c_str());
+  return code;
+}
+
 // -1 when `path` can be created, or with `force` replaced; otherwise prints
 //   fluiddemo COMMAND: FLAG PATH: REASON
 // and returns the exit code. `flag` names the option ("--csv"), empty for a positional.
 inline int checkOutputFile(std::string_view command, std::string_view flag, const std::filesystem::path& path,
                            bool force) {
-  const std::string label = std::string(flag) + (flag.empty() ? "" : " ") + path.string();
-  auto fail = [&](int code, const std::string& reason) {
-    std::fprintf(stderr, "fluiddemo %.*s: %s: %s\n", static_cast<int>(command.size()), command.data(), label.c_str(),
-                 reason.c_str());
-    return code;
-  };
+  auto fail = [&](int code, const std::string& reason) { return outputProblem(code, command, flag, path, reason); };
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);
   if (std::filesystem::is_directory(status)) return fail(2, "is a folder (name a file)");
@@ -55,12 +58,7 @@ inline int checkPngOutput(std::string_view command, std::string_view flag, const
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".png") {
-    std::fprintf(stderr, "fluiddemo %.*s: %.*s%s%s: only PNG is written: name the file .png\n",
-                 static_cast<int>(command.size()), command.data(), static_cast<int>(flag.size()), flag.data(),
-                 flag.empty() ? "" : " ", path.c_str());
-    return 2;
-  }
+  if (extension != ".png") return outputProblem(2, command, flag, path, "only PNG is written: name the file .png");
   return checkOutputFile(command, flag, path, force);
 }
 
@@ -72,9 +70,7 @@ inline int prepareOutputFolder(std::string_view command, std::string_view flag, 
   std::string reason = ec ? ec.message() : "";
   if (!ec && ::access(folder.c_str(), W_OK | X_OK) != 0) reason = std::strerror(errno);
   if (reason.empty()) return -1;
-  std::fprintf(stderr, "fluiddemo %.*s: %.*s %s: cannot write in it: %s\n", static_cast<int>(command.size()),
-               command.data(), static_cast<int>(flag.size()), flag.data(), folder.c_str(), reason.c_str());
-  return 1;
+  return outputProblem(1, command, flag, folder, "cannot write in it: " + reason);
 }
 
 }  // namespace game
