@@ -114,8 +114,45 @@ BodyId addStaticTriangleMesh(PhysicsWorld& world, const BodyDesc& desc, const Me
   return addBody(world, desc, std::move(shape));
 }
 
+namespace {
+
+BodyId bodyIdOf(const PhysicsWorld& world, const btCollisionObject* object) {
+  for (std::size_t i = 0; i < world.bodies.size(); ++i)
+    if (world.bodies[i].get() == object) return static_cast<BodyId>(i);
+  return -1;
+}
+
+// The manifolds of the substep just taken, in the dispatcher's order (Bullet is serial here, so
+// the same inputs give the same manifolds in the same order).
+void recordContacts(PhysicsWorld& world, int substep) {
+  btDispatcher& dispatcher = *world.world->getDispatcher();
+  const int count = dispatcher.getNumManifolds();
+  for (int m = 0; m < count; ++m) {
+    const btPersistentManifold& manifold = *dispatcher.getManifoldByIndexInternal(m);
+    ContactImpulse contact;
+    contact.substep = substep;
+    glm::vec3 sum(0.0f);
+    for (int p = 0; p < manifold.getNumContacts(); ++p) {
+      const btManifoldPoint& point = manifold.getContactPoint(p);
+      contact.impulse += point.getAppliedImpulse();
+      const btVector3 at = point.getPositionWorldOnB();
+      sum += glm::vec3(at.x(), at.y(), at.z());
+    }
+    if (!(contact.impulse > 0.0f) || manifold.getNumContacts() == 0) continue;
+    contact.point = sum / static_cast<float>(manifold.getNumContacts());
+    BodyId a = bodyIdOf(world, manifold.getBody0()), b = bodyIdOf(world, manifold.getBody1());
+    if (a > b) std::swap(a, b);
+    contact.a = a;
+    contact.b = b;
+    world.contacts.push_back(contact);
+  }
+}
+
+}  // namespace
+
 void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps) {
   substeps = std::max(substeps, 1);
+  world.contacts.clear();
   const btScalar h = static_cast<btScalar>(step_seconds / substeps);
   // maxSubSteps = 0 makes Bullet take exactly one step of h: no internal accumulator.
   for (int i = 0; i < substeps; ++i) {
@@ -125,6 +162,7 @@ void stepPhysics(PhysicsWorld& world, double step_seconds, int substeps) {
       world.bodies[b]->applyTorque(bt(world.external_torque[b]));
     }
     world.world->stepSimulation(h, 0);
+    if (world.record_contacts) recordContacts(world, i);
     ++world.steps;
   }
   std::fill(world.external_force.begin(), world.external_force.end(), glm::vec3(0.0f));

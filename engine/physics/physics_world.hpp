@@ -48,6 +48,15 @@ struct BodyState {
   glm::vec3 angular_velocity{0.0f};
 };
 
+// One contact manifold's push in one Bullet substep: the sum of its points' applied impulses (N s)
+// along the normal, at their mean point. Bodies a < b by id (a static mesh or plane counts as a body).
+struct ContactImpulse {
+  BodyId a = -1, b = -1;
+  glm::vec3 point{0.0f};  // m, world: the mean of the manifold's points
+  float impulse = 0.0f;   // N s, > 0
+  int substep = 0;        // which substep of the stepPhysics call (0 first)
+};
+
 // Owns every Bullet object. Not copyable; destroy with the unique_ptr from createPhysicsWorld.
 struct PhysicsWorld {
   PhysicsWorld();
@@ -70,6 +79,11 @@ struct PhysicsWorld {
   // stepPhysics call (every substep), then zeroed; sized lazily by setExternalForce.
   std::vector<glm::vec3> external_force, external_torque;
   std::uint64_t steps = 0;  // substeps taken
+  // When set, stepPhysics lists every manifold with a non-zero push after each of its substeps in
+  // `contacts` (cleared at the start of the call): what sound synthesis hears of the crates. A
+  // resting contact appears too, pushing its weight each substep. Off: no cost.
+  bool record_contacts = false;
+  std::vector<ContactImpulse> contacts;
 };
 
 std::unique_ptr<PhysicsWorld> createPhysicsWorld(const PhysicsDesc& desc);

@@ -4,6 +4,7 @@
 #include "game/commands.hpp"
 #include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
+#include "engine/audio/synth.hpp"
 #include "game/paths.hpp"
 #include "game/replay/frame_times.hpp"
 #include "game/replay/replay_file.hpp"
@@ -19,6 +20,7 @@
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -37,6 +39,8 @@ struct ReplayArgs {
   std::vector<std::string> compare;
   std::vector<std::string> sets;  // render-only --set overrides
   bool update_hashes = false, force = false, no_ui = false;
+  std::string wav;        // --wav: the audio effect's sound, rendered offline
+  bool wav_mono = false;  // --wav-mono: one channel (L+R)/2
 };
 
 int usageError(const std::string& message) {
@@ -204,6 +208,64 @@ int updateHashes(const ReplayFile& replay, const ReplayResult& result) {
   return 0;
 }
 
+// The offline render's figures: per kind of sound its events, their rate, the pitch range, and
+// its loudness (its own sum, after the volume, before the limiter) as the peak and the RMS over the
+// frames it sounded; then the output's peak and RMS, and the main thread's cost per step.
+void printAudioSummary(const ReplayAudio& a) {
+  const auto db = [](double x) { return x > 1e-9 ? 20.0 * std::log10(x) : -180.0; };
+  const double frames = static_cast<double>(a.samples.size() / 2);
+  const double seconds = frames / a.sample_rate;
+  std::printf("audio: %.2f s at %d Hz; main-thread cost per step: mean %.4f ms, max %.4f ms (%llu steps)\n", seconds,
+              a.sample_rate, a.main_ms_mean, a.main_ms_max, static_cast<unsigned long long>(a.steps));
+  std::printf("  %-13s %8s %9s %8s %17s %10s %10s\n", "kind", "events", "per s", "dropped", "pitch (Hz)", "peak dBFS",
+              "rms dBFS");
+  for (std::size_t k = 0; k < engine::audio::kSoundKinds; ++k) {
+    const engine::audio::KindStats& s = a.stats[k];
+    const double rms = s.active_frames > 0 ? std::sqrt(s.sum_squares / static_cast<double>(s.active_frames)) : 0.0;
+    char pitch[32] = "-";
+    if (s.max_frequency > 0.0f) std::snprintf(pitch, sizeof pitch, "%.0f-%.0f", s.min_frequency, s.max_frequency);
+    std::printf("  %-13s %8llu %9.1f %8llu %17s %10.1f %10.1f\n",
+                std::string(engine::audio::soundKindName(static_cast<engine::audio::SoundKind>(k))).c_str(),
+                static_cast<unsigned long long>(s.events), seconds > 0.0 ? static_cast<double>(s.events) / seconds : 0.0,
+                static_cast<unsigned long long>(s.dropped), pitch, db(s.peak), db(rms));
+  }
+  float peak = 0.0f;
+  double sum = 0.0;
+  std::size_t nonfinite = 0;
+  for (float x : a.samples) {
+    if (!std::isfinite(x)) ++nonfinite;
+    peak = std::max(peak, std::abs(x));
+    sum += static_cast<double>(x) * x;
+  }
+  std::printf("  output: peak %.2f dBFS, rms %.1f dBFS, clamped samples %llu, NaN/inf %zu (voices dropped for NaN %llu)\n",
+              db(peak), db(a.samples.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(a.samples.size()))),
+              static_cast<unsigned long long>(a.clipped), nonfinite, static_cast<unsigned long long>(a.nonfinite));
+}
+
+int writeAudio(const ReplayArgs& args, const ReplayResult& result) {
+  if (!result.audio.present) {
+    std::fprintf(stderr, "fluiddemo replay: --wav %s: the scene '%s' lists no audio effect\n", args.wav.c_str(),
+                 result.scene.name.c_str());
+    return 1;
+  }
+  printAudioSummary(result.audio);
+  std::string error;
+  std::vector<float> mono;
+  std::span<const float> samples = result.audio.samples;
+  if (args.wav_mono) {
+    engine::audio::stereoToMono(samples, mono);
+    samples = mono;
+  }
+  if (!engine::audio::writeWav16(args.wav.c_str(), samples, args.wav_mono ? 1 : 2, result.audio.sample_rate, &error)) {
+    std::fprintf(stderr, "fluiddemo replay: --wav %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("wav: %s (%s, %d Hz, 16-bit, %.2f s)\n", args.wav.c_str(), args.wav_mono ? "mono" : "stereo",
+              result.audio.sample_rate,
+              static_cast<double>(result.audio.samples.size() / 2) / result.audio.sample_rate);
+  return 0;
+}
+
 }  // namespace
 
 int replayCommand(const Args& args) {
@@ -241,13 +303,22 @@ int replayCommand(const Args& args) {
                  "a render-only override, section.key=value (repeatable; fluid_surface.* and the blob's surface "
                  "keys only, so the checkpoints still hold), e.g. fluid_surface.method=raycast, blob.async=false");
   app.add_flag("--no-ui", a.no_ui, "start with the overlay hidden");
+  app.add_option("--wav", a.wav,
+                 "write the audio effect's sound as 16-bit WAV, rendered offline (simulation only, as --no-render; "
+                 "the same samples at any --threads)");
+  app.add_flag("--wav-mono", a.wav_mono, "--wav as one channel");
   bool no_render = false;
   app.add_flag("--no-render", no_render,
                "simulation only: the same steps, inputs and checkpoints without GL, meshing or rendering");
   if (const int code = parseCommandLine(app, "replay", args); code >= 0) return code;
   if (const int code = checkArgs(a); code >= 0) return code;
   if (!a.compare.empty()) return compareCommand(a);
-  if (no_render && !a.run.screenshots.empty()) return usageError("--screenshot-at needs rendering: drop --no-render");
+  if (!a.wav.empty()) no_render = true;  // the offline render is the simulation-only run
+  if (no_render && !a.run.screenshots.empty())
+    return usageError("--screenshot-at needs rendering: drop --no-render (and --wav)");
+  if (a.wav_mono && a.wav.empty()) return usageError("--wav-mono needs --wav");
+  if (!a.wav.empty())
+    if (const int code = checkOutputFile("replay", "--wav", a.wav, a.force); code >= 0) return code;
 
   ReplayFile replay;
   if (ReplayStatus st = loadReplayFile(a.file, replay); !st.ok()) {
@@ -261,6 +332,7 @@ int replayCommand(const Args& args) {
   a.run.run.show_ui = !a.no_ui;
   a.run.update_hashes = a.update_hashes;
   a.run.render = !no_render;
+  a.run.audio = !a.wav.empty();
   std::optional<tbb::global_control> limit;
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(a.threads));
 
@@ -292,6 +364,8 @@ int replayCommand(const Args& args) {
     return code;
   }
   if (const int out = writeOutputs(a, replay, result); out != 0) return out;
+  if (!a.wav.empty())
+    if (const int out = writeAudio(a, result); out != 0) return out;
   if (a.update_hashes) return updateHashes(replay, result);
   return 0;
 }

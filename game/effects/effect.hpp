@@ -35,7 +35,14 @@
 
 namespace engine {
 struct FrameBatches;
+namespace audio {
+struct Mixer;
+}  // namespace audio
 }  // namespace engine
+
+namespace fluid {
+struct BlobWorld;
+}  // namespace fluid
 
 namespace game {
 
@@ -65,6 +72,12 @@ struct EffectLinks {
   // the step (the round restarts).
   glm::vec3 player{0.0f};
   bool reset_player = false;
+  // blob: the goo's particles (the audio effect hears their impacts).
+  const fluid::BlobWorld* blob = nullptr;
+  // audio: the mixer its step queues the simulation's sounds into (engine/audio/synth.hpp). The
+  // live device pulls it from SDL's audio thread; `replay --wav` sets the listener before each step
+  // and renders the step's samples after it (game/replay/replay_runner.cpp).
+  engine::audio::Mixer* audio = nullptr;
 };
 
 struct BuildContext {

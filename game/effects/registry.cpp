@@ -12,6 +12,7 @@ const EffectDesc& sphFluidEffect();
 const EffectDesc& spriteParticlesEffect();
 const EffectDesc& fluidSurfaceEffect();
 const EffectDesc& blobEffect();
+const EffectDesc& audioEffect();
 
 std::span<const EffectDesc* const> effectRegistry() {
   static const std::array kEffects = {
@@ -21,6 +22,7 @@ std::span<const EffectDesc* const> effectRegistry() {
       &spriteParticlesEffect(),  // sprays from this step's particles
       &fluidSurfaceEffect(),     // meshes the particles per frame
       &blobEffect(),             // the blob monster: crates both ways, this step's blasts, chases the player
+      &audioEffect(),            // hears what every effect above did this step (output only)
   };
   return kEffects;
 }

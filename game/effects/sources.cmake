@@ -7,4 +7,5 @@ target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sprite_particles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/fluid_surface.cpp
   ${CMAKE_CURRENT_LIST_DIR}/blob.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/audio.cpp
 )

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <mutex>
 #include <cstdio>
 
 namespace game {
@@ -63,9 +65,17 @@ int finish(ReplayResult& result, std::string& error) {
 
 // The replay without GL: build the world, then per frame inputs, one step, checkpoints. The rows
 // carry the simulation phases (physics, fluid) from a profiler of their own.
-int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::string& error) {
+int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& result, std::string& error) {
   World world;
   if (!buildWorld(result.scene, contentDir(), world, error)) return 1;
+  engine::audio::Mixer* mixer = audio ? world.links.audio : nullptr;
+  ReplayAudio& sound = result.audio;
+  if (mixer != nullptr) {
+    sound.present = true;
+    sound.sample_rate = mixer->params.sample_rate;
+    sound.samples.reserve(2 * audioStepFrames(0, world.step_seconds, sound.sample_rate) *
+                          static_cast<std::size_t>(frames + 1));
+  }
   result.report.systems_constructed = world.systems;
   result.report.gl_renderer = "none (simulation only)";
   engine::Profiler profiler;
@@ -75,7 +85,16 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
       engine::ScopedPhase phase(profiler, engine::Phase::input);
       applyReplayInputs(player, world);
     }
+    // The listener is the replay's camera for this step; the step queues its sounds, which the
+    // mixer then renders: the same renderMixer SDL's callback calls live.
+    if (mixer != nullptr) engine::audio::setListener(*mixer, {world.camera.position, engine::cameraForward(world.camera)});
     stepWorld(world, &profiler);
+    if (mixer != nullptr) {
+      const std::size_t n = audioStepFrames(world.steps - 1, world.step_seconds, sound.sample_rate);
+      const std::size_t at = sound.samples.size();
+      sound.samples.resize(at + 2 * n);
+      engine::audio::renderMixer(*mixer, sound.samples.data() + at, n);
+    }
     engine::endFrame(profiler);
     FrameRow row;
     row.frame = frame;
@@ -87,6 +106,15 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
     ++result.report.frames_rendered;
     ++result.report.simulation_steps;
     if (!keep_going) break;
+  }
+  if (mixer != nullptr) {
+    const std::lock_guard<std::mutex> hold(mixer->lock);
+    sound.stats = mixer->stats;
+    sound.clipped = mixer->clipped;
+    sound.nonfinite = mixer->nonfinite;
+    sound.steps = mixer->producer_steps;
+    sound.main_ms_mean = mixer->producer_steps > 0 ? mixer->producer_ms_sum / static_cast<double>(mixer->producer_steps) : 0.0;
+    sound.main_ms_max = mixer->producer_ms_max;
   }
   result.report.nonfinite_state = world.nonfinite_state;
   result.report.runtime_failures = world.failures.count;
@@ -103,6 +131,12 @@ int simulateReplay(ReplayPlayer& player, int frames, ReplayResult& result, std::
 }
 
 }  // namespace
+
+std::size_t audioStepFrames(std::uint64_t step, double step_seconds, int sample_rate) {
+  const double per_step = step_seconds * sample_rate;
+  return static_cast<std::size_t>(std::floor(static_cast<double>(step + 1) * per_step) -
+                                  std::floor(static_cast<double>(step) * per_step));
+}
 
 void applyReplayInputs(ReplayPlayer& player, World& world) {
   const ReplayFile& replay = *player.replay;
@@ -257,7 +291,7 @@ int runReplay(const ReplayFile& replay, const ReplayRunOptions& options, ReplayR
   ReplayPlayer player;
   player.replay = &replay;
   player.update_hashes = options.update_hashes;
-  if (!options.render) return simulateReplay(player, frames, result, error);
+  if (!options.render) return simulateReplay(player, frames, options.audio, result, error);
 
   RunOptions run = options.run;
   run.frames = frames;

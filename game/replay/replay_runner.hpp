@@ -3,12 +3,14 @@
 // file's camera keyframes and actions applied before each step, the state hashed and checked
 // at every checkpoint, and one timing row kept per frame.
 
+#include "engine/audio/synth.hpp"
 #include "game/replay/frame_times.hpp"
 #include "game/replay/replay_file.hpp"
 #include "game/replay/state_hash.hpp"
 #include "game/run_scene.hpp"
 #include "game/scene/scene_config.hpp"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -38,7 +40,26 @@ struct ReplayRunOptions {
   // (renderOnlyOverride); tests pass a perturbed constant, which must fail the gate.
   std::vector<std::string> extra_overrides;
   std::vector<std::pair<std::uint64_t, std::filesystem::path>> screenshots;  // (step, PNG)
+  // Render the audio effect's sound offline (simulation-only runs): before each step the listener
+  // takes the replay's camera, after it the mixer renders the step's share of samples
+  // (audioStepFrames) into ReplayResult::audio. Needs the scene to list `audio`.
+  bool audio = false;
 };
+
+// Interleaved stereo samples of a replay's sound and what the mixer counted while making them.
+struct ReplayAudio {
+  bool present = false;  // the scene lists audio and ReplayRunOptions::audio was set
+  int sample_rate = 0;
+  std::vector<float> samples;  // interleaved stereo, in [-1, 1]
+  std::array<engine::audio::KindStats, engine::audio::kSoundKinds> stats{};
+  std::uint64_t clipped = 0, nonfinite = 0;
+  double main_ms_mean = 0.0, main_ms_max = 0.0;  // the audio effect's step (main thread), per step
+  std::uint64_t steps = 0;
+};
+
+// Frames of sound belonging to step `step` (0-based) at `sample_rate`: floor((k + 1) R dt) - floor(k R dt),
+// so any run of steps holds exactly its duration's samples.
+std::size_t audioStepFrames(std::uint64_t step, double step_seconds, int sample_rate);
 
 struct CheckpointOutcome {
   std::size_t event = 0;  // index into ReplayFile::events
@@ -69,6 +90,7 @@ struct ReplayResult {
   std::size_t checkpoints_in_file = 0;
   std::string mismatch;  // the first failed checkpoint: step, line, first differing subsystem
   RaycastTally raycast;
+  ReplayAudio audio;  // ReplayRunOptions::audio
 };
 
 // `fluiddemo replay --set`: true when `assignment` (section.key=value) names a key that changes
