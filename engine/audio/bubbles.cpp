@@ -33,8 +33,8 @@ int bubblesFromSplash(const Splash& splash, const BubbleParams& params, float st
   // The count follows the impact's kinetic energy (mass x speed^2), relative to one particle at the
   // reference speed; the fraction left over is a chance of one more, so small impacts make a sparse
   // patter and not a constant hiss.
-  const float energy = splash.particles * (splash.speed / params.reference_speed) *
-                       (splash.speed / params.reference_speed);
+  const float energy =
+      splash.particles * (splash.speed / params.reference_speed) * (splash.speed / params.reference_speed);
   const float expected = params.rate_scale * params.per_particle * energy;
   const int count = std::min(params.max_per_impact, static_cast<int>(std::floor(expected + uniform01(rng))));
   const float top = topRadius(params, splash.drop_radius);

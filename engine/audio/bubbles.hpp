@@ -21,25 +21,25 @@ std::uint64_t nextRandom(Rng& rng);
 float uniform01(Rng& rng);  // in [0, 1)
 
 struct BubbleParams {
-  float radius_min = 0.0012f;   // m (2.7 kHz)
-  float radius_max = 0.015f;    // m (217 Hz)
-  float exponent = 2.0f;        // p(r) ~ r^-exponent (0 = uniform in r)
-  float size_ratio = 0.05f;     // the top radius as a fraction of the drop's radius
-  float rate_scale = 1.0f;      // bubbles per impact, relative
-  float per_particle = 0.35f;   // bubbles a one-particle impact at reference_speed makes, on average
-  float reference_speed = 3.0f; // m/s
+  float radius_min = 0.0012f;    // m (2.7 kHz)
+  float radius_max = 0.015f;     // m (217 Hz)
+  float exponent = 2.0f;         // p(r) ~ r^-exponent (0 = uniform in r)
+  float size_ratio = 0.05f;      // the top radius as a fraction of the drop's radius
+  float rate_scale = 1.0f;       // bubbles per impact, relative
+  float per_particle = 0.35f;    // bubbles a one-particle impact at reference_speed makes, on average
+  float reference_speed = 3.0f;  // m/s
   int max_per_impact = 24;
-  float amplitude = 0.02f;      // one bubble of radius 3 mm at reference_speed, 1 m away
-  float damping = 1.0f;         // multiplies the bubbles' decay (goo > 1)
+  float amplitude = 0.02f;  // one bubble of radius 3 mm at reference_speed, 1 m away
+  float damping = 1.0f;     // multiplies the bubbles' decay (goo > 1)
 };
 
 struct Splash {
   SoundKind kind = SoundKind::drop;
   glm::vec3 position{0.0f};
-  float speed = 0.0f;         // m/s at impact
-  float drop_radius = 0.0f;   // m: the radius of a ball of what fell
-  float particles = 1.0f;     // how much fell, in particles (the energy's volume factor)
-  float loudness = 1.0f;      // extra gain (a crate, a blast's splash)
+  float speed = 0.0f;        // m/s at impact
+  float drop_radius = 0.0f;  // m: the radius of a ball of what fell
+  float particles = 1.0f;    // how much fell, in particles (the energy's volume factor)
+  float loudness = 1.0f;     // extra gain (a crate, a blast's splash)
 };
 
 // Draws one radius from p(r) ~ r^-exponent on [lo, hi] by inverting its CDF.

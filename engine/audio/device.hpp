@@ -12,10 +12,10 @@
 namespace engine::audio {
 
 struct AudioDevice {
-  std::uint32_t id = 0;        // SDL_AudioDeviceID; 0 = not open
-  bool subsystem = false;      // this device initialised SDL's audio subsystem (quit on close)
-  Mixer* mixer = nullptr;      // pulled by the callback; outlives the device
-  std::string driver;          // SDL's driver name, for the overlay
+  std::uint32_t id = 0;    // SDL_AudioDeviceID; 0 = not open
+  bool subsystem = false;  // this device initialised SDL's audio subsystem (quit on close)
+  Mixer* mixer = nullptr;  // pulled by the callback; outlives the device
+  std::string driver;      // SDL's driver name, for the overlay
 };
 
 // Opens the default output as stereo float at the mixer's sample rate and starts it. False +

@@ -117,9 +117,7 @@ bool shapeVoice(Mixer& m, const SoundEvent& e, Voice& v) {
   return false;
 }
 
-float loudness(const Voice& v) {
-  return (v.amplitude + v.noise) * std::max(v.gain_left, v.gain_right);
-}
+float loudness(const Voice& v) { return (v.amplitude + v.noise) * std::max(v.gain_left, v.gain_right); }
 
 void addVoice(Mixer& m, const SoundEvent& e) {
   KindStats& stats = m.stats[static_cast<std::size_t>(e.kind)];
@@ -207,14 +205,16 @@ void renderChunk(Mixer& m, float* out, std::size_t frames) {
     Voice& v = m.voices[i];
     const std::int64_t begin = std::max<std::int64_t>(0, v.start - m.clock);
     const std::size_t k = static_cast<std::size_t>(v.kind);
-    bool bad = false;
+    bool bad = false, done = false;
     for (std::size_t f = static_cast<std::size_t>(std::min<std::int64_t>(begin, static_cast<std::int64_t>(frames)));
-         f < frames; ++f) {
+         f < frames && !done; ++f) {
       const float s = advance(v, rate);
       if (!std::isfinite(s)) {
         bad = true;
         break;
       }
+      // Ends on the frame its envelope falls silent, whatever the render calls' sizes.
+      done = finished(v);
       out[2 * f] += s * v.gain_left;
       out[2 * f + 1] += s * v.gain_right;
       m.kind_mix[k * kChunk + f] += 0.5f * s * (v.gain_left + v.gain_right);
@@ -222,9 +222,10 @@ void renderChunk(Mixer& m, float* out, std::size_t frames) {
       last_active[k] = std::max(last_active[k], static_cast<std::uint32_t>(f + 1));
     }
     if (bad) ++m.nonfinite;
-    if (bad || (v.start <= m.clock + static_cast<std::int64_t>(frames) && finished(v))) {
-      m.voices[i] = m.voices.back();
-      m.voices.pop_back();
+    // Ended voices leave in place (the order of the others, hence of the sum, is kept): the output
+    // does not depend on where render calls split the stream.
+    if (bad || done) {
+      m.voices.erase(m.voices.begin() + static_cast<std::ptrdiff_t>(i));
     } else {
       ++i;
     }
@@ -270,14 +271,22 @@ void renderChunk(Mixer& m, float* out, std::size_t frames) {
 
 std::string_view soundKindName(SoundKind kind) {
   switch (kind) {
-    case SoundKind::drop: return "drop";
-    case SoundKind::jet: return "jet";
-    case SoundKind::pump: return "pump";
-    case SoundKind::goo: return "goo";
-    case SoundKind::crate: return "crate";
-    case SoundKind::crate_splash: return "crate_splash";
-    case SoundKind::blast: return "blast";
-    case SoundKind::count: break;
+    case SoundKind::drop:
+      return "drop";
+    case SoundKind::jet:
+      return "jet";
+    case SoundKind::pump:
+      return "pump";
+    case SoundKind::goo:
+      return "goo";
+    case SoundKind::crate:
+      return "crate";
+    case SoundKind::crate_splash:
+      return "crate_splash";
+    case SoundKind::blast:
+      return "blast";
+    case SoundKind::count:
+      break;
   }
   return "?";
 }
@@ -288,9 +297,7 @@ float minnaertFrequency(float radius) {
   return radius > 0.0f && std::isfinite(radius) ? kMinnaert / radius : 0.0f;
 }
 
-float bubbleDecayRate(float frequency) {
-  return 0.043f * frequency + 0.0014f * frequency * std::sqrt(frequency);
-}
+float bubbleDecayRate(float frequency) { return 0.043f * frequency + 0.0014f * frequency * std::sqrt(frequency); }
 
 void initMixer(Mixer& mixer, const MixerParams& params) {
   const std::lock_guard<std::mutex> hold(mixer.lock);

@@ -60,12 +60,12 @@ struct Listener {
 };
 
 struct MixerParams {
-  int sample_rate = 22050;        // Hz, >= 8000
-  int max_voices = 192;           // more: the quietest voice is replaced, or the new one dropped
-  float volume = 0.5f;            // master gain in [0, 4]
-  bool mute = false;              // render silence (voices still advance, so unmuting is seamless)
-  float xi = 0.1f;                // Moss et al. 2010 §3 (after van den Doel 2005): pitch rise per decay
-  float speed_of_sound = 343.0f;  // m/s, the travel delay; 0 = no delay
+  int sample_rate = 22050;          // Hz, >= 8000
+  int max_voices = 192;             // more: the quietest voice is replaced, or the new one dropped
+  float volume = 0.5f;              // master gain in [0, 4]
+  bool mute = false;                // render silence (voices still advance, so unmuting is seamless)
+  float xi = 0.1f;                  // Moss et al. 2010 §3 (after van den Doel 2005): pitch rise per decay
+  float speed_of_sound = 343.0f;    // m/s, the travel delay; 0 = no delay
   float reference_distance = 2.0f;  // m: closer sounds are not louder (1/r beyond it)
   float limit = 0.89f;              // the limiter's ceiling (linear; 0.89 = -1 dBFS)
 };
@@ -93,7 +93,7 @@ struct Voice {
   // wood: modes 1-3 beyond the fundamental; blast: the boom's sweep and the noise state.
   std::array<float, 3> mode_amp{}, mode_decay{}, mode_freq{};
   std::array<double, 3> mode_phase{};
-  float noise = 0.0f;       // wood: click amplitude; blast: noise amplitude
+  float noise = 0.0f;  // wood: click amplitude; blast: noise amplitude
   float noise_decay = 1.0f;
   float lowpass = 0.0f, lowpass_coeff = 0.0f;
   std::uint32_t rng = 1;
@@ -103,18 +103,18 @@ struct Voice {
 struct Mixer {
   MixerParams params;
   Listener listener;
-  std::mutex lock;                   // queueSounds / setListener vs renderMixer
-  std::vector<SoundEvent> pending;   // queued, voiced at the next render call
+  std::mutex lock;                  // queueSounds / setListener vs renderMixer
+  std::vector<SoundEvent> pending;  // queued, voiced at the next render call
   // Events beyond this many pending are dropped (counted per kind): a run with no device and no
   // offline render never grows the queue past it.
   std::size_t max_pending = 16384;
-  std::vector<Voice> voices;         // sounding (or waiting for their start)
-  std::int64_t clock = 0;            // frames rendered so far
+  std::vector<Voice> voices;  // sounding (or waiting for their start)
+  std::int64_t clock = 0;     // frames rendered so far
   float limiter_gain = 1.0f;
   std::array<KindStats, kSoundKinds> stats{};
-  std::vector<float> kind_mix;       // scratch: one render call's mono sum per kind
-  std::uint64_t clipped = 0;         // output samples the final clamp touched (0 unless the limiter failed)
-  std::uint64_t nonfinite = 0;       // voices dropped for a NaN/inf sample
+  std::vector<float> kind_mix;  // scratch: one render call's mono sum per kind
+  std::uint64_t clipped = 0;    // output samples the final clamp touched (0 unless the limiter failed)
+  std::uint64_t nonfinite = 0;  // voices dropped for a NaN/inf sample
   // What producing the events costs the thread that queues them (the game's main thread): its
   // producer writes these (ms per step) for the overlay and the offline summary.
   double producer_ms_sum = 0.0, producer_ms_max = 0.0;

@@ -26,8 +26,8 @@ std::uint64_t cellKey(glm::vec3 p, float inv_cell) {
 }  // namespace
 
 void findImpacts(const glm::vec3* positions, std::size_t position_stride, const glm::vec3* velocities,
-                 std::size_t velocity_stride, const std::uint32_t* ids, std::size_t count, glm::vec3 gravity,
-                 float dt, const ImpactParams& params, ImpactTracker& tracker, std::vector<Impact>& out) {
+                 std::size_t velocity_stride, const std::uint32_t* ids, std::size_t count, glm::vec3 gravity, float dt,
+                 const ImpactParams& params, ImpactTracker& tracker, std::vector<Impact>& out) {
   out.clear();
   tracker.hits.clear();
   std::fill(tracker.seen.begin(), tracker.seen.end(), std::uint8_t{0});
@@ -50,8 +50,8 @@ void findImpacts(const glm::vec3* positions, std::size_t position_stride, const 
       // What the step took beyond free flight: |v0 + g dt| - |v1|.
       const float loss = glm::length(before + fall) - glm::length(v);
       if (speed >= params.min_speed && loss >= params.min_speed_loss && std::isfinite(loss))
-        tracker.hits.push_back({cellKey(at(positions, position_stride, i), inv_cell), static_cast<std::uint32_t>(i),
-                                speed, loss});
+        tracker.hits.push_back(
+            {cellKey(at(positions, position_stride, i), inv_cell), static_cast<std::uint32_t>(i), speed, loss});
     }
     tracker.velocity[id] = v;
     tracker.known[id] = std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) ? 1 : 0;

@@ -22,9 +22,9 @@
 namespace fluid {
 
 struct ImpactParams {
-  float min_speed = 1.0f;         // m/s: slower particles make no sound
-  float min_speed_loss = 1.2f;    // m/s lost in one step beyond what gravity explains
-  float cell_size = 0.25f;        // m: impacts within one cell of this size merge
+  float min_speed = 1.0f;           // m/s: slower particles make no sound
+  float min_speed_loss = 1.2f;      // m/s lost in one step beyond what gravity explains
+  float cell_size = 0.25f;          // m: impacts within one cell of this size merge
   std::uint32_t max_id = 1u << 22;  // ids at or above are ignored (the tracker is indexed by id)
 };
 
@@ -54,7 +54,7 @@ struct ImpactTracker {
 // `out` (cleared first) in cell order. The tracker then holds the end-of-step velocities; an id
 // not present this call is forgotten (a pumped particle comes back as new, not as an impact).
 void findImpacts(const glm::vec3* positions, std::size_t position_stride, const glm::vec3* velocities,
-                 std::size_t velocity_stride, const std::uint32_t* ids, std::size_t count, glm::vec3 gravity,
-                 float dt, const ImpactParams& params, ImpactTracker& tracker, std::vector<Impact>& out);
+                 std::size_t velocity_stride, const std::uint32_t* ids, std::size_t count, glm::vec3 gravity, float dt,
+                 const ImpactParams& params, ImpactTracker& tracker, std::vector<Impact>& out);
 
 }  // namespace fluid

@@ -46,12 +46,12 @@ struct AudioParams {
   float radius_min = 0.0012f;  // m
   float radius_max = 0.015f;   // m
   float radius_exponent = 2.0f;
-  float size_ratio = 0.05f;    // top bubble radius / the radius of what fell
+  float size_ratio = 0.05f;  // top bubble radius / the radius of what fell
   float bubble_gain = 0.02f;
-  float rising_pitch = 0.1f;   // Moss et al. 2010 §3 xi
-  float min_speed = 1.0f;      // m/s
+  float rising_pitch = 0.1f;    // Moss et al. 2010 §3 xi
+  float min_speed = 1.0f;       // m/s
   float min_speed_loss = 1.2f;  // m/s lost in a step
-  float impact_cell = 0.25f;   // m
+  float impact_cell = 0.25f;    // m
   float pump_gain = 0.5f;
   float crate_gain = 0.25f;
   float crate_min_impulse = 6.0f;  // N s
@@ -59,7 +59,7 @@ struct AudioParams {
   float blast_gain = 0.6f;
   float goo_gain = 1.5f;
   float goo_damping = 4.0f;
-  float goo_pitch = 0.35f;    // the goo's bubbles sound at this fraction of the water's pitch
+  float goo_pitch = 0.35f;  // the goo's bubbles sound at this fraction of the water's pitch
   float speed_of_sound = 343.0f;
   float reference_distance = 2.0f;
 };
@@ -98,8 +98,7 @@ const ParamTable<AudioParams>& table() {
       param<&P::goo_damping>("goo_damping", 0.1, 50.0, "the goo's bubbles decay this many times faster"),
       param<&P::goo_pitch>("goo_pitch", 0.05, 2.0, "the goo's bubbles at this fraction of the water's pitch"),
       param<&P::speed_of_sound>("speed_of_sound", 0.0, 10000.0, "m/s: the delay of distant sounds; 0 = none"),
-      param<&P::reference_distance>("reference_distance", 0.1, 100.0,
-                                    "m: sounds fall off as 1/distance beyond this"),
+      param<&P::reference_distance>("reference_distance", 0.1, 100.0, "m: sounds fall off as 1/distance beyond this"),
   };
   return rows;
 }
@@ -158,13 +157,13 @@ struct AudioState {
   engine::audio::AudioDevice device;
   engine::audio::Rng rng;
   fluid::ImpactTracker water_tracker, goo_tracker;
-  std::vector<fluid::Impact> impacts;      // scratch
+  std::vector<fluid::Impact> impacts;             // scratch
   std::vector<engine::audio::SoundEvent> events;  // scratch: this step's
-  std::vector<PairImpulse> contact_impulse;  // per body pair (sorted by key): the last step's largest impulse
-  std::vector<PairImpulse> contact_now;      // scratch
-  std::vector<float> crate_bottom;                 // per crate: the last step's bottom height (m)
-  std::size_t pump_held = 0;                       // the pump's fill count after the last step
-  float pool_surface = -1e30f;                     // m: the pool's surface height (refreshed each second)
+  std::vector<PairImpulse> contact_impulse;       // per body pair (sorted by key): the last step's largest impulse
+  std::vector<PairImpulse> contact_now;           // scratch
+  std::vector<float> crate_bottom;                // per crate: the last step's bottom height (m)
+  std::size_t pump_held = 0;                      // the pump's fill count after the last step
+  float pool_surface = -1e30f;                    // m: the pool's surface height (refreshed each second)
   std::uint64_t steps = 0;
   // Main-thread cost of step (ms): the last, the mean and the largest.
   double step_ms = 0.0, step_ms_sum = 0.0, step_ms_max = 0.0;
@@ -229,9 +228,9 @@ class AudioEffect final : public EffectOf<AudioState> {
     const float rms = state.mixer.meter_rms.load(std::memory_order_relaxed);
     const auto db = [](float x) { return x > 1e-6f ? 20.0f * std::log10(x) : -120.0f; };
     ImGui::Text("audio: %s%s, step %.3f ms (mean %.3f, max %.3f), M mutes",
-                state.device.id != 0 ? state.device.driver.c_str() : "no device",
-                state.params.mute ? " (muted)" : "", state.step_ms,
-                state.steps > 0 ? state.step_ms_sum / static_cast<double>(state.steps) : 0.0, state.step_ms_max);
+                state.device.id != 0 ? state.device.driver.c_str() : "no device", state.params.mute ? " (muted)" : "",
+                state.step_ms, state.steps > 0 ? state.step_ms_sum / static_cast<double>(state.steps) : 0.0,
+                state.step_ms_max);
     // The level meter: RMS as the bar, the peak in the text, both in dBFS over a 60 dB range.
     char label[64];
     std::snprintf(label, sizeof label, "rms %.0f dB  peak %.0f dB", db(rms), db(peak));
@@ -243,8 +242,7 @@ class AudioEffect final : public EffectOf<AudioState> {
   void waterSounds(const SphFluid& fluid, glm::vec3 gravity, float dt) {
     const fluid::ParticleStore& p = fluid.world.particles;
     fluid::findImpacts(p.position.data(), sizeof(glm::vec3), p.velocity.data(), sizeof(glm::vec3), p.id.data(),
-                       p.position.size(), gravity, dt, impactParams(state.params), state.water_tracker,
-                       state.impacts);
+                       p.position.size(), gravity, dt, impactParams(state.params), state.water_tracker, state.impacts);
     const engine::audio::BubbleParams bubbles = waterBubbles(state.params);
     const float r = fluid.world.params.particle_radius;
     for (const fluid::Impact& impact : state.impacts) {
@@ -291,14 +289,16 @@ class AudioEffect final : public EffectOf<AudioState> {
     std::vector<PairImpulse>& now = state.contact_now;
     now.clear();
     for (const engine::ContactImpulse& c : physics.contacts)
-      now.push_back({(static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.a)) << 32) |
-                         static_cast<std::uint32_t>(c.b),
-                     c.impulse, c.point});
+      now.push_back(
+          {(static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.a)) << 32) | static_cast<std::uint32_t>(c.b),
+           c.impulse, c.point});
     // Per pair, the largest of the step's substeps (first of equals, so the order is total).
-    std::stable_sort(now.begin(), now.end(),
-                     [](const PairImpulse& a, const PairImpulse& b) { return a.key < b.key || (a.key == b.key && a.impulse > b.impulse); });
-    now.erase(std::unique(now.begin(), now.end(), [](const PairImpulse& a, const PairImpulse& b) { return a.key == b.key; }),
-              now.end());
+    std::stable_sort(now.begin(), now.end(), [](const PairImpulse& a, const PairImpulse& b) {
+      return a.key < b.key || (a.key == b.key && a.impulse > b.impulse);
+    });
+    now.erase(
+        std::unique(now.begin(), now.end(), [](const PairImpulse& a, const PairImpulse& b) { return a.key == b.key; }),
+        now.end());
     for (const PairImpulse& pair : now) {
       const auto last = std::lower_bound(state.contact_impulse.begin(), state.contact_impulse.end(), pair.key,
                                          [](const PairImpulse& a, std::uint64_t key) { return a.key < key; });
@@ -358,8 +358,8 @@ class AudioEffect final : public EffectOf<AudioState> {
 
   void gooSounds(const fluid::BlobWorld& blob, glm::vec3 gravity, float dt) {
     const fluid::BlobParticles& p = blob.particles;
-    fluid::findImpacts(p.position.data(), sizeof(glm::vec3), p.velocity.data(), sizeof(glm::vec3), nullptr,
-                       p.size(), gravity, dt, impactParams(state.params), state.goo_tracker, state.impacts);
+    fluid::findImpacts(p.position.data(), sizeof(glm::vec3), p.velocity.data(), sizeof(glm::vec3), nullptr, p.size(),
+                       gravity, dt, impactParams(state.params), state.goo_tracker, state.impacts);
     const engine::audio::BubbleParams bubbles = gooBubbles(state.params);
     const float r = fluid::blobParticleRadius(blob.params);
     for (const fluid::Impact& impact : state.impacts) {

@@ -1,0 +1,143 @@
+// The `audio` effect in a World (no GL, no device): the mixer is rendered step by step as
+// `replay --wav` does. Silence when nothing moves, a knock when a crate lands, a blast's noise and
+// boom, a splash when a crate drops into the pool, and the same samples at any thread count.
+#include "engine/audio/synth.hpp"
+#include "game/paths.hpp"
+#include "game/replay/replay_file.hpp"
+#include "game/replay/replay_runner.hpp"
+#include "game/world/world.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace {
+
+using engine::audio::SoundKind;
+
+game::World buildFrom(const std::string& text) {
+  game::SceneConfig scene;
+  const game::SceneStatus status = game::parseSceneText(text, "test.json", scene);
+  EXPECT_TRUE(status.ok()) << status.error;
+  game::World world;
+  std::string error;
+  EXPECT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  return world;
+}
+
+// Steps the world `steps` times, rendering each step's samples after it (the offline path).
+std::vector<float> stepAndRender(game::World& world, int steps) {
+  engine::audio::Mixer& mixer = *world.links.audio;
+  std::vector<float> out;
+  for (int i = 0; i < steps; ++i) {
+    engine::audio::setListener(mixer, {world.camera.position, engine::cameraForward(world.camera)});
+    game::stepWorld(world, nullptr);
+    const std::size_t n = game::audioStepFrames(world.steps - 1, world.step_seconds, mixer.params.sample_rate);
+    const std::size_t at = out.size();
+    out.resize(at + 2 * n);
+    engine::audio::renderMixer(mixer, out.data() + at, n);
+  }
+  return out;
+}
+
+double rms(const std::vector<float>& samples) {
+  double sum = 0.0;
+  for (float x : samples) sum += static_cast<double>(x) * x;
+  return samples.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(samples.size()));
+}
+
+bool allFiniteUnderFullScale(const std::vector<float>& samples) {
+  for (float x : samples)
+    if (!std::isfinite(x) || std::abs(x) > 1.0f) return false;
+  return true;
+}
+
+const engine::audio::KindStats& stats(const game::World& world, SoundKind kind) {
+  return world.links.audio->stats[static_cast<std::size_t>(kind)];
+}
+
+TEST(AudioEffect, IsSilentWhenNothingMoves) {
+  game::World world = buildFrom(R"({"effects": {"rigid_bodies": {"crates": 3}, "audio": {}}})");
+  ASSERT_NE(world.links.audio, nullptr);
+  stepAndRender(world, 240);  // the stack settles (its first contacts may knock)
+  const std::uint64_t knocks = stats(world, SoundKind::crate).events;
+  const std::vector<float> later = stepAndRender(world, 120);
+  EXPECT_EQ(stats(world, SoundKind::crate).events, knocks);
+  for (float x : later) ASSERT_EQ(x, 0.0f);
+}
+
+TEST(AudioEffect, ACrateLandingKnocks) {
+  game::World world = buildFrom(R"({"effects": {"rigid_bodies": {"crates": 0}, "audio": {}}})");
+  world.camera.position = glm::vec3(0.0f, 3.0f, 6.0f);
+  world.camera.yaw_degrees = -90.0f;
+  world.camera.pitch_degrees = -20.0f;
+  const std::vector<float> before = stepAndRender(world, 30);
+  EXPECT_EQ(rms(before), 0.0);
+  game::playerThrow(world);
+  const std::vector<float> after = stepAndRender(world, 120);
+  EXPECT_GT(stats(world, SoundKind::crate).events, 0u);
+  EXPECT_GT(stats(world, SoundKind::crate).max_frequency, 0.0f);
+  EXPECT_GT(rms(after), 1e-4);  // above -80 dBFS
+  EXPECT_TRUE(allFiniteUnderFullScale(after));
+}
+
+TEST(AudioEffect, ABlastIsHeard) {
+  game::World world = buildFrom(
+      R"({"effects": {"rigid_bodies": {"crates": 0}, "explosives": {"fuse_seconds": 0.5, "throw_speed": 0},
+          "audio": {"speed_of_sound": 34.3}}})");
+  world.camera.position = glm::vec3(0.0f, 1.0f, 0.0f);
+  game::playerThrowExplosive(world);
+  std::vector<float> out = stepAndRender(world, 90);
+  ASSERT_EQ(stats(world, SoundKind::blast).events, 1u);
+  EXPECT_GT(rms(out), 1e-3);  // above -60 dBFS
+  EXPECT_TRUE(allFiniteUnderFullScale(out));
+  EXPECT_EQ(world.links.audio->clipped, 0u);
+}
+
+TEST(AudioEffect, ACrateDroppedIntoThePoolSplashes) {
+  game::World world = buildFrom(
+      R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 6},
+          "sph_fluid": {"max_particles": 4000, "cfl": 0.9, "max_time_step": 0.0167, "density_error": 0.005,
+                        "force_bound": 0},
+          "audio": {}}})");
+  // Over the pool between the statue's plinth and the basin wall, throwing straight down.
+  world.camera.position = glm::vec3(1.8f, 2.5f, 0.0f);
+  world.camera.pitch_degrees = -89.0f;
+  stepAndRender(world, 2);
+  game::playerThrow(world);
+  const std::vector<float> out = stepAndRender(world, 60);
+  EXPECT_GT(stats(world, SoundKind::crate_splash).events, 0u);
+  EXPECT_GT(stats(world, SoundKind::crate_splash).peak, 0.0f);
+  EXPECT_TRUE(allFiniteUnderFullScale(out));
+}
+
+// The fountain tour's first 150 steps offline, through the replay runner as `replay --wav` runs
+// it, at 1 and at 2 threads: the same samples, bit for bit, and water is heard.
+TEST(AudioEffect, TheOfflineRenderIsTheSameAtAnyThreadCount) {
+  game::ReplayFile replay;
+  ASSERT_TRUE(game::loadReplayFile(game::contentDir() / "replays" / "fountain_tour.replay", replay).ok());
+  const auto run = [&](int threads) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    game::ReplayRunOptions options;
+    options.render = false;
+    options.audio = true;
+    options.frames = 150;
+    options.allow_scene_change = true;
+    game::ReplayResult result;
+    std::string error;
+    EXPECT_EQ(game::runReplay(replay, options, result, error), 0) << error;
+    return result.audio;
+  };
+  const game::ReplayAudio one = run(1), two = run(2);
+  ASSERT_TRUE(one.present);
+  EXPECT_EQ(one.samples.size(), 2u * 150u * 22050u / 60u);
+  EXPECT_EQ(one.samples, two.samples);
+  EXPECT_GT(one.stats[static_cast<std::size_t>(SoundKind::jet)].events, 0u);
+  EXPECT_GT(rms(one.samples), 1e-5);
+  EXPECT_TRUE(allFiniteUnderFullScale(one.samples));
+}
+
+}  // namespace
