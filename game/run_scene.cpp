@@ -91,7 +91,7 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   engine::InputState& input = s.input;
   engine::pollInput(s.platform, input, engine::overlayWantsMouse(s.overlay), engine::overlayWantsKeyboard(s.overlay),
                     &engine::overlayProcessEvent);
-  if (input.toggle_ui) s.overlay.visible = !s.overlay.visible;
+  if (input.toggle_ui) s.overlay.mode = engine::nextOverlayMode(s.overlay.mode);
   engine::CameraInput camera_input;
   camera_input.forward = (input.forward ? 1.0f : 0.0f) - (input.back ? 1.0f : 0.0f);
   camera_input.right = (input.right ? 1.0f : 0.0f) - (input.left ? 1.0f : 0.0f);
@@ -154,10 +154,9 @@ bool writeImages(Session& s, const engine::FrameView& view, bool last_frame, std
 // UI phase: the overlay's windows; a knob edit applies live, "Restart" rebuilds the world.
 void drawUi(Session& s, const std::filesystem::path& content_dir) {
   const engine::ScopedPhase phase(s.profiler, engine::Phase::ui);
-  if (!s.overlay.visible) return;
+  if (s.overlay.mode == engine::OverlayMode::hidden) return;
   engine::beginOverlayFrame(s.overlay);
-  engine::drawProfilerWindow(s.profiler, s.world.systems, s.platform.gl_renderer);
-  const auto [changed, restart] = drawScenePanel(s.world);
+  const auto [changed, restart] = drawGameOverlay(s.world, s.overlay, s.profiler, s.platform.gl_renderer);
   if (s.options.hooks.draw_overlay) s.options.hooks.draw_overlay();
   engine::endOverlayFrame(s.overlay);
   engine::checkGl(s.renderer.errors, "overlay");
@@ -309,7 +308,7 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
         loadLevelAssets(content_dir, world.scene.scene.text("level"), assets, error) &&
         engine::createOverlay(platform, overlay, error)) {
       attachWorldGpu(world, shaderDirectory(), content_dir);
-      overlay.visible = options.show_ui;
+      overlay.mode = options.show_ui ? engine::OverlayMode::compact : engine::OverlayMode::hidden;
       Session session{options, report, world, platform, renderer, overlay, assets};
       code = runFrames(session, content_dir, passes, error);
       // The effects' GL objects are freed while the context is still current.

@@ -55,9 +55,10 @@ bool editParam(const ParamSpec& param, ParamValue& value) {
   return edited;
 }
 
-bool editSection(SectionConfig& section) {
+bool editSection(SectionConfig& section, const char* title) {
   const SectionSpec* spec = findSection(section.name);
-  if (spec == nullptr || !ImGui::TreeNodeEx(section.name.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return false;
+  if (spec == nullptr || !ImGui::TreeNodeEx(section.name.c_str(), ImGuiTreeNodeFlags_DefaultOpen, "%s", title))
+    return false;
   bool changed = false;
   for (const ParamSpec& param : spec->params) {
     auto it = section.params.find(param.key);
@@ -67,32 +68,93 @@ bool editSection(SectionConfig& section) {
   return changed;
 }
 
-}  // namespace
+// The camera as it is now (the camera section's keys are the start pose a new round returns to).
+void editLiveCamera(World& world) {
+  if (!ImGui::TreeNodeEx("live camera", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  engine::FpsCamera& camera = world.camera;
+  ImGui::DragFloat3("position##live", &camera.position.x, 0.05f, -1000.0f, 1000.0f, "%.2f");
+  ImGui::DragFloat("yaw##live", &camera.yaw_degrees, 0.5f, -720.0f, 720.0f, "%.1f");
+  ImGui::DragFloat("pitch##live", &camera.pitch_degrees, 0.5f, -89.0f, 89.0f, "%.1f");
+  if (ImGui::Button("make this the start pose")) {
+    world.scene.camera.params["position"].vec = camera.position;
+    world.scene.camera.params["yaw_degrees"].number = camera.yaw_degrees;
+    world.scene.camera.params["pitch_degrees"].number = camera.pitch_degrees;
+  }
+  ImGui::TreePop();
+}
 
-std::pair<bool, bool> drawScenePanel(World& world) {
-  ImGui::SetNextWindowPos(ImVec2(std::max(ImGui::GetIO().DisplaySize.x - 390.0f, 400.0f), 10), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_FirstUseEver);
+// The widest knob label of the scene, so every knob leaves its label room and none is cut.
+float widestLabel(const World& world) {
+  float widest = ImGui::CalcTextSize("position").x;
+  const auto measure = [&widest](const SectionConfig& section) {
+    if (const SectionSpec* spec = findSection(section.name))
+      for (const ParamSpec& param : spec->params) {
+        const std::string label(param.key);
+        widest = std::max(widest, ImGui::CalcTextSize(label.c_str()).x);
+      }
+  };
+  measure(world.scene.camera);
+  for (const SectionConfig& effect : world.scene.effects) measure(effect);
+  measure(world.scene.scene);
+  return widest;
+}
+
+std::pair<bool, bool> drawScenePanel(World& world, const engine::PanelPlacement& placement) {
+  engine::placeNextPanel(placement);
+  // The panel runs down the right edge and scrolls; its height is the layout's.
+  ImGui::SetNextWindowSize(ImVec2(placement.width, placement.max_height),
+                           placement.force ? ImGuiCond_Always : ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Scene")) {
     ImGui::End();
     return {false, false};
   }
+  ImGui::PushTextWrapPos(0.0f);  // status lines wrap at the panel's edge instead of being cut
   ImGui::Text("scene '%s', step %llu", world.scene.name.c_str(), static_cast<unsigned long long>(world.steps));
   for (const std::unique_ptr<Effect>& effect : world.effects) effect->drawStatus();
   if (world.failures.count > 0) {
     ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "run-time failures: %llu (frames go on)",
                        static_cast<unsigned long long>(world.failures.count));
-    ImGui::TextWrapped("last: %s", world.failures.last.c_str());
+    ImGui::Text("last: %s", world.failures.last.c_str());
   }
-  ImGui::TextDisabled("LMB throw crate, RMB/Tab look, WASD move, F12 screenshot");
-  ImGui::PushItemWidth(ImGui::GetWindowWidth() * 0.5f);
-  bool changed = editSection(world.scene.camera);
-  for (SectionConfig& effect : world.scene.effects) changed |= editSection(effect);
-  changed |= editSection(world.scene.scene);
+  ImGui::TextDisabled("%s", keyHint(world).c_str());
+  const float indent = ImGui::GetStyle().IndentSpacing * 2.0f;
+  const float knob = ImGui::GetContentRegionAvail().x - widestLabel(world) - ImGui::GetStyle().ItemInnerSpacing.x - indent;
+  ImGui::PushItemWidth(std::max(knob, 60.0f));
+  editLiveCamera(world);
+  bool changed = editSection(world.scene.camera, "camera (start pose)");
+  for (SectionConfig& effect : world.scene.effects) changed |= editSection(effect, effect.name.c_str());
+  changed |= editSection(world.scene.scene, "scene");
   ImGui::TextDisabled("counts, sizes and scene.* apply on restart");
   ImGui::PopItemWidth();
+  ImGui::PopTextWrapPos();
   const bool restart = ImGui::Button("Restart scene with these values");
   ImGui::End();
   return {changed, restart};
+}
+
+}  // namespace
+
+std::string keyHint(const World& world) {
+  std::string hint = "WASD move  Space/E up  Q down  Shift fast  RMB/Tab look  LMB crate";
+  if (world.links.explosives != nullptr) hint += "  G charge";
+  hint += "  F1 panels  F12 screenshot  Esc quit";
+  return hint;
+}
+
+std::pair<bool, bool> drawGameOverlay(World& world, const engine::Overlay& overlay, const engine::Profiler& profiler,
+                                      const std::string& gl_renderer) {
+  switch (overlay.mode) {
+    case engine::OverlayMode::hidden:
+      return {false, false};
+    case engine::OverlayMode::compact:
+      engine::drawCompactStrip(profiler, {}, keyHint(world));
+      return {false, false};
+    case engine::OverlayMode::full:
+      break;
+  }
+  const engine::OverlayLayout layout = engine::currentOverlayLayout(overlay);
+  engine::drawProfilerWindow(profiler, world.systems, gl_renderer, layout.frame);
+  return drawScenePanel(world, layout.game);
 }
 
 }  // namespace game

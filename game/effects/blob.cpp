@@ -429,10 +429,17 @@ class BlobEffect final : public EffectOf<BlobMonster> {
                 s.machine.state >= 0 ? fluid::blobBehaviourName(s.program.states[s.machine.state].behaviour.kind) : "-",
                 s.machine.time_in_state, s.world.particles.size(), s.catches, s.stats.step_ms,
                 static_cast<unsigned long long>(s.mesh.stats.triangles));
-    // Trigger any state of the program now (as if one of its triggers fired).
+    // Trigger any state of the program now (as if one of its triggers fired); the current state's
+    // button is lit, and the buttons wrap onto new lines in a narrow panel.
+    const float right = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
     for (std::size_t k = 0; k < s.program.states.size(); ++k) {
-      if (k > 0) ImGui::SameLine();
-      if (ImGui::SmallButton(s.program.states[k].name.c_str())) requested_state_ = static_cast<int>(k);
+      const char* name = s.program.states[k].name.c_str();
+      const float width = ImGui::CalcTextSize(name).x + 2.0f * ImGui::GetStyle().FramePadding.x;
+      if (k > 0 && ImGui::GetItemRectMax().x + ImGui::GetStyle().ItemSpacing.x + width <= right) ImGui::SameLine();
+      const bool lit = static_cast<int>(k) == s.machine.state;
+      if (lit) ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0.85f, 0.45f, 0.10f, 1.0f));
+      if (ImGui::SmallButton(name)) requested_state_ = static_cast<int>(k);
+      if (lit) ImGui::PopStyleColor();
     }
   }
 

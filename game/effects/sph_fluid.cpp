@@ -107,23 +107,44 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     const fluid::SphStepTotals& run = state.run_totals;
     const ImVec4 red(1.0f, 0.35f, 0.35f, 1.0f), plain = ImGui::GetStyleColorVec4(ImGuiCol_Text);
     const auto ull = [](std::size_t v) { return static_cast<unsigned long long>(v); };
+    // Each counter's line explains itself when hovered: what it counts and why it matters.
+    const auto explain = [](const char* why) {
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", why);
+    };
     ImGui::Text("sph fluid: %zu particles, %llu sub-steps this step", state.world.particles.size(), ull(t.steps));
+    explain("Sub-steps: the solver's CFL-limited steps inside one 1/60 s game step. More sub-steps\n"
+            "cost more time; fast water (a blast, the jet) needs them.");
     const WaterWhereabouts where = waterWhereabouts(state, level_);
     ImGui::Text("  water: pool %zu (level %.0f cm)  jet and air %zu (spray %zu)  ground %zu  pump %zu", where.pool,
                 100.0 * where.pool_level, where.jet_and_air, where.spray, where.ground, where.pump);
+    explain("Where the constant number of particles is: in the basin's pool, in the jet and the air\n"
+            "(spray: drops flying ballistic, outside the SPH solve), on the ground running to the\n"
+            "gutter, and inside the pump's pipe on their way back to the nozzle.");
     ImGui::Text("  density error: mean %.3f %%  p99 %.2f %%  max %.2f %%", 100.0 * t.meanDensityError(),
                 100.0 * t.p99_density_error, 100.0 * t.max_density_error);
+    explain("How far the particles' density is above the rest density after the pressure solve:\n"
+            "the fluid's compression. Water should stay within a few per cent.");
     const float deep = sphDeepPush(state);
     ImGui::TextColored(t.max_push_depth > deep ? red : plain,
                        "  pushed out of colliders: %llu (deepest %.1f mm; warns beyond %.1f mm)  run %llu",
                        ull(t.pushed_out), 1000.0 * t.max_push_depth, 1000.0 * deep, ull(run.pushed_out));
+    explain("Particles found inside a depth-map collider and moved back to its surface (Kolb & Latta\n"
+            "2004). Shallow ones are ordinary contact; a deep one means the water moved faster than\n"
+            "the collision could follow, and it warns the frame (red).");
     ImGui::TextColored(t.speed_clamps > 0 ? red : plain, "  speed clamps: %llu  run %llu", ull(t.speed_clamps),
                        ull(run.speed_clamps));
+    explain("Particles whose speed was cut to the solver's limit: energy the simulation removed by\n"
+            "force rather than by physics. Any clamp warns the frame (red).");
     ImGui::TextColored(t.dt_min_clamps > 0 ? red : plain, "  dt held at min_time_step: %llu  run %llu",
                        ull(t.dt_min_clamps), ull(run.dt_min_clamps));
+    explain("Sub-steps where the CFL condition asked for a step below min_time_step and was refused:\n"
+            "the solve then runs with a step too long for its fastest particle. Warns the frame (red).");
     ImGui::Text("  dt cut to land on the step's end: %llu  run %llu", ull(t.dt_request_cuts), ull(run.dt_request_cuts));
+    explain("Sub-steps shortened so the last one ends exactly on the game step: harmless bookkeeping.");
     ImGui::TextColored(t.nonfinite > 0 ? red : plain, "  NaN/inf particles: %llu  run %llu", ull(t.nonfinite),
                        ull(run.nonfinite));
+    explain("Particles with a non-finite position or velocity: the run stops trusting the state.\n"
+            "Should always be 0; any warns the frame (red).");
   }
 
   std::string findNonFinite() const override {
