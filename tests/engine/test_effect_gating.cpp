@@ -8,6 +8,7 @@
 #include "game/world/world.hpp"
 
 #include <LinearMath/btAlignedAllocator.h>
+#include <SDL.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -132,6 +133,39 @@ TEST(EffectGating, AnEmptyEffectListBuildsNothing) {
   EXPECT_EQ(game::findState<game::SpriteParticles>(world), nullptr);
   EXPECT_EQ(counter.count(), 0);
   for (const engine::PhaseStats& stats : profiler.stats) EXPECT_EQ(stats.frames, 0u);
+}
+
+// Sound (issue 39): a scene without `audio` makes no mixer, asks Bullet for no contact lists and
+// never starts SDL's audio; with it, the mixer exists but only a rendered run (attachGpu) opens a
+// device.
+TEST(EffectGating, WithoutAudioThereIsNoMixerNoContactListAndNoAudioDevice) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 3}}})"), game::contentDir(), world, error))
+      << error;
+  engine::Profiler profiler;
+  runSteps(world, profiler, 30);
+  EXPECT_EQ(world.links.audio, nullptr);
+  const game::RigidBodies* bodies = game::findState<game::RigidBodies>(world);
+  ASSERT_NE(bodies, nullptr);
+  EXPECT_FALSE(bodies->physics->record_contacts);
+  EXPECT_TRUE(bodies->physics->contacts.empty());
+  EXPECT_EQ(SDL_WasInit(SDL_INIT_AUDIO), 0u);
+}
+
+TEST(EffectGating, AudioMakesAMixerButNoDeviceWithoutARenderedRun) {
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"rigid_bodies": {"crates": 3}, "audio": {}}})"),
+                               game::contentDir(), world, error))
+      << error;
+  engine::Profiler profiler;
+  runSteps(world, profiler, 30);
+  ASSERT_NE(world.links.audio, nullptr);
+  EXPECT_EQ(world.systems.back(), "audio");
+  EXPECT_TRUE(game::findState<game::RigidBodies>(world)->physics->record_contacts);
+  EXPECT_EQ(SDL_WasInit(SDL_INIT_AUDIO), 0u);
 }
 
 TEST(EffectGating, ThrownCratesAreCappedAndRecycled) {
