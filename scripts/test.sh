@@ -14,5 +14,8 @@ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
 cmake --build "$build_dir" -j "$jobs"
 # The smoke and GL tests use Mesa's software rasterizer through SDL's offscreen driver.
 export SDL_VIDEODRIVER="${SDL_VIDEODRIVER:-offscreen}"
+# The audio effect's live device (rendered runs) uses SDL's dummy driver: no sound card is needed
+# and ALSA's "cannot find card" noise stays out of the logs.
+export SDL_AUDIODRIVER="${SDL_AUDIODRIVER:-dummy}"
 cd "$build_dir"
 ctest --output-on-failure -j "$jobs" --timeout 600

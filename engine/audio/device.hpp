@@ -14,12 +14,14 @@ namespace engine::audio {
 struct AudioDevice {
   std::uint32_t id = 0;    // SDL_AudioDeviceID; 0 = not open
   bool subsystem = false;  // this device initialised SDL's audio subsystem (quit on close)
+  bool dummy = false;      // no sound card: SDL_AudioInit("dummy") stands in (SDL_AudioQuit on close)
   Mixer* mixer = nullptr;  // pulled by the callback; outlives the device
   std::string driver;      // SDL's driver name, for the overlay
 };
 
-// Opens the default output as stereo float at the mixer's sample rate and starts it. False +
-// message (SDL's) when no device opens; `device` is then closed.
+// Opens the default output as stereo float at the mixer's sample rate and starts it; when no sound
+// card opens and SDL_AUDIODRIVER is unset, SDL's dummy driver instead (driver "dummy"). False +
+// message (SDL's) when nothing opens; `device` is then closed.
 bool openAudioDevice(AudioDevice& device, Mixer& mixer, std::string& error);
 // Stops the callback (it is not running when this returns) and closes the device.
 void closeAudioDevice(AudioDevice& device);

@@ -37,17 +37,17 @@ namespace game {
 namespace {
 
 struct AudioParams {
-  float volume = 0.5f;
+  float volume = 1.0f;
   bool mute = false;
   bool live_device = true;     // open the sound card in a rendered run (fixed at construction)
   int sample_rate = 22050;     // Hz (fixed at construction)
-  int max_voices = 192;        // (fixed at construction)
+  int max_voices = 256;        // (fixed at construction)
   float bubble_rate = 1.0f;    // bubbles per impact, relative
   float radius_min = 0.0012f;  // m
   float radius_max = 0.015f;   // m
   float radius_exponent = 2.0f;
   float size_ratio = 0.05f;  // top bubble radius / the radius of what fell
-  float bubble_gain = 0.02f;
+  float bubble_gain = 0.03f;
   float rising_pitch = 0.1f;    // Moss et al. 2010 §3 xi
   float min_speed = 1.0f;       // m/s
   float min_speed_loss = 1.2f;  // m/s lost in a step
@@ -56,7 +56,7 @@ struct AudioParams {
   float crate_gain = 0.25f;
   float crate_min_impulse = 6.0f;  // N s
   float splash_gain = 2.0f;
-  float blast_gain = 0.6f;
+  float blast_gain = 1.0f;
   float goo_gain = 1.5f;
   float goo_damping = 4.0f;
   float goo_pitch = 0.35f;  // the goo's bubbles sound at this fraction of the water's pitch
