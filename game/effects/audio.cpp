@@ -52,6 +52,7 @@ struct AudioParams {
   float min_speed = 1.0f;       // m/s
   float min_speed_loss = 1.2f;  // m/s lost in a step
   float impact_cell = 0.25f;    // m
+  float jet_gain = 0.4f;
   float pump_gain = 0.5f;
   float crate_gain = 0.25f;
   float crate_min_impulse = 6.0f;  // N s
@@ -88,6 +89,8 @@ const ParamTable<AudioParams>& table() {
       param<&P::min_speed_loss>("min_speed_loss", 0.01, 50.0,
                                 "speed a particle must lose in one step beyond gravity's (m/s) to be an impact"),
       param<&P::impact_cell>("impact_cell", 0.01, 5.0, "impacts closer than this (m) in one step are one splash"),
+      param<&P::jet_gain>("jet_gain", 0.0, 10.0,
+                          "the jet landing in the dish, relative to a drop: the running fountain's steady bed"),
       param<&P::pump_gain>("pump_gain", 0.0, 10.0, "the pump intake's gurgle, relative"),
       param<&P::crate_gain>("crate_gain", 0.0, 10.0, "a crate's knock at 50 N s, 1 m away (linear)"),
       param<&P::crate_min_impulse>("crate_min_impulse", 0.0, 1000.0,
@@ -255,6 +258,7 @@ class AudioEffect final : public EffectOf<AudioState> {
       splash.speed = impact.speed;
       splash.particles = static_cast<float>(impact.particles);
       splash.drop_radius = r * std::cbrt(splash.particles);
+      if (in_dish) splash.loudness = state.params.jet_gain;  // a steady bed under the splashes
       engine::audio::bubblesFromSplash(splash, bubbles, dt, state.rng, state.events);
     }
     // The pump's intake: what it swallowed this step gurgles at the intake (slow water drawing air).

@@ -10,8 +10,10 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -112,6 +114,43 @@ TEST(AudioEffect, ACrateDroppedIntoThePoolSplashes) {
   EXPECT_GT(stats(world, SoundKind::crate_splash).events, 0u);
   EXPECT_GT(stats(world, SoundKind::crate_splash).peak, 0.0f);
   EXPECT_TRUE(allFiniteUnderFullScale(out));
+}
+
+// A blast in the pool throws water up: what falls back splashes louder than the running fountain.
+// Compared per step (the water's own mix, drop and jet, before the limiter): the loudest step and
+// the bubbles per step, over 60 calm steps and over the 120 steps from the throw on.
+TEST(AudioEffect, SplashesAreLouderAfterABlastInThePool) {
+  game::World world = buildFrom(
+      R"({"effects": {"rigid_bodies": {"crates": 0},
+          "explosives": {"fuse_seconds": 0.4, "throw_speed": 8, "lob_degrees": 0},
+          "sph_fluid": {"max_particles": 4000, "cfl": 0.9, "max_time_step": 0.0167, "density_error": 0.005,
+                        "force_bound": 0},
+          "audio": {}}})");
+  world.camera.position = glm::vec3(1.8f, 2.5f, 0.0f);
+  world.camera.pitch_degrees = -89.0f;
+  stepAndRender(world, 90);  // the jet reaches the pool
+  struct Window {
+    double loudest = 0.0;  // the largest one-step energy
+    std::uint64_t bubbles = 0;
+  };
+  const auto run = [&world](int steps) {
+    Window w;
+    for (int i = 0; i < steps; ++i) {
+      const engine::audio::KindStats &drop = stats(world, SoundKind::drop), &jet = stats(world, SoundKind::jet);
+      const double energy = drop.sum_squares + jet.sum_squares;
+      const std::uint64_t events = drop.events + jet.events;
+      stepAndRender(world, 1);
+      w.loudest = std::max(w.loudest, drop.sum_squares + jet.sum_squares - energy);
+      w.bubbles += drop.events + jet.events - events;
+    }
+    return w;
+  };
+  const Window calm = run(60);
+  game::playerThrowExplosive(world);
+  const Window blasted = run(120);  // it lands in the pool, goes off, and the water falls back
+  ASSERT_EQ(stats(world, SoundKind::blast).events, 1u);
+  EXPECT_GT(static_cast<double>(blasted.bubbles) / 120.0, 1.5 * static_cast<double>(calm.bubbles) / 60.0);
+  EXPECT_GT(blasted.loudest, 2.0 * calm.loudest);
 }
 
 // The fountain tour's first 150 steps offline, through the replay runner as `replay --wav` runs
