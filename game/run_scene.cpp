@@ -103,6 +103,7 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   s.actions.clear();
   if (input.left_click) s.actions.push_back(PlayerAction::throw_crate);
   if (input.throw_explosive) s.actions.push_back(PlayerAction::throw_explosive);
+  s.world.player_aiming = input.aiming;
   FrameInput frame_input{s.world, frame, s.actions, {}};
   if (s.options.hooks.before_steps) s.options.hooks.before_steps(frame_input);
   for (PlayerAction action : s.actions) applyPlayerAction(s.world, action);

@@ -125,7 +125,12 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
               input.quit = true;
           }
           if (key == SDLK_TAB && !ui_wants_keyboard) input.mouse_look = !input.mouse_look;
-          if (key == SDLK_g && !ui_wants_keyboard) input.throw_explosive = true;
+          if (key == SDLK_g && !ui_wants_keyboard) input.aiming = true;
+        }
+        // Aim while G is held, throw on its release (the arc shows where the charge will land).
+        if (!down && key == SDLK_g && input.aiming) {
+          input.aiming = false;
+          input.throw_explosive = true;
         }
         if (ui_wants_keyboard && down) break;
         if (key == SDLK_w || key == SDLK_UP) input.forward = down;
@@ -140,11 +145,15 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
       case SDL_MOUSEBUTTONDOWN:
         if (ui_wants_mouse && !input.mouse_look) break;
         if (event.button.button == SDL_BUTTON_LEFT) input.left_click = true;
-        if (event.button.button == SDL_BUTTON_MIDDLE) input.throw_explosive = true;
+        if (event.button.button == SDL_BUTTON_MIDDLE) input.aiming = true;
         if (event.button.button == SDL_BUTTON_RIGHT) input.mouse_look = true;
         break;
       case SDL_MOUSEBUTTONUP:
         if (event.button.button == SDL_BUTTON_RIGHT) input.mouse_look = false;
+        if (event.button.button == SDL_BUTTON_MIDDLE && input.aiming) {
+          input.aiming = false;
+          input.throw_explosive = true;
+        }
         break;
       case SDL_MOUSEMOTION:
         if (input.mouse_look) {

@@ -104,6 +104,7 @@ struct FrameContext {
   glm::vec3 eye{0.0f};
   glm::vec3 view_dir{0.0f, 0.0f, -1.0f};
   engine::Profiler* profiler = nullptr;  // may be null
+  bool aiming = false;  // the player holds the throw key: an effect that throws draws its aim (rendering only)
 };
 
 struct LevelAssets;

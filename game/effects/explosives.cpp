@@ -12,6 +12,7 @@
 
 #include <imgui.h>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 namespace game {
 namespace {
@@ -21,7 +22,8 @@ const ParamTable<ExplosiveParams>& table() {
       param<&ExplosiveParams::fuse_seconds>("fuse_seconds", 0.05, 60.0, "time from the throw to the detonation (s)"),
       param<&ExplosiveParams::throw_speed>("throw_speed", 0.0, 60.0,
                                            "speed of a thrown charge, G or middle click (m/s)"),
-      param<&ExplosiveParams::lob_degrees>("lob_degrees", -80.0, 80.0, "the throw leaves this far above the aim (deg)"),
+      param<&ExplosiveParams::lob_degrees>("lob_degrees", -80.0, 80.0,
+                                           "the throw leaves this far above the aim (deg); 0: along the aim"),
       param<&ExplosiveParams::radius>("radius", 0.02, 1.0, "radius of the charge's Bullet sphere (m)"),
       param<&ExplosiveParams::mass>("mass", 0.05, 100.0, "mass of a charge (kg)"),
       param<&ExplosiveParams::impact_speed_change>(
@@ -38,7 +40,8 @@ const ParamTable<ExplosiveParams>& table() {
 
 class ExplosivesEffect final : public EffectOf<Explosives> {
  public:
-  explicit ExplosivesEffect(RigidBodies* bodies) : bodies_(bodies) {}
+  ExplosivesEffect(RigidBodies* bodies, std::shared_ptr<const LevelColliders> colliders, glm::vec3 gravity)
+      : bodies_(bodies), colliders_(std::move(colliders)), gravity_(gravity) {}
   std::string_view name() const override { return "explosives"; }
 
   void applyLive(const SectionConfig& section, EffectLinks&) override {
@@ -63,6 +66,15 @@ class ExplosivesEffect final : public EffectOf<Explosives> {
     return {};
   }
 
+  // While the throw key is held: where a charge thrown now would fly and land (from the eye, along
+  // the view, as playerThrowExplosive throws it).
+  bool prepareFrame(const FrameContext& ctx, std::string&) override {
+    aiming_ = ctx.aiming;
+    if (aiming_)
+      predictThrow(state.params, throwOrigin(ctx.eye, ctx.view_dir), ctx.view_dir, gravity_, colliders_->parts, arc_);
+    return true;
+  }
+
   // A live charge is drawn as a dark stone sphere of its collision sphere's diameter
   // (content/models/charge.obj); it turns as Bullet rolls it.
   void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
@@ -78,6 +90,7 @@ class ExplosivesEffect final : public EffectOf<Explosives> {
                    glm::scale(glm::mat4(1.0f), glm::vec3(2.0f * state.params.radius));
       frame.opaque.push_back(item);
     }
+    if (aiming_) submitAim(frame, ctx);
   }
 
   void drawStatus() const override {
@@ -86,11 +99,44 @@ class ExplosivesEffect final : public EffectOf<Explosives> {
   }
 
  private:
+  // The arc as a dotted line of glowing beads (one per 1/24 s of flight, from 0.05 s after the
+  // throw so they start in front of the hand) and the landing point as a disc of the blast's core on the
+  // surface it hits: orange where it lands, grey where the fuse would run out in the air.
+  void submitAim(engine::FrameBatches& frame, const SubmitContext& ctx) const {
+    engine::DrawItem bead;
+    bead.mesh = &ctx.assets.charge;
+    bead.tint = glm::vec3(2.4f, 1.3f, 0.35f);
+    bead.specular = 0.0f;
+    bead.casts_shadow = false;
+    constexpr std::size_t kStride = 5;  // samples of 1/120 s between beads
+    for (std::size_t k = 6; k < arc_.path.size(); k += kStride) {
+      bead.model = glm::translate(glm::mat4(1.0f), arc_.path[k]) * glm::scale(glm::mat4(1.0f), glm::vec3(0.045f));
+      frame.opaque.push_back(bead);
+    }
+    engine::DrawItem disc = bead;
+    disc.tint = arc_.lands ? glm::vec3(2.6f, 0.8f, 0.15f) : glm::vec3(0.6f);
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    const glm::vec3 n = glm::length(arc_.end_normal) > 0.5f ? glm::normalize(arc_.end_normal) : up;
+    const glm::quat tilt(up, n);  // the shortest rotation taking up onto the normal
+    const float diameter = 2.0f * state.params.core_radius;
+    disc.model = glm::translate(glm::mat4(1.0f), arc_.end - n * state.params.radius + n * 0.01f) *
+                 glm::mat4_cast(tilt) * glm::scale(glm::mat4(1.0f), glm::vec3(diameter, 0.02f, diameter));
+    frame.opaque.push_back(disc);
+  }
+
   RigidBodies* bodies_;
+  std::shared_ptr<const LevelColliders> colliders_;  // the level's depth-map colliders (the aim arc's ground)
+  glm::vec3 gravity_;
+  bool aiming_ = false;
+  AimArc arc_;
 };
 
 std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
-  auto effect = std::make_unique<ExplosivesEffect>(ctx.links.bodies);
+  if (!ensureLevelColliders(ctx.content_dir, ctx.scene.scene.text("level"), ctx.links.colliders, error)) {
+    error = "explosives: " + error;
+    return nullptr;
+  }
+  auto effect = std::make_unique<ExplosivesEffect>(ctx.links.bodies, ctx.links.colliders, ctx.links.gravity);
   effect->state.params = table().parse(section);
   if (std::string bad = validateExplosiveParams(effect->state.params); !bad.empty()) {
     error = bad;

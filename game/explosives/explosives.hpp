@@ -8,11 +8,13 @@
 // valid (engine/physics).
 
 #include "engine/physics/physics_world.hpp"
+#include "fluid/collide/collider_cache.hpp"
 #include "fluid/core/blast.hpp"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -21,7 +23,7 @@ namespace game {
 struct ExplosiveParams {
   float fuse_seconds = 2.5f;      // from the throw to the detonation
   float throw_speed = 9.0f;       // m/s
-  float lob_degrees = 20.0f;      // the throw leaves this much above the aimed direction (a lob, not a line drive)
+  float lob_degrees = 0.0f;       // the throw leaves this much above the aimed direction (0: along the aim)
   float radius = 0.1f;            // m, the charge's sphere
   float mass = 1.2f;              // kg
   float impact_speed_change = 0;  // m/s: detonate early when one step changes its velocity by more; 0 = fuse only
@@ -59,6 +61,32 @@ struct Explosives {
 // Creates its Bullet body on first use.
 void throwExplosive(Explosives& explosives, engine::PhysicsWorld& physics, glm::vec3 origin, glm::vec3 direction,
                     glm::vec3 initial_velocity = glm::vec3(0.0f));
+
+// Where the player's hand lets a charge go: a little right of and below the eye, so the charge
+// and its aim arc are seen leaving the hand instead of hiding behind the view's centre.
+glm::vec3 throwOrigin(glm::vec3 eye, glm::vec3 view_dir);
+
+// The velocity a throw along `direction` gives a charge: params.throw_speed along the direction
+// raised by params.lob_degrees. throwExplosive and the aim arc share it, so the arc is the throw's.
+glm::vec3 throwVelocity(const ExplosiveParams& params, glm::vec3 direction);
+
+// The aim arc: where a charge thrown now would fly and land.
+struct AimArc {
+  std::vector<glm::vec3> path;  // points of the flight, every AimArc::kSampleSeconds from the throw
+  glm::vec3 end{0.0f};          // the landing point, or where the fuse runs out in the air
+  glm::vec3 end_normal{0.0f, 1.0f, 0.0f};  // the surface's normal at the landing point
+  bool lands = false;           // touches a collider before its fuse runs out
+  float flight_seconds = 0.0f;  // from the throw to `end`
+  static constexpr float kSampleSeconds = 1.0f / 120.0f;
+};
+
+// The charge's free flight from `origin` (no drag: Bullet's bodies have none) under `gravity`,
+// until its sphere touches one of the level's depth-map colliders (Kolb & Latta 2004 §3.3.2's
+// query: the signed distance at the centre is below the radius; the contact time is refined by
+// bisection) or its fuse runs out. Bounces and crates are not predicted: the arc ends at the
+// first contact, where the player aimed.
+void predictThrow(const ExplosiveParams& params, glm::vec3 origin, glm::vec3 direction, glm::vec3 gravity,
+                  std::span<const fluid::CachedCollider> colliders, AimArc& out);
 
 // Advances the fuses by `dt` after the physics step: every charge whose fuse ran out (or that hit
 // something hard enough, see impact_speed_change) detonates. `detonations` is cleared first and

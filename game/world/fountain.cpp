@@ -60,13 +60,23 @@ bool loadLevelColliders(const std::filesystem::path& content_dir, const std::str
   return true;
 }
 
-bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shared_ptr<const LevelColliders>& slot,
-                             std::string& error) {
-  if (slot) return true;
+bool ensureLevelColliders(const std::filesystem::path& content_dir, const std::string& level,
+                          std::shared_ptr<const LevelColliders>& slot, std::string& error) {
+  if (slot) {
+    if (slot->level == level) return true;
+    error = "the colliders of level '" + slot->level + "' are loaded, not those of '" + level + "'";
+    return false;
+  }
   auto loaded = std::make_shared<LevelColliders>();
-  if (!loadLevelColliders(content_dir, "fountain", *loaded, error)) return false;
+  if (!loadLevelColliders(content_dir, level, *loaded, error)) return false;
+  loaded->level = level;
   slot = std::move(loaded);
   return true;
+}
+
+bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shared_ptr<const LevelColliders>& slot,
+                             std::string& error) {
+  return ensureLevelColliders(content_dir, "fountain", slot, error);
 }
 
 std::shared_ptr<const fluid::SignedDistanceShape> culledPart(const std::shared_ptr<const LevelColliders>& level,

@@ -41,6 +41,7 @@ struct FountainGeometry {
 
 // A level's baked colliders, static (collider space = world space), in manifest order.
 struct LevelColliders {
+  std::string level;  // the level's name (content/colliders/LEVEL.colliders)
   std::vector<fluid::CachedCollider> parts;
   // Per part: the box (world space) outside which the part is farther than its bake margin
   // from any point of its model: the intersection of its ortho maps' view volumes, which
@@ -54,8 +55,11 @@ struct LevelColliders {
 // load_or_bake). False + error naming the file on failure.
 bool loadLevelColliders(const std::filesystem::path& content_dir, const std::string& level, LevelColliders& out,
                         std::string& error);
-// The fountain's colliders, loaded once into `slot` (EffectLinks::colliders): a no-op when it
-// is already set.
+// `level`'s colliders, loaded once into `slot` (EffectLinks::colliders): a no-op when it already
+// holds that level's, an error naming both when it holds another level's.
+bool ensureLevelColliders(const std::filesystem::path& content_dir, const std::string& level,
+                          std::shared_ptr<const LevelColliders>& slot, std::string& error);
+// ensureLevelColliders for the fountain level (the SPH water's basin and statue).
 bool ensureFountainColliders(const std::filesystem::path& content_dir, std::shared_ptr<const LevelColliders>& slot,
                              std::string& error);
 

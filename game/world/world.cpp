@@ -101,7 +101,7 @@ void stepWorld(World& world, engine::Profiler* profiler) {
 }
 
 void meshWorld(World& world, engine::Profiler* profiler) {
-  const FrameContext frame{world.camera.position, engine::cameraForward(world.camera), profiler};
+  const FrameContext frame{world.camera.position, engine::cameraForward(world.camera), profiler, world.player_aiming};
   std::string error;
   for (const std::unique_ptr<Effect>& effect : world.effects)
     if (!effect->prepareFrame(frame, error)) recordFailure(world, error);
@@ -114,8 +114,9 @@ void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& a
 
 void playerThrowExplosive(World& world) {
   if (world.links.explosives == nullptr || world.links.bodies == nullptr) return;
-  throwExplosive(*world.links.explosives, *world.links.bodies->physics, world.camera.position,
-                 engine::cameraForward(world.camera));
+  const glm::vec3 forward = engine::cameraForward(world.camera);
+  throwExplosive(*world.links.explosives, *world.links.bodies->physics, throwOrigin(world.camera.position, forward),
+                 forward);
 }
 
 void playerThrow(World& world) {

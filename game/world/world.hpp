@@ -39,6 +39,7 @@ struct World {
   std::vector<std::unique_ptr<Effect>> effects;  // the listed effects, registry order
   EffectLinks links;                             // what the effects offer each other
   engine::FpsCamera camera;
+  bool player_aiming = false;  // the throw key is held this frame (FrameContext::aiming; never simulated)
   double step_seconds = 1.0 / 60.0;
   int substeps = 1;
   std::uint64_t steps = 0;

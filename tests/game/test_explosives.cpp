@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace {
@@ -165,7 +168,7 @@ TEST(ExplosivesInTheFountain, AChargeThrownIntoTheBasinThrowsTheWaterOut) {
   const float calm = maxSpeed(sph);
   run.world.camera.position = {-7.53f, 2.6f, -5.44f};
   run.world.camera.yaw_degrees = 36.0f;
-  run.world.camera.pitch_degrees = -11.0f;
+  run.world.camera.pitch_degrees = -5.0f;  // the charge leaves along the aim: over the rim into the water
   game::playerThrowExplosive(run.world);
   ASSERT_EQ(run.explosives().thrown, 1u);
   float fastest_after = 0.0f;
@@ -210,6 +213,87 @@ TEST(ExplosivesInTheFountain, TenChargesOnTheNozzleInOneStepStayFiniteAndBounded
   EXPECT_GT(run.sph().blasted_particles, 0u);
 }
 
+// The fountain's level with only the Bullet world and the explosives (no water, no crates): the
+// aim arc's test needs nothing else, and steps fast.
+game::World bareFountain() {
+  game::SceneConfig scene;
+  EXPECT_TRUE(game::loadSceneFile(game::contentDir() / "scenes" / "fountain.json", scene).ok());
+  std::erase_if(scene.effects, [](const game::SectionConfig& s) { return s.name != "rigid_bodies" && s.name != "explosives"; });
+  EXPECT_TRUE(game::applyOverride(scene, "rigid_bodies.crates=0").ok());
+  game::World world;
+  std::string error;
+  EXPECT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  return world;
+}
+
+// With the default parameters the charge leaves along the aim (issue 35: it used to leave 20
+// degrees above it), at throw_speed.
+TEST(ExplosivesAim, TheChargeLeavesAlongTheAim) {
+  const game::ExplosiveParams params;
+  for (const glm::vec3 aim : {glm::vec3(0, 0, -1), glm::vec3(1, 0.3f, 0), glm::vec3(-0.2f, -0.8f, 0.4f)}) {
+    const glm::vec3 v = game::throwVelocity(params, aim);
+    EXPECT_NEAR(glm::length(v), params.throw_speed, 1e-4f);
+    EXPECT_GT(glm::dot(glm::normalize(v), glm::normalize(aim)), 0.99999f);
+  }
+}
+
+// The aim arc ends where the thrown charge first touches the level: from eight viewpoints around
+// the fountain (aimed over it to the paving behind, into the basin, and at the paving in front), the predicted
+// contact (depth-map colliders, analytic flight) against the step where Bullet first turns the
+// charge's velocity (its mesh shapes, semi-implicit Euler at 120 Hz). The views aim 10 degrees
+// beside the centre: a path grazing the statue's 9 cm spire is decided by millimetres between the
+// two collision models (the depth maps' texels, Bullet's margin), which no arc can promise.
+TEST(ExplosivesAim, TheArcEndsWhereTheThrownChargeFirstTouches) {
+  game::World world = bareFountain();
+  game::Explosives& explosives = *game::findState<game::Explosives>(world);
+  explosives.params.fuse_seconds = 3.0f;
+  const glm::vec3 gravity = world.links.gravity;
+  const double dt = world.step_seconds;
+  double worst = 0.0;
+  for (int view = 0; view < 8; ++view) {
+    const float yaw = -90.0f + 45.0f * static_cast<float>(view);
+    const float radians = glm::radians(yaw + 180.0f);
+    world.camera.position = glm::vec3(9.0f * std::cos(radians), 2.6f, 9.0f * std::sin(radians));
+    world.camera.yaw_degrees = yaw + 10.0f;
+    world.camera.pitch_degrees = view % 3 == 0 ? 12.0f : (view % 3 == 1 ? 2.0f : -14.0f);
+    const glm::vec3 forward = engine::cameraForward(world.camera);
+    game::AimArc arc;
+    game::predictThrow(explosives.params, game::throwOrigin(world.camera.position, forward), forward, gravity,
+                       world.links.colliders->parts, arc);
+    ASSERT_TRUE(arc.lands) << "view " << view;
+    game::playerThrowExplosive(world);
+    const game::Charge& charge = *std::find_if(explosives.charges.begin(), explosives.charges.end(),
+                                               [](const game::Charge& c) { return c.live; });
+    glm::vec3 before = engine::bodyState(*world.links.bodies->physics, charge.body).linear_velocity;
+    glm::vec3 contact(std::numeric_limits<float>::quiet_NaN());
+    double contact_time = 0.0;
+    for (int s = 1; s < 150 && std::isnan(contact.x); ++s) {
+      const glm::vec3 position = engine::bodyState(*world.links.bodies->physics, charge.body).position;
+      game::stepWorld(world, nullptr);
+      const glm::vec3 after = engine::bodyState(*world.links.bodies->physics, charge.body).linear_velocity;
+      // Free flight changes the velocity by g dt; anything more is a contact.
+      if (glm::length(after - before - gravity * static_cast<float>(dt)) > 0.5f) {
+        contact = position;
+        contact_time = s * dt;
+      }
+      before = after;
+    }
+    ASSERT_FALSE(std::isnan(contact.x)) << "view " << view << ": the charge never touched anything";
+    const double miss = glm::length(contact - arc.end);
+    worst = std::max(worst, miss);
+    std::printf("[ metric ] view %d: arc lands at (%.2f, %.2f, %.2f) after %.3f s, Bullet's first contact at "
+                "(%.2f, %.2f, %.2f) in the step ending %.3f s: %.3f m apart\n",
+                view, arc.end.x, arc.end.y, arc.end.z, arc.flight_seconds, contact.x, contact.y, contact.z,
+                contact_time, miss);
+    // Bullet's contact is seen at the start of the step it happens in (its solver turns a charge
+    // that would close the gap within the step), so up to a step's flight before the predicted
+    // point; measured within 6 cm.
+    EXPECT_LT(miss, 0.15) << "view " << view;
+    for (int s = 0; s < 240; ++s) game::stepWorld(world, nullptr);  // the fuse runs out; the next throw
+  }
+  std::printf("[ metric ] the aim arc's worst miss over 8 throws: %.3f m\n", worst);
+}
+
 }  // namespace
 
 // ---- the same explosives in the blob monster's street ------------------------------------------
@@ -230,6 +314,7 @@ TEST(ExplosivesInTheBlobLevel, AChargeBlowsTheMonsterApartAndItReassembles) {
   for (int s = 0; s < 400; ++s) game::stepWorld(world, nullptr);  // it emerges and balls up
   game::BlobMonster& blob = *game::findState<game::BlobMonster>(world);
   const std::size_t particles = blob.world.particles.position.size();
+  world.camera.pitch_degrees += 20.0f;  // a lob toward the monster: the charge leaves along the aim
   game::playerThrowExplosive(world);
   std::size_t pushed = 0;
   bool reassembling = false;
