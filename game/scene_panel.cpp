@@ -143,14 +143,18 @@ std::string keyHint(const World& world) {
 
 std::pair<bool, bool> drawGameOverlay(World& world, const engine::Overlay& overlay, const engine::Profiler& profiler,
                                       const std::string& gl_renderer) {
-  switch (overlay.mode) {
-    case engine::OverlayMode::hidden:
-      return {false, false};
-    case engine::OverlayMode::compact:
-      engine::drawCompactStrip(profiler, {}, keyHint(world));
-      return {false, false};
-    case engine::OverlayMode::full:
-      break;
+  if (overlay.mode == engine::OverlayMode::hidden) return {false, false};
+  // What the effects tell the player: their lines join the strip, their banners show mid-screen.
+  std::string status, banner;
+  for (const std::unique_ptr<Effect>& effect : world.effects) {
+    const HudText hud = effect->hud();
+    if (!hud.line.empty()) status += (status.empty() ? "" : "   ") + hud.line;
+    if (!hud.banner.empty()) banner += (banner.empty() ? "" : "\n") + hud.banner;
+  }
+  if (!banner.empty()) engine::drawBanner(banner);
+  if (overlay.mode == engine::OverlayMode::compact) {
+    engine::drawCompactStrip(profiler, status, keyHint(world));
+    return {false, false};
   }
   const engine::OverlayLayout layout = engine::currentOverlayLayout(overlay);
   engine::drawProfilerWindow(profiler, world.systems, gl_renderer, layout.frame);

@@ -142,6 +142,28 @@ void drawSpritePass(Renderer& renderer, GpuParticles& system, const FrameView& v
   checkGl(renderer.errors, "sprites");
 }
 
+// A full-screen colour over the frame; the scene's alpha stays 1.
+void drawScreenTint(Renderer& renderer, glm::vec4 tint) {
+  glBindFramebuffer(GL_FRAMEBUFFER, renderer.scene_fbo.id());
+  glViewport(0, 0, renderer.width, renderer.height);
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
+  const GLuint program = renderer.tint_program.id();
+  glUseProgram(program);
+  setUniform(program, "u_tint", glm::clamp(tint, glm::vec4(0.0f), glm::vec4(1.0f)));
+  glBindVertexArray(renderer.empty_vao.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDisable(GL_BLEND);
+  glEnable(GL_DEPTH_TEST);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  checkGl(renderer.errors, "screen tint");
+}
+
 }  // namespace
 
 void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view, const Lighting& lighting,
@@ -152,6 +174,7 @@ void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view,
   for (std::size_t i = 0; i < batches.water.size(); ++i)
     drawWater(renderer, passes.water[i], view, lighting, batches.water[i], passes.shader_dir);
   for (GpuParticles* system : batches.sprites) drawSpritePass(renderer, *system, view);
+  if (batches.screen_tint.a > 0.0f) drawScreenTint(renderer, batches.screen_tint);
 }
 
 void releaseFramePasses(FramePasses& passes) {

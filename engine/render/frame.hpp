@@ -9,6 +9,7 @@
 //      (engine/fluid_render)
 //   3. sprites, one pass per system      a few odd-even merge-sort passes for the eye (Kolb 2004
 //      §3.3.3), then point sprites depth-tested against the scene, not written
+//   4. screen tint                       a full-screen colour blended over it all (when alpha > 0)
 // Every pass keeps the scene's alpha at 1 (PNG screenshots would otherwise turn see-through).
 // The UI (engine/ui) is drawn over the window after presentToWindow.
 
@@ -60,10 +61,14 @@ struct FrameBatches {
   std::vector<DrawItem> opaque;        // pass 1, in draw order
   std::vector<WaterBatch> water;       // pass 2
   std::vector<GpuParticles*> sprites;  // pass 3: ready systems only
+  // Pass 4: one colour blended over the whole frame by its alpha (0: no pass), e.g. the screen
+  // turning red while the blob holds the player. The strongest submitted tint wins.
+  glm::vec4 screen_tint{0.0f};
   void clear() {
     opaque.clear();
     water.clear();
     sprites.clear();
+    screen_tint = glm::vec4(0.0f);
   }
 };
 

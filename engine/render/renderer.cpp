@@ -163,6 +163,8 @@ bool createRenderer(const std::filesystem::path& shader_dir, int width, int heig
   if (!out.mesh_program) return false;
   out.shadow_program = loadProgram(shader_dir, "shadow.vert", "shadow.frag", error);
   if (!out.shadow_program) return false;
+  out.tint_program = loadProgram(shader_dir, "tint.vert", "tint.frag", error);
+  if (!out.tint_program) return false;
   if (!createShadowMap(out, shadow_size, error)) return false;
   out.empty_vao = GlVertexArray(genVertexArray());
   ImageData white;

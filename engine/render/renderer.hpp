@@ -75,6 +75,7 @@ struct Renderer {
   GlProgram sky_program;
   GlProgram mesh_program;
   GlProgram shadow_program;
+  GlProgram tint_program;  // the screen tint (FrameBatches::screen_tint)
   GlFramebuffer shadow_fbo;
   GlTexture shadow_depth;   // depth texture compared in the mesh shader (sampler2DShadow)
   int shadow_size = 2048;   // texels per side

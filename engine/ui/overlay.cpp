@@ -177,6 +177,23 @@ void drawCompactStrip(const Profiler& profiler, std::string_view status, std::st
   ImGui::End();
 }
 
+void drawBanner(std::string_view text) {
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(0.5f * display.x, 0.3f * display.y), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+  ImGui::SetNextWindowBgAlpha(0.55f);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(0.0f, 0.0f), ImVec2(display.x - 2.0f * kMargin, 0.4f * display.y));
+  constexpr ImGuiWindowFlags kPassive = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
+                                        ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings |
+                                        ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav;
+  if (ImGui::Begin("##banner", nullptr, kPassive)) {
+    ImGui::SetWindowFontScale(2.0f);
+    ImGui::PushTextWrapPos(display.x - 4.0f * kMargin);
+    ImGui::TextUnformatted(text.data(), text.data() + text.size());
+    ImGui::PopTextWrapPos();
+  }
+  ImGui::End();
+}
+
 void drawProfilerWindow(const Profiler& profiler, std::span<const std::string> systems, const std::string& gl_renderer,
                         const PanelPlacement& placement) {
   placeNextPanel(placement);

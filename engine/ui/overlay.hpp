@@ -74,6 +74,8 @@ void drawCompactStrip(const Profiler& profiler, std::string_view status, std::st
 // A small window with a progress bar (fraction in [0, 1], clamped) and one line of detail, e.g. a
 // replay's step and checkpoints.
 void drawProgressWindow(const char* title, float fraction, const char* detail);
+// A large message centred in the upper half of the display (a game event: "caught"), without input.
+void drawBanner(std::string_view text);
 // Renders into the currently bound framebuffer (the window's).
 void endOverlayFrame(Overlay& overlay);
 

@@ -121,6 +121,12 @@ struct GpuContext {
   double step_seconds = 1.0 / 60.0;
 };
 
+// What an effect tells the player on screen, outside the full panels (game/scene_panel.cpp).
+struct HudText {
+  std::string line;    // joins the compact strip's status line (short; empty: nothing)
+  std::string banner;  // a large message mid-screen while it lasts, e.g. "caught" (empty: none)
+};
+
 class Effect {
  public:
   virtual ~Effect() = default;
@@ -136,6 +142,7 @@ class Effect {
   virtual bool prepareFrame(const FrameContext&, std::string& /*error*/) { return true; }
   virtual void submit(engine::FrameBatches& /*frame*/, const SubmitContext&) {}
   virtual void drawStatus() const {}  // the overlay's status lines (ImGui text)
+  virtual HudText hud() const { return {}; }  // the player-facing line and banner, every frame
 };
 
 // An effect whose state other code may read (tests, soak checks, state hashes): findState<State>.
