@@ -134,10 +134,15 @@ glm::vec3 aimAt(glm::vec3 from, glm::vec3 target) {
   return len > 1e-6f && std::isfinite(len) ? d / len : glm::vec3(1.0f, 0.0f, 0.0f);
 }
 
-// Re-aims the tentacles at the target, places their goal slots (with a slow sway so they look
-// alive), and recomputes each particle's texturing frame from the chain (paper §7: per-particle
-// basis vectors and length coordinates).
-void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) {
+// Re-aims the tentacles at the target and places their goal slots; recomputes each particle's
+// texturing frame from the chain (paper §7: per-particle basis vectors and length coordinates).
+// Paper §7's tentacles reach for the player: each one's visible length (tentacle_extent) grows
+// toward the target while it is within reach_range and retracts to a stub beyond, at grow_speed
+// (staggered per tentacle, so they do not move as one). The chain slides out of the core: the
+// particles not yet out wait compressed on the axis inside the core. The centreline bends aside by
+// `curl` (a quadratic bend, strongest when retracted: a tentacle curls up, and straightens to reach)
+// in a plane that turns about the axis, plus a travelling sway, so no two frames are alike.
+void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, float dt) {
   BlobTarget& t = world.target;
   BlobParticles& parts = world.particles;
   const float d = world.params.spacing;
@@ -146,28 +151,47 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) {
                             std::cbrt(1.0f - static_cast<float>(b.tentacles * tentacleParticles(b, world.params)) /
                                                  static_cast<float>(parts.size()));
   const float time = static_cast<float>(world.time);
+  const bool in_range = b.reach_range <= 0.0f || glm::length(target - t.anchor) <= b.reach_range;
+  if (t.tentacle_extent.size() != t.tentacle_particles.size()) t.tentacle_extent.assign(t.tentacle_particles.size(), 0.0f);
   for (std::size_t k = 0; k < t.tentacle_particles.size(); ++k) {
     const auto& chain = t.tentacle_particles[k];
     const glm::vec3 dir = tentacleDirection(aim, static_cast<int>(k), b.tentacles, b.tentacle_spread);
     const glm::vec3 base = t.anchor + dir * (0.85f * core_radius);
-    const float reach = std::min(b.tentacle_length, std::max(glm::length(target - base), 2.0f * d));
+    const float full = std::min(b.tentacle_length, std::max(glm::length(target - base), 2.0f * d));
+    const float stub = std::min(full, std::max(2.0f * d, 0.15f * b.tentacle_length));
+    const float want = in_range ? full : stub;
+    const float rate = b.grow_speed * (1.0f - 0.12f * static_cast<float>(k % 3)) * dt;
+    float& ext = t.tentacle_extent[k];
+    ext = std::min(full, ext + std::clamp(want - ext, -rate, rate));
     const std::size_t m = chain.size();
     float natural = 0.0f;
     for (std::size_t j = 0; j < m; ++j)
       natural += d * glm::mix(1.0f, b.tip_radius_scale, static_cast<float>(j) / static_cast<float>(m - 1));
-    const float stretch = reach / natural;
-    const glm::vec3 side = anyPerpendicular(dir);
+    const float stretch = full / natural;
+    const float hidden = full - ext, inner = 0.7f * core_radius;
+    const glm::vec3 side = anyPerpendicular(dir), side2 = glm::cross(dir, side);
+    const float phase = 2.0f * kPi * static_cast<float>(k) / static_cast<float>(std::max(b.tentacles, 1)) + 0.6f * time;
+    const glm::vec3 bend = std::cos(phase) * side + std::sin(phase) * side2;
+    const float bend_amp = b.curl * ext * (1.0f - 0.8f * ext / std::max(full, 1e-6f));
     float along = 0.0f;
     for (std::size_t j = 0; j < m; ++j) {
       const float s = static_cast<float>(j) / static_cast<float>(m - 1);
       along += stretch * d * glm::mix(1.0f, b.tip_radius_scale, s);
-      const float sway =
-          0.04f * reach * s * std::sin(2.0f * kPi * 0.4f * time - 3.0f * s + 1.7f * static_cast<float>(k));
-      t.offset[chain[j]] = base + dir * along + side * sway - t.anchor;
+      const float out = along - hidden;  // distance out of the core along the axis
+      glm::vec3 goal;
+      if (out <= 0.0f) {
+        goal = base + dir * (out * inner / std::max(hidden, 1e-6f));
+      } else {
+        const float u = out / std::max(ext, 1e-6f);  // 0 at the base, 1 at the tip
+        const float sway =
+            0.04f * ext * u * std::sin(2.0f * kPi * 0.4f * time - 3.0f * u + 1.7f * static_cast<float>(k));
+        goal = base + dir * out + bend * (bend_amp * u * u) + side * sway;
+      }
+      t.offset[chain[j]] = goal - t.anchor;
     }
     t.tentacle_base[k] = base;
     t.tentacle_dir[k] = dir;
-    t.tentacle_length[k] = reach;
+    t.tentacle_length[k] = full;
     for (std::size_t j = 0; j < m; ++j) {
       const std::uint32_t i = chain[j];
       const glm::vec3 a = parts.position[chain[j > 0 ? j - 1 : 0]];
@@ -181,7 +205,9 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) {
   }
 }
 
-void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) {
+// Picks the tentacles' particles (those furthest out toward each tentacle's direction), gives the
+// rest `core_ratios`' lattice shape, and lays the tentacles (retracted: they grow from the core).
+void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, glm::vec3 core_ratios) {
   BlobTarget& t = world.target;
   BlobParticles& parts = world.particles;
   const std::size_t n = parts.size();
@@ -196,6 +222,7 @@ void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) 
   t.tentacle_base.assign(b.tentacles, c);
   t.tentacle_dir.assign(b.tentacles, aim);
   t.tentacle_length.assign(b.tentacles, 0.0f);
+  t.tentacle_extent.assign(b.tentacles, 0.0f);
   std::vector<std::uint32_t> order(n);
   std::vector<float> score(n), along(n);
   for (int k = 0; k < b.tentacles; ++k) {
@@ -232,9 +259,32 @@ void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target) 
   std::vector<std::uint32_t> core;
   for (std::size_t i = 0; i < n; ++i)
     if (!used[i]) core.push_back(static_cast<std::uint32_t>(i));
-  const std::vector<glm::vec3> ball = blobLatticeShape(core.size(), world.params.spacing, glm::vec3(1.0f));
-  matchShape(world, core, ball);
-  layTentacles(world, b, target);
+  const std::vector<glm::vec3> shape = blobLatticeShape(core.size(), world.params.spacing, core_ratios);
+  matchShape(world, core, shape);
+  layTentacles(world, b, target, 0.0f);
+}
+
+// Squash and stretch (chase): the core's goal shape is stretched along the body's horizontal
+// motion and squashed across it by the same volume, following the mean velocity of the particles
+// (the anchor moves in spurts; the body's own motion is smooth), smoothed over 0.15 s.
+void stretchCore(BlobWorld& world, const BlobBehaviour& b, float dt) {
+  BlobTarget& t = world.target;
+  const BlobParticles& parts = world.particles;
+  glm::vec3 v(0.0f);
+  for (const glm::vec3& u : parts.velocity) v += u;
+  v /= static_cast<float>(std::max<std::size_t>(parts.size(), 1));
+  v.y = 0.0f;
+  const float speed = glm::length(v);
+  if (speed > 1e-3f && std::isfinite(speed)) t.stretch_dir = v / speed;
+  const float want = 1.0f + b.stretch * std::min(speed / b.speed, 1.5f);
+  t.stretch += (want - t.stretch) * std::min(1.0f, dt / 0.15f);
+  const float f = t.stretch, across = 1.0f / std::sqrt(f);
+  const glm::vec3 h = t.stretch_dir;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    if (parts.tentacle[i] >= 0) continue;
+    const glm::vec3 q = t.shape_offset[i];
+    t.offset[i] = across * q + (f - across) * glm::dot(q, h) * h;
+  }
 }
 
 void startCoatWall(BlobWorld& world, const BlobBehaviour& b) {
@@ -360,8 +410,14 @@ BlobStatus validateBlobProgram(BlobProgram& program, const BlobParams& params) {
     checkRange(err, where, "tip_radius_scale", b.tip_radius_scale, 0.1f, 1.0f);
     checkRange(err, where, "wall_collider", b.wall_collider, -1, 1 << 20);
     checkRange(err, where, "catch_distance", b.catch_distance, 0.0f, 100.0f);
+    checkRange(err, where, "reach_range", b.reach_range, 0.0f, 100.0f);
+    checkRange(err, where, "grow_speed", b.grow_speed, 1e-3f, 100.0f);
+    checkRange(err, where, "curl", b.curl, 0.0f, 1.0f);
+    checkRange(err, where, "stretch", b.stretch, 0.0f, 2.0f);
     if (!err.str().empty()) return {err.str()};
-    if (b.kind == BlobBehaviourKind::tentacles &&
+    const bool has_tentacles = b.kind == BlobBehaviourKind::tentacles ||
+                               (b.kind == BlobBehaviourKind::chase && b.reach_range > 0.0f);
+    if (has_tentacles &&
         static_cast<std::size_t>(b.tentacles * tentacleParticles(b, params)) * 2 > params.particle_count)
       return {"blob: " + where +
               ": tentacles x tentacle particles = " + std::to_string(b.tentacles * tentacleParticles(b, params)) +
@@ -417,13 +473,23 @@ void startBlobBehaviour(BlobWorld& world, const BlobBehaviour& b, glm::vec3 targ
       break;
     }
     case BlobBehaviourKind::emerge:
-    case BlobBehaviourKind::chase:
       matchShape(world, all, parts.rest);
       t.anchor_at_centroid = false;
       t.rotate = false;
       break;
+    case BlobBehaviourKind::chase:
+      // Hunting: the core keeps the rest shape's proportions (the flattened ellipsoid of initBlob)
+      // while tentacles reach out of it.
+      if (b.reach_range > 0.0f)
+        startTentacles(world, b, target, glm::vec3(1.2f, 0.75f, 1.2f));
+      else
+        matchShape(world, all, parts.rest);
+      t.anchor_at_centroid = false;
+      t.rotate = false;
+      t.shape_offset = t.offset;
+      break;
     case BlobBehaviourKind::tentacles:
-      startTentacles(world, b, target);
+      startTentacles(world, b, target, glm::vec3(1.0f));
       break;
     case BlobBehaviourKind::coat_wall:
       startCoatWall(world, b);
@@ -455,12 +521,19 @@ void updateBlobBehaviour(BlobWorld& world, const BlobBehaviour& b, glm::vec3 tar
     glm::vec3 next = t.anchor;
     if (dist > 1e-6f && std::isfinite(dist) && glm::length(lead) < 0.25f * radius)
       next += steerAroundWalls(world, t.anchor, to / dist, radius) * std::min(dist, b.speed * dt);
+    // The street's edges: the anchor stays a body radius inside the keep box, so the body follows
+    // the player to the edge of the street and no further.
+    for (int axis : {0, 2})
+      if (world.keep_min[axis] + radius <= world.keep_max[axis] - radius)
+        next[axis] = std::clamp(next[axis], world.keep_min[axis] + radius, world.keep_max[axis] - radius);
     next.y = c.y;
     t.anchor_velocity = (next - t.anchor) / dt;
     t.anchor_velocity.y = 0.0f;
     t.anchor = next;
+    if (b.stretch > 0.0f && t.shape_offset.size() == world.particles.size()) stretchCore(world, b, dt);
+    if (!t.tentacle_particles.empty()) layTentacles(world, b, target, dt);
   } else if (b.kind == BlobBehaviourKind::tentacles) {
-    layTentacles(world, b, target);
+    layTentacles(world, b, target, dt);
   }
 }
 
@@ -472,6 +545,46 @@ std::vector<float> blobTentacleReach(const BlobWorld& world) {
     out.push_back(chain.empty() ? 0.0f : glm::length(world.particles.position[chain.back()] - t.tentacle_base[k]));
   }
   return out;
+}
+
+std::vector<float> blobTentacleAimAngles(const BlobWorld& world, glm::vec3 target) {
+  const BlobTarget& t = world.target;
+  std::vector<float> out;
+  for (std::size_t k = 0; k < t.tentacle_particles.size(); ++k) {
+    const auto& chain = t.tentacle_particles[k];
+    if (chain.empty()) continue;
+    const glm::vec3 axis = world.particles.position[chain.back()] - t.tentacle_base[k];
+    const glm::vec3 to = target - t.tentacle_base[k];
+    const float la = glm::length(axis), lt = glm::length(to);
+    const float cosine = la > 1e-9f && lt > 1e-9f ? glm::dot(axis, to) / (la * lt) : 1.0f;
+    out.push_back(std::acos(std::clamp(cosine, -1.0f, 1.0f)));
+  }
+  return out;
+}
+
+std::vector<float> blobTentacleTipDistances(const BlobWorld& world, glm::vec3 target) {
+  std::vector<float> out;
+  for (const auto& chain : world.target.tentacle_particles)
+    if (!chain.empty()) out.push_back(glm::length(target - world.particles.position[chain.back()]));
+  return out;
+}
+
+float blobCoreAspect(const BlobWorld& world, glm::vec3 heading) {
+  const BlobParticles& p = world.particles;
+  glm::dvec3 c(0.0);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.tentacle[i] < 0) c += glm::dvec3(p.position[i]), ++n;
+  if (n == 0) return 0.0f;
+  c /= static_cast<double>(n);
+  double along = 0.0, up = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.tentacle[i] >= 0) continue;
+    const glm::dvec3 r = glm::dvec3(p.position[i]) - c;
+    along += glm::dot(r, glm::dvec3(heading)) * glm::dot(r, glm::dvec3(heading));
+    up += r.y * r.y;
+  }
+  return up > 0.0 ? static_cast<float>(std::sqrt(along / up)) : 0.0f;
 }
 
 float blobFractionNearWall(const BlobWorld& world, int wall_collider, float band) {
@@ -505,8 +618,10 @@ bool blobGoalReached(const BlobWorld& world, const BlobBehaviour& b, glm::vec3 t
     }
     case BlobBehaviourKind::coat_wall:
       return blobFractionNearWall(world, b.wall_collider, world.params.spacing) >= 0.8f;
-    case BlobBehaviourKind::chase:
-      return glm::length(target - c) <= b.catch_distance;
+    case BlobBehaviourKind::chase: {
+      const glm::vec2 gap(target.x - c.x, target.z - c.z);  // the player's eye is above the goo
+      return glm::length(gap) <= b.catch_distance;
+    }
     case BlobBehaviourKind::reassemble:
       return blobShapeError(x, world.target.offset) <= 0.1f * radius;
   }

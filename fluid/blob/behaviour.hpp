@@ -42,8 +42,23 @@ struct BlobBehaviour {
   float tip_radius_scale = 0.6f;
   // coat_wall: collider index of the wall (-1 = every collider, the nearest surface wins).
   int wall_collider = -1;
-  // chase: distance (m) from the centroid to the target at which the target counts as caught.
+  // chase: horizontal distance (m) from the centroid to the target at which the target counts as
+  // caught (the target is the player's eye; the body keeps to the ground below it).
   float catch_distance = 0.8f;
+  // Hunting (paper §7: tentacles that reach for the player). tentacles: the tentacles extend
+  // while the target is within `reach_range` (m) of the body's anchor and retract to stubs beyond
+  // it (0 = always extended). chase: 0 = no tentacles; > 0 grows `tentacles` hunting tentacles
+  // that reach for the target within that range. grow_speed (m/s > 0): how fast a tentacle's
+  // visible length follows what it wants. curl in [0, 1]: how far a tentacle's tip bends aside, as
+  // a fraction of its length (most when retracted, least when reaching), the bend's plane turning
+  // about the tentacle's axis over time.
+  float reach_range = 0.0f;
+  float grow_speed = 2.0f;
+  float curl = 0.0f;
+  // chase: squash and stretch in [0, 2]. Moving at `speed` the core stretches by 1 + stretch along
+  // its heading and shrinks by 1 / sqrt(1 + stretch) across it (volume kept); at rest it relaxes
+  // back (time constant 0.15 s). 0 = a rigid shape.
+  float stretch = 0.0f;
 };
 
 // A transition. `next` names a state; validateBlobProgram resolves it to next_index.
@@ -81,6 +96,16 @@ struct BlobProgram {
 // Checks ranges, unique state names and that every trigger names an existing state; resolves the
 // indices. The error names the state, the key and the value (the game prefixes the file).
 BlobStatus validateBlobProgram(BlobProgram& program, const BlobParams& params);
+
+// A tentacle's axis (base to tip, from the particles) and the direction from its base to `target`:
+// the angle (rad) between them, per tentacle of the current target (empty when none).
+std::vector<float> blobTentacleAimAngles(const BlobWorld& world, glm::vec3 target);
+// Distance (m) from each tentacle's tip particle to `target` (empty when none).
+std::vector<float> blobTentacleTipDistances(const BlobWorld& world, glm::vec3 target);
+// The core's (particles in no tentacle) aspect ratio: RMS extent along the horizontal unit
+// `heading` over the RMS extent along y, both about the core's centroid. A body stretched along
+// its motion reads above its rest value.
+float blobCoreAspect(const BlobWorld& world, glm::vec3 heading);
 
 // What the game feeds the machine each step.
 struct BlobInputs {

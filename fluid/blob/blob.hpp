@@ -112,6 +112,13 @@ struct BlobTarget {
   std::vector<float> tentacle_length;
   std::vector<std::vector<std::uint32_t>> tentacle_particles;
   float steer_side = 0.0f;  // chase: side (+1/-1) it slides along walls in its way; 0 = none met yet
+  // Hunting tentacles: each one's visible length now (m), grown and retracted at grow_speed.
+  std::vector<float> tentacle_extent;
+  // chase squash and stretch: the core's unstretched offsets (offset = S shape_offset), the
+  // smoothed stretch factor along stretch_dir (horizontal unit).
+  std::vector<glm::vec3> shape_offset;
+  float stretch = 1.0f;
+  glm::vec3 stretch_dir{1.0f, 0.0f, 0.0f};
 };
 
 // A level collider or a rigid body (crate). Moving colliders (pose velocities, integrated over the
@@ -166,6 +173,9 @@ struct BlobStatus {
 
 struct BlobWorld {
   BlobParams params;
+  // The box (m, world) the behaviours keep the body's anchor in, shrunk by the body radius in x and
+  // z: the street the monster hunts in (the game sets it to the player's bounds). Unbounded by default.
+  glm::vec3 keep_min{-1e30f}, keep_max{1e30f};
   BlobParticles particles;
   BlobTarget target;
   std::vector<BlobCollider> colliders;
