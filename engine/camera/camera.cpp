@@ -25,6 +25,7 @@ void updateCamera(FpsCamera& camera, const CameraInput& input, float dt_seconds)
   const float length = glm::length(move);
   if (length > 1.0f) move /= length;
   camera.position += move * camera.move_speed * (input.fast ? 3.0f : 1.0f) * dt_seconds;
+  camera.position = glm::clamp(camera.position, camera.bounds_min, camera.bounds_max);
 }
 
 glm::mat4 cameraView(const FpsCamera& camera) {

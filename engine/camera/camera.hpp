@@ -14,6 +14,9 @@ struct FpsCamera {
   float mouse_sensitivity = 0.12f;  // degrees per pixel
   float near_plane = 0.05f;
   float far_plane = 400.0f;
+  // The box the player may move in (the level's edges); updateCamera keeps the position inside.
+  glm::vec3 bounds_min{-1e30f};
+  glm::vec3 bounds_max{1e30f};
 };
 
 struct CameraInput {

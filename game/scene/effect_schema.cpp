@@ -39,6 +39,10 @@ const std::array kCameraParams = {
     ParamSpec{"pitch_degrees", ParamType::number, -89.0, 89.0, num(-8.0), "look up (+) or down (-)"},
     ParamSpec{"fov_degrees", ParamType::number, 20.0, 120.0, num(60.0), "vertical field of view"},
     ParamSpec{"move_speed", ParamType::number, 0.1, 100.0, num(5.0), "WASD speed (m/s)"},
+    ParamSpec{"bounds_min", ParamType::vec3, -1000.0, 1000.0, vec(-1000.0f, -1000.0f, -1000.0f),
+              "the player cannot move below these x, y, z (m): the level's edges"},
+    ParamSpec{"bounds_max", ParamType::vec3, -1000.0, 1000.0, vec(1000.0f, 1000.0f, 1000.0f),
+              "the player cannot move beyond these x, y, z (m): the level's edges"},
 };
 
 }  // namespace

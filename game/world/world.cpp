@@ -13,6 +13,23 @@ void applyCamera(const SectionConfig& section, engine::FpsCamera& camera, bool i
   }
   camera.fov_degrees = static_cast<float>(section.number("fov_degrees"));
   camera.move_speed = static_cast<float>(section.number("move_speed"));
+  camera.bounds_min = section.vec3("bounds_min");
+  camera.bounds_max = section.vec3("bounds_max");
+}
+
+// The camera's box must hold its start position (so the first frame does not snap it).
+bool checkCameraBounds(const SceneConfig& scene, std::string& error) {
+  const glm::vec3 lo = scene.camera.vec3("bounds_min"), hi = scene.camera.vec3("bounds_max");
+  const glm::vec3 start = scene.camera.vec3("position");
+  for (int axis = 0; axis < 3; ++axis) {
+    if (lo[axis] <= start[axis] && start[axis] <= hi[axis]) continue;
+    const std::string file = scene.source.empty() ? scene.name : scene.source.string();
+    error = file + ": camera.position's " + "xyz"[axis] + " = " + std::to_string(start[axis]) +
+            " is outside camera.bounds_min .. bounds_max (" + std::to_string(lo[axis]) + " .. " +
+            std::to_string(hi[axis]) + ")";
+    return false;
+  }
+  return true;
 }
 
 // Every effect listed must find the effects it needs listed too.
@@ -46,7 +63,7 @@ bool buildWorld(const SceneConfig& scene, const std::filesystem::path& content_d
   out.substeps = scene.scene.integer("substeps");
   out.links.level = FountainGeometry{};
   applyCamera(scene.camera, out.camera, true);
-  if (!checkNeeds(scene, error)) return false;
+  if (!checkNeeds(scene, error) || !checkCameraBounds(scene, error)) return false;
   // Effects are built in registry order; anything not listed is simply never touched.
   BuildContext context{scene, content_dir, static_cast<std::uint32_t>(scene.scene.integer("seed")), out.links};
   for (const EffectDesc* desc : effectRegistry()) {

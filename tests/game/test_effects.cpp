@@ -15,6 +15,24 @@ game::SceneConfig parse(const std::string& text) {
   return scene;
 }
 
+// The camera's box (the level's edges) must hold its start: a start outside is refused naming the
+// axis, the value and the box; the box reaches the camera the world builds.
+TEST(CameraBounds, AStartOutsideTheBoxIsRefusedByName) {
+  game::World world;
+  std::string error;
+  const std::string outside =
+      R"({"camera": {"position": [0, 2, 20], "bounds_min": [-15, 0.4, -15], "bounds_max": [15, 10, 15]}, "effects": {}})";
+  EXPECT_FALSE(game::buildWorld(parse(outside), game::contentDir(), world, error));
+  EXPECT_NE(error.find("camera.position's z = 20"), std::string::npos) << error;
+  EXPECT_NE(error.find("-15.0"), std::string::npos) << error;
+  const std::string inside =
+      R"({"camera": {"position": [0, 2, 9], "bounds_min": [-15, 0.4, -15], "bounds_max": [15, 10, 15]}, "effects": {}})";
+  error.clear();
+  ASSERT_TRUE(game::buildWorld(parse(inside), game::contentDir(), world, error)) << error;
+  EXPECT_EQ(world.camera.bounds_min, glm::vec3(-15.0f, 0.4f, -15.0f));
+  EXPECT_EQ(world.camera.bounds_max, glm::vec3(15.0f, 10.0f, 15.0f));
+}
+
 // Every effect section of the schema is its registry entry's table, in registry order.
 TEST(EffectTables, SchemaSectionsAreTheRegistryTables) {
   std::vector<const game::SectionSpec*> effects;
