@@ -80,6 +80,16 @@ struct KindStats {
   float min_frequency = 0.0f, max_frequency = 0.0f;  // bubble and wood starting pitches (Hz); 0 = none
 };
 
+// What producing the events costs the thread that queues them (the game's main thread), per step:
+// wall time, and the thread's CPU time (the work itself, without the time a loaded machine kept
+// the thread waiting for a core).
+struct ProducerCost {
+  std::uint64_t steps = 0;
+  double last_wall_ms = 0.0;
+  double wall_ms_sum = 0.0, wall_ms_max = 0.0;
+  double cpu_ms_sum = 0.0, cpu_ms_max = 0.0;
+};
+
 struct Voice {
   VoiceShape shape = VoiceShape::bubble;
   SoundKind kind = SoundKind::drop;
@@ -115,10 +125,7 @@ struct Mixer {
   std::vector<float> kind_mix;  // scratch: one render call's mono sum per kind
   std::uint64_t clipped = 0;    // output samples the final clamp touched (0 unless the limiter failed)
   std::uint64_t nonfinite = 0;  // voices dropped for a NaN/inf sample
-  // What producing the events costs the thread that queues them (the game's main thread): its
-  // producer writes these (ms per step) for the overlay and the offline summary.
-  double producer_ms_sum = 0.0, producer_ms_max = 0.0;
-  std::uint64_t producer_steps = 0;
+  ProducerCost producer;        // written by the thread that queues the events (the game's)
   // The overlay's level meter: the last render call's output peak and RMS (linear).
   std::atomic<float> meter_peak{0.0f}, meter_rms{0.0f};
 };

@@ -215,8 +215,12 @@ void printAudioSummary(const ReplayAudio& a) {
   const auto db = [](double x) { return x > 1e-9 ? 20.0 * std::log10(x) : -180.0; };
   const double frames = static_cast<double>(a.samples.size() / 2);
   const double seconds = frames / a.sample_rate;
-  std::printf("audio: %.2f s at %d Hz; main-thread cost per step: mean %.4f ms, max %.4f ms (%llu steps)\n", seconds,
-              a.sample_rate, a.main_ms_mean, a.main_ms_max, static_cast<unsigned long long>(a.steps));
+  const engine::audio::ProducerCost& c = a.cost;
+  const double steps = c.steps > 0 ? static_cast<double>(c.steps) : 1.0;
+  std::printf("audio: %.2f s at %d Hz; main-thread cost per step (%llu steps): wall mean %.4f ms, max %.4f ms; "
+              "CPU mean %.4f ms, max %.4f ms\n",
+              seconds, a.sample_rate, static_cast<unsigned long long>(c.steps), c.wall_ms_sum / steps, c.wall_ms_max,
+              c.cpu_ms_sum / steps, c.cpu_ms_max);
   std::printf("  %-13s %8s %9s %8s %17s %10s %10s\n", "kind", "events", "per s", "dropped", "pitch (Hz)", "peak dBFS",
               "rms dBFS");
   for (std::size_t k = 0; k < engine::audio::kSoundKinds; ++k) {

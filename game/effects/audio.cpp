@@ -31,6 +31,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <vector>
 
 namespace game {
@@ -106,6 +107,13 @@ const ParamTable<AudioParams>& table() {
   return rows;
 }
 
+// The calling thread's CPU time (ms).
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
 engine::audio::MixerParams mixerParams(const AudioParams& p) {
   engine::audio::MixerParams m;
   m.sample_rate = p.sample_rate;
@@ -168,8 +176,7 @@ struct AudioState {
   std::size_t pump_held = 0;                      // the pump's fill count after the last step
   float pool_surface = -1e30f;                    // m: the pool's surface height (refreshed each second)
   std::uint64_t steps = 0;
-  // Main-thread cost of step (ms): the last, the mean and the largest.
-  double step_ms = 0.0, step_ms_sum = 0.0, step_ms_max = 0.0;
+  engine::audio::ProducerCost cost;  // of step, on the main thread
   std::string device_error;
 };
 
@@ -192,6 +199,7 @@ class AudioEffect final : public EffectOf<AudioState> {
 
   StepOutcome step(const StepContext& ctx) override {
     const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = threadCpuMs();
     state.events.clear();
     const float dt = static_cast<float>(ctx.step_seconds);
     if (ctx.links.fluid != nullptr) waterSounds(*ctx.links.fluid, ctx.links.gravity, dt);
@@ -200,15 +208,17 @@ class AudioEffect final : public EffectOf<AudioState> {
     if (ctx.links.blob != nullptr) gooSounds(*ctx.links.blob, ctx.links.gravity, dt);
     if (!state.events.empty()) engine::audio::queueSounds(state.mixer, state.events);
     ++state.steps;
-    state.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    state.step_ms_sum += state.step_ms;
-    state.step_ms_max = std::max(state.step_ms_max, state.step_ms);
-    {
-      const std::lock_guard<std::mutex> hold(state.mixer.lock);
-      state.mixer.producer_ms_sum = state.step_ms_sum;
-      state.mixer.producer_ms_max = state.step_ms_max;
-      state.mixer.producer_steps = state.steps;
-    }
+    engine::audio::ProducerCost& c = state.cost;
+    const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double cpu = threadCpuMs() - cpu_start;
+    ++c.steps;
+    c.last_wall_ms = wall;
+    c.wall_ms_sum += wall;
+    c.wall_ms_max = std::max(c.wall_ms_max, wall);
+    c.cpu_ms_sum += cpu;
+    c.cpu_ms_max = std::max(c.cpu_ms_max, cpu);
+    const std::lock_guard<std::mutex> hold(state.mixer.lock);
+    state.mixer.producer = c;
     return {};
   }
 
@@ -230,10 +240,10 @@ class AudioEffect final : public EffectOf<AudioState> {
     const float peak = state.mixer.meter_peak.load(std::memory_order_relaxed);
     const float rms = state.mixer.meter_rms.load(std::memory_order_relaxed);
     const auto db = [](float x) { return x > 1e-6f ? 20.0f * std::log10(x) : -120.0f; };
-    ImGui::Text("audio: %s%s, step %.3f ms (mean %.3f, max %.3f), M mutes",
+    const engine::audio::ProducerCost& c = state.cost;
+    ImGui::Text("audio: %s%s, main thread %.3f ms/step (mean %.3f, max %.3f), M mutes",
                 state.device.id != 0 ? state.device.driver.c_str() : "no device", state.params.mute ? " (muted)" : "",
-                state.step_ms, state.steps > 0 ? state.step_ms_sum / static_cast<double>(state.steps) : 0.0,
-                state.step_ms_max);
+                c.last_wall_ms, c.steps > 0 ? c.wall_ms_sum / static_cast<double>(c.steps) : 0.0, c.wall_ms_max);
     // The level meter: RMS as the bar, the peak in the text, both in dBFS over a 60 dB range.
     char label[64];
     std::snprintf(label, sizeof label, "rms %.0f dB  peak %.0f dB", db(rms), db(peak));

@@ -2,16 +2,16 @@
 #include "game/replay/replay_runner.hpp"
 
 #include "engine/ui/overlay.hpp"
-#include "game/paths.hpp"
 #include "game/explosives/explosives.hpp"
+#include "game/paths.hpp"
 #include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <mutex>
 #include <cstdio>
+#include <mutex>
 
 namespace game {
 namespace {
@@ -87,7 +87,8 @@ int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& r
     }
     // The listener is the replay's camera for this step; the step queues its sounds, which the
     // mixer then renders: the same renderMixer SDL's callback calls live.
-    if (mixer != nullptr) engine::audio::setListener(*mixer, {world.camera.position, engine::cameraForward(world.camera)});
+    if (mixer != nullptr)
+      engine::audio::setListener(*mixer, {world.camera.position, engine::cameraForward(world.camera)});
     stepWorld(world, &profiler);
     if (mixer != nullptr) {
       const std::size_t n = audioStepFrames(world.steps - 1, world.step_seconds, sound.sample_rate);
@@ -112,9 +113,7 @@ int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& r
     sound.stats = mixer->stats;
     sound.clipped = mixer->clipped;
     sound.nonfinite = mixer->nonfinite;
-    sound.steps = mixer->producer_steps;
-    sound.main_ms_mean = mixer->producer_steps > 0 ? mixer->producer_ms_sum / static_cast<double>(mixer->producer_steps) : 0.0;
-    sound.main_ms_max = mixer->producer_ms_max;
+    sound.cost = mixer->producer;
   }
   result.report.nonfinite_state = world.nonfinite_state;
   result.report.runtime_failures = world.failures.count;

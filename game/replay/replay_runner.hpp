@@ -53,8 +53,7 @@ struct ReplayAudio {
   std::vector<float> samples;  // interleaved stereo, in [-1, 1]
   std::array<engine::audio::KindStats, engine::audio::kSoundKinds> stats{};
   std::uint64_t clipped = 0, nonfinite = 0;
-  double main_ms_mean = 0.0, main_ms_max = 0.0;  // the audio effect's step (main thread), per step
-  std::uint64_t steps = 0;
+  engine::audio::ProducerCost cost;  // the audio effect's step on the main thread
 };
 
 // Frames of sound belonging to step `step` (0-based) at `sample_rate`: floor((k + 1) R dt) - floor(k R dt),
