@@ -512,14 +512,17 @@ void updateBlobBehaviour(BlobWorld& world, const BlobBehaviour& b, glm::vec3 tar
     t.anchor = next;
   } else if (b.kind == BlobBehaviourKind::chase) {
     // Over the ground toward the target: the anchor leads the body horizontally by at most a
-    // quarter radius, so the body's own speed is `speed`; vertically it rests on the ground.
+    // quarter radius along the heading, so the body's own speed is `speed`; vertically it rests on
+    // the ground.
     glm::vec3 to = target - t.anchor;
     to.y = 0.0f;
     const float dist = glm::length(to);
     glm::vec3 lead = t.anchor - c;
     lead.y = 0.0f;
     glm::vec3 next = t.anchor;
-    if (dist > 1e-6f && std::isfinite(dist) && glm::length(lead) < 0.25f * radius)
+    // The lead is measured along the heading only: reaching tentacles carry mass toward the target and
+    // put the centroid ahead of the anchor, which must not read as the body lagging behind it.
+    if (dist > 1e-6f && std::isfinite(dist) && glm::dot(lead, to / dist) < 0.25f * radius)
       next += steerAroundWalls(world, t.anchor, to / dist, radius) * std::min(dist, b.speed * dt);
     // The street's edges: the anchor stays a body radius inside the keep box, so the body follows
     // the player to the edge of the street and no further.

@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -46,7 +47,8 @@ const ParamTable<BlobMonsterParams>& table() {
                         "behaviour program (states, their parameters and triggers), a JSON file relative to "
                         "content/ (format: docs/blob.md); fixed at construction"),
       param<&P::caught_seconds>("caught_seconds", 0.0, 10.0,
-                                "the caught effect (the goo flashes red) lasts this long, then the round resets"),
+                                "the caught effect (the camera is pulled into the goo, the screen tints, the goo "
+                                "flashes red, a banner gives the round's time) lasts this long, then the round resets"),
       param<&P::smoothing>("smoothing", 1.0, 4.0, "surface field cutoff Rc in spacings"),
       param<&P::cube>("cube", 0.2, 2.0, "marching cube edge in spacings"),
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the field"),
@@ -107,6 +109,10 @@ struct ProgramReader {
     if (key == "tip_strength") return number(v, path, b.tip_strength);
     if (key == "tip_radius_scale") return number(v, path, b.tip_radius_scale);
     if (key == "catch_distance") return number(v, path, b.catch_distance);
+    if (key == "reach_range") return number(v, path, b.reach_range);
+    if (key == "grow_speed") return number(v, path, b.grow_speed);
+    if (key == "curl") return number(v, path, b.curl);
+    if (key == "stretch") return number(v, path, b.stretch);
     if (key == "wall") {
       std::string name;
       if (!text(v, path, name)) return false;
@@ -335,10 +341,9 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     if (bodies_ != nullptr) collidersFromCrates(s, *bodies_);
     s.blasted_particles = 0;
     for (const fluid::Blast& blast : ctx.links.blasts) s.blasted_particles += fluid::blastBlob(s.world, blast);
-    // Tentacles reach for the player's head; the chase follows the player's feet at the body's height.
+    // Tentacles reach for the player's eye; the chase moves over the ground below it and catches by
+    // the horizontal distance (fluid::BlobBehaviour::catch_distance).
     s.target = ctx.links.player;
-    if (s.machine.state >= 0 && s.program.states[s.machine.state].behaviour.kind == fluid::BlobBehaviourKind::chase)
-      s.target.y = fluid::blobCentroid(s.world.particles.position).y;
     const std::vector<std::string> events;
     fluid::stepBlobMachine(s.program, s.machine, s.world, {s.target, s.blasted_particles > 0, events});
     const fluid::BlobStatus st = fluid::stepBlob(s.world, &s.stats);
@@ -420,6 +425,16 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     goo.rc = state.params.smoothing * state.params.spacing;
     goo.threshold = state.params.threshold;
     frame.water.push_back(goo);
+    if (state.tint.a > frame.screen_tint.a) frame.screen_tint = state.tint;
+  }
+
+  HudText hud() const override {
+    const BlobMonster& s = state;
+    char line[96], banner[96];
+    std::snprintf(line, sizeof line, "round %d | %.1f s | caught %d", s.round, s.round_seconds, s.catches);
+    if (s.caught_timer <= 0.0f) return {line, {}};
+    std::snprintf(banner, sizeof banner, "CAUGHT! round %d lasted %.1f s", s.round, s.last_round_seconds);
+    return {line, banner};
   }
 
   void drawStatus() const override {
@@ -452,19 +467,46 @@ class BlobEffect final : public EffectOf<BlobMonster> {
   }
 
   void stepRound(BlobMonster& s, const StepContext& ctx) {
+    const float dt = static_cast<float>(ctx.step_seconds);
     if (s.caught_timer > 0.0f) {
-      s.caught_timer -= static_cast<float>(ctx.step_seconds);
+      s.caught_timer -= dt;
+      s.caught_elapsed += dt;
       if (s.caught_timer <= 0.0f) {
+        s.caught_timer = 0.0f;
+        s.tint = glm::vec4(0.0f);
+        ++s.round;
+        s.round_seconds = 0.0;
         startRound(s);
         ctx.links.reset_player = true;
+        return;
       }
+      grab(s, ctx.links);
       return;
     }
+    s.round_seconds += ctx.step_seconds;
     const fluid::BlobBehaviour& b = s.program.states[s.machine.state].behaviour;
     if (b.kind == fluid::BlobBehaviourKind::chase && fluid::blobGoalReached(s.world, b, s.target)) {
       ++s.catches;
-      s.caught_timer = std::max(s.params.caught_seconds, static_cast<float>(ctx.step_seconds));
+      s.last_round_seconds = s.round_seconds;
+      s.caught_timer = std::max(s.params.caught_seconds, dt);
+      s.caught_elapsed = 0.0f;
+      grab(s, ctx.links);
     }
+  }
+
+  // The catch as the player sees it: the goo grabs the camera and pulls it in, turning it to face
+  // the goo (the catch happened at the player's feet, out of view), and the screen goes goo-dark.
+  static void grab(BlobMonster& s, EffectLinks& links) {
+    constexpr float kHold = 0.7f;   // m from the goo's top the camera is pulled to
+    constexpr float kRate = 0.08f;  // of the remaining way per step: 92 % of it in half a second at 60 Hz
+    const glm::vec3 centre = fluid::blobCentroid(s.world.particles.position);
+    const glm::vec3 top = centre + glm::vec3(0.0f, 0.3f, 0.0f);
+    glm::vec3 away = links.player - top;
+    const float len = glm::length(away);
+    away = len > 1e-4f && std::isfinite(len) ? away / len : glm::vec3(0.0f, 1.0f, 0.0f);
+    links.camera_pull = {top + away * kHold, centre, kRate};
+    const float ramp = std::min(1.0f, s.caught_elapsed / 0.4f);
+    s.tint = glm::vec4(0.45f * s.params.colour, 0.6f * ramp);
   }
 
   RigidBodies* bodies_;
@@ -479,6 +521,10 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   s.params = table().parse(section);
   deriveBody(s.params, ctx.links.gravity, step_seconds, s.world.params);
   s.world.params.seed = ctx.seed;
+  // The monster hunts in the player's street: its chase keeps inside the camera's bounds (the
+  // level's edges, camera.bounds_min/max), so it never follows the player over the level's edge.
+  s.world.keep_min = ctx.scene.camera.vec3("bounds_min");
+  s.world.keep_max = ctx.scene.camera.vec3("bounds_max");
   if (const fluid::BlobStatus st = fluid::validateBlobParams(s.world.params); !st.ok()) {
     error = "blob: " + st.error;
     return nullptr;

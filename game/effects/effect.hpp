@@ -72,6 +72,14 @@ struct EffectLinks {
   // the step (the round restarts).
   glm::vec3 player{0.0f};
   bool reset_player = false;
+  // An effect that grabs the player (the blob's catch) sets camera_pull in its step; World then
+  // moves the camera `rate` (in (0, 1]) of the way to `toward` and turns it by the same share
+  // toward `look_at`, after the step, and clears it. rate 0: no pull.
+  struct CameraPull {
+    glm::vec3 toward{0.0f};
+    glm::vec3 look_at{0.0f};
+    float rate = 0.0f;
+  } camera_pull;
   // blob: the goo's particles (the audio effect hears their impacts).
   const fluid::BlobWorld* blob = nullptr;
   // audio: the mixer its step queues the simulation's sounds into (engine/audio/synth.hpp). The

@@ -9,6 +9,7 @@
 #include "fluid/surface/marching_slices.hpp"
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -27,7 +28,7 @@ struct BlobMonsterParams {
   glm::vec3 grate{0.0f, 0.0f, 0.0f};                  // top of the sewer pipe (m): the column starts below it
   float pipe_radius = 0.3f;                           // m: radius of the particle column in the pipe
   std::string program = "blob/monster.program.json";  // behaviour program, relative to content/
-  float caught_seconds = 1.5f;                        // the caught effect lasts this long, then the round resets
+  float caught_seconds = 2.5f;                        // the caught effect lasts this long, then the round resets
   // Surface (marching slices, paper §7): field cutoff and cube edge in spacings, iso level.
   float smoothing = 2.0f;
   float cube = 0.5f;
@@ -62,6 +63,13 @@ struct BlobMonster {
   glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
   float caught_timer = 0.0f;              // > 0 while the caught effect plays
   int catches = 0;
+  // The rounds (issue 35: the catch is seen): round 1 starts at build, each catch ends one; the
+  // time (s, steps x step) the current round has lasted, and what the last caught round lasted.
+  int round = 1;
+  double round_seconds = 0.0;
+  double last_round_seconds = 0.0;
+  float caught_elapsed = 0.0f;            // s since the catch, while the caught effect plays
+  glm::vec4 tint{0.0f};                   // the screen tint this step (engine::FrameBatches::screen_tint)
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;
   // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy).

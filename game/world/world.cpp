@@ -2,6 +2,9 @@
 
 #include "game/explosives/explosives.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace game {
 namespace {
 
@@ -46,6 +49,23 @@ bool checkNeeds(const SceneConfig& scene, std::string& error) {
     }
   }
   return true;
+}
+
+// An effect grabbed the player this step (EffectLinks::camera_pull): move the camera its share of
+// the way and turn it by the same share toward what grabbed it, then let go until the next step.
+void applyCameraPull(EffectLinks::CameraPull& pull, engine::FpsCamera& camera) {
+  if (!(pull.rate > 0.0f)) return;
+  const float r = std::min(pull.rate, 1.0f);
+  camera.position += (pull.toward - camera.position) * r;
+  const glm::vec3 to = pull.look_at - camera.position;
+  const float len = glm::length(to);
+  if (len > 1e-4f && std::isfinite(len)) {  // yaw and pitch as engine::cameraForward reads them
+    const float yaw = glm::degrees(std::atan2(to.z, to.x));
+    const float pitch = std::clamp(glm::degrees(std::asin(std::clamp(to.y / len, -1.0f, 1.0f))), -89.0f, 89.0f);
+    camera.yaw_degrees = std::remainder(camera.yaw_degrees + r * std::remainder(yaw - camera.yaw_degrees, 360.0f), 360.0f);
+    camera.pitch_degrees += r * (pitch - camera.pitch_degrees);
+  }
+  pull.rate = 0.0f;
 }
 
 }  // namespace
@@ -105,6 +125,7 @@ void stepWorld(World& world, engine::Profiler* profiler) {
     const StepOutcome outcome = effect->step(context);
     if (!outcome.failure.empty()) recordFailure(world, outcome.failure);
   }
+  applyCameraPull(world.links.camera_pull, world.camera);
   if (world.links.reset_player) applyCamera(world.scene.camera, world.camera, true);  // caught: a new round
   world.links.reset_player = false;
   ++world.steps;

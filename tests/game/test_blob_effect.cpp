@@ -1,6 +1,7 @@
 // The `blob` effect in a World (no GL): the blob_monster scene builds the monster from its section
 // and program, it rises out of the sewer onto the street (baked colliders), a blast sends it to
 // reassemble, catching the player resets the round, and bad programs are errors naming file, key, value.
+#include "engine/camera/camera.hpp"
 #include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
 #include "game/world/blob_monster.hpp"
@@ -10,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -55,7 +59,7 @@ TEST(BlobEffect, RisesOutOfTheSewerOntoTheStreet) {
   game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
   ASSERT_NE(blob, nullptr);
   EXPECT_EQ(blob->world.particles.size(), 1000u);
-  EXPECT_EQ(blob->level_colliders, 3u);  // street, sewer, wall baked from the level's models
+  EXPECT_EQ(blob->level_colliders, 7u);  // street, sewer, wall and the four building fronts, baked from the models
   EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // starts in the pipe
   steps(world, 60);
   EXPECT_EQ(stateName(*blob), "emerge");
@@ -95,11 +99,22 @@ TEST(BlobEffect, ABlastThrowsParticlesAndStartsReassembly) {
   EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
 }
 
-TEST(BlobEffect, CatchingThePlayerFlashesThenResetsTheRound) {
+// The catch is seen (issue 35 item 2): the goo grabs the camera and pulls it in, facing it, the
+// screen tints, a banner gives the round's time, the round counter goes up, and the round resets.
+TEST(BlobEffect, CatchingThePlayerPullsTheCameraInTintsTheScreenAndCountsTheRound) {
   game::World world = blobWorld();
   game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
   ASSERT_NE(blob, nullptr);
+  game::Effect* effect = nullptr;
+  for (const auto& e : world.effects)
+    if (e->name() == "blob") effect = e.get();
+  ASSERT_NE(effect, nullptr);
   steps(world, 4 * 60);
+  EXPECT_EQ(blob->round, 1);
+  EXPECT_NEAR(blob->round_seconds, 4.0, 1e-9);
+  EXPECT_EQ(blob->tint.a, 0.0f);
+  EXPECT_TRUE(effect->hud().banner.empty());
+  EXPECT_NE(effect->hud().line.find("round 1"), std::string::npos) << effect->hud().line;
   int chase = -1;
   for (std::size_t k = 0; k < blob->program.states.size(); ++k)
     if (blob->program.states[k].behaviour.kind == fluid::BlobBehaviourKind::chase) chase = static_cast<int>(k);
@@ -107,15 +122,93 @@ TEST(BlobEffect, CatchingThePlayerFlashesThenResetsTheRound) {
   fluid::enterBlobState(blob->program, blob->machine, blob->world, chase, blob->target);
   const glm::vec3 start_eye = world.camera.position;
   const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
-  world.camera.position = glm::vec3(c.x + 0.3f, 1.7f, c.z);  // the player walks into it
+  world.camera.position = glm::vec3(c.x + 0.6f, 1.7f, c.z);  // the player walks into it
+  world.camera.pitch_degrees = 0.0f;                          // looking ahead: the goo is below the view
+  const auto gooDistance = [&] {
+    return glm::length(world.camera.position - fluid::blobCentroid(blob->world.particles.position));
+  };
+  const auto gooOffView = [&] {  // angle (deg) between the view and the direction to the goo
+    const glm::vec3 to = glm::normalize(fluid::blobCentroid(blob->world.particles.position) - world.camera.position);
+    return glm::degrees(std::acos(std::clamp(glm::dot(to, engine::cameraForward(world.camera)), -1.0f, 1.0f)));
+  };
+  const float before = gooDistance(), off_before = gooOffView();
   steps(world, 2);
   EXPECT_EQ(blob->catches, 1);
   EXPECT_GT(blob->caught_timer, 0.0f);
-  steps(world, static_cast<int>(blob->params.caught_seconds * 60.0f) + 2);
+  const std::string banner = effect->hud().banner;
+  EXPECT_NE(banner.find("CAUGHT"), std::string::npos) << banner;
+  EXPECT_NE(banner.find("round 1 lasted 4.0 s"), std::string::npos) << banner;
+  steps(world, 30);  // half a second into the catch
+  const float during = gooDistance(), off_during = gooOffView(), tint = blob->tint.a;
+  std::printf(
+      "[blob] catch: camera %.2f m from the goo's centroid -> %.2f m after 0.5 s, the goo %.0f deg -> %.0f deg off "
+      "the view; screen tint alpha %.2f; banner '%s'\n",
+      before, during, off_before, off_during, tint, banner.c_str());
+  EXPECT_LT(during, 0.7f * before);
+  EXPECT_LT(during, 1.2f);
+  EXPECT_LT(off_during, 20.0f);
+  EXPECT_GT(off_before, 45.0f);
+  EXPECT_GE(tint, 0.5f);
+  steps(world, static_cast<int>(blob->params.caught_seconds * 60.0f) - 30 + 2);
   EXPECT_EQ(blob->caught_timer, 0.0f);
+  EXPECT_EQ(blob->tint.a, 0.0f);
+  EXPECT_TRUE(effect->hud().banner.empty());
   EXPECT_LT(fluid::blobCentroid(blob->world.particles.position).y, 0.0f);  // back in the pipe
   EXPECT_EQ(world.camera.position, start_eye);                             // the player back at the start
   EXPECT_EQ(stateName(*blob), "emerge");
+  EXPECT_EQ(blob->round, 2);
+  EXPECT_NE(effect->hud().line.find("round 2"), std::string::npos) << effect->hud().line;
+  std::printf("[blob] rounds: round %d after one catch, HUD '%s'\n", blob->round, effect->hud().line.c_str());
+}
+
+// The street is closed (issue 35 item 3): building fronts stand around it (baked colliders and
+// Bullet meshes), the crates start and stay inside them, and the monster, hunting a player in the
+// street's far corner, keeps inside the camera's bounds and never enters a front.
+TEST(BlobEffect, TheHuntKeepsToTheClosedStreet) {
+  game::World world = blobWorld();
+  game::BlobMonster* blob = game::findState<game::BlobMonster>(world);
+  game::RigidBodies* bodies = game::findState<game::RigidBodies>(world);
+  ASSERT_NE(blob, nullptr);
+  ASSERT_NE(bodies, nullptr);
+  steps(world, 4 * 60);
+  int chase = -1;
+  for (std::size_t k = 0; k < blob->program.states.size(); ++k)
+    if (blob->program.states[k].behaviour.kind == fluid::BlobBehaviourKind::chase) chase = static_cast<int>(k);
+  ASSERT_GE(chase, 0);
+  fluid::enterBlobState(blob->program, blob->machine, blob->world, chase, blob->target);
+  const glm::vec3 lo = world.camera.bounds_min;
+  world.camera.position = glm::vec3(lo.x, 1.7f, lo.z);  // the player in the street's far corner
+  float worst_x = 0.0f, worst_z = 0.0f, deepest = 1e30f;
+  int hunted = 0;
+  for (; hunted < 25 * 60 && blob->catches == 0; ++hunted) {
+    steps(world, 1);
+    for (const glm::vec3& x : blob->world.particles.position)
+      worst_x = std::min(worst_x, x.x), worst_z = std::min(worst_z, x.z);
+  }
+  for (std::size_t c = 3; c < blob->level_colliders; ++c)  // the four fronts follow street, sewer, wall
+    for (const glm::vec3& x : blob->world.particles.position) {
+      fluid::ColliderSample sample;
+      const glm::vec3 local = fluid::toColliderSpace(blob->world.colliders[c].pose, x);
+      blob->world.colliders[c].shape->query({&local, 1}, {&sample, 1});
+      if (sample.valid) deepest = std::min(deepest, sample.distance);
+    }
+  const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
+  std::printf(
+      "[blob] closed street: hunting a player at (%.1f, %.1f) the goo reached (%.2f, %.2f), caught %d after %.1f s; "
+      "its furthest particle x %.2f, z %.2f (fronts' faces at x -7, z -9.5); deepest into a front %.3f m\n",
+      lo.x, lo.z, c.x, c.z, blob->catches, hunted / 60.0, worst_x, worst_z, deepest);
+  EXPECT_EQ(blob->catches, 1);  // it reached him in the corner
+  EXPECT_GE(c.x, lo.x);
+  EXPECT_GE(c.z, lo.z);
+  EXPECT_GE(worst_x, -7.0f - 0.01f * blob->params.spacing);  // a particle may touch a face, not cross it
+  EXPECT_GE(worst_z, -9.5f - 0.01f * blob->params.spacing);
+  EXPECT_GE(deepest, -0.01f * blob->params.spacing);
+  for (const engine::BodyState& b : bodies->current) {
+    EXPECT_GT(b.position.x, -7.0f);
+    EXPECT_LT(b.position.x, 7.0f);
+    EXPECT_GT(b.position.z, -9.5f);
+    EXPECT_LT(b.position.z, 6.8f);
+  }
 }
 
 TEST(BlobEffect, ACrateDroppedOnItAndTheBlobPushEachOther) {
