@@ -30,34 +30,35 @@ void findImpacts(const glm::vec3* positions, std::size_t position_stride, const 
                  const ImpactParams& params, ImpactTracker& tracker, std::vector<Impact>& out) {
   out.clear();
   tracker.hits.clear();
-  std::fill(tracker.seen.begin(), tracker.seen.end(), std::uint8_t{0});
+  const std::uint32_t previous = tracker.calls, now = ++tracker.calls;  // stamps are call numbers
   const float inv_cell = 1.0f / std::max(params.cell_size, 1e-3f);
   const glm::vec3 fall = gravity * dt;
+  const float min_speed2 = params.min_speed * params.min_speed;
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint32_t id = ids != nullptr ? ids[i] : static_cast<std::uint32_t>(i);
     if (id >= params.max_id) continue;
     if (id >= tracker.velocity.size()) {
       const std::size_t size = std::max<std::size_t>(id + 1, 2 * tracker.velocity.size());
       tracker.velocity.resize(size, glm::vec3(0.0f));
-      tracker.known.resize(size, 0);
-      tracker.seen.resize(size, 0);
+      tracker.seen_in.resize(size, 0);
     }
     const glm::vec3 v = at(velocities, velocity_stride, i);
-    tracker.seen[id] = 1;
-    if (tracker.known[id] != 0) {
+    // Known: seen by the previous call (an id absent from a call, in the pump, is forgotten).
+    if (previous != 0 && tracker.seen_in[id] == previous) {
       const glm::vec3 before = tracker.velocity[id];
-      const float speed = glm::length(before);
-      // What the step took beyond free flight: |v0 + g dt| - |v1|.
-      const float loss = glm::length(before + fall) - glm::length(v);
-      if (speed >= params.min_speed && loss >= params.min_speed_loss && std::isfinite(loss))
-        tracker.hits.push_back(
-            {cellKey(at(positions, position_stride, i), inv_cell), static_cast<std::uint32_t>(i), speed, loss});
+      // Most of the water is slow (the pool): one dot product turns it away.
+      if (glm::dot(before, before) >= min_speed2) {
+        const float speed = glm::length(before);
+        // What the step took beyond free flight: |v0 + g dt| - |v1|.
+        const float loss = glm::length(before + fall) - glm::length(v);
+        if (loss >= params.min_speed_loss && std::isfinite(loss))
+          tracker.hits.push_back(
+              {cellKey(at(positions, position_stride, i), inv_cell), static_cast<std::uint32_t>(i), speed, loss});
+      }
     }
     tracker.velocity[id] = v;
-    tracker.known[id] = std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) ? 1 : 0;
+    tracker.seen_in[id] = std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) ? now : 0;
   }
-  for (std::size_t id = 0; id < tracker.known.size(); ++id)
-    if (tracker.seen[id] == 0) tracker.known[id] = 0;
   std::sort(tracker.hits.begin(), tracker.hits.end(), [](const ImpactTracker::Hit& a, const ImpactTracker::Hit& b) {
     return a.cell != b.cell ? a.cell < b.cell : a.index < b.index;
   });

@@ -35,11 +35,12 @@ struct Impact {
   std::uint32_t particles = 0;
 };
 
-// Per particle id: its velocity after the last call (known = 0 until seen once).
+// Per particle id: its velocity after the last call, and the call that saw it (an id is known when
+// the previous call saw it with a finite velocity; nothing is cleared between calls).
 struct ImpactTracker {
   std::vector<glm::vec3> velocity;
-  std::vector<std::uint8_t> known;
-  std::vector<std::uint8_t> seen;  // scratch: seen in this call
+  std::vector<std::uint32_t> seen_in;  // call number + 1 of the call that last saw the id; 0 = never
+  std::uint32_t calls = 0;
   struct Hit {
     std::uint64_t cell = 0;
     std::uint32_t index = 0;

@@ -174,7 +174,8 @@ struct AudioState {
   std::vector<PairImpulse> contact_now;           // scratch
   std::vector<float> crate_bottom;                // per crate: the last step's bottom height (m)
   std::size_t pump_held = 0;                      // the pump's fill count after the last step
-  float pool_surface = -1e30f;                    // m: the pool's surface height (refreshed each second)
+  float pool_surface = -1e30f;                    // m: the pool's surface height (crateSplashes refreshes it)
+  std::uint64_t pool_surface_step = 0;            // steps + 1 when it was last measured; 0 = never
   std::uint64_t steps = 0;
   engine::audio::ProducerCost cost;  // of step, on the main thread
   std::string device_error;
@@ -203,7 +204,7 @@ class AudioEffect final : public EffectOf<AudioState> {
     state.events.clear();
     const float dt = static_cast<float>(ctx.step_seconds);
     if (ctx.links.fluid != nullptr) waterSounds(*ctx.links.fluid, ctx.links.gravity, dt);
-    if (ctx.links.bodies != nullptr) crateSounds(*ctx.links.bodies, ctx.links.fluid != nullptr, dt);
+    if (ctx.links.bodies != nullptr) crateSounds(*ctx.links.bodies, ctx.links.fluid, dt);
     for (const fluid::Blast& blast : ctx.links.blasts) blastSound(blast);
     if (ctx.links.blob != nullptr) gooSounds(*ctx.links.blob, ctx.links.gravity, dt);
     if (!state.events.empty()) engine::audio::queueSounds(state.mixer, state.events);
@@ -289,13 +290,9 @@ class AudioEffect final : public EffectOf<AudioState> {
         break;
       }
     }
-    if (state.steps % 60 == 0) {
-      const WaterWhereabouts where = waterWhereabouts(fluid, level_);
-      state.pool_surface = where.pool > 0 ? level_.basin_floor + where.pool_level : -1e30f;
-    }
   }
 
-  void crateSounds(const RigidBodies& bodies, bool has_water, float dt) {
+  void crateSounds(const RigidBodies& bodies, const SphFluid* fluid, float dt) {
     engine::PhysicsWorld& physics = *bodies.physics;
     physics.record_contacts = true;  // from the next step on (the first step's contacts are missed)
     // A knock is a sudden rise of a body pair's contact impulse (a landing, a hit); a resting or
@@ -334,10 +331,26 @@ class AudioEffect final : public EffectOf<AudioState> {
       state.events.push_back(e);
     }
     std::swap(state.contact_impulse, state.contact_now);
-    if (!has_water) return;
-    // A crate dropping through the pool's surface inside the basin: a big splash.
+    if (fluid != nullptr) crateSplashes(bodies, *fluid, dt);
+  }
+
+  // A crate dropping through the pool's surface inside the basin: a big splash.
+  void crateSplashes(const RigidBodies& bodies, const SphFluid& fluid, float dt) {
     state.crate_bottom.resize(bodies.crates.size(), 1e30f);
     const float half = 0.5f * bodies.params.crate_size;
+    // The pool's surface (a pass over every particle) only while a crate falls inside the basin,
+    // at most once a second: most steps cost nothing here.
+    bool falling = false;
+    for (std::size_t i = 0; i < bodies.crates.size() && i < bodies.current.size(); ++i) {
+      const engine::BodyState& b = bodies.current[i];
+      falling = falling || (glm::length(glm::vec2(b.position.x, b.position.z)) < level_.basin_inner_radius &&
+                            b.linear_velocity.y < -state.params.min_speed);
+    }
+    if (falling && (state.pool_surface_step == 0 || state.steps >= state.pool_surface_step + 60)) {
+      const WaterWhereabouts where = waterWhereabouts(fluid, level_);
+      state.pool_surface = where.pool > 0 ? level_.basin_floor + where.pool_level : -1e30f;
+      state.pool_surface_step = state.steps + 1;
+    }
     for (std::size_t i = 0; i < bodies.crates.size() && i < bodies.current.size(); ++i) {
       const engine::BodyState& b = bodies.current[i];
       const float bottom = b.position.y - half;
