@@ -9,9 +9,11 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -69,6 +71,21 @@ TEST(AudioEffect, IsSilentWhenNothingMoves) {
   const std::vector<float> later = stepAndRender(world, 120);
   EXPECT_EQ(stats(world, SoundKind::crate).events, knocks);
   for (float x : later) ASSERT_EQ(x, 0.0f);
+}
+
+// Live, the listener is each rendered frame's camera (prepareFrame, called by meshWorld).
+TEST(AudioEffect, TheListenerFollowsEachRenderedFramesCamera) {
+  game::World world = buildFrom(R"({"effects": {"audio": {}}})");
+  world.camera.position = glm::vec3(1.0f, 2.0f, 3.0f);
+  world.camera.yaw_degrees = 0.0f;  // looking along +x
+  world.camera.pitch_degrees = 0.0f;
+  game::meshWorld(world, nullptr);
+  const engine::audio::Listener listener = [&world] {
+    const std::lock_guard<std::mutex> hold(world.links.audio->lock);
+    return world.links.audio->listener;
+  }();
+  EXPECT_EQ(listener.position, world.camera.position);
+  EXPECT_NEAR(glm::dot(glm::normalize(listener.forward), engine::cameraForward(world.camera)), 1.0f, 1e-6f);
 }
 
 TEST(AudioEffect, ACrateLandingKnocks) {
