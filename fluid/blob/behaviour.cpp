@@ -119,13 +119,28 @@ int tentacleParticles(const BlobBehaviour& b, const BlobParams& p) {
   return std::clamp(static_cast<int>(std::lround(b.tentacle_length / mean_spacing)), 2, 256);
 }
 
-// Tentacle k's direction: the direction to the target, tilted by the spread angle around it.
-glm::vec3 tentacleDirection(glm::vec3 aim, int k, int count, float spread) {
-  if (count <= 1) return aim;
-  const glm::vec3 e1 = anyPerpendicular(aim);
-  const glm::vec3 e2 = glm::cross(aim, e1);
-  const float a = 2.0f * kPi * static_cast<float>(k) / static_cast<float>(count);
-  return glm::normalize(std::cos(spread) * aim + std::sin(spread) * (std::cos(a) * e1 + std::sin(a) * e2));
+// Where tentacle k leaves the core: fanned across the side of the body that faces the target
+// (azimuths about the horizontal heading to it) and raised 30 or 45 degrees, so that seen from the
+// target the tentacles rise from the body and arc toward it. Pointed straight at the target from a
+// cone, they read from there as a star of spikes (issue 35: "a sea mine, not a creature").
+glm::vec3 tentacleRoot(glm::vec3 aim, int k, int count) {
+  glm::vec3 h(aim.x, 0.0f, aim.z);
+  h = glm::length(h) > 1e-3f ? glm::normalize(h) : glm::vec3(1.0f, 0.0f, 0.0f);
+  const glm::vec3 up(0.0f, 1.0f, 0.0f);
+  const glm::vec3 side = glm::cross(up, h);
+  const float step = std::min(0.9f, 4.2f / static_cast<float>(std::max(count, 1)));
+  const float azimuth = (static_cast<float>(k) - 0.5f * static_cast<float>(count - 1)) * step;
+  const float elevation = 0.52f + 0.26f * static_cast<float>(k % 2);
+  return glm::normalize(std::cos(elevation) * (std::cos(azimuth) * h + std::sin(azimuth) * side) +
+                        std::sin(elevation) * up);
+}
+
+// Where its tip goes: toward the target, turned by half the spread angle toward its root's side,
+// so the tips close around the target from all sides rather than meeting in one point.
+glm::vec3 tentacleTipDirection(glm::vec3 to_target, glm::vec3 root, float spread) {
+  glm::vec3 side = root - glm::dot(root, to_target) * to_target;
+  side = glm::length(side) > 1e-4f ? glm::normalize(side) : anyPerpendicular(to_target);
+  return glm::normalize(std::cos(0.5f * spread) * to_target + std::sin(0.5f * spread) * side);
 }
 
 glm::vec3 aimAt(glm::vec3 from, glm::vec3 target) {
@@ -155,9 +170,12 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, fl
   if (t.tentacle_extent.size() != t.tentacle_particles.size()) t.tentacle_extent.assign(t.tentacle_particles.size(), 0.0f);
   for (std::size_t k = 0; k < t.tentacle_particles.size(); ++k) {
     const auto& chain = t.tentacle_particles[k];
-    const glm::vec3 dir = tentacleDirection(aim, static_cast<int>(k), b.tentacles, b.tentacle_spread);
-    const glm::vec3 base = t.anchor + dir * (0.85f * core_radius);
-    const float full = std::min(b.tentacle_length, std::max(glm::length(target - base), 2.0f * d));
+    const glm::vec3 root = tentacleRoot(aim, static_cast<int>(k), b.tentacles);
+    const glm::vec3 base = t.anchor + root * (0.85f * core_radius);
+    const glm::vec3 dir = tentacleTipDirection(aimAt(base, target), root, b.tentacle_spread);
+    // The tip stops short of the target (kShort): it grabs at the player's face, it does not fill the view.
+    constexpr float kShort = 0.3f;
+    const float full = std::min(b.tentacle_length, std::max(glm::length(target - base) - kShort, 2.0f * d));
     const float stub = std::min(full, std::max(2.0f * d, 0.15f * b.tentacle_length));
     const float want = in_range ? full : stub;
     const float rate = b.grow_speed * (1.0f - 0.12f * static_cast<float>(k % 3)) * dt;
@@ -173,19 +191,23 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, fl
     const float phase = 2.0f * kPi * static_cast<float>(k) / static_cast<float>(std::max(b.tentacles, 1)) + 0.6f * time;
     const glm::vec3 bend = std::cos(phase) * side + std::sin(phase) * side2;
     const float bend_amp = b.curl * ext * (1.0f - 0.8f * ext / std::max(full, 1e-6f));
+    // The visible part is a quadratic Bezier from the base, leaving along the root (up and out of the
+    // body), ending `ext` out along `dir`: an arm that rises and reaches, the same shape at any length.
+    const glm::vec3 p1 = base + root * (0.4f * ext), p2 = base + dir * ext;
     float along = 0.0f;
     for (std::size_t j = 0; j < m; ++j) {
       const float s = static_cast<float>(j) / static_cast<float>(m - 1);
       along += stretch * d * glm::mix(1.0f, b.tip_radius_scale, s);
-      const float out = along - hidden;  // distance out of the core along the axis
+      const float out = along - hidden;  // distance out of the core along the tentacle
       glm::vec3 goal;
       if (out <= 0.0f) {
-        goal = base + dir * (out * inner / std::max(hidden, 1e-6f));
+        goal = base + root * (out * inner / std::max(hidden, 1e-6f));
       } else {
         const float u = out / std::max(ext, 1e-6f);  // 0 at the base, 1 at the tip
         const float sway =
             0.04f * ext * u * std::sin(2.0f * kPi * 0.4f * time - 3.0f * u + 1.7f * static_cast<float>(k));
-        goal = base + dir * out + bend * (bend_amp * u * u) + side * sway;
+        const glm::vec3 curve = (1.0f - u) * (1.0f - u) * base + 2.0f * u * (1.0f - u) * p1 + u * u * p2;
+        goal = curve + bend * (bend_amp * u * u) + side * sway;
       }
       t.offset[chain[j]] = goal - t.anchor;
     }
@@ -205,7 +227,7 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, fl
   }
 }
 
-// Picks the tentacles' particles (those furthest out toward each tentacle's direction), gives the
+// Picks the tentacles' particles (those furthest out toward each tentacle's root), gives the
 // rest `core_ratios`' lattice shape, and lays the tentacles (retracted: they grow from the core).
 void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, glm::vec3 core_ratios) {
   BlobTarget& t = world.target;
@@ -227,7 +249,7 @@ void startTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, 
   std::vector<float> score(n), along(n);
   for (int k = 0; k < b.tentacles; ++k) {
     // The particles furthest out toward the tentacle become it, ordered base (inner) to tip.
-    const glm::vec3 dir = tentacleDirection(aim, k, b.tentacles, b.tentacle_spread);
+    const glm::vec3 dir = tentacleRoot(aim, k, b.tentacles);
     for (std::size_t i = 0; i < n; ++i) {
       const glm::vec3 r = parts.position[i] - c;
       along[i] = glm::dot(r, dir);
