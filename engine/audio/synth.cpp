@@ -315,6 +315,7 @@ void initMixer(Mixer& mixer, const MixerParams& params) {
   mixer.kind_mix.assign(kSoundKinds * kChunk, 0.0f);
   mixer.clipped = mixer.nonfinite = 0;
   mixer.meter_peak = mixer.meter_rms = 0.0f;
+  mixer.meter_voices = 0;
 }
 
 void setMixerLive(Mixer& mixer, const MixerParams& params) {
@@ -362,6 +363,7 @@ void renderMixer(Mixer& mixer, float* out, std::size_t frames) {
     done += n;
   }
   mixer.meter_peak.store(peak, std::memory_order_relaxed);
+  mixer.meter_voices.store(static_cast<std::uint32_t>(mixer.voices.size()), std::memory_order_relaxed);
   mixer.meter_rms.store(frames > 0 ? static_cast<float>(std::sqrt(sum / (2.0 * frames))) : 0.0f,
                         std::memory_order_relaxed);
 }

@@ -128,6 +128,7 @@ struct Mixer {
   ProducerCost producer;        // written by the thread that queues the events (the game's)
   // The overlay's level meter: the last render call's output peak and RMS (linear).
   std::atomic<float> meter_peak{0.0f}, meter_rms{0.0f};
+  std::atomic<std::uint32_t> meter_voices{0};  // voices sounding or waiting after that call
 };
 
 // Clamps the parameters to their stable ranges and resets the mixer (no voices, clock 0).

@@ -249,7 +249,7 @@ class AudioEffect final : public EffectOf<AudioState> {
     char label[64];
     std::snprintf(label, sizeof label, "rms %.0f dB  peak %.0f dB", db(rms), db(peak));
     ImGui::ProgressBar(std::clamp((db(rms) + 60.0f) / 60.0f, 0.0f, 1.0f), ImVec2(240.0f, 0.0f), label);
-    ImGui::Text("  voices %zu", state.mixer.voices.size());
+    ImGui::Text("  voices %u", state.mixer.meter_voices.load(std::memory_order_relaxed));
   }
 
  private:
