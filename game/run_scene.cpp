@@ -14,6 +14,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/ui/overlay.hpp"
 #include "game/explosives/explosives.hpp"
+#include "game/graphics_settings.hpp"
 #include "game/paths.hpp"
 #include "game/scene_panel.hpp"
 #include "game/world/level_assets.hpp"
@@ -58,31 +59,67 @@ void lightFlash(const BlastFlash& flash, engine::Lighting& lighting) {
 }
 
 struct Session {
-  Session(const RunOptions& run_options, RunReport& run_report, World& run_world, engine::Platform& run_platform,
-          engine::Renderer& run_renderer, engine::Overlay& run_overlay, const LevelAssets& level)
+  Session(const RunOptions& run_options, const SceneConfig& run_scene, RunReport& run_report, World& run_world,
+          engine::Platform& run_platform, engine::Renderer& run_renderer, engine::Overlay& run_overlay,
+          const LevelAssets& level, const GraphicsSettings& run_graphics)
       : options(run_options),
+        loaded(run_scene),
         report(run_report),
         world(run_world),
         platform(run_platform),
         renderer(run_renderer),
         overlay(run_overlay),
-        assets(level) {}
+        assets(level),
+        graphics(run_graphics) {}
 
   const RunOptions& options;
+  const SceneConfig& loaded;  // the scene as the run was asked for (before the graphics preset)
   RunReport& report;
   World& world;
   engine::Platform& platform;
   engine::Renderer& renderer;
   engine::Overlay& overlay;
   const LevelAssets& assets;
+  GraphicsSettings graphics;
   engine::Profiler profiler;
   engine::InputState input;
   engine::Lighting lighting;
   BlastFlash flash;
   std::vector<std::uint8_t> pixels;
+  std::vector<std::uint8_t> scene_pixels;  // the scene FBO before it is scaled to the view's size
   std::vector<PlayerAction> actions;
   std::filesystem::path hook_screenshot;
 };
+
+// The size the player sees: the requested frame headless, the window's drawable otherwise. The
+// scene renders at the graphics' resolution scale of it.
+int viewWidth(const Session& s) { return s.options.headless ? std::clamp(s.options.width, 64, 8192) : s.platform.width; }
+int viewHeight(const Session& s) {
+  return s.options.headless ? std::clamp(s.options.height, 64, 8192) : s.platform.height;
+}
+int scaled(int size, const GraphicsSettings& graphics) {
+  return std::max(16, static_cast<int>(std::lround(static_cast<float>(size) * graphics.resolution_scale)));
+}
+
+// The graphics preset of world.scene on this renderer: its render-only keys set from the loaded
+// scene's, and the scene target resized to its resolution scale. False when the resize failed.
+bool applyGraphicsPreset(Session& s, std::string& error) {
+  s.graphics = resolveGraphics(s.world.scene.graphics, s.platform.gl_renderer);
+  applyGraphics(s.graphics, s.loaded, s.world.scene);
+  applyLiveParams(s.world);
+  return engine::resizeRenderer(s.renderer, scaled(viewWidth(s), s.graphics), scaled(viewHeight(s), s.graphics), error);
+}
+
+// The scene FBO at the view's size (scaled up when the graphics render it smaller) into s.pixels.
+void readView(Session& s) {
+  const int width = viewWidth(s), height = viewHeight(s);
+  if (s.renderer.width == width && s.renderer.height == height) {
+    engine::readSceneRgba(s.renderer, s.pixels);
+    return;
+  }
+  engine::readSceneRgba(s.renderer, s.scene_pixels);
+  engine::resizeRgba(s.scene_pixels, s.renderer.width, s.renderer.height, width, height, s.pixels);
+}
 
 // Input phase: SDL events move the camera; the mouse and the hooks decide the player's actions.
 // False when a resize failed (error set).
@@ -109,7 +146,8 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   for (PlayerAction action : s.actions) applyPlayerAction(s.world, action);
   s.hook_screenshot = std::move(frame_input.screenshot);
   if (input.resized && !s.options.headless)
-    return engine::resizeRenderer(s.renderer, s.platform.width, s.platform.height, error);
+    return engine::resizeRenderer(s.renderer, scaled(s.platform.width, s.graphics), scaled(s.platform.height, s.graphics),
+                                  error);
   return true;
 }
 
@@ -120,17 +158,18 @@ bool writeImages(Session& s, const engine::FrameView& view, bool last_frame, std
   const RunOptions& options = s.options;
   if (s.input.screenshot || !s.hook_screenshot.empty() ||
       (last_frame && (!options.screenshot.empty() || options.capture_last_frame))) {
-    engine::readSceneRgba(renderer, s.pixels);
+    readView(s);
   }
+  const int width = viewWidth(s), height = viewHeight(s);
   bool ok = true;
   if (!s.hook_screenshot.empty() &&
-      !engine::writePngBottomUp(s.hook_screenshot, renderer.width, renderer.height, s.pixels, error)) {
+      !engine::writePngBottomUp(s.hook_screenshot, width, height, s.pixels, error)) {
     ok = false;
   }
   if (s.input.screenshot) {
     const std::filesystem::path path = engine::nextFreeScreenshotPath(".", "fluiddemo");
     std::string write_error;
-    if (engine::writePngBottomUp(path, renderer.width, renderer.height, s.pixels, write_error)) {
+    if (engine::writePngBottomUp(path, width, height, s.pixels, write_error)) {
       std::printf("screenshot: %s\n", path.string().c_str());
     } else {
       std::fprintf(stderr, "fluiddemo: %s\n", write_error.c_str());
@@ -138,16 +177,17 @@ bool writeImages(Session& s, const engine::FrameView& view, bool last_frame, std
   }
   if (!last_frame) return ok;
   if (!options.screenshot.empty() &&
-      !engine::writePngBottomUp(options.screenshot, renderer.width, renderer.height, s.pixels, error)) {
+      !engine::writePngBottomUp(options.screenshot, width, height, s.pixels, error)) {
     ok = false;
   }
   if (options.capture_last_frame) {
-    s.report.frame_width = renderer.width;
-    s.report.frame_height = renderer.height;
+    s.report.frame_width = width;
+    s.report.frame_height = height;
     s.report.last_frame_rgba = s.pixels;
     // The same passes with nothing drawn but the clear, for the smoke test's blank check.
     engine::renderScene(renderer, view, s.lighting, {}, false);
-    engine::readSceneRgba(renderer, s.report.blank_frame_rgba);
+    readView(s);
+    s.report.blank_frame_rgba = s.pixels;
   }
   return ok;
 }
@@ -157,7 +197,10 @@ void drawUi(Session& s, const std::filesystem::path& content_dir) {
   const engine::ScopedPhase phase(s.profiler, engine::Phase::ui);
   if (s.overlay.mode == engine::OverlayMode::hidden) return;
   engine::beginOverlayFrame(s.overlay);
-  const auto [changed, restart] = drawGameOverlay(s.world, s.overlay, s.profiler, s.platform.gl_renderer);
+  char graphics[160];
+  std::snprintf(graphics, sizeof graphics, "%s; graphics %s, %dx%d of %dx%d", s.platform.gl_renderer.c_str(),
+                s.graphics.preset.c_str(), s.renderer.width, s.renderer.height, viewWidth(s), viewHeight(s));
+  const auto [changed, restart] = drawGameOverlay(s.world, s.overlay, s.profiler, graphics);
   if (s.options.hooks.draw_overlay) s.options.hooks.draw_overlay();
   engine::endOverlayFrame(s.overlay);
   engine::checkGl(s.renderer.errors, "overlay");
@@ -167,7 +210,7 @@ void drawUi(Session& s, const std::filesystem::path& content_dir) {
   const engine::FpsCamera camera = s.world.camera;
   std::string rebuild_error;
   detachWorldGpu(s.world);
-  if (buildWorld(edited, content_dir, s.world, rebuild_error)) {
+  if (buildWorld(edited, content_dir, s.world, rebuild_error) && applyGraphicsPreset(s, rebuild_error)) {
     s.world.camera = camera;
     s.report.systems_constructed = s.world.systems;
     attachWorldGpu(s.world, shaderDirectory(), content_dir);
@@ -303,14 +346,22 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     engine::Overlay overlay;
     engine::FramePasses passes;
     passes.shader_dir = shaderDirectory();
-    // llvmpipe (headless CI) pays for every shadow texel it clears; 1024 is plenty at 720p there.
-    const int shadow_size = options.headless ? 1024 : 2048;
-    if (engine::createRenderer(shaderDirectory(), fb_width, fb_height, renderer, error, shadow_size) &&
+    // The graphics preset for this renderer (game/graphics_settings.hpp): the scene target's scale,
+    // the shadow map, and the render-only keys it sets in the world's scene.
+    GraphicsSettings graphics = resolveGraphics(world.scene.graphics, platform.gl_renderer);
+    applyGraphics(graphics, scene, world.scene);
+    applyLiveParams(world);
+    report.graphics_preset = graphics.preset;
+    // Without a preset's own size: llvmpipe (headless CI) pays for every shadow texel it clears, and
+    // 1024 is plenty at 720p there.
+    const int shadow_size = graphics.shadow_size > 0 ? graphics.shadow_size : (options.headless ? 1024 : 2048);
+    if (engine::createRenderer(shaderDirectory(), scaled(fb_width, graphics), scaled(fb_height, graphics), renderer,
+                               error, shadow_size) &&
         loadLevelAssets(content_dir, world.scene.scene.text("level"), assets, error) &&
         engine::createOverlay(platform, overlay, error)) {
       attachWorldGpu(world, shaderDirectory(), content_dir);
       overlay.mode = options.show_ui ? engine::OverlayMode::compact : engine::OverlayMode::hidden;
-      Session session{options, report, world, platform, renderer, overlay, assets};
+      Session session{options, scene, report, world, platform, renderer, overlay, assets, graphics};
       code = runFrames(session, content_dir, passes, error);
       // The effects' GL objects are freed while the context is still current.
       detachWorldGpu(world);

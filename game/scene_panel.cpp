@@ -96,6 +96,7 @@ float widestLabel(const World& world) {
   measure(world.scene.camera);
   for (const SectionConfig& effect : world.scene.effects) measure(effect);
   measure(world.scene.scene);
+  measure(world.scene.graphics);
   return widest;
 }
 
@@ -124,7 +125,8 @@ std::pair<bool, bool> drawScenePanel(World& world, const engine::PanelPlacement&
   bool changed = editSection(world.scene.camera, "camera (start pose)");
   for (SectionConfig& effect : world.scene.effects) changed |= editSection(effect, effect.name.c_str());
   changed |= editSection(world.scene.scene, "scene");
-  ImGui::TextDisabled("counts, sizes and scene.* apply on restart");
+  changed |= editSection(world.scene.graphics, "graphics");
+  ImGui::TextDisabled("counts, sizes, scene.* and graphics.* apply on restart");
   ImGui::PopItemWidth();
   ImGui::PopTextWrapPos();
   const bool restart = ImGui::Button("Restart scene with these values");

@@ -1,5 +1,8 @@
 #include "engine/render/image_write.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <stb_image_write.h>
 
 #include <cerrno>
@@ -45,6 +48,32 @@ std::filesystem::path nextFreeScreenshotPath(const std::filesystem::path& dir, c
     if (!std::filesystem::exists(candidate, ec)) return candidate;
   }
   return dir / (stem + "-overflow.png");
+}
+
+void resizeRgba(std::span<const std::uint8_t> rgba, int width, int height, int out_width, int out_height,
+                std::vector<std::uint8_t>& out) {
+  out.assign(static_cast<std::size_t>(std::max(out_width, 0)) * static_cast<std::size_t>(std::max(out_height, 0)) * 4,
+             0);
+  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return;
+  const float sx = static_cast<float>(width) / static_cast<float>(out_width);
+  const float sy = static_cast<float>(height) / static_cast<float>(out_height);
+  for (int y = 0; y < out_height; ++y) {
+    const float fy = std::clamp((static_cast<float>(y) + 0.5f) * sy - 0.5f, 0.0f, static_cast<float>(height - 1));
+    const int y0 = static_cast<int>(fy), y1 = std::min(y0 + 1, height - 1);
+    const float wy = fy - static_cast<float>(y0);
+    for (int x = 0; x < out_width; ++x) {
+      const float fx = std::clamp((static_cast<float>(x) + 0.5f) * sx - 0.5f, 0.0f, static_cast<float>(width - 1));
+      const int x0 = static_cast<int>(fx), x1 = std::min(x0 + 1, width - 1);
+      const float wx = fx - static_cast<float>(x0);
+      for (int c = 0; c < 4; ++c) {
+        const auto at = [&](int px, int py) { return static_cast<float>(rgba[(static_cast<std::size_t>(py) * width + px) * 4 + c]); };
+        const float top = at(x0, y0) + (at(x1, y0) - at(x0, y0)) * wx;
+        const float bottom = at(x0, y1) + (at(x1, y1) - at(x0, y1)) * wx;
+        out[(static_cast<std::size_t>(y) * out_width + x) * 4 + c] =
+            static_cast<std::uint8_t>(std::lround(top + (bottom - top) * wy));
+      }
+    }
+  }
 }
 
 }  // namespace engine

@@ -45,6 +45,21 @@ const std::array kCameraParams = {
               "the player cannot move beyond these x, y, z (m): the level's edges"},
 };
 
+constexpr std::string_view kPresets[] = {"auto", "low", "medium", "high"};
+
+const std::array kGraphicsParams = {
+    ParamSpec{"preset",
+              ParamType::text,
+              0.0,
+              0.0,
+              {ParamType::text, 0.0, false, {}, "auto"},
+              "quality: low / medium / high (game/graphics_settings.cpp says what each sets), or auto: low on a "
+              "software renderer (llvmpipe), high on a GPU; applies on restart",
+              kPresets},
+    ParamSpec{"resolution_scale", ParamType::number, 0.0, 1.0, num(0.0),
+              "the scene renders at this fraction of the window's size and is scaled up; 0 = the preset's"},
+};
+
 }  // namespace
 
 std::span<const SectionSpec> sceneSchema() {
@@ -52,6 +67,7 @@ std::span<const SectionSpec> sceneSchema() {
     std::vector<SectionSpec> all = {
         SectionSpec{"scene", false, "simulation clock", kSceneParams},
         SectionSpec{"camera", false, "first-person camera", kCameraParams},
+        SectionSpec{"graphics", false, "rendering quality (never changes the simulation)", kGraphicsParams},
     };
     for (const EffectDesc* effect : effectRegistry())
       all.push_back(SectionSpec{effect->name, true, effect->doc, effect->params});

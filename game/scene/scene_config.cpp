@@ -283,6 +283,7 @@ std::string sectionFromJson(const SectionSpec& spec, const Json& object, const s
 SectionConfig* findConfigSection(SceneConfig& scene, std::string_view name) {
   if (name == "scene") return &scene.scene;
   if (name == "camera") return &scene.camera;
+  if (name == "graphics") return &scene.graphics;
   for (SectionConfig& effect : scene.effects) {
     if (effect.name == name) return &effect;
   }
@@ -361,18 +362,20 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
 
   const SectionSpec* scene_spec = findSection("scene");
   const SectionSpec* camera_spec = findSection("camera");
-  assert(scene_spec && camera_spec);
+  const SectionSpec* graphics_spec = findSection("graphics");
+  assert(scene_spec && camera_spec && graphics_spec);
   SceneConfig scene;
   scene.scene = defaultSection(*scene_spec);
   scene.camera = defaultSection(*camera_spec);
+  scene.graphics = defaultSection(*graphics_spec);
   bool has_effects = false;
   for (const auto& [key, value] : root.items()) {
     if (key == "description") {
       if (!value.is_string()) return {at(file_label, key) + "expected a string (got " + describe(value) + ")"};
       scene.description = value.get<std::string>();
-    } else if (key == "scene" || key == "camera") {
-      const SectionSpec& spec = key == "scene" ? *scene_spec : *camera_spec;
-      SectionConfig& section = key == "scene" ? scene.scene : scene.camera;
+    } else if (key == "scene" || key == "camera" || key == "graphics") {
+      const SectionSpec& spec = key == "scene" ? *scene_spec : (key == "camera" ? *camera_spec : *graphics_spec);
+      SectionConfig& section = key == "scene" ? scene.scene : (key == "camera" ? scene.camera : scene.graphics);
       if (std::string error = sectionFromJson(spec, value, file_label, key, section); !error.empty()) return {error};
     } else if (key == "effects") {
       has_effects = true;
@@ -397,7 +400,7 @@ SceneStatus parseSceneText(const std::string& json_text, const std::string& file
         (void)effect_value;
       }
     } else {
-      return {at(file_label, keyText(key)) + "unknown top-level key (known: description, scene, camera, effects)"};
+      return {at(file_label, keyText(key)) + "unknown top-level key (known: description, scene, camera, graphics, effects)"};
     }
   }
   if (!has_effects) return {at(file_label, "effects") + "missing (a scene must list its effects)"};

@@ -78,6 +78,7 @@ struct SceneConfig {
   std::string description;
   SectionConfig scene;                 // "scene" section (step, substeps, seed)
   SectionConfig camera;                // "camera" section
+  SectionConfig graphics;              // "graphics" section (quality preset, resolution scale): rendering only
   std::vector<SectionConfig> effects;  // listed effects only, in schema order
 
   bool has(std::string_view effect_name) const;

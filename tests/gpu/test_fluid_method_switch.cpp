@@ -88,3 +88,33 @@ TEST(FluidMethodSwitch, EachMethodRunsTheFountainHeadless) {
     }
   }
 }
+
+// The graphics preset (game/graphics_settings.hpp): auto draws llvmpipe at low, the scene at half
+// the frame's size, yet the captured frame is the requested size; the water is drawn at every
+// preset and no GL error occurs.
+TEST(GraphicsPresets, EachPresetDrawsTheFountainAtTheRequestedSize) {
+  setenv("SDL_VIDEODRIVER", "offscreen", 1);
+  game::RunOptions options;
+  options.width = 160;
+  options.height = 90;
+  options.headless = true;
+  options.frames = 60;
+  options.show_ui = false;
+  options.capture_last_frame = true;
+  options.fixed_frame_time = true;
+  for (const char* preset : {"auto", "low", "medium", "high"}) {
+    game::SceneConfig scene = fountain();
+    ASSERT_TRUE(game::applyOverride(scene, std::string("graphics.preset=") + preset).ok());
+    game::RunReport report;
+    std::string error;
+    ASSERT_EQ(game::runScene(scene, options, report, error), 0) << error;
+    EXPECT_EQ(report.gl_errors, 0) << preset;
+    EXPECT_EQ(report.frame_width, 160) << preset;
+    EXPECT_EQ(report.frame_height, 90) << preset;
+    EXPECT_EQ(report.last_frame_rgba.size(), 160u * 90u * 4u) << preset;
+    const bool software = report.gl_renderer.find("llvmpipe") != std::string::npos;
+    const std::string expected = std::string(preset) == "auto" ? (software ? "low" : "high") : preset;
+    EXPECT_EQ(report.graphics_preset, expected) << report.gl_renderer;
+    std::printf("[ metric ] preset %s -> %s on %s\n", preset, report.graphics_preset.c_str(), report.gl_renderer.c_str());
+  }
+}
