@@ -41,7 +41,8 @@ def main():
         for cube in cubes:
             png, table = os.path.join(tmp, f"s{cube}.png"), os.path.join(tmp, f"s{cube}.csv")
             subprocess.run([fluiddemo, "replay", replay, "--headless", "--no-ui", "--width", str(SIZE[0]), "--height",
-                            str(SIZE[1]), "--frames", str(STEP + 1), "--threads", "2", "--set",
+                            str(SIZE[1]), "--frames", str(STEP + 1), "--threads", "2", "--set", "graphics.preset=high",
+                            "--set",
                             f"fluid_surface.cube={cube}", "--screenshot-at", f"{STEP}:{png}", "--csv", table],
                            check=True, stdout=subprocess.DEVNULL)
             rows = list(csv.DictReader(open(table)))

@@ -370,7 +370,7 @@ bool renderOnlyOverride(std::string_view assignment, std::string& error) {
   // The blob's surface keys: how its goo is meshed and drawn, never how the body moves.
   constexpr std::array<std::string_view, 6> kBlobSurface = {"blob.async",     "blob.smoothing", "blob.cube",
                                                             "blob.threshold", "blob.colour",    "blob.visible"};
-  if (section == kRenderOnly) return true;
+  if (section == kRenderOnly || section == "graphics") return true;  // the graphics presets set render-only keys
   if (std::find(kBlobSurface.begin(), kBlobSurface.end(), path) != kBlobSurface.end()) return true;
   std::string keys;
   if (const SectionSpec* spec = findSection(kRenderOnly))
@@ -379,7 +379,8 @@ bool renderOnlyOverride(std::string_view assignment, std::string& error) {
   for (const std::string_view key : kBlobSurface) blob_keys += (blob_keys.empty() ? "" : ", ") + std::string(key);
   error = "--set " + std::string(assignment) + ": '" + std::string(path) +
           "' is not render-only (it could change the simulation the checkpoints hash); a replay accepts --set for " +
-          std::string(kRenderOnly) + ".* keys (" + keys + ") and the blob's surface keys (" + blob_keys + ") only";
+          std::string(kRenderOnly) + ".* keys (" + keys + "), graphics.* and the blob's surface keys (" + blob_keys +
+          ") only";
   return false;
 }
 

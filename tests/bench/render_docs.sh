@@ -29,7 +29,8 @@ for size in $sizes; do
     shots=()
     for s in $steps; do shots+=(--screenshot-at "$s:$tmp/$size.$method.$s.png"); done
     before=$(cut -d' ' -f1-3 /proc/loadavg)
-    "$exe" replay content/replays/fountain_tour.replay --headless --no-ui --width "${size%x*}" --height "${size#*x}" \
+    "$exe" replay content/replays/fountain_tour.replay --headless --no-ui --set graphics.preset=high \
+      --width "${size%x*}" --height "${size#*x}" \
       --frames "$replay_frames" "${sets[@]}" "${shots[@]}" --csv "$tmp/$size.$method.csv" > "$tmp/$size.$method.txt"
     echo "$before / $(cut -d' ' -f1-3 /proc/loadavg)" > "$tmp/$size.$method.load"
   done

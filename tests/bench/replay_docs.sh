@@ -27,7 +27,8 @@ for replay in fountain_tour crate_yard_tour; do
     png_args=""
     [ "$threads" = 2 ] && png_args="--png docs/replay_$replay.png --plot-width 1100 --plot-height 420"
     # shellcheck disable=SC2086
-    "$EXE" replay "content/replays/$replay.replay" --headless --no-ui --width "$WIDTH" --height "$HEIGHT" \
+    "$EXE" replay "content/replays/$replay.replay" --headless --no-ui --set graphics.preset=high \
+      --width "$WIDTH" --height "$HEIGHT" \
       --threads "$threads" --frames "$frames" --csv "$tmp/$replay.$threads.csv" $png_args --force \
       > "$tmp/$replay.$threads.txt"
     echo "$replay $threads $load_before $(cut -d' ' -f1-3 /proc/loadavg) $(grep '^checkpoints:' "$tmp/$replay.$threads.txt" | cut -d' ' -f2-)" >> "$tmp/runs.txt"
@@ -76,6 +77,7 @@ for replay in ["fountain_tour", "crate_yard_tour"]:
     print()
     n = len(tables[(replay, "1")][0])
     print(f"Command: `build/dev/game/fluiddemo replay content/replays/{replay}.replay --headless --no-ui "
+          "--set graphics.preset=high "
           f"--width {width} --height {height} --threads T --frames {n} --csv OUT.csv` "
           f"({n} frames; the plot is the 2-thread run).")
     print()
