@@ -551,7 +551,16 @@ void updateBlobBehaviour(BlobWorld& world, const BlobBehaviour& b, glm::vec3 tar
     for (int axis : {0, 2})
       if (world.keep_min[axis] + radius <= world.keep_max[axis] - radius)
         next[axis] = std::clamp(next[axis], world.keep_min[axis] + radius, world.keep_max[axis] - radius);
-    next.y = c.y;
+    // Vertically the anchor follows the core (the tentacles reaching up for the player's eye would
+    // otherwise lift the centroid, the anchor with it, and the body would float up at the player),
+    // rising at most kClimb: enough to get onto a kerb, not to levitate.
+    constexpr float kClimb = 0.2f;  // m/s
+    glm::vec3 core(0.0f);
+    std::size_t core_count = 0;
+    for (std::size_t i = 0; i < world.particles.size(); ++i)
+      if (world.particles.tentacle[i] < 0) core += world.particles.position[i], ++core_count;
+    const float core_y = core_count > 0 ? core.y / static_cast<float>(core_count) : c.y;
+    next.y = std::min(core_y, t.anchor.y + kClimb * dt);
     t.anchor_velocity = (next - t.anchor) / dt;
     t.anchor_velocity.y = 0.0f;
     t.anchor = next;

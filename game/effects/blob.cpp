@@ -494,19 +494,22 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     }
   }
 
-  // The catch as the player sees it: the goo grabs the camera and pulls it in, turning it to face
-  // the goo (the catch happened at the player's feet, out of view), and the screen goes goo-dark.
+  // The catch as the player sees it: the goo grabs the camera and pulls it in, down to kHold from its
+  // centre and kElevation above it on the player's side, turning it to face the goo (the catch
+  // happened at the player's feet, below the view), and the screen goes goo-dark. Close enough that
+  // the body and its tentacles fill the view, far enough that it is seen as a body, not a green wall.
   static void grab(BlobMonster& s, EffectLinks& links) {
-    constexpr float kHold = 0.7f;   // m from the goo's top the camera is pulled to
-    constexpr float kRate = 0.08f;  // of the remaining way per step: 92 % of it in half a second at 60 Hz
+    constexpr float kHold = 1.1f;        // m from the goo's centroid
+    constexpr float kElevation = 0.52f;  // rad (30 degrees) above it
+    constexpr float kRate = 0.08f;       // of the remaining way per step: 92 % of it in half a second at 60 Hz
     const glm::vec3 centre = fluid::blobCentroid(s.world.particles.position);
-    const glm::vec3 top = centre + glm::vec3(0.0f, 0.3f, 0.0f);
-    glm::vec3 away = links.player - top;
+    glm::vec3 away(links.player.x - centre.x, 0.0f, links.player.z - centre.z);
     const float len = glm::length(away);
-    away = len > 1e-4f && std::isfinite(len) ? away / len : glm::vec3(0.0f, 1.0f, 0.0f);
-    links.camera_pull = {top + away * kHold, centre, kRate};
+    away = len > 1e-4f && std::isfinite(len) ? away / len : glm::vec3(1.0f, 0.0f, 0.0f);
+    const glm::vec3 hold = centre + kHold * (std::cos(kElevation) * away + glm::vec3(0.0f, std::sin(kElevation), 0.0f));
+    links.camera_pull = {hold, centre, kRate};
     const float ramp = std::min(1.0f, s.caught_elapsed / 0.4f);
-    s.tint = glm::vec4(0.45f * s.params.colour, 0.6f * ramp);
+    s.tint = glm::vec4(0.45f * s.params.colour, 0.55f * ramp);
   }
 
   RigidBodies* bodies_;

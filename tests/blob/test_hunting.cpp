@@ -145,4 +145,32 @@ TEST(BlobHunting, TheChaseKeepsToTheStreet) {
   EXPECT_GE(c.z, -3.0f + 0.7f * radius);
 }
 
+TEST(BlobHunting, TheHunterStaysOnTheGroundWhileItsTentaclesReachUp) {
+  fluid::BlobWorld w = blobtest::restingBlob();
+  w.colliders.push_back(blobtest::ground());
+  const BlobBehaviour b = hunter(BlobBehaviourKind::chase);
+  // A player standing 1.5 m away, his eye 3.2 m up (the scene's start height), within reach_range:
+  // the tentacles reach up for it, and the body must not climb them.
+  const glm::vec3 eye(1.5f, 3.2f, 0.0f);
+  fluid::startBlobBehaviour(w, b, eye);
+  const float start_y = fluid::blobCentroid(w.particles.position).y;
+  float highest = start_y, core_highest = -1e30f;
+  for (int s = 0; s < 4 * 60; ++s) {
+    run(w, b, eye, w.params.step);
+    highest = std::max(highest, fluid::blobCentroid(w.particles.position).y);
+    float core = 0.0f;
+    int n = 0;
+    for (std::size_t i = 0; i < w.particles.size(); ++i)
+      if (w.particles.tentacle[i] < 0) core += w.particles.position[i].y, ++n;
+    core_highest = std::max(core_highest, core / static_cast<float>(n));
+  }
+  const float reach = mean(fluid::blobTentacleReach(w));
+  std::printf("[blob] hunter on the ground: centroid %.2f m high at the start, at most %.2f m (core at most %.2f m) "
+              "in 4 s while its tentacles reach %.2f m for an eye 3.2 m up\n",
+              start_y, highest, core_highest, reach);
+  EXPECT_GT(reach, 1.0f);  // they do reach for it
+  EXPECT_LT(core_highest, start_y + 0.15f);
+  EXPECT_TRUE(fluid::blobAllFinite(w.particles));
+}
+
 }  // namespace

@@ -122,7 +122,7 @@ TEST(BlobEffect, CatchingThePlayerPullsTheCameraInTintsTheScreenAndCountsTheRoun
   fluid::enterBlobState(blob->program, blob->machine, blob->world, chase, blob->target);
   const glm::vec3 start_eye = world.camera.position;
   const glm::vec3 c = fluid::blobCentroid(blob->world.particles.position);
-  world.camera.position = glm::vec3(c.x + 0.6f, 1.7f, c.z);  // the player walks into it
+  world.camera.position = glm::vec3(c.x + 0.85f, 1.7f, c.z);  // the player walks within its reach
   world.camera.pitch_degrees = 0.0f;                          // looking ahead: the goo is below the view
   const auto gooDistance = [&] {
     return glm::length(world.camera.position - fluid::blobCentroid(blob->world.particles.position));
@@ -144,8 +144,8 @@ TEST(BlobEffect, CatchingThePlayerPullsTheCameraInTintsTheScreenAndCountsTheRoun
       "[blob] catch: camera %.2f m from the goo's centroid -> %.2f m after 0.5 s, the goo %.0f deg -> %.0f deg off "
       "the view; screen tint alpha %.2f; banner '%s'\n",
       before, during, off_before, off_during, tint, banner.c_str());
-  EXPECT_LT(during, 0.7f * before);
-  EXPECT_LT(during, 1.2f);
+  EXPECT_LT(during, before - 0.25f);  // pulled in: to 1.1 m of the goo's centre (blob.cpp grab)
+  EXPECT_LT(during, 1.25f);
   EXPECT_LT(off_during, 20.0f);
   EXPECT_GT(off_before, 45.0f);
   EXPECT_GE(tint, 0.5f);
