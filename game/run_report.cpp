@@ -21,7 +21,8 @@ void printRunSummary(std::FILE* out, const SceneConfig& scene, const RunOptions&
   std::fprintf(out, "fluiddemo: scene '%s', %d frames, %llu simulation steps, %dx%d %s\n", scene.name.c_str(),
                report.frames_rendered, static_cast<unsigned long long>(report.simulation_steps), options.width,
                options.height, options.headless ? "headless" : "window");
-  std::fprintf(out, "renderer: %s (graphics %s)\n", report.gl_renderer.c_str(), report.graphics_preset.c_str());
+  std::fprintf(out, "renderer: %s (graphics %s, scene %dx%d)\n", report.gl_renderer.c_str(),
+               report.graphics_preset.c_str(), report.scene_width, report.scene_height);
   std::string systems;
   for (const std::string& system : report.systems_constructed) systems += (systems.empty() ? "" : ", ") + system;
   std::fprintf(out, "systems running: %s\n", systems.empty() ? "(none)" : systems.c_str());

@@ -233,6 +233,9 @@ bool afterFrame(Session& s, int frame, int steps) {
 
 void fillReport(const Session& s, std::uint64_t steps_done, RunReport& report) {
   report.simulation_steps = steps_done;
+  report.graphics_preset = s.graphics.preset;
+  report.scene_width = s.renderer.width;
+  report.scene_height = s.renderer.height;
   report.nonfinite_state = s.world.nonfinite_state;
   report.runtime_failures = s.world.failures.count;
   report.first_failure = s.world.failures.first;
@@ -351,7 +354,6 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
     GraphicsSettings graphics = resolveGraphics(world.scene.graphics, platform.gl_renderer);
     applyGraphics(graphics, scene, world.scene);
     applyLiveParams(world);
-    report.graphics_preset = graphics.preset;
     // Without a preset's own size: llvmpipe (headless CI) pays for every shadow texel it clears, and
     // 1024 is plenty at 720p there.
     const int shadow_size = graphics.shadow_size > 0 ? graphics.shadow_size : (options.headless ? 1024 : 2048);

@@ -80,6 +80,7 @@ struct RunReport {
   double mean_frame_ms = 0.0;
   std::string gl_renderer;      // GL_RENDERER string of the context used
   std::string graphics_preset;  // the graphics preset the run drew with (low, medium, high)
+  int scene_width = 0, scene_height = 0;  // the scene target it rendered at (the preset's resolution scale)
   int gl_errors = 0;            // GL errors seen by the engine's checks
   std::string nonfinite_state;  // empty, or which system/value went NaN/inf at which step
   // Systems that refused content at run time while the frames went on (World::failures).
