@@ -2,9 +2,10 @@
 """Writes the blob monster's measurements into README.md.
 
 Behaviours (between the blob_table markers): the `[blob]` lines the unit_blob tests print (tests/blob:
-each behaviour reaching its goal in a scripted headless run, asserted there as a number).
+each behaviour reaching its goal in a scripted headless run, asserted there as a number), then those
+of any further test executables named (unit_blob_game: the hunt in the game's street, the catch).
 
-    python3 scripts/blob_table.py build/dev/tests/blob/unit_blob [README.md]
+    python3 scripts/blob_table.py build/dev/tests/blob/unit_blob [build/dev/tests/game/unit_blob_game ...] [README.md]
 
 Cost (between the blob_cost markers): body step and step + meshing per frame from bench_blob
 (250 / 1,000 / 4,000 particles, 1 and 2 threads), and step + meshing per frame in the blob replay
@@ -78,19 +79,22 @@ def main():
         if len(sys.argv) < 4:
             sys.exit(__doc__)
         return cost(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "README.md")
-    exe = sys.argv[1]
-    readme = sys.argv[2] if len(sys.argv) > 2 else "README.md"
-    run = subprocess.run([exe], capture_output=True, text=True)
-    if run.returncode != 0:
-        sys.exit(f"blob_table: {exe} failed (exit {run.returncode}):\n{run.stdout[-2000:]}{run.stderr[-2000:]}")
+    exes = [a for a in sys.argv[1:] if not a.endswith(".md")]
+    readmes = [a for a in sys.argv[1:] if a.endswith(".md")]
+    readme = readmes[0] if readmes else "README.md"
     rows = []
-    for line in run.stdout.splitlines():
-        m = re.match(r"\[blob\] ([^:]+): (.*)$", line)
-        if m:
-            rows.append((m.group(1).strip(), m.group(2).strip().replace("|", "\\|")))
+    for exe in exes:
+        run = subprocess.run([exe], capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit(f"blob_table: {exe} failed (exit {run.returncode}):\n{run.stdout[-2000:]}{run.stderr[-2000:]}")
+        for line in run.stdout.splitlines():
+            m = re.match(r"\[blob\] ([^:]+): (.*)$", line)
+            if m:
+                rows.append((m.group(1).strip(), m.group(2).strip().replace("|", "\\|")))
     if not rows:
-        sys.exit(f"blob_table: {exe} printed no [blob] lines")
-    table = [BEGIN, "", f"Written by `python3 scripts/blob_table.py {exe}` (tests/blob, 1,000 particles unless named).", "",
+        sys.exit(f"blob_table: {' '.join(exes)} printed no [blob] lines")
+    table = [BEGIN, "", f"Written by `python3 scripts/blob_table.py {' '.join(exes)}` (tests/blob and the blob's game "
+             "tests, 1,000 particles unless named).", "",
              "| behaviour / check | measured |", "|---|---|"]
     table += [f"| {name} | {text} |" for name, text in rows]
     table += [""]
