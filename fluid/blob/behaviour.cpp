@@ -167,7 +167,8 @@ void layTentacles(BlobWorld& world, const BlobBehaviour& b, glm::vec3 target, fl
                                                  static_cast<float>(parts.size()));
   const float time = static_cast<float>(world.time);
   const bool in_range = b.reach_range <= 0.0f || glm::length(target - t.anchor) <= b.reach_range;
-  if (t.tentacle_extent.size() != t.tentacle_particles.size()) t.tentacle_extent.assign(t.tentacle_particles.size(), 0.0f);
+  if (t.tentacle_extent.size() != t.tentacle_particles.size())
+    t.tentacle_extent.assign(t.tentacle_particles.size(), 0.0f);
   for (std::size_t k = 0; k < t.tentacle_particles.size(); ++k) {
     const auto& chain = t.tentacle_particles[k];
     const glm::vec3 root = tentacleRoot(aim, static_cast<int>(k), b.tentacles);
@@ -437,8 +438,8 @@ BlobStatus validateBlobProgram(BlobProgram& program, const BlobParams& params) {
     checkRange(err, where, "curl", b.curl, 0.0f, 1.0f);
     checkRange(err, where, "stretch", b.stretch, 0.0f, 2.0f);
     if (!err.str().empty()) return {err.str()};
-    const bool has_tentacles = b.kind == BlobBehaviourKind::tentacles ||
-                               (b.kind == BlobBehaviourKind::chase && b.reach_range > 0.0f);
+    const bool has_tentacles =
+        b.kind == BlobBehaviourKind::tentacles || (b.kind == BlobBehaviourKind::chase && b.reach_range > 0.0f);
     if (has_tentacles &&
         static_cast<std::size_t>(b.tentacles * tentacleParticles(b, params)) * 2 > params.particle_count)
       return {"blob: " + where +

@@ -58,7 +58,7 @@ struct BlobMonster {
   std::vector<glm::vec3> start_column;  // where each round starts: the column in the pipe
   std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
   std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
-  std::vector<int> crate_of_collider;      // per collider after the level: index into RigidBodies::crates
+  std::vector<int> crate_of_collider;     // per collider after the level: index into RigidBodies::crates
   std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)
   glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
   float caught_timer = 0.0f;              // > 0 while the caught effect plays
@@ -68,8 +68,8 @@ struct BlobMonster {
   int round = 1;
   double round_seconds = 0.0;
   double last_round_seconds = 0.0;
-  float caught_elapsed = 0.0f;            // s since the catch, while the caught effect plays
-  glm::vec4 tint{0.0f};                   // the screen tint this step (engine::FrameBatches::screen_tint)
+  float caught_elapsed = 0.0f;        // s since the catch, while the caught effect plays
+  glm::vec4 tint{0.0f};               // the screen tint this step (engine::FrameBatches::screen_tint)
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;
   // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy).
@@ -84,7 +84,7 @@ struct BlobMonster {
   };
   std::unique_ptr<MeshJob> async_job;
   double mesh_worker_ms = 0.0;  // the worker's time on the surface drawn this frame (0 when synchronous)
-  std::string error;  // a refused step or mesh (the effect stops stepping on a refused step)
+  std::string error;            // a refused step or mesh (the effect stops stepping on a refused step)
 };
 
 }  // namespace game

@@ -62,7 +62,8 @@ void applyCameraPull(EffectLinks::CameraPull& pull, engine::FpsCamera& camera) {
   if (len > 1e-4f && std::isfinite(len)) {  // yaw and pitch as engine::cameraForward reads them
     const float yaw = glm::degrees(std::atan2(to.z, to.x));
     const float pitch = std::clamp(glm::degrees(std::asin(std::clamp(to.y / len, -1.0f, 1.0f))), -89.0f, 89.0f);
-    camera.yaw_degrees = std::remainder(camera.yaw_degrees + r * std::remainder(yaw - camera.yaw_degrees, 360.0f), 360.0f);
+    camera.yaw_degrees =
+        std::remainder(camera.yaw_degrees + r * std::remainder(yaw - camera.yaw_degrees, 360.0f), 360.0f);
     camera.pitch_degrees += r * (pitch - camera.pitch_degrees);
   }
   pull.rate = 0.0f;

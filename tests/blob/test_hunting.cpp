@@ -84,7 +84,8 @@ TEST(BlobHunting, TentaclesGrowTowardThePlayerPointAtHimCurlAndRetract) {
   EXPECT_LT(tips05, tips0 - 0.4f);  // they grow toward him, not all at once
   EXPECT_LT(tips2, tips0 - 1.0f);   // and come over a metre closer
   ASSERT_EQ(angles.size(), 4u);
-  EXPECT_LT(mean(angles) * kDegrees, 20.0f);  // they point at him (tips fanned by half the 0.35 rad spread, plus the curl)
+  // They point at him: the tips are fanned by half the 0.35 rad spread, plus the curl.
+  EXPECT_LT(mean(angles) * kDegrees, 20.0f);
   EXPECT_LT(largest(angles) * kDegrees, 25.0f);
   EXPECT_GT(wander, 0.05f);  // not rigid spikes
   EXPECT_LT(reach_after, 0.5f * reach_before);
@@ -137,9 +138,10 @@ TEST(BlobHunting, TheChaseKeepsToTheStreet) {
   run(w, b, outside, 8.0f);
   const glm::vec3 c = fluid::blobCentroid(w.particles.position);
   const float radius = fluid::blobBodyRadius(w.params);
-  std::printf("[blob] street edge: chasing a player at (10, -6) the centroid stops at (%.2f, %.2f) inside x, z <= 3 "
-              "(body radius %.2f m)\n",
-              c.x, c.z, radius);
+  std::printf(
+      "[blob] street edge: chasing a player at (10, -6) the centroid stops at (%.2f, %.2f) inside x, z <= 3 "
+      "(body radius %.2f m)\n",
+      c.x, c.z, radius);
   EXPECT_GT(c.x, 1.5f);  // it did go after him
   EXPECT_LE(c.x, 3.0f - 0.7f * radius);
   EXPECT_GE(c.z, -3.0f + 0.7f * radius);
@@ -165,9 +167,10 @@ TEST(BlobHunting, TheHunterStaysOnTheGroundWhileItsTentaclesReachUp) {
     core_highest = std::max(core_highest, core / static_cast<float>(n));
   }
   const float reach = mean(fluid::blobTentacleReach(w));
-  std::printf("[blob] hunter on the ground: centroid %.2f m high at the start, at most %.2f m (core at most %.2f m) "
-              "in 4 s while its tentacles reach %.2f m for an eye 3.2 m up\n",
-              start_y, highest, core_highest, reach);
+  std::printf(
+      "[blob] hunter on the ground: centroid %.2f m high at the start, at most %.2f m (core at most %.2f m) "
+      "in 4 s while its tentacles reach %.2f m for an eye 3.2 m up\n",
+      start_y, highest, core_highest, reach);
   EXPECT_GT(reach, 1.0f);  // they do reach for it
   EXPECT_LT(core_highest, start_y + 0.15f);
   EXPECT_TRUE(fluid::blobAllFinite(w.particles));
