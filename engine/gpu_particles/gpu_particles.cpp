@@ -81,7 +81,9 @@ void sortStage(std::uint32_t n, std::uint32_t step, std::uint32_t& p, std::uint3
 }
 
 GLuint buildUpdateVariant(const std::filesystem::path& dir, unsigned variant, std::string& error) {
-  std::string defines;
+  // The collider and map array sizes come from the one place that bounds them (gpu_particles.hpp).
+  std::string defines = "#define MAX_COLLIDERS " + std::to_string(kMaxGpuColliders) + "\n#define MAX_MAPS " +
+                        std::to_string(kMaxGpuDepthMaps) + "\n";
   if (variant & 1u) defines += "#define ATTRACTORS\n";
   if (variant & 2u) defines += "#define DRAG\n";
   if (variant & 4u) defines += "#define FLOW\n";

@@ -136,8 +136,11 @@ struct GpuDepthMapView {
 // The view of one fluid::DepthMap (no copy: the map must outlive the upload call).
 GpuDepthMapView gpuDepthMapView(const fluid::DepthMap& map);
 
-inline constexpr int kMaxGpuColliders = 4;
-inline constexpr int kMaxGpuDepthMaps = 16;  // over all colliders
+// A level of a few models each seen along three axes (the blob's street with its four building
+// fronts: 7 colliders, 22 maps). The maps' matrices are uniforms: 32 of them and the rest stay
+// within GL 3.3's 1024 fragment uniform components' order (llvmpipe allows far more).
+inline constexpr int kMaxGpuColliders = 8;
+inline constexpr int kMaxGpuDepthMaps = 32;  // over all colliders
 
 struct GpuColliderDesc {
   std::span<const GpuDepthMapView> maps;

@@ -101,7 +101,10 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   auto effect = std::make_unique<SpriteParticlesEffect>(ctx.links.fluid);
   const SpriteParticleParams params = spriteParamsFrom(section, ctx.links.gravity, ctx.links.level.nozzle);
   initSpriteParticles(effect->state, params, params.max_particles, ctx.seed ^ 0x9e3779b9u);
-  effect->state.level_colliders = ctx.links.colliders;  // null without sph_fluid: loaded at attach
+  effect->state.level = ctx.scene.scene.text("level");
+  // The level's colliders when an effect built before loaded them (sph_fluid, explosives); else at attach.
+  if (ctx.links.colliders && ctx.links.colliders->level == effect->state.level)
+    effect->state.level_colliders = ctx.links.colliders;
   return effect;
 }
 

@@ -156,7 +156,7 @@ void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params,
 }
 
 bool loadSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error) {
-  if (!ensureFountainColliders(content_dir, s.level_colliders, error)) return false;
+  if (!ensureLevelColliders(content_dir, s.level, s.level_colliders, error)) return false;
   s.collider_names.clear();
   for (const fluid::CachedCollider& part : s.level_colliders->parts) s.collider_names.push_back(part.name);
   s.bake_ms = s.level_colliders->load_ms;

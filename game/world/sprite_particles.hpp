@@ -87,6 +87,7 @@ struct SpriteParticles {
   // The level's baked colliders (content/colliders: ground, basin, statue; collider space =
   // world), shared with the SPH fluid (EffectLinks::colliders) or loaded at attach.
   std::shared_ptr<const LevelColliders> level_colliders;
+  std::string level = "fountain";  // the scene's level, whose colliders the sprites bounce on
   std::vector<std::string> collider_names;
   double bake_ms = 0.0;  // loading them (a stale file is re-baked)
   // Counters for the overlay and tests.
@@ -105,7 +106,7 @@ struct SpriteParticles {
 void initSpriteParticles(SpriteParticles& s, const SpriteParticleParams& params, std::uint32_t capacity,
                          std::uint64_t seed);
 
-// The fountain's baked colliders (ensureFountainColliders) into s.level_colliders unless set;
+// The baked colliders of s.level (ensureLevelColliders) into s.level_colliders unless set;
 // no GL. False + error naming the file on failure.
 bool loadSpriteColliders(SpriteParticles& s, const std::filesystem::path& content_dir, std::string& error);
 

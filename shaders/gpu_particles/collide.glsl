@@ -17,8 +17,7 @@
 #define PRECISE
 #endif
 
-#define MAX_COLLIDERS 4
-#define MAX_MAPS 16
+// MAX_COLLIDERS and MAX_MAPS are #defined by the engine (kMaxGpuColliders, kMaxGpuDepthMaps).
 
 uniform usamplerBuffer u_map_words;
 uniform samplerBuffer u_normals;  // RGB float32 normal index tables, 3 floats per texel

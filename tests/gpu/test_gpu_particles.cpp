@@ -526,9 +526,10 @@ TEST_F(GpuParticlesTest, BadColliderInputIsRejectedWithAClearError) {
   EXPECT_FALSE(setColliders(system_, std::span<const GpuColliderDesc>(&no_table, 1), error));
   EXPECT_NE(error.find("normal_table has 0 floats"), std::string::npos) << error;
   EXPECT_EQ(system_.collider_count, 0);
-  std::vector<GpuColliderDesc> five(5, ground.gpu());
-  EXPECT_FALSE(setColliders(system_, five, error));
-  EXPECT_NE(error.find("at most 4 colliders"), std::string::npos) << error;
+  std::vector<GpuColliderDesc> too_many(engine::kMaxGpuColliders + 1, ground.gpu());
+  EXPECT_FALSE(setColliders(system_, too_many, error));
+  EXPECT_NE(error.find("at most " + std::to_string(engine::kMaxGpuColliders) + " colliders"), std::string::npos)
+      << error;
   FlowFieldDesc flow;
   flow.size = {2, 2, 2};
   std::vector<glm::vec3> v(7, glm::vec3(0.0f));
