@@ -86,9 +86,11 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
     const engine::IndexAllocator& a = s.gpu.allocator;
     ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
                 s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
-    ImGui::Text("  born: mist %llu, spray %llu (%u this step), dropped (budget full) %llu",
+    ImGui::Text("  born: mist %llu, spray %llu (%u this step), blasts %llu (%llu shock rings on the water), "
+                "dropped (budget full) %llu",
                 static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
-                s.spray_last_step, static_cast<unsigned long long>(s.dropped));
+                s.spray_last_step, static_cast<unsigned long long>(s.born_blast),
+                static_cast<unsigned long long>(s.shock_rings), static_cast<unsigned long long>(s.dropped));
     ImGui::Text("  sort pass %u of %u, colliders loaded in %.0f ms", s.gpu.sort_step,
                 engine::sortPassCount(s.gpu.capacity), s.bake_ms);
   }

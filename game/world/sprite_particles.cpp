@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 namespace game {
@@ -28,7 +29,7 @@ float clampPotential(float value, float lo, float hi) {
 }
 
 std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& p) {
-  std::vector<engine::ParticleTypeDesc> types(5);
+  std::vector<engine::ParticleTypeDesc> types(6);
   const float d = 2.0f * p.size;  // key-frame sizes are diameters
   // Mist: pale, grows a little as it disperses, fades out.
   types[kMistType].keys = {{{glm::vec4(0.86f, 0.91f, 0.96f, 0.55f), d},
@@ -62,6 +63,14 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
                             {glm::vec4(0.40f, 0.12f, 0.05f, 0.0f), 30.0f * d}}};
   types[kFireType].gravity_scale = -0.3f;
   types[kFireType].damping = 6.0f;
+  // Shock ring: white foam torn off the surface, growing as it spreads; the air slows its rush so
+  // the ring expands fast and stops within a second, riding just above the water.
+  types[kRingType].keys = {{{glm::vec4(0.97f, 0.98f, 1.00f, 0.95f), 4.0f * d},
+                            {glm::vec4(0.95f, 0.97f, 1.00f, 0.85f), 7.0f * d},
+                            {glm::vec4(0.92f, 0.95f, 0.99f, 0.50f), 10.0f * d},
+                            {glm::vec4(0.90f, 0.94f, 0.98f, 0.0f), 12.0f * d}}};
+  types[kRingType].gravity_scale = 0.25f;
+  types[kRingType].damping = 2.5f;
   return types;
 }
 
@@ -82,10 +91,52 @@ constexpr BlastBurst kBlastBursts[] = {
     {engine::EmitterKind::mist, 0.2f, 2.5f, 0.4f, 90, 3.5f, kSmokeType, 0x5bd1e995ull},
 };
 
-// Debris, a fireball and smoke at each blast's centre, seeded by the step and the blast.
-void emitBlastSprites(SpriteParticles& s, std::span<const fluid::Blast> blasts) {
+// The water's surface over a blast: the highest SPH particle within `radius` across the blast's
+// centre and within `depth` above or below it, when at least `min_particles` are there (a blast in
+// or on the water; a blast in the air or on dry stone has none).
+bool waterSurfaceAt(const SphFluid& sph, glm::vec3 centre, glm::vec3& surface) {
+  constexpr float kRadius = 0.6f, kDepth = 0.8f;
+  constexpr int kMinParticles = 12;
+  const fluid::ParticleStore& p = sph.world.particles;
+  int found = 0;
+  float top = -std::numeric_limits<float>::max();
+  for (std::size_t i = 0; i < p.sphCount(); ++i) {
+    const glm::vec3 d = p.position[i] - centre;
+    if (d.x * d.x + d.z * d.z > kRadius * kRadius || std::abs(d.y) > kDepth) continue;
+    ++found;
+    top = std::max(top, p.position[i].y);
+  }
+  if (found < kMinParticles) return false;
+  surface = glm::vec3(centre.x, top, centre.z);
+  return true;
+}
+
+// The shock ring where a blast meets the water (issue 35): a crown of foam thrown out nearly flat
+// from a ring around the blast on the surface, so the push the water already takes reads as a ring.
+void emitShockRing(SpriteParticles& s, const SphFluid& sph, const fluid::Blast& blast, std::uint64_t seed) {
+  glm::vec3 surface;
+  if (!waterSurfaceAt(sph, blast.centre, surface)) return;
+  ++s.shock_rings;
+  engine::EmitterDesc ring;
+  ring.kind = engine::EmitterKind::splash;
+  ring.position = surface + glm::vec3(0.0f, 0.02f, 0.0f);
+  ring.direction = glm::vec3(0.0f, 1.0f, 0.0f);
+  ring.spread = glm::radians(78.0f);  // mostly outward, a little up
+  ring.speed = 6.0f;
+  ring.radius = blast.core_radius;
+  ring.count = 200;
+  ring.lifetime = 0.8f;
+  ring.type = kRingType;
+  ring.seed = seed ^ 0x165667b19e3779f9ull;
+  engine::emit(ring, s.births);
+}
+
+// Debris, a fireball and smoke at each blast's centre, and a shock ring where it meets the water,
+// seeded by the step and the blast.
+void emitBlastSprites(SpriteParticles& s, const SphFluid* sph, std::span<const fluid::Blast> blasts) {
   for (std::size_t k = 0; k < blasts.size(); ++k) {
     const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
+    if (sph != nullptr && sph->error.empty()) emitShockRing(s, *sph, blasts[k], seed);
     for (const BlastBurst& burst : kBlastBursts) {
       engine::EmitterDesc desc;
       desc.kind = burst.kind;
@@ -280,7 +331,7 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
   const std::size_t before_blasts = s.births.size();
-  emitBlastSprites(s, blasts);
+  emitBlastSprites(s, sph, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
   // spawn takes the batch in order until the budget is full: mist, then spray, then blast sprites.
   // A blast's own sprites, born in its step, do not take its push (update.frag): they start as a

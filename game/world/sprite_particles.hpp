@@ -71,6 +71,7 @@ inline constexpr std::uint32_t kSprayType = 1;
 inline constexpr std::uint32_t kDebrisType = 2;  // explosion debris: dark grit thrown out, falls
 inline constexpr std::uint32_t kSmokeType = 3;   // explosion smoke: grows, rises slowly, fades
 inline constexpr std::uint32_t kFireType = 4;    // explosion fireball: a bright burst that rises and dies within half a second
+inline constexpr std::uint32_t kRingType = 5;    // a blast's shock ring on the water: white foam rushing out, slowing
 
 struct SpriteParticles {
   SpriteParticleParams params;
@@ -92,6 +93,7 @@ struct SpriteParticles {
   double bake_ms = 0.0;  // loading them (a stale file is re-baked)
   // Counters for the overlay and tests.
   std::uint64_t born_mist = 0, born_spray = 0, born_blast = 0;
+  std::uint64_t shock_rings = 0;  // blasts that met the water and threw a ring of foam
   std::uint64_t dropped = 0;  // births refused because the budget was full
   std::uint32_t spray_last_step = 0;
   // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the live
