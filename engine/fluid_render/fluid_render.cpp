@@ -47,6 +47,8 @@ void setShading(GLuint prog, const WaterParams& p) {
   glUniform3fv(loc(prog, "u_sky_horizon"), 1, glm::value_ptr(p.sky_horizon));
   glUniform3fv(loc(prog, "u_light"), 1, glm::value_ptr(light));
   glUniform1f(loc(prog, "u_shininess"), std::clamp(p.shininess, 1.0f, 4096.0f));
+  glUniform3fv(loc(prog, "u_flash_position"), 1, glm::value_ptr(p.flash_position));
+  glUniform3fv(loc(prog, "u_flash_colour"), 1, glm::value_ptr(p.flash_colour));
   glUniform3fv(loc(prog, "u_goo_colour"), 1, glm::value_ptr(p.goo_colour));
   glUniform1f(loc(prog, "u_goo_density"), std::clamp(p.goo_density, 0.0f, 1000.0f));
   glUniform1f(loc(prog, "u_goo_min_coverage"), std::clamp(p.goo_min_coverage, 0.0f, 1.0f));

@@ -45,6 +45,10 @@ struct WaterParams {
   glm::vec3 sky_horizon{0.85f, 0.9f, 0.95f};
   glm::vec3 light_direction{0.3f, 1.0f, 0.4f};  // towards the light, world (normalised inside)
   float shininess = 96.0f;
+  // An explosion's flash (engine::Lighting's point light): its position and radiance at 1 m;
+  // zero colour = none.
+  glm::vec3 flash_position{0.0f};
+  glm::vec3 flash_colour{0.0f};
   glm::vec3 goo_colour{0.35f, 0.8f, 0.2f};
   // Goo: extinction per metre of body along the pixel's ray (coverage 1 − exp(−density·d), at
   // least `opacity`'s floor below), clamped 0..1000.

@@ -141,6 +141,8 @@ void setWaterShading(GLuint prog, const WaterParams& p) {
   setUniform(prog, "u_sky_horizon", p.sky_horizon);
   setUniform(prog, "u_light", light);
   setUniform(prog, "u_shininess", std::clamp(p.shininess, 1.0f, 4096.0f));
+  setUniform(prog, "u_flash_position", p.flash_position);
+  setUniform(prog, "u_flash_colour", p.flash_colour);
 }
 
 }  // namespace engine

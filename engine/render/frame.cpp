@@ -105,6 +105,8 @@ void drawWater(Renderer& renderer, WaterRenderers& pass, const FrameView& view, 
   water.sky_zenith = lighting.sky_zenith;
   water.sky_horizon = lighting.sky_horizon;
   water.light_direction = lighting.sun_direction;
+  water.flash_position = lighting.flash_position;
+  water.flash_colour = lighting.flash_colour;
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
   if (batch.method == FluidMethod::screen_space) {
     ScreenSpaceParams ss;

@@ -53,7 +53,8 @@ void main() {
   float glow = thin * (0.3 + 0.7 * pow(max(dot(-to_eye, u_light), 0.0), 4.0));
   vec3 colour = albedo * (0.25 + 0.75 * diffuse + 0.6 * glow);
   float f = fresnel(dot(n, to_eye));
-  colour = mix(colour, sky(reflect(-to_eye, n)), 0.5 * f) + vec3(0.6 * specular(n, to_eye));
+  colour = mix(colour, sky(reflect(-to_eye, n)), 0.5 * f) + vec3(0.6 * specular(n, to_eye)) +
+           flashLight(v_world, n, to_eye);
   float coverage = max(1.0 - thin, u_goo_min_coverage);
   out_colour = vec4(colour, mix(coverage, 1.0, f));
 }

@@ -45,6 +45,7 @@ void main() {
   vec3 behind = texture(u_scene_colour, uv_refracted).rgb;
   vec3 transmitted = behind * exp(-u_absorption * thickness);
   float f = fresnel(dot(n, to_eye));
-  vec3 colour = mix(transmitted, sky(reflect(-to_eye, n)), f) + vec3(specular(n, to_eye));
+  vec3 colour = mix(transmitted, sky(reflect(-to_eye, n)), f) + vec3(specular(n, to_eye)) +
+                flashLight(v_world, n, to_eye);
   out_colour = vec4(colour, mix(u_opacity, 1.0, f));
 }

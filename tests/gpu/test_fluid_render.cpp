@@ -116,6 +116,39 @@ TEST_F(FluidRenderTest, FluidCoversTheExpectedPixelsOnly) {
               covered_changed, outside_changed);
 }
 
+// An explosion's flash lights the water (issue 35 item 1): with the point light at the eye's side
+// of the surface, the covered pixels brighten, the brightest of them by far, and nothing outside
+// the water changes (the backdrop here is not a mesh the flash lights).
+TEST_F(FluidRenderTest, AFlashLightsTheWaterAndOnlyTheWater) {
+  const WaterParams calm;
+  WaterParams flash;
+  glm::vec3 centre(0.0f);
+  for (const glm::vec3& p : scene_.mesh.positions) centre += p;
+  centre /= static_cast<float>(scene_.mesh.positions.size());
+  flash.flash_position = centre + 0.5f * glm::normalize(scene_.camera.eye - centre);  // between the eye and the water
+  flash.flash_colour = glm::vec3(60.0f, 37.0f, 17.0f);  // the game's peak (run_scene's lightFlash)
+  const auto before = render(calm);
+  const auto lit = render(flash);
+  const auto mask = coverage();
+  std::size_t covered = 0, brighter = 0, outside_changed = 0;
+  int largest = 0;
+  for (std::size_t p = 0; p < mask.size(); ++p) {
+    const int gain = (lit[p * 4] + lit[p * 4 + 1] + lit[p * 4 + 2]) - (before[p * 4] + before[p * 4 + 1] + before[p * 4 + 2]);
+    if (mask[p]) {
+      ++covered;
+      brighter += gain > 6;
+      largest = std::max(largest, gain);
+    } else {
+      outside_changed += pixelDiff(before, lit, p) > 0;
+    }
+  }
+  std::printf("[ metric ] flash: %zu of %zu water pixels brighter, the largest gain %d (sum of RGB)\n", brighter,
+              covered, largest);
+  EXPECT_GE(brighter, covered / 2);
+  EXPECT_GT(largest, 150);
+  EXPECT_EQ(outside_changed, 0u);
+}
+
 // Refraction moves the stripes behind the water: with refraction on vs off, covered pixels
 // differ (the lookup is shifted), and the scene outside the water is identical.
 TEST_F(FluidRenderTest, RefractionShiftsTheBackgroundWhereExpected) {
