@@ -560,6 +560,7 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   s.start_column =
       fluid::blobColumn(s.world.params, s.params.grate - glm::vec3(0.0f, s.params.spacing, 0.0f), s.params.pipe_radius);
   startRound(s);
+  ctx.links.blob = &s.world;  // the audio effect hears the goo's impacts
   return effect;
 }
 
