@@ -129,6 +129,10 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   engine::pollInput(s.platform, input, engine::overlayWantsMouse(s.overlay), engine::overlayWantsKeyboard(s.overlay),
                     &engine::overlayProcessEvent);
   if (input.toggle_ui) s.overlay.mode = engine::nextOverlayMode(s.overlay.mode);
+  // M mutes: the audio effect's `mute` key, flipped live as the overlay's knobs are.
+  if (const SectionConfig* audio = s.world.scene.effect("audio"); input.toggle_mute && audio != nullptr)
+    if (applyOverride(s.world.scene, audio->boolean("mute") ? "audio.mute=false" : "audio.mute=true").ok())
+      applyLiveParams(s.world);
   engine::CameraInput camera_input;
   camera_input.forward = (input.forward ? 1.0f : 0.0f) - (input.back ? 1.0f : 0.0f);
   camera_input.right = (input.right ? 1.0f : 0.0f) - (input.left ? 1.0f : 0.0f);

@@ -98,6 +98,7 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
                bool (*event_hook)(const SDL_Event*)) {
   input.mouse_dx = input.mouse_dy = 0.0f;
   input.left_click = input.throw_explosive = input.toggle_ui = input.screenshot = input.resized = false;
+  input.toggle_mute = false;
   SDL_Event event;
   while (SDL_PollEvent(&event)) {
     if (event_hook != nullptr) event_hook(&event);
@@ -126,6 +127,7 @@ void pollInput(Platform& platform, InputState& input, bool ui_wants_mouse, bool 
           }
           if (key == SDLK_TAB && !ui_wants_keyboard) input.mouse_look = !input.mouse_look;
           if (key == SDLK_g && !ui_wants_keyboard) input.aiming = true;
+          if (key == SDLK_m && !ui_wants_keyboard) input.toggle_mute = true;
         }
         // Aim while G is held, throw on its release (the arc shows where the charge will land).
         if (!down && key == SDLK_g && input.aiming) {

@@ -35,12 +35,13 @@ struct InputState {
   bool forward = false, back = false, left = false, right = false, up = false, down = false;
   bool fast = false;                       // shift
   float mouse_dx = 0.0f, mouse_dy = 0.0f;  // pixels since the last poll (relative mode)
-  bool mouse_look = false;                 // right button held, or relative mode toggled with Tab/M
+  bool mouse_look = false;                 // right button held, or relative mode toggled with Tab
   bool left_click = false;                 // a left press happened this frame
   bool aiming = false;                     // G or the middle button held: the aim arc shows
   bool throw_explosive = false;            // G or the middle button released this frame: the throw
   bool toggle_ui = false;                  // F1 pressed this frame
   bool screenshot = false;                 // F12 pressed this frame
+  bool toggle_mute = false;                // M pressed this frame (the audio effect's mute)
   bool resized = false;
 };
 
