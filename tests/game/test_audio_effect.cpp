@@ -170,6 +170,25 @@ TEST(AudioEffect, SplashesAreLouderAfterABlastInThePool) {
   EXPECT_GT(blasted.loudest, 2.0 * calm.loudest);
 }
 
+// The goo (issue 39 item 4): the blob's particle impacts squelch, with the water's bubble machinery
+// shifted down (goo_pitch) and damped more: every goo bubble sounds below the water's highest note.
+TEST(AudioEffect, TheGooSquelchesLowerThanTheWater) {
+  game::SceneConfig scene;
+  ASSERT_TRUE(game::loadSceneFile(game::scenesDir() / "blob_monster.json", scene).ok());
+  game::World world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), world, error)) << error;
+  ASSERT_NE(world.links.blob, nullptr);
+  const std::vector<float> out = stepAndRender(world, 600);  // it rises out of the sewer and reaches out
+  const engine::audio::KindStats& goo = stats(world, SoundKind::goo);
+  EXPECT_GT(goo.events, 0u);
+  EXPECT_GT(goo.peak, 0.0f);
+  EXPECT_GT(goo.min_frequency, 0.0f);
+  // The water's top note is its smallest bubble's Minnaert pitch; the goo's smallest is radius_min / goo_pitch.
+  EXPECT_LT(goo.max_frequency, 0.5f * engine::audio::minnaertFrequency(0.0012f));
+  EXPECT_TRUE(allFiniteUnderFullScale(out));
+}
+
 // The fountain tour's first 150 steps offline, through the replay runner as `replay --wav` runs
 // it, at 1 and at 2 threads: the same samples, bit for bit, and water is heard.
 TEST(AudioEffect, TheOfflineRenderIsTheSameAtAnyThreadCount) {
