@@ -72,8 +72,8 @@ struct MixerParams {
 
 // Per kind of sound, over everything rendered so far.
 struct KindStats {
-  std::uint64_t events = 0;         // events queued
-  std::uint64_t dropped = 0;        // not voiced (no free voice and quieter than every voice)
+  std::uint64_t events = 0;   // events queued
+  std::uint64_t dropped = 0;  // not voiced (bad, inaudible, or quieter than every voice) or cut short by a louder one
   std::uint64_t active_frames = 0;  // frames with at least one voice of the kind sounding
   double sum_squares = 0.0;         // of the kind's own mono sum (after volume, before the limiter), active frames
   float peak = 0.0f;                // largest |sample| of the same

@@ -59,7 +59,8 @@ struct AudioParams {
   float crate_min_impulse = 6.0f;  // N s
   float splash_gain = 2.0f;
   float blast_gain = 1.0f;
-  float goo_gain = 1.5f;
+  float goo_gain = 0.6f;
+  float goo_rate = 0.25f;
   float goo_damping = 4.0f;
   float goo_pitch = 0.35f;  // the goo's bubbles sound at this fraction of the water's pitch
   float speed_of_sound = 343.0f;
@@ -99,6 +100,8 @@ const ParamTable<AudioParams>& table() {
       param<&P::splash_gain>("splash_gain", 0.0, 20.0, "a crate landing in water, relative to a drop"),
       param<&P::blast_gain>("blast_gain", 0.0, 10.0, "a blast's amplitude at 1 m (linear, before the limiter)"),
       param<&P::goo_gain>("goo_gain", 0.0, 20.0, "the goo's squelches, relative to the water's bubbles"),
+      param<&P::goo_rate>("goo_rate", 0.0, 20.0,
+                          "the goo's bubbles per impact, relative to the water's (the body is always moving)"),
       param<&P::goo_damping>("goo_damping", 0.1, 50.0, "the goo's bubbles decay this many times faster"),
       param<&P::goo_pitch>("goo_pitch", 0.05, 2.0, "the goo's bubbles at this fraction of the water's pitch"),
       param<&P::speed_of_sound>("speed_of_sound", 0.0, 10000.0, "m/s: the delay of distant sounds; 0 = none"),
@@ -143,6 +146,7 @@ engine::audio::BubbleParams gooBubbles(const AudioParams& p) {
   b.radius_min /= p.goo_pitch;
   b.radius_max /= p.goo_pitch;
   b.amplitude *= p.goo_gain;
+  b.rate_scale *= p.goo_rate;
   b.damping = p.goo_damping;
   return b;
 }
