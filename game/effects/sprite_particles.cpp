@@ -37,6 +37,9 @@ const ParamTable<SpriteParticleParams>& table() {
                                        "rho/rho0 at or below which an SPH particle counts as at the free surface"),
       param<&P::spray_lifetime>("spray_lifetime", 0.1, 60.0, "spray sprite lifetime (s, +-25%)"),
       param<&P::spray_max_per_step>("spray_max_per_step", 0, 100000, "cap on spray births per step"),
+      param<&P::blast_debris>("blast_debris",
+                              "a blast throws dark grit besides its fireball and smoke (the blob's street: off, its "
+                              "sewer's rim lets fast grit through)"),
   };
   return rows;
 }

@@ -138,6 +138,7 @@ void emitBlastSprites(SpriteParticles& s, const SphFluid* sph, std::span<const f
     const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
     if (sph != nullptr && sph->error.empty()) emitShockRing(s, *sph, blasts[k], seed);
     for (const BlastBurst& burst : kBlastBursts) {
+      if (burst.type == kDebrisType && !s.params.blast_debris) continue;
       engine::EmitterDesc desc;
       desc.kind = burst.kind;
       desc.position = blasts[k].centre + glm::vec3(0.0f, burst.rise, 0.0f);

@@ -56,6 +56,7 @@ struct SpriteParticleParams {
   float spray_surface_density = 0.9f;  // ρ/ρ0 at or below which a particle counts as at the free surface
   float spray_lifetime = 1.2f;         // s (±25 %)
   int spray_max_per_step = 200;        // cap on spray births per step
+  bool blast_debris = true;            // a blast throws grit too (off where it would fall into a level's holes)
   // From the world, not the scene section: the particles' gravity and the level's nozzle.
   glm::vec3 gravity{0.0f};
   glm::vec3 nozzle{0.0f};
