@@ -25,8 +25,8 @@ bool sameParams(const game::SpriteParticleParams& a, const game::SpriteParticleP
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
-// Every number/integer row of the schema's sprite_particles section reaches the params struct
-// (except the budget, fixed at construction): changing it changes the params.
+// Every number/integer/boolean row of the schema's sprite_particles section reaches the params
+// struct (except the budget, fixed at construction): changing it changes the params.
 TEST(SpriteParams, EverySchemaRowIsReadIntoTheStruct) {
   const game::SceneConfig defaults = parse(R"({"effects": {"sprite_particles": {}}})");
   const game::SpriteParticleParams base = paramsOf(defaults);
@@ -37,14 +37,15 @@ TEST(SpriteParams, EverySchemaRowIsReadIntoTheStruct) {
     if (row.key == "max_particles") continue;
     game::SceneConfig changed = defaults;
     const double value = row.default_value.number == row.max ? row.min : row.max;
-    const std::string text =
-        row.type == game::ParamType::integer ? std::to_string(static_cast<long long>(value)) : std::to_string(value);
+    const std::string text = row.type == game::ParamType::boolean   ? (row.default_value.boolean ? "false" : "true")
+                             : row.type == game::ParamType::integer ? std::to_string(static_cast<long long>(value))
+                                                                    : std::to_string(value);
     const std::string assignment = "sprite_particles." + std::string(row.key) + "=" + text;
     ASSERT_TRUE(game::applyOverride(changed, assignment).ok()) << assignment;
     EXPECT_FALSE(sameParams(base, paramsOf(changed))) << row.key << " is not read by spriteParamsFrom";
     ++checked;
   }
-  EXPECT_EQ(checked, 13);
+  EXPECT_EQ(checked, 14);
 }
 
 // A non-finite value in the sprites' GPU read-back is named like any other state.
