@@ -93,20 +93,31 @@ struct Session {
 
 // The size the player sees: the requested frame headless, the window's drawable otherwise. The
 // scene renders at the graphics' resolution scale of it.
-int viewWidth(const Session& s) { return s.options.headless ? std::clamp(s.options.width, 64, 8192) : s.platform.width; }
-int viewHeight(const Session& s) {
-  return s.options.headless ? std::clamp(s.options.height, 64, 8192) : s.platform.height;
+int viewWidth(const RunOptions& options, const engine::Platform& platform) {
+  return options.headless ? std::clamp(options.width, 64, 8192) : platform.width;
 }
+int viewHeight(const RunOptions& options, const engine::Platform& platform) {
+  return options.headless ? std::clamp(options.height, 64, 8192) : platform.height;
+}
+int viewWidth(const Session& s) { return viewWidth(s.options, s.platform); }
+int viewHeight(const Session& s) { return viewHeight(s.options, s.platform); }
 int scaled(int size, const GraphicsSettings& graphics) {
   return std::max(16, static_cast<int>(std::lround(static_cast<float>(size) * graphics.resolution_scale)));
 }
 
-// The graphics preset of world.scene on this renderer: its render-only keys set from the loaded
-// scene's, and the scene target resized to its resolution scale. False when the resize failed.
+// The graphics preset of world.scene on this renderer (game/graphics_settings.hpp): its
+// render-only keys set from the loaded scene's and applied live. At the start and on a restart.
+GraphicsSettings presetWorld(World& world, const SceneConfig& loaded, const std::string& gl_renderer) {
+  GraphicsSettings graphics = resolveGraphics(world.scene.graphics, gl_renderer);
+  applyGraphics(graphics, loaded, world.scene);
+  applyLiveParams(world);
+  return graphics;
+}
+
+// A restart's preset, and the scene target resized to its resolution scale. False when the
+// resize failed.
 bool applyGraphicsPreset(Session& s, std::string& error) {
-  s.graphics = resolveGraphics(s.world.scene.graphics, s.platform.gl_renderer);
-  applyGraphics(s.graphics, s.loaded, s.world.scene);
-  applyLiveParams(s.world);
+  s.graphics = presetWorld(s.world, s.loaded, s.platform.gl_renderer);
   return engine::resizeRenderer(s.renderer, scaled(viewWidth(s), s.graphics), scaled(viewHeight(s), s.graphics), error);
 }
 
@@ -346,18 +357,14 @@ int runScene(const SceneConfig& scene, const RunOptions& options, RunReport& rep
   int code = 1;
   {
     // GL objects live in this scope so they die before the context.
-    const int fb_width = options.headless ? std::clamp(options.width, 64, 8192) : platform.width;
-    const int fb_height = options.headless ? std::clamp(options.height, 64, 8192) : platform.height;
+    const int fb_width = viewWidth(options, platform), fb_height = viewHeight(options, platform);
     engine::Renderer renderer;
     LevelAssets assets;
     engine::Overlay overlay;
     engine::FramePasses passes;
     passes.shader_dir = shaderDirectory();
-    // The graphics preset for this renderer (game/graphics_settings.hpp): the scene target's scale,
-    // the shadow map, and the render-only keys it sets in the world's scene.
-    GraphicsSettings graphics = resolveGraphics(world.scene.graphics, platform.gl_renderer);
-    applyGraphics(graphics, scene, world.scene);
-    applyLiveParams(world);
+    // The graphics preset for this renderer: the scene target's scale and the shadow map below.
+    const GraphicsSettings graphics = presetWorld(world, scene, platform.gl_renderer);
     // Without a preset's own size: llvmpipe (headless CI) pays for every shadow texel it clears, and
     // 1024 is plenty at 720p there.
     const int shadow_size = graphics.shadow_size > 0 ? graphics.shadow_size : (options.headless ? 1024 : 2048);

@@ -21,6 +21,20 @@ game::SceneConfig fountain() {
   return scene;
 }
 
+// A headless run of `frames` fixed steps at 160x90 that keeps its last frame.
+game::RunOptions headlessCapture(int frames) {
+  setenv("SDL_VIDEODRIVER", "offscreen", 1);
+  game::RunOptions options;
+  options.width = 160;
+  options.height = 90;
+  options.headless = true;
+  options.frames = frames;
+  options.show_ui = false;
+  options.capture_last_frame = true;
+  options.fixed_frame_time = true;
+  return options;
+}
+
 }  // namespace
 
 TEST(FluidMethodSwitch, SchemaAcceptsTheThreeMethodsOnly) {
@@ -41,15 +55,7 @@ TEST(FluidMethodSwitch, SchemaAcceptsTheThreeMethodsOnly) {
 
 // Frames of the fountain at 160x90 after 90 steps (the jet has water in the dish by then).
 TEST(FluidMethodSwitch, EachMethodRunsTheFountainHeadless) {
-  setenv("SDL_VIDEODRIVER", "offscreen", 1);
-  game::RunOptions options;
-  options.width = 160;
-  options.height = 90;
-  options.headless = true;
-  options.frames = 90;
-  options.show_ui = false;
-  options.capture_last_frame = true;
-  options.fixed_frame_time = true;
+  const game::RunOptions options = headlessCapture(90);
   auto run = [&](const char* method, game::RunReport& report) {
     game::SceneConfig scene = fountain();
     if (method != nullptr) {
@@ -93,15 +99,7 @@ TEST(FluidMethodSwitch, EachMethodRunsTheFountainHeadless) {
 // the frame's size, yet the captured frame is the requested size; the water is drawn at every
 // preset and no GL error occurs.
 TEST(GraphicsPresets, EachPresetDrawsTheFountainAtTheRequestedSize) {
-  setenv("SDL_VIDEODRIVER", "offscreen", 1);
-  game::RunOptions options;
-  options.width = 160;
-  options.height = 90;
-  options.headless = true;
-  options.frames = 60;
-  options.show_ui = false;
-  options.capture_last_frame = true;
-  options.fixed_frame_time = true;
+  const game::RunOptions options = headlessCapture(60);
   for (const char* preset : {"auto", "low", "medium", "high"}) {
     game::SceneConfig scene = fountain();
     ASSERT_TRUE(game::applyOverride(scene, std::string("graphics.preset=") + preset).ok());
