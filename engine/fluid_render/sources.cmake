@@ -5,4 +5,5 @@ target_sources(engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/particle_pass.cpp
   ${CMAKE_CURRENT_LIST_DIR}/screen_space.cpp
   ${CMAKE_CURRENT_LIST_DIR}/raycast.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/voxel.cpp
 )

@@ -6,4 +6,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/async_extractor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/baselines.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_io.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_reference.cpp
 )

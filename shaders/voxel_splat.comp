@@ -1,0 +1,51 @@
+// Splat (Zirr & Dachsbacher 2015 §3.1 a, §4.1): every particle sphere marks the voxels its
+// pixels' centre rays cross inside it, in the current tile's bit grid, with atomicOr per word. One
+// invocation per particle walks the sphere's screen bounds in the tile sequentially (the paper's
+// splatting kernel for small particles, §4.1), so llvmpipe needs no geometry shader.
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer Particles { vec4 centres[]; };
+layout(std430, binding = 2) buffer Bits { uint bits[]; };
+layout(std430, binding = 9) readonly buffer Selection { uint selected[]; };  // u_use_selection: indices
+uniform mat4 u_world_to_view;
+uniform uint u_count;
+uniform uint u_row;  // invocations per dispatch row (the grid is 2D past 65535 groups)
+uniform bool u_use_selection;
+uniform float u_radius;
+uniform ivec4 u_tile;  // x, y, width, height
+
+int pixelOf(float ndc, int size) { return int(floor(clamp((ndc + 1.0) * 0.5 * float(size) - 0.5, -1e6, 1e6))); }
+
+void main() {
+  uint i = gl_GlobalInvocationID.y * u_row + gl_GlobalInvocationID.x;
+  if (i >= u_count) return;
+  vec3 p = centres[u_use_selection ? selected[i] : i].xyz;
+  mat4 v = u_world_to_view;
+  precise float cx = ((v[0][0] * p.x + v[1][0] * p.y) + v[2][0] * p.z) + v[3][0];
+  precise float cy = ((v[0][1] * p.x + v[1][1] * p.y) + v[2][1] * p.z) + v[3][1];
+  precise float cz = ((v[0][2] * p.x + v[1][2] * p.y) + v[2][2] * p.z) + v[3][2];
+  vec3 c = vec3(cx, cy, cz);
+  float r = u_radius, d = -c.z;
+  if (d + r < layer_depth[0] || d - r >= layer_depth[u_layer_count]) return;
+  ivec2 lo = u_tile.xy, hi = u_tile.xy + u_tile.zw - 1;
+  if (d - r > 1e-4) {
+    // Screen bounds: x/d over the sphere's view box is extreme at its corners; one pixel of margin,
+    // the per-pixel ray test decides.
+    float zn = d - r, zf = d + r;
+    vec2 a0 = min((c.xy - r) / zn, (c.xy - r) / zf), a1 = max((c.xy + r) / zn, (c.xy + r) / zf);
+    vec2 n0 = a0 * u_proj.xy - u_proj.zw, n1 = a1 * u_proj.xy - u_proj.zw;
+    lo = max(lo, ivec2(pixelOf(n0.x, u_size.x), pixelOf(n0.y, u_size.y)) - 1);
+    hi = min(hi, ivec2(pixelOf(n1.x, u_size.x), pixelOf(n1.y, u_size.y)) + 2);
+  }
+  for (int y = lo.y; y <= hi.y; ++y) {
+    for (int x = lo.x; x <= hi.x; ++x) {
+      int first, last;
+      if (!sphereLayers(columnRay(ivec2(x, y)), c, r, first, last)) continue;
+      int base = ((y - u_tile.y) * u_tile.z + (x - u_tile.x)) * u_words;
+      for (int w = first >> 5; w <= (last >> 5); ++w) {
+        int b0 = max(first - 32 * w, 0), b1 = min(last - 32 * w, 31);
+        uint upper = b1 == 31 ? 0xffffffffu : ((1u << uint(b1 + 1)) - 1u);
+        atomicOr(bits[base + w], upper & ~((1u << uint(b0)) - 1u));
+      }
+    }
+  }
+}
