@@ -21,6 +21,7 @@ int smokeCommand(const Args& args);          // game/commands/play_command.cpp
 int soakCommand(const Args& args);           // game/commands/soak_command.cpp
 int replayCommand(const Args& args);         // game/commands/replay_command.cpp (game/replay)
 int meshCommand(const Args& args);           // game/commands/mesh_command.cpp (fluid/surface)
+int renderCommand(const Args& args);         // game/commands/render_command.cpp (engine/fluid_render)
 int simulateCommand(const Args& args);       // game/commands/simulate_command.cpp (fluid/sph)
 int bakeColliderCommand(const Args& args);   // game/commands/collider_commands.cpp (fluid/collide)
 int queryColliderCommand(const Args& args);  // game/commands/collider_commands.cpp (fluid/collide)

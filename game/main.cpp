@@ -22,6 +22,8 @@ constexpr Subcommand kSubcommands[] = {
     {"replay", "play a replay file, check its hashes, time each frame: replay FILE [--csv OUT] [--png OUT]",
      game::replayCommand},
     {"mesh", "particles -> triangle mesh by marching slices: mesh --in FILE --out FILE", game::meshCommand},
+    {"render", "draw a particle set headless with one water renderer: render --in FILE --method M --out IMAGE.png",
+     game::renderCommand},
     {"simulate", "run an SPH scene without a window: simulate --scene NAME --seconds T", game::simulateCommand},
     {"bake-collider", "bake depth-map colliders from a model: bake-collider MODEL --out FILE",
      game::bakeColliderCommand},

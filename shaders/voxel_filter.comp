@@ -1,8 +1,8 @@
 // Surface smoothing (Zirr & Dachsbacher 2015 §3.4, §4.6): one iteration of a 3x3 binomial kernel
 // on the reciprocal depth of every surface point, its neighbours found through the surface links
 // (diagonals by two steps). A point takes part in iterations while u_iteration is below its own
-// count, u_filter_radius over its pixel's width at its depth (Bagar et al. 2010): the filter's
-// world-space radius is about constant.
+// count, from u_filter_radius over its pixel's width at its depth (Bagar et al. 2010): the
+// filter's world-space radius is about constant.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 4) readonly buffer Meta { uvec4 meta[]; };
 layout(std430, binding = 6) readonly buffer DepthsIn { vec2 depths_in[]; };
@@ -28,7 +28,9 @@ void main() {
     for (int side = 0; side < 2; ++side) {
       int ref = int(s) * 2 + side;
       float own = depths_raw[base + s][side];
-      int iterations = min(int(u_filter_radius / (own * pixel_angle)), u_max_iterations);
+      // n rounds of the binomial kernel spread about sqrt(n / 2) px: n = 2 (radius / pixel)^2.
+      float reach = min(u_filter_radius / (own * pixel_angle), 64.0);
+      int iterations = min(int(2.0 * reach * reach), u_max_iterations);
       if (u_iteration >= iterations) continue;
       float sum = 4.0 / depthAt(pixel, ref);
       for (int d = 0; d < 4; ++d) {

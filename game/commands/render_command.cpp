@@ -1,0 +1,527 @@
+// fluiddemo render: a static particle set drawn headless by one of the four water renderers, in
+// the fountain scene's lighting (engine::Lighting's sky and sun, the fountain's water colours),
+// over a striped wall and floor (shaders/fluid/backdrop.*) so refraction and absorption show.
+//   fluiddemo render --in FILE --method mesh|screen_space|raycast|voxel|none --out IMAGE.png
+//                    [--width W --height H] [--camera x,y,z --look-at x,y,z] [--radius R]
+//                    [--frames N] [--silhouette] [--drop-inner-cells] [--force]
+// Prints the milliseconds of each stage (each ended by glFinish) and the renderer's GPU memory.
+// The renderers are called directly (engine/fluid_render), not through the game's frame.
+// `none` draws the backdrop alone: the reference for water masks (tests/bench/render_sets_docs.sh).
+#include "game/commands.hpp"
+#include "game/commands/cli_outputs.hpp"
+#include "game/commands/cli_parse.hpp"
+#include "game/paths.hpp"
+
+#include "engine/fluid_render/fluid_render.hpp"
+#include "engine/fluid_render/raycast.hpp"
+#include "engine/fluid_render/screen_space.hpp"
+#include "engine/fluid_render/voxel.hpp"
+#include "engine/gl/gl.hpp"
+#include "engine/platform/platform.hpp"
+#include "engine/render/image_write.hpp"
+#include "engine/render/renderer.hpp"
+#include "fluid/io/particle_io.hpp"
+#include "fluid/surface/marching_slices.hpp"
+
+#include <CLI/CLI.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace game {
+namespace {
+
+constexpr double kMiB = 1024.0 * 1024.0;
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// "x,y,z" → vector; false for anything else (three finite numbers).
+bool parseVec3(const std::string& text, glm::vec3& out) {
+  std::stringstream in(text);
+  std::string part;
+  float v[3];
+  int n = 0;
+  while (std::getline(in, part, ',')) {
+    if (n == 3) return false;
+    char* end = nullptr;
+    v[n] = std::strtof(part.c_str(), &end);
+    if (part.empty() || end == part.c_str() || *end != '\0' || !std::isfinite(v[n])) return false;
+    ++n;
+  }
+  if (n != 3) return false;
+  out = {v[0], v[1], v[2]};
+  return true;
+}
+
+// Median distance to the nearest other particle over up to 2000 sampled particles (a hash grid of
+// cells about the mean spacing): the set's particle spacing, from which the radius defaults.
+float estimateSpacing(const std::vector<glm::vec3>& p, glm::vec3 lo, glm::vec3 hi) {
+  if (p.size() < 2) return 0.1f;
+  const glm::vec3 extent = glm::max(hi - lo, glm::vec3(1e-3f));
+  const float cell = std::max(std::cbrt(extent.x * extent.y * extent.z / static_cast<float>(p.size())), 1e-4f);
+  auto key = [&](glm::vec3 q) {
+    const glm::ivec3 c = glm::ivec3(glm::floor((q - lo) / cell));
+    return (static_cast<std::int64_t>(c.x) * 73856093) ^ (static_cast<std::int64_t>(c.y) * 19349663) ^
+           (static_cast<std::int64_t>(c.z) * 83492791);
+  };
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> grid;
+  for (std::size_t i = 0; i < p.size(); ++i) grid[key(p[i])].push_back(static_cast<std::uint32_t>(i));
+  std::vector<float> nearest;
+  const std::size_t step = std::max<std::size_t>(p.size() / 2000, 1);
+  for (std::size_t i = 0; i < p.size(); i += step) {
+    float best = 1e30f;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto found = grid.find(key(p[i] + cell * glm::vec3(dx, dy, dz)));
+          if (found == grid.end()) continue;
+          for (std::uint32_t j : found->second)
+            if (j != i) best = std::min(best, glm::length(p[j] - p[i]));
+        }
+    if (best < 1e29f) nearest.push_back(best);
+  }
+  if (nearest.empty()) return cell;
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  return std::max(nearest[nearest.size() / 2], 1e-4f);
+}
+
+struct Backdrop {
+  GLuint program = 0, vao = 0, vbo = 0;
+};
+
+// A wall behind the set (seen from the camera) and a floor under it, striped, as the tests' scene.
+bool createBackdrop(const std::filesystem::path& shaders, glm::vec3 lo, glm::vec3 hi, float radius, glm::vec3 eye,
+                    Backdrop& b, std::string& error) {
+  const std::filesystem::path dir = shaders / "fluid";
+  b.program = engine::buildProgram(std::vector<engine::ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "backdrop.vert"}},
+                                                                         {GL_FRAGMENT_SHADER, {dir / "backdrop.frag"}}},
+                                   "", error);
+  if (b.program == 0) return false;
+  const glm::vec3 centre = 0.5f * (lo + hi);
+  const float size = 4.0f * std::max(glm::length(hi - lo), 1.0f);
+  const float floor_y = std::min(lo.y, 0.0f) - 3.0f * radius;  // below the lowest sphere: every method sees the bottom
+  // The wall behind the set at constant x (backdrop.frag stripes it along z), on the far side
+  // from the eye.
+  const float wall = eye.x > centre.x ? lo.x - 0.5f : hi.x + 0.5f;
+  auto wallPoint = [&](float u, float y) { return glm::vec3(wall, y, centre.z + u); };
+  const float top = floor_y + size;
+  const glm::vec3 w[6] = {wallPoint(-size, floor_y), wallPoint(size, floor_y), wallPoint(size, top),
+                          wallPoint(-size, floor_y), wallPoint(size, top),     wallPoint(-size, top)};
+  const glm::vec3 f[6] = {{centre.x - size, floor_y, centre.z - size}, {centre.x + size, floor_y, centre.z - size},
+                          {centre.x + size, floor_y, centre.z + size}, {centre.x - size, floor_y, centre.z - size},
+                          {centre.x + size, floor_y, centre.z + size}, {centre.x - size, floor_y, centre.z + size}};
+  std::vector<glm::vec3> v(w, w + 6);
+  v.insert(v.end(), f, f + 6);
+  glGenVertexArrays(1, &b.vao);
+  glGenBuffers(1, &b.vbo);
+  glBindVertexArray(b.vao);
+  glBindBuffer(GL_ARRAY_BUFFER, b.vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(glm::vec3)), v.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, nullptr);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  return true;
+}
+
+void destroyBackdrop(Backdrop& b) {
+  if (b.program != 0) glDeleteProgram(b.program);
+  if (b.vbo != 0) glDeleteBuffers(1, &b.vbo);
+  if (b.vao != 0) glDeleteVertexArrays(1, &b.vao);
+  b = Backdrop{};
+}
+
+// Clears `fbo` to the sky's horizon colour and draws the backdrop with depth.
+void drawBackdrop(const Backdrop& b, GLuint fbo, const engine::FluidCamera& camera, int w, int h, glm::vec3 sky) {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, w, h);
+  glClearColor(sky.r, sky.g, sky.b, 1.0f);
+  glClearDepth(1.0);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glUseProgram(b.program);
+  const glm::mat4 vp = camera.projection * camera.view;
+  glUniformMatrix4fv(glGetUniformLocation(b.program, "u_view_projection"), 1, GL_FALSE, glm::value_ptr(vp));
+  glBindVertexArray(b.vao);
+  glDrawArrays(GL_TRIANGLES, 0, 12);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+}
+
+struct RenderJob {
+  std::string method;
+  std::vector<glm::vec3> particles;
+  glm::vec3 lo{0.0f}, hi{0.0f};
+  float radius = 0.0f, spacing = 0.0f;
+  int width = 640, height = 360, frames = 1;
+  bool drop_inner = false;
+  engine::FluidCamera camera;
+  engine::WaterParams water;
+  glm::vec3 sky{0.0f};
+  Backdrop backdrop;
+  GLuint fbo = 0, colour = 0;
+};
+
+struct Timing {
+  std::vector<std::pair<std::string, double>> stages;  // summed over the timed frames
+  double gpu_bytes = 0.0;
+  std::vector<std::string> notes;
+  void add(const std::string& name, double ms) {
+    for (auto& [n, v] : stages)
+      if (n == name) {
+        v += ms;
+        return;
+      }
+    stages.emplace_back(name, ms);
+  }
+};
+
+// Frames -1 (warm-up, untimed) .. frames-1; `frame(timed)` draws one.
+template <class Frame>
+void runFrames(const RenderJob& job, Frame&& frame) {
+  for (int f = -1; f < job.frames; ++f) frame(f >= 0);
+}
+
+bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, std::string& error) {
+  engine::FluidRenderer r;
+  engine::createFluidRenderer(desc, r);
+  if (!r.ready) {
+    error = r.error;
+    return false;
+  }
+  std::vector<float> xs, ys, zs;
+  for (const glm::vec3& p : job.particles) xs.push_back(p.x), ys.push_back(p.y), zs.push_back(p.z);
+  fluid::SurfaceParams sp;  // the game's field: Rc = 2 spacings, T = 0.2 (iso radius 0.975 Rc / 3), cube = spacing / 2
+  sp.rc = 3.0f * job.radius / 0.975f;
+  sp.threshold = 0.2f;
+  sp.cube = 0.5f * job.spacing;
+  sp.order = fluid::SurfaceOrder::backToFront;
+  sp.eye = job.camera.eye;
+  sp.viewDir = -glm::vec3(glm::transpose(job.camera.view)[2]);
+  fluid::SurfaceExtractor extractor;
+  fluid::SurfaceMesh mesh;
+  bool ok = true;
+  runFrames(job, [&](bool timed) {
+    if (!ok) return;
+    const double t0 = nowMs();
+    const fluid::SurfaceStatus st = extractor.extract({xs, ys, zs, {}, {}, {}}, sp, mesh);
+    if (!st.ok()) {
+      error = "meshing failed: " + st.error;
+      ok = false;
+      return;
+    }
+    drawBackdrop(job.backdrop, r.scene_fbo, job.camera, job.width, job.height, job.sky);
+    glFinish();
+    const double t1 = nowMs();
+    engine::uploadFluidMesh(r, mesh.positions, mesh.normals, mesh.indices, error);
+    glFinish();
+    const double t2 = nowMs();
+    engine::drawFluid(r, job.fbo, job.camera, job.water);
+    glFinish();
+    if (timed) {
+      t.add("extract (CPU marching slices)", t1 - t0);
+      t.add("upload mesh", t2 - t1);
+      t.add("draw", nowMs() - t2);
+    }
+  });
+  t.gpu_bytes =
+      static_cast<double>(job.width) * job.height * (4 + 4 + 8) + static_cast<double>(r.vbo_bytes + r.ibo_bytes);
+  t.notes.push_back(std::to_string(mesh.indices.size() / 3) + " triangles, Rc " + std::to_string(sp.rc) + ", cube " +
+                    std::to_string(sp.cube));
+  engine::destroyFluidRenderer(r);
+  return ok;
+}
+
+template <class Renderer, class Upload, class Draw>
+void timeParticleMethod(RenderJob& job, Renderer& r, Timing& t, Upload&& upload, Draw&& draw) {
+  runFrames(job, [&](bool timed) {
+    drawBackdrop(job.backdrop, r.scene.fbo, job.camera, job.width, job.height, job.sky);
+    glFinish();
+    const double t0 = nowMs();
+    upload();
+    glFinish();
+    const double t1 = nowMs();
+    draw(timed);
+    glFinish();
+    if (timed) {
+      t.add("upload particles", t1 - t0);
+      t.add("draw", nowMs() - t1);
+    }
+  });
+}
+
+bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t, std::string& error) {
+  engine::VoxelDesc desc;
+  desc.base = base;
+  engine::VoxelRenderer r;
+  engine::createVoxelRenderer(desc, r);
+  if (!r.ready) {
+    error = r.error;
+    return false;
+  }
+  engine::VoxelParams p;
+  p.radius = job.radius;
+  p.min_gap = job.radius;
+  p.filter_radius = 1.5f * job.radius;  // enough rounds to smooth a lattice's bumps (spacing 1.5 R)
+  p.time_stages = true;
+  const float cell = 2.0f * job.spacing;
+  if (job.drop_inner) p.min_gap = std::max(p.min_gap, cell);
+  bool ok = true;
+  double stage_ms[6] = {0, 0, 0, 0, 0, 0};
+  timeParticleMethod(
+      job, r, t,
+      [&] {
+        ok = ok && (job.drop_inner ? engine::uploadVoxelParticles(r, job.particles, cell, 7, error)
+                                   : engine::uploadVoxelParticles(r, job.particles, error));
+      },
+      [&](bool timed) {
+        engine::drawVoxelFluid(r, job.fbo, job.camera, job.water, p);
+        if (!timed) return;
+        const engine::VoxelStats& s = r.stats;
+        const double ms[6] = {s.splat_ms, s.compress_ms, s.connect_ms, s.filter_ms, s.normals_ms, s.shade_ms};
+        for (int i = 0; i < 6; ++i) stage_ms[i] += ms[i];
+      });
+  const engine::VoxelStats& s = r.stats;
+  const char* names[6] = {"splat", "compress", "connect", "filter", "normals", "shade"};
+  for (int i = 0; i < 6; ++i) t.add(std::string("  ") + names[i], stage_ms[i]);
+  t.gpu_bytes = static_cast<double>(s.tile_grid_bytes + s.span_bytes) + 16.0 * s.particles +
+                static_cast<double>(job.width) * job.height * 8;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "voxel grid %dx%dx%d (%d words per column, angle %.1f deg, depth %.3f..%.3f m); tiles %d of %dx%d",
+                job.width, job.height, s.layers, s.words, static_cast<double>(s.angle_degrees),
+                static_cast<double>(s.nearest), static_cast<double>(s.farthest), s.tiles, s.tile_width, s.tile_height);
+  t.notes.push_back(line);
+  std::snprintf(line, sizeof line,
+                "voxel memory: tile grid %.2f MiB, stored spans %.2f MiB (%d per pixel; %llu spans, %llu columns "
+                "overflowing), dense grid at this resolution %.2f MiB",
+                s.tile_grid_bytes / kMiB, s.span_bytes / kMiB, desc.max_spans,
+                static_cast<unsigned long long>(s.stored_spans), static_cast<unsigned long long>(s.overflow_columns),
+                s.dense_grid_bytes / kMiB);
+  t.notes.push_back(line);
+  std::snprintf(line, sizeof line, "particles splatted %u of %u%s", s.splatted, s.particles,
+                job.drop_inner ? " (full inner cells left out, §4.3)" : "");
+  t.notes.push_back(line);
+  engine::destroyVoxelRenderer(r);
+  return ok;
+}
+
+bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
+  engine::FluidRenderDesc desc;
+  desc.width = job.width;
+  desc.height = job.height;
+  desc.shader_dir = shadersDir();
+  const double px = static_cast<double>(job.width) * job.height;
+  if (job.method == "none") {
+    runFrames(job, [&](bool timed) {
+      const double t0 = nowMs();
+      drawBackdrop(job.backdrop, job.fbo, job.camera, job.width, job.height, job.sky);
+      glFinish();
+      if (timed) t.add("backdrop", nowMs() - t0);
+    });
+    return true;
+  }
+  if (job.method == "mesh") return renderMesh(job, desc, t, error);
+  if (job.method == "voxel") return renderVoxel(job, desc, t, error);
+  bool ok = true;
+  if (job.method == "screen_space") {
+    engine::ScreenSpaceRenderer r;
+    engine::createScreenSpaceRenderer(desc, r);
+    if (!r.ready) {
+      error = r.error;
+      return false;
+    }
+    engine::ScreenSpaceParams p;
+    p.radius = job.radius;
+    p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
+    timeParticleMethod(
+        job, r, t, [&] { ok = ok && engine::uploadScreenSpaceParticles(r, job.particles, error); },
+        [&](bool) { engine::drawScreenSpaceFluid(r, job.fbo, job.camera, job.water, p); });
+    t.gpu_bytes = px * (4 + 4 + 4 * 4 + 4) + static_cast<double>(r.particles.capacity_bytes);
+    engine::destroyScreenSpaceRenderer(r);
+    return ok;
+  }
+  engine::RaycastDesc rdesc;
+  rdesc.base = desc;
+  engine::RaycastRenderer r;
+  engine::createRaycastRenderer(rdesc, r);
+  if (!r.ready) {
+    error = r.error;
+    return false;
+  }
+  engine::RaycastParams p;
+  p.rc = 3.0f * job.radius / 0.975f;
+  p.threshold = 0.2f;
+  timeParticleMethod(
+      job, r, t, [&] { ok = ok && engine::uploadRaycastParticles(r, job.particles, error); },
+      [&](bool) { engine::drawRaycastFluid(r, job.fbo, job.camera, job.water, p); });
+  t.gpu_bytes = px * (4 + 4 + 4 + 16 + 4) + 16.0 * r.pool_records + static_cast<double>(r.particles.capacity_bytes);
+  t.notes.push_back("raycast pool " + std::to_string(r.pool_records) + " records, asked for " + std::to_string(r.used) +
+                    ", dropped " + std::to_string(r.dropped));
+  engine::destroyRaycastRenderer(r);
+  return ok;
+}
+
+}  // namespace
+
+int renderCommand(const Args& args) {
+  CLI::App app{"Draw a static particle set with one water renderer, headless, and time its stages", "fluiddemo render"};
+  std::string in, out, method = "voxel", camera_text, look_text;
+  int width = 640, height = 360, frames = 1;
+  float radius = 0.0f;
+  bool force = false, silhouette = false, drop_inner = false;
+  app.add_option("--in", in, "particle file: .xyz (x y z per line), .csv or .ply")->required();
+  app.add_option("--method", method, "mesh, screen_space, raycast, voxel, or none (the backdrop alone)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"mesh", "screen_space", "raycast", "voxel", "none"}));
+  app.add_option("--out", out, "PNG image to write")->required();
+  app.add_option("--width", width, "image width, px")->capture_default_str()->check(CLI::Range(16, 8192));
+  app.add_option("--height", height, "image height, px")->capture_default_str()->check(CLI::Range(16, 8192));
+  app.add_option("--camera", camera_text,
+                 "eye position x,y,z (default: framing the set from +x, above; the striped wall behind)");
+  app.add_option("--look-at", look_text, "point looked at x,y,z (default: the set's centre)");
+  app.add_option("--radius", radius,
+                 "a lone particle's iso radius, metres (spheres of screen_space/voxel; Rc = 3R/0.975 of "
+                 "mesh/raycast); default 0.65 x the median nearest-neighbour spacing (the game's ratio)")
+      ->check(positiveNumber());
+  app.add_option("--frames", frames, "timed frames after one warm-up (stage times are their mean)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
+  app.add_flag("--silhouette", silhouette, "opaque, dark water: the image is the water's mask (for IoU)");
+  app.add_flag("--drop-inner-cells", drop_inner, "voxel: leave full inner cells out of the splat (paper §4.3)");
+  app.add_flag("--force", force, "replace --out if it exists");
+  if (const int code = parseCommandLine(app, "render", args); code >= 0) return code;
+  glm::vec3 eye{0.0f}, target{0.0f};
+  if (!camera_text.empty() && !parseVec3(camera_text, eye))
+    return usageError("render", "--camera " + camera_text + ": expected three numbers x,y,z");
+  if (!look_text.empty() && !parseVec3(look_text, target))
+    return usageError("render", "--look-at " + look_text + ": expected three numbers x,y,z");
+  if (const int code = checkPngOutput("render", "--out", out, force); code >= 0) return code;
+
+  fluid::ParticlePositions read;
+  if (const fluid::IoStatus st = fluid::readParticleFile(in, read); !st.ok()) {
+    std::fprintf(stderr, "fluiddemo render: %s\n", st.error.c_str());
+    return 1;
+  }
+  if (read.size() == 0) {
+    std::fprintf(stderr, "fluiddemo render: --in %s: no particles in the file\n", in.c_str());
+    return 1;
+  }
+  RenderJob job;
+  job.method = method;
+  job.width = width;
+  job.height = height;
+  job.frames = frames;
+  job.drop_inner = drop_inner;
+  job.particles.resize(read.size());
+  job.lo = glm::vec3(1e30f);
+  job.hi = glm::vec3(-1e30f);
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    job.particles[i] = {read.x[i], read.y[i], read.z[i]};
+    job.lo = glm::min(job.lo, job.particles[i]);
+    job.hi = glm::max(job.hi, job.particles[i]);
+  }
+  const double t_spacing = nowMs();
+  job.spacing = estimateSpacing(job.particles, job.lo, job.hi);
+  job.radius = radius > 0.0f ? radius : 0.65f * job.spacing;
+  if (radius > 0.0f) job.spacing = radius / 0.65f;
+  const double spacing_ms = nowMs() - t_spacing;
+  const glm::vec3 centre = 0.5f * (job.lo + job.hi);
+  const float extent = std::max(0.5f * glm::length(job.hi - job.lo), 4.0f * job.radius);
+  if (look_text.empty()) target = centre;
+  if (camera_text.empty()) eye = centre + glm::normalize(glm::vec3(1.0f, 0.45f, 0.35f)) * extent * 2.2f;
+  if (glm::length(eye - target) < 1e-4f)
+    return usageError("render", "--camera and --look-at are the same point: no view direction");
+  job.camera.eye = eye;
+  job.camera.near_plane = std::max(0.01f, 1e-3f * glm::length(eye - target));
+  job.camera.far_plane = std::max(200.0f, 4.0f * (glm::length(eye - centre) + extent));
+  const glm::vec3 forward = glm::normalize(target - eye);
+  const glm::vec3 up = std::abs(forward.y) > 0.99f ? glm::vec3(0, 0, -1) : glm::vec3(0, 1, 0);
+  job.camera.view = glm::lookAt(eye, target, up);
+  job.camera.projection = glm::perspective(glm::radians(45.0f), static_cast<float>(width) / static_cast<float>(height),
+                                           job.camera.near_plane, job.camera.far_plane);
+  // The fountain's look: the scene lighting's sky and sun (engine::Lighting, the fountain scene
+  // sets none of its own) and the water's colours of fluid_surface (game/world/fluid_surface.hpp).
+  const engine::Lighting lighting;
+  job.sky = lighting.sky_horizon;
+  job.water.sky_zenith = lighting.sky_zenith;
+  job.water.sky_horizon = lighting.sky_horizon;
+  job.water.light_direction = lighting.sun_direction;
+  job.water.absorption = {1.6f, 0.45f, 0.25f};
+  if (silhouette) {  // as bench_fluid_render: dark wherever there is water at all
+    job.water.absorption = glm::vec3(1000.0f);
+    job.water.refraction = 0.0f;
+    job.water.opacity = 1.0f;
+  }
+
+  engine::PlatformDesc platform_desc;
+  platform_desc.title = "fluiddemo render";
+  platform_desc.width = 64;
+  platform_desc.height = 64;
+  platform_desc.headless = true;
+  engine::Platform platform;
+  std::string error;
+  if (!engine::createPlatform(platform_desc, platform, error)) {
+    std::fprintf(stderr, "fluiddemo render: no GL context: %s\n", error.c_str());
+    return 1;
+  }
+  int code = 0;
+  if (!createBackdrop(shadersDir(), job.lo, job.hi, job.radius, eye, job.backdrop, error)) {
+    std::fprintf(stderr, "fluiddemo render: backdrop shaders: %s\n", error.c_str());
+    code = 1;
+  }
+  job.colour = engine::createTexture2D(GL_RGBA8, width, height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  glGenFramebuffers(1, &job.fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, job.colour, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  Timing timing;
+  const double t0 = nowMs();
+  if (code == 0 && !renderMethod(job, timing, error)) {
+    std::fprintf(stderr, "fluiddemo render: --method %s: %s\n", method.c_str(), error.c_str());
+    code = 1;
+  }
+  const double total_ms = nowMs() - t0;
+  if (code == 0) {
+    std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height * 4);
+    glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
+    glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (!engine::writePngBottomUp(out, width, height, pixels, error)) {
+      std::fprintf(stderr, "fluiddemo render: %s\n", error.c_str());
+      code = 1;
+    }
+  }
+  if (code == 0) {
+    std::printf("render %s: %zu particles from %s, %dx%d, radius %.4g m (spacing %.4g m%s), GL %s / %s\n",
+                method.c_str(), job.particles.size(), in.c_str(), width, height, static_cast<double>(job.radius),
+                static_cast<double>(job.spacing), radius > 0.0f ? ", from --radius" : ", estimated",
+                platform.gl_version.c_str(), platform.gl_renderer.c_str());
+    std::printf("  spacing estimate      %9.2f ms (CPU)\n", spacing_ms);
+    for (const auto& [name, ms] : timing.stages) std::printf("  %-22s%9.2f ms\n", name.c_str(), ms / frames);
+    std::printf("  all frames (%d + 1 warm-up) %.2f ms\n", frames, total_ms);
+    std::printf("  GPU memory            %9.2f MiB (the renderer's targets and buffers)\n", timing.gpu_bytes / kMiB);
+    for (const std::string& note : timing.notes) std::printf("  %s\n", note.c_str());
+    std::printf("wrote %s\n", out.c_str());
+  }
+  glDeleteFramebuffers(1, &job.fbo);
+  glDeleteTextures(1, &job.colour);
+  destroyBackdrop(job.backdrop);
+  engine::destroyPlatform(platform);
+  return code;
+}
+
+}  // namespace game
