@@ -10,6 +10,7 @@ packages=(
   libopengl-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0 libgles-dev mesa-utils
   xvfb xauth
   python3-matplotlib
+  python3-dev pybind11-dev python3-numpy python3-pytest
 )
 
 missing=()

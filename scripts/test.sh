@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Set-up + build + all tests:  scripts/test.sh
 # Env: BUILD_DIR (default build/test), FLUIDDEMO_SANITIZE (address|thread), JOBS.
+# After ctest (plain builds): installs to a temporary prefix, builds examples/ as an outside project
+# with find_package(fluiddemo) and runs it, configures a project that takes fluid/ with
+# add_subdirectory, and runs the pytest suite against the installed Python module.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -19,3 +22,35 @@ export SDL_VIDEODRIVER="${SDL_VIDEODRIVER:-offscreen}"
 export SDL_AUDIODRIVER="${SDL_AUDIODRIVER:-dummy}"
 cd "$build_dir"
 ctest --output-on-failure -j "$jobs" --timeout 600
+
+if [ -n "${FLUIDDEMO_SANITIZE:-}" ]; then
+  exit 0  # the installed library would be an instrumented build: the outside checks need a plain one
+fi
+build_abs="$PWD"
+scratch="$(mktemp -d)"
+trap 'rm -rf "$scratch"' EXIT
+echo "test.sh: installing to $scratch/prefix and building examples/ against it"
+cmake --install "$build_abs" --prefix "$scratch/prefix" >/dev/null
+cmake -S "$root/examples" -B "$scratch/examples" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$scratch/prefix" >/dev/null
+cmake --build "$scratch/examples" -j "$jobs"
+"$root/examples/run_examples.sh" "$scratch/examples" "$root" "$scratch/examples-run"
+
+# fluid/ taken into another project with add_subdirectory (configure and generate: the step that
+# fails when fluid/ needs something only our top level defines).
+mkdir -p "$scratch/subdir"
+printf '%s\n' 'cmake_minimum_required(VERSION 3.25)' 'project(uses_fluid LANGUAGES CXX)' \
+  "add_subdirectory(\"$root/fluid\" fluid)" "add_executable(mesh_particles \"$root/examples/mesh_particles.cpp\")" \
+  'target_link_libraries(mesh_particles PRIVATE fluiddemo::fluid)' >"$scratch/subdir/CMakeLists.txt"
+cmake -S "$scratch/subdir" -B "$scratch/subdir/build" -G Ninja >/dev/null
+echo "test.sh: add_subdirectory(fluid) from an outside project configures"
+
+# The Python module as installed, with the interpreter it was built for (Debian's /usr/bin/python3,
+# which has python3-numpy and python3-pytest; README "Use the libraries").
+python="$(sed -n 's/^Python_EXECUTABLE:[A-Z]*=//p' "$build_abs/CMakeCache.txt")"
+if [ -n "$python" ] && [ -d "$scratch/prefix/lib/python3/dist-packages" ]; then
+  exe_env=()  # the CLI comparisons need the executable (not built with FLUIDDEMO_BUILD_ENGINE=OFF)
+  if [ -x "$build_abs/game/fluiddemo" ]; then exe_env=(FLUIDDEMO_EXE="$build_abs/game/fluiddemo"); fi
+  env PYTHONPATH="$scratch/prefix/lib/python3/dist-packages" FLUIDDEMO_SOURCE_DIR="$root" "${exe_env[@]}" \
+    "$python" -m pytest -q -p no:cacheprovider "$root/tests/python"
+fi

@@ -1,5 +1,7 @@
 #include "fluid/io/particle_io.hpp"
 
+#include "fluid/io/vtk_io.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -10,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string_view>
@@ -434,13 +437,17 @@ IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& 
   out.clear();
   const std::string name = path.string();
   const std::string extension = lowercase(path.extension().string());
-  if (extension != ".xyz" && extension != ".csv" && extension != ".ply") {
-    return {name + ": unknown particle file extension '" + extension + "' (use .xyz, .csv or .ply)"};
+  if (extension != ".xyz" && extension != ".csv" && extension != ".ply" && extension != ".vtk") {
+    return {name + ": unknown particle file extension '" + extension + "' (use .xyz, .csv, .ply or .vtk)"};
   }
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) return {name + ": is a directory, not a particle file"};
   std::ifstream in(path, std::ios::binary);
   if (!in) return {name + ": cannot open for reading: " + std::strerror(errno)};
+  if (extension == ".vtk") {
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return parseParticleVtk(bytes, name, out);
+  }
   IoStatus status = extension == ".ply" ? readPly(in, name, out) : parseLines(in, extension == ".csv", name, out);
   if (!status.ok()) out.clear();
   return status;

@@ -9,6 +9,7 @@
 //         columns (x, y and z are then picked by name, in any order).
 //   .ply  ASCII or binary (little/big endian) PLY with a `vertex` element holding float or
 //         double properties x, y, z; other properties and elements are skipped.
+//   .vtk  legacy VTK, ASCII or BINARY: the POINTS of any dataset (fluid/io/vtk_io.hpp).
 // Errors name the file and the 1-based line (text) or vertex index (binary) and never crash.
 // NaN/inf coordinates are rejected.
 

@@ -1,25 +1,27 @@
 #include "fluid/surface/mesh_io.hpp"
 
+#include "fluid/io/vtk_io.hpp"
+
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <numeric>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace fluid {
-namespace {
 
-struct Welded {
-  std::vector<glm::vec3> positions, normals;
-  std::vector<std::uint32_t> indices;
-};
-
-Welded weld(const SurfaceMesh& m, const MeshWriteOptions& o) {
-  Welded w;
+void weldSurfaceMesh(const SurfaceMesh& m, const MeshWriteOptions& o, WeldedMesh& w) {
+  w.positions.clear();
+  w.normals.clear();
+  w.indices.clear();
   std::vector<std::uint32_t> order(m.positions.size()), remap(m.positions.size());
   std::iota(order.begin(), order.end(), 0u);
   if (o.weldSeams && m.edgeKeys.size() == m.positions.size()) {
@@ -47,8 +49,70 @@ Welded weld(const SurfaceMesh& m, const MeshWriteOptions& o) {
     }
     w.indices.push_back(r);
   }
-  return w;
 }
+
+
+void centreSurfaceOrigin(const SurfaceInput& input, SurfaceParams& params) {
+  if (input.x.empty()) return;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < input.x.size(); ++i) {
+    const double p[3] = {input.x[i], input.y[i], input.z[i]};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  }
+  const double s = params.cube;
+  params.originX = std::round(0.5 * (lo[0] + hi[0]) / s) * s;
+  params.originY = std::round(0.5 * (lo[1] + hi[1]) / s) * s;
+  params.originZ = std::round(0.5 * (lo[2] + hi[2]) / s) * s;
+}
+
+namespace {
+
+// An upper bound of the particles' field (Rosenberg & Birdwell 2008 §2): each particle adds
+// f(r) = (r/(sqrt2 Rc))^4 - (r/(sqrt2 Rc))^2 + 1/4, at most 1/4 (at r = 0) and 0 from r = Rc
+// on, so at any point the field is at most 1/4 x the particles within Rc of it. A ball of
+// radius Rc lies inside the 3x3x3 cells of edge Rc around the cell holding its centre, so
+// 1/4 x the largest such 27-cell count bounds the field everywhere.
+double fieldUpperBound(const SurfaceInput& input, double rc) {
+  auto cell = [rc](float v) {
+    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / rc), -1e15, 1e15));
+  };
+  struct CellHash {
+    std::size_t operator()(const std::array<std::int64_t, 3>& c) const {
+      return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+    }
+  };
+  std::unordered_map<std::array<std::int64_t, 3>, std::size_t, CellHash> counts;
+  for (std::size_t i = 0; i < input.x.size(); ++i) ++counts[{cell(input.x[i]), cell(input.y[i]), cell(input.z[i])}];
+  std::size_t most = 0;
+  for (const auto& [c, count] : counts) {
+    std::size_t around = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto found = counts.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (found != counts.end()) around += found->second;
+        }
+    most = std::max(most, around);
+  }
+  return 0.25 * static_cast<double>(most);
+}
+
+}  // namespace
+
+std::string unreachableThreshold(const SurfaceInput& input, const SurfaceParams& params, const std::string& option,
+                                 const std::string& source) {
+  if (input.x.empty() || !(params.threshold >= 0.25f) || !(params.rc > 0.0f)) return {};
+  const double bound = fieldUpperBound(input, params.rc);
+  if (params.threshold < bound) return {};
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "%.60s %g is at or above the largest value the field of ", option.c_str(),
+                static_cast<double>(params.threshold));
+  std::string message = buffer + source;
+  std::snprintf(buffer, sizeof buffer, " can reach (%g: at most 0.25 per particle within Rc of a point)", bound);
+  return message + buffer + ", so the mesh would be empty";
+}
+
+namespace {
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -59,7 +123,8 @@ std::string lower(std::string s) {
 
 IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
   const std::string ext = lower(path.extension().string());
-  if (ext != ".obj" && ext != ".ply") return {path.string() + ": unknown mesh format '" + ext + "' (use .obj or .ply)"};
+  if (ext != ".obj" && ext != ".ply" && ext != ".vtk" && ext != ".vtu")
+    return {path.string() + ": unknown mesh format '" + ext + "' (use .obj, .ply, .vtk or .vtu)"};
   std::error_code ec;
   if (options.overwrite == OverwritePolicy::refuse && std::filesystem::exists(path, ec))
     return {path.string() + ": exists; not overwriting (use --force to replace it)"};
@@ -67,10 +132,14 @@ IoStatus writeSurfaceMesh(const std::filesystem::path& path, const SurfaceMesh& 
     return {path.string() + ": inconsistent mesh (normals or indices)"};
   for (std::uint32_t i : mesh.indices)
     if (i >= mesh.positions.size()) return {path.string() + ": index out of range"};
-  const Welded w = weld(mesh, options);
+  WeldedMesh w;
+  weldSurfaceMesh(mesh, options, w);
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!f) return {path.string() + ": cannot open for writing: " + std::strerror(errno)};
-  if (ext == ".obj") {
+  if (ext == ".vtk" || ext == ".vtu") {
+    const TriangleMeshView view{w.positions, w.normals, w.indices};
+    ext == ".vtk" ? writeMeshLegacyVtk(f, view) : writeMeshVtu(f, view);
+  } else if (ext == ".obj") {
     f << "# fluiddemo mesh: " << w.positions.size() << " vertices, " << w.indices.size() / 3 << " triangles\n";
     char buf[128];
     for (const glm::vec3& p : w.positions) {

@@ -1,7 +1,11 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
 //                  [--block N] [--field auto|cache|splat] [--reps N] [--idle-ms MS] [--stats] [--force]
-// Reads .xyz/.csv/.ply particles (fluid/io), writes .obj or .ply with normals (seams welded).
+//   fluiddemo mesh --in 'frames/frame_{}.xyz' --out 'meshes/frame_{}.obj' [--frame-jobs N] [...]
+// Reads .xyz/.csv/.ply/.vtk particles (fluid/io), writes .obj, .ply, .vtk or .vtu with normals
+// (seams welded). With '{}' in --in, every file matching the pattern ({} = digits) is a frame,
+// meshed to --out with the same digits; existing outputs are skipped unless --force (a stopped
+// run resumes), a frame that fails is named and the others are finished (exit 1).
 // --reps N times N more extractions with the same extractor after the first (warm: scratch and
 // output capacity kept, as in a game meshing every frame) and prints their median and min, the first
 // (cold) one separately. --idle-ms MS sleeps that long before each of them, as a game's mesher
@@ -17,50 +21,169 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <unordered_map>
 #include <vector>
 
+#include <unistd.h>
+
 namespace game {
 namespace {
 
-// An upper bound of the particles' field (Rosenberg & Birdwell 2008 §2): each particle adds
-// f(r) = (r/(sqrt2 Rc))^4 - (r/(sqrt2 Rc))^2 + 1/4, at most 1/4 (at r = 0) and 0 from r = Rc
-// on, so at any point the field is at most 1/4 x the particles within Rc of it. A ball of
-// radius Rc lies inside the 3x3x3 cells of edge Rc around the cell holding its centre, so
-// 1/4 x the largest such 27-cell count bounds the field everywhere.
-double fieldUpperBound(const fluid::ParticlePositions& particles, double rc) {
-  auto cell = [rc](float v) {
-    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / rc), -1e15, 1e15));
+std::string lowercaseExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// One frame: read, check, extract, write. Returns 0, or the exit code of the single-file command
+// (1 failure, 2 usage) with the message (without the "fluiddemo mesh: " prefix) in `error`.
+int meshFile(const std::string& in, const std::string& out, fluid::SurfaceParams params, bool force,
+             fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh, std::string& error) {
+  fluid::ParticlePositions particles;
+  if (const fluid::IoStatus read = fluid::readParticleFile(in, particles); !read.ok()) {
+    error = read.error;
+    return 1;
+  }
+  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  if (error = fluid::unreachableThreshold(input, params, "--threshold", in); !error.empty()) return 2;
+  fluid::centreSurfaceOrigin(input, params);
+  if (const fluid::SurfaceStatus st = extractor.extract(input, params, mesh); !st.ok()) {
+    error = in + ": " + st.error;
+    return 1;
+  }
+  fluid::MeshWriteOptions options;
+  options.overwrite = force ? fluid::OverwritePolicy::replace : fluid::OverwritePolicy::refuse;
+  options.originX = params.originX, options.originY = params.originY, options.originZ = params.originZ;
+  if (const fluid::IoStatus written = fluid::writeSurfaceMesh(out, mesh, options); !written.ok()) {
+    error = written.error;
+    return 1;
+  }
+  return 0;
+}
+
+// Frames of a '{}' pattern: the files in its folder whose names are the pattern with digits for
+// {}, in numeric order (then by name, so frame_7 and frame_007 keep a fixed order).
+struct Frame {
+  std::string digits, in, out;
+};
+std::vector<Frame> findFrames(const std::string& in_pattern, const std::string& out_pattern, std::string& error) {
+  const std::filesystem::path pattern(in_pattern);
+  const std::string name = pattern.filename().string();
+  const std::size_t at = name.find("{}");
+  if (at == std::string::npos || name.find("{}", at + 2) != std::string::npos ||
+      pattern.parent_path().string().find("{}") != std::string::npos) {
+    error = "--in " + in_pattern + ": a sequence pattern holds '{}' once, in the file name";
+    return {};
+  }
+  const std::string prefix = name.substr(0, at), suffix = name.substr(at + 2);
+  const std::filesystem::path folder = pattern.has_parent_path() ? pattern.parent_path() : ".";
+  std::vector<Frame> frames;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string file = it->path().filename().string();
+    if (file.size() <= prefix.size() + suffix.size() || file.compare(0, prefix.size(), prefix) != 0 ||
+        file.compare(file.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    const std::string digits = file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 18) continue;
+    std::string out = out_pattern;
+    out.replace(out.find("{}"), 2, digits);
+    frames.push_back({digits, (folder / file).string(), out});
+  }
+  if (ec) {
+    error = "--in " + in_pattern + ": cannot list " + folder.string() + ": " + ec.message();
+    return {};
+  }
+  std::sort(frames.begin(), frames.end(), [](const Frame& a, const Frame& b) {
+    const unsigned long long x = std::stoull(a.digits), y = std::stoull(b.digits);
+    return x != y ? x < y : a.in < b.in;
+  });
+  if (frames.empty()) error = "--in " + in_pattern + ": no file matches (the pattern's {} stands for digits)";
+  return frames;
+}
+
+// Meshes every frame on `jobs` workers, each with its own extractor of params.threads threads.
+int meshSequence(const std::string& in_pattern, const std::string& out_pattern, const fluid::SurfaceParams& params,
+                 bool force, int jobs) {
+  std::string error;
+  const std::vector<Frame> frames = findFrames(in_pattern, out_pattern, error);
+  if (frames.empty()) {
+    std::fprintf(stderr, "fluiddemo mesh: %s\n", error.c_str());
+    return 2;
+  }
+  std::vector<std::size_t> todo;
+  std::error_code ec;
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    if (force || !std::filesystem::exists(frames[i].out, ec)) todo.push_back(i);
+  const std::size_t skipped = frames.size() - todo.size();
+  std::fprintf(stderr, "fluiddemo mesh: %zu frames (%s ... %s), %zu already meshed (skipped; --force remeshes them)\n",
+               frames.size(), frames.front().in.c_str(), frames.back().in.c_str(), skipped);
+  for (const std::size_t i : todo) {
+    const std::filesystem::path folder = std::filesystem::path(frames[i].out).parent_path();
+    if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+  }
+
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  const auto start = std::chrono::steady_clock::now();
+  auto last_shown = start;
+  std::mutex lock;  // guards the counters below and stderr
+  std::size_t done = 0;
+  std::vector<std::size_t> failed;  // frame indices
+  auto progress = [&](bool final) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!final && !terminal && now - last_shown < std::chrono::seconds(1)) return;
+    last_shown = now;
+    const double seconds = std::chrono::duration<double>(now - start).count();
+    const double rate = seconds > 0.0 ? double(done) / seconds : 0.0;
+    const double left = rate > 0.0 ? double(todo.size() - done) / rate : 0.0;
+    std::fprintf(stderr, "%smesh: %zu/%zu frames, %.1f frames/s, %.0f s left%s", terminal ? "\r" : "", done,
+                 todo.size(), rate, left, terminal && !final ? "" : "\n");
+    std::fflush(stderr);
   };
-  struct CellHash {
-    std::size_t operator()(const std::array<std::int64_t, 3>& c) const {
-      return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    fluid::SurfaceExtractor extractor;
+    fluid::SurfaceMesh mesh;
+    std::string message;
+    for (std::size_t k; (k = next.fetch_add(1)) < todo.size();) {
+      const Frame& frame = frames[todo[k]];
+      const int code = meshFile(frame.in, frame.out, params, force, extractor, mesh, message);
+      std::lock_guard<std::mutex> guard(lock);
+      ++done;
+      if (code != 0) {
+        failed.push_back(todo[k]);
+        std::fprintf(stderr, "%sfluiddemo mesh: frame %s failed: %s\n", terminal ? "\r" : "", frame.digits.c_str(),
+                     message.c_str());
+      }
+      progress(false);
     }
   };
-  std::unordered_map<std::array<std::int64_t, 3>, std::size_t, CellHash> counts;
-  for (std::size_t i = 0; i < particles.size(); ++i) {
-    ++counts[{cell(particles.x[i]), cell(particles.y[i]), cell(particles.z[i])}];
+  const int workers = std::max(1, std::min<int>(jobs, static_cast<int>(todo.size())));
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  progress(true);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("meshed %zu frames in %.2f s (%zu skipped, %zu failed)\n", todo.size() - failed.size(), seconds, skipped,
+              failed.size());
+  if (!failed.empty()) {
+    std::sort(failed.begin(), failed.end());
+    std::fprintf(stderr, "fluiddemo mesh: %zu of %zu frames failed, the first %s\n", failed.size(), frames.size(),
+                 frames[failed.front()].in.c_str());
+    return 1;
   }
-  std::size_t most = 0;
-  for (const auto& [c, count] : counts) {
-    std::size_t around = 0;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto found = counts.find({c[0] + dx, c[1] + dy, c[2] + dz});
-          if (found != counts.end()) around += found->second;
-        }
-    most = std::max(most, around);
-  }
-  return 0.25 * static_cast<double>(most);
+  return 0;
 }
 
 }  // namespace
@@ -72,8 +195,14 @@ int meshCommand(const Args& args) {
   fluid::SurfaceParams params;
   bool stats = false, force = false;
   int reps = 0;
-  app.add_option("--in", in, "particle file: .xyz (x y z per line), .csv or .ply")->required();
-  app.add_option("--out", out, "mesh file to write: .obj or .ply (with normals)")->required();
+  app.add_option("--in", in,
+                 "particle file: .xyz (x y z per line), .csv, .ply or legacy .vtk; or a sequence pattern "
+                 "'frames/frame_{}.xyz' ({} = the frame's digits)")
+      ->required();
+  app.add_option("--out", out,
+                 "mesh file to write: .obj, .ply, .vtk or .vtu (with normals); with a sequence, a pattern "
+                 "'meshes/frame_{}.obj' (existing frames are skipped unless --force)")
+      ->required();
   app.add_option("--rc", params.rc, "cutoff radius Rc of each particle's field (world units)")
       ->capture_default_str()
       ->check(positiveNumber());
@@ -100,20 +229,32 @@ int meshCommand(const Args& args) {
   app.add_option("--idle-ms", idle_ms, "with --reps: sleep this long before each timed extraction (a frame's idle)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0));
+  int frame_jobs = 0;
+  app.add_option("--frame-jobs", frame_jobs,
+                 "sequences: frames meshed at once, each on --threads / N threads; 0 = one frame per thread "
+                 "(faster than all threads on each frame in turn: docs/use-the-libraries.md)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
   app.add_flag("--stats", stats, "print extraction statistics");
-  app.add_flag("--force", force, "replace --out if it exists");
+  app.add_flag("--force", force, "replace --out if it exists (sequences: remesh frames already meshed)");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
   params.fieldRoute = field == "splat"   ? fluid::SurfaceFieldRoute::sliceSplat
                       : field == "cache" ? fluid::SurfaceFieldRoute::particleCache
                                          : fluid::SurfaceFieldRoute::automatic;
-  {
-    std::string ext = std::filesystem::path(out).extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".obj" && ext != ".ply") {
-      std::fprintf(stderr, "fluiddemo mesh: --out %s: unknown mesh format '%s' (use .obj or .ply)\n", out.c_str(),
-                   ext.c_str());
-      return 2;
-    }
+  if (const std::string ext = lowercaseExtension(out); ext != ".obj" && ext != ".ply" && ext != ".vtk" && ext != ".vtu") {
+    std::fprintf(stderr, "fluiddemo mesh: --out %s: unknown mesh format '%s' (use .obj, .ply, .vtk or .vtu)\n",
+                 out.c_str(), ext.c_str());
+    return 2;
+  }
+  const bool sequence_in = in.find("{}") != std::string::npos, sequence_out = out.find("{}") != std::string::npos;
+  if (sequence_in != sequence_out)
+    return usageError("mesh", "--in and --out are both sequence patterns (with '{}') or both files");
+  if (sequence_in) {
+    if (reps > 0 || stats) return usageError("mesh", "--reps and --stats take one file, not a sequence");
+    const int threads = params.threads > 0 ? params.threads : std::max(1, int(std::thread::hardware_concurrency()));
+    const int jobs = frame_jobs > 0 ? std::min(frame_jobs, threads) : threads;
+    params.threads = std::max(1, threads / jobs);
+    return meshSequence(in, out, params, force, jobs);
   }
   if (const int code = checkOutputFile("mesh", "--out", out, force); code >= 0) return code;
 
@@ -123,35 +264,19 @@ int meshCommand(const Args& args) {
     std::fprintf(stderr, "fluiddemo mesh: %s\n", read.error.c_str());
     return 1;
   }
-  // A threshold the field can never exceed is a usage error, not an empty mesh. (Any T < 1/4 is
-  // reached at a lone particle's centre, so only larger ones need the count.)
-  if (!particles.empty() && params.threshold >= 0.25f && params.rc > 0.0f) {
-    const double bound = fieldUpperBound(particles, params.rc);
-    if (params.threshold >= bound) {
-      std::fprintf(stderr,
-                   "fluiddemo mesh: --threshold %g is at or above the largest value the field of %s can reach "
-                   "(%g: at most 0.25 per particle within Rc of a point), so the mesh would be empty\n",
-                   static_cast<double>(params.threshold), in.c_str(), bound);
-      return 2;
-    }
+  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  // A threshold the field can never exceed is a usage error, not an empty mesh.
+  if (const std::string unreachable = fluid::unreachableThreshold(input, params, "--threshold", in);
+      !unreachable.empty()) {
+    std::fprintf(stderr, "fluiddemo mesh: %s\n", unreachable.c_str());
+    return 2;
   }
   // Keep float vertices precise for data far from the origin: mesh around the particles' centre
   // (a lattice point, so the lattice and the triangles do not change), add it back on writing.
-  if (!particles.empty()) {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (std::size_t i = 0; i < particles.size(); ++i) {
-      const double p[3] = {particles.x[i], particles.y[i], particles.z[i]};
-      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
-    }
-    const double s = params.cube;
-    params.originX = std::round(0.5 * (lo[0] + hi[0]) / s) * s;
-    params.originY = std::round(0.5 * (lo[1] + hi[1]) / s) * s;
-    params.originZ = std::round(0.5 * (lo[2] + hi[2]) / s) * s;
-  }
+  fluid::centreSurfaceOrigin(input, params);
 
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
-  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
   auto timedExtract = [&](double& ms) {
     const auto t0 = std::chrono::steady_clock::now();
     const fluid::SurfaceStatus st = extractor.extract(input, params, mesh);
