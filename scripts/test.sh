@@ -31,6 +31,11 @@ scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 echo "test.sh: installing to $scratch/prefix and building examples/ against it"
 cmake --install "$build_abs" --prefix "$scratch/prefix" >/dev/null
+# Every installed header compiles from the installed tree (nothing missing, nothing outside it).
+find "$scratch/prefix/include/fluiddemo/fluid" -name '*.hpp' | sort | sed 's|.*/include/fluiddemo/|#include "|; s|$|"|' \
+  >"$scratch/all_headers.cpp"
+"${CXX:-c++}" -std=c++20 -fsyntax-only -I"$scratch/prefix/include/fluiddemo" "$scratch/all_headers.cpp"
+echo "test.sh: $(grep -c . "$scratch/all_headers.cpp") installed headers compile from the installed tree"
 cmake -S "$root/examples" -B "$scratch/examples" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$scratch/prefix" >/dev/null
 cmake --build "$scratch/examples" -j "$jobs"
