@@ -8,6 +8,7 @@
 #include "fluid/collide/collide.hpp"
 #include "fluid/collide/mesh_checks.hpp"
 #include "fluid/io/obj_mesh.hpp"
+#include "fluid/io/particle_io.hpp"
 #include "fluid/sph/sph.hpp"
 #include "fluid/sph/sph_scenes.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -28,14 +29,22 @@ namespace py = pybind11;
 
 namespace {
 
+// ValueError with `message`; bytes of a file quoted in it that are not UTF-8 become U+FFFD.
+[[noreturn]] void fail(const std::string& message) {
+  PyObject* text = PyUnicode_DecodeUTF8(message.data(), static_cast<Py_ssize_t>(message.size()), "replace");
+  PyErr_SetObject(PyExc_ValueError, text);
+  Py_XDECREF(text);
+  throw py::error_already_set();
+}
+
 using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
 // (n, 3) float32 C-contiguous copy-or-view of `points`; `what` names the argument in errors.
 FloatArray pointsArgument(const py::handle& points, const char* what) {
   FloatArray a = FloatArray::ensure(points);
-  if (!a) throw py::value_error(std::string(what) + ": not convertible to a float32 array");
+  if (!a) fail(std::string(what) + ": not convertible to a float32 array");
   if (a.ndim() != 2 || a.shape(1) != 3)
-    throw py::value_error(std::string(what) + ": expected shape (n, 3), got " +
+    fail(std::string(what) + ": expected shape (n, 3), got " +
                           std::string(py::str(py::getattr(a, "shape"))));
   return a;
 }
@@ -66,7 +75,7 @@ struct Mesher {
     fluid::SurfaceParams frame = params;
     const fluid::SurfaceInput input{x, y, z, {}, {}, {}};
     if (const std::string error = fluid::unreachableThreshold(input, frame, "threshold", "positions"); !error.empty())
-      throw py::value_error(error);
+      fail(error);
     fluid::SurfaceStatus st;
     {
       py::gil_scoped_release unlocked;
@@ -78,7 +87,7 @@ struct Mesher {
         fluid::weldSurfaceMesh(surface, options, welded);
       }
     }
-    if (!st.ok()) throw py::value_error(st.error);
+    if (!st.ok()) fail(st.error);
     const py::ssize_t v = static_cast<py::ssize_t>(welded.positions.size());
     const py::ssize_t t = static_cast<py::ssize_t>(welded.indices.size() / 3);
     py::array_t<float> vertices({v, py::ssize_t{3}}), normals({v, py::ssize_t{3}});
@@ -95,6 +104,23 @@ py::tuple mesh(const py::handle& positions, float radius, float threshold, float
   return mesher.mesh(positions);
 }
 
+// The particle files `fluiddemo mesh --in` reads (.xyz, .csv, .ply, legacy .vtk) as an (n, 3) array.
+py::array_t<float> readParticles(const std::string& path) {
+  fluid::ParticlePositions particles;
+  fluid::IoStatus st;
+  {
+    py::gil_scoped_release unlocked;
+    st = fluid::readParticleFile(path, particles);
+  }
+  if (!st.ok()) fail(st.error);
+  const py::ssize_t n = static_cast<py::ssize_t>(particles.size());
+  py::array_t<float> out({n, py::ssize_t{3}});
+  float* p = out.mutable_data();
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    p[3 * i] = particles.x[i], p[3 * i + 1] = particles.y[i], p[3 * i + 2] = particles.z[i];
+  return out;
+}
+
 // An SPH world made from a measurement scene (fluid/sph/sph_scenes.hpp).
 struct World {
   std::unique_ptr<fluid::SphScene> scene = std::make_unique<fluid::SphScene>();
@@ -103,12 +129,12 @@ struct World {
 World makeWorld(const std::string& name, const std::string& solver, const py::kwargs& keys) {
   fluid::SphSolverKind kind;
   if (!fluid::parseSphSolver(solver, kind))
-    throw py::value_error("solver: unknown solver '" + solver + "' (expected wcsph or dfsph)");
+    fail("solver: unknown solver '" + solver + "' (expected wcsph or dfsph)");
   std::vector<std::pair<std::string, std::string>> overrides;
   for (const auto& [key, value] : keys) overrides.emplace_back(py::str(key), py::str(value));
   World world;
   if (const fluid::SphStatus st = fluid::makeSphScene(name, kind, overrides, *world.scene); !st.ok())
-    throw py::value_error(st.error);
+    fail(st.error);
   return world;
 }
 
@@ -129,18 +155,18 @@ struct Collider {
 
 Collider bakeCollider(const std::string& path, int resolution, const std::string& maps, int threads) {
   fluid::ObjMesh model;
-  if (const fluid::IoStatus read = fluid::readObjMesh(path, model); !read.ok()) throw py::value_error(read.error);
+  if (const fluid::IoStatus read = fluid::readObjMesh(path, model); !read.ok()) fail(read.error);
   const fluid::MeshView view{model.positions, model.indices};
   const fluid::ClosedMeshReport closed = fluid::checkClosed(view);
   if (!closed.closed())
-    throw py::value_error(path + ": the mesh is open: " + std::to_string(closed.boundary_edges) +
+    fail(path + ": the mesh is open: " + std::to_string(closed.boundary_edges) +
                           " boundary edges (edges of one triangle, after welding coincident vertices); depth maps "
                           "of an open mesh call points inside it outside");
   std::vector<fluid::MapSpec> specs;
   std::string error;
   if (!fluid::parseMapSpec(maps, fluid::meshBounds(view), resolution, fluid::DepthMapFormat::front_back16, specs,
                            error))
-    throw py::value_error("maps: " + error);
+    fail("maps: " + error);
   Collider collider{std::make_shared<fluid::DepthMapCollider>()};
   fluid::BakeDesc desc;
   desc.threads = threads;
@@ -149,7 +175,7 @@ Collider bakeCollider(const std::string& path, int resolution, const std::string
     py::gil_scoped_release unlocked;
     st = fluid::bakeDepthMaps(view, specs, desc, *collider.shape);
   }
-  if (!st.ok()) throw py::value_error(path + ": " + st.error);
+  if (!st.ok()) fail(path + ": " + st.error);
   return collider;
 }
 
@@ -189,6 +215,9 @@ PYBIND11_MODULE(fluiddemo, m) {
       .def(py::init<float, float, float, int>(), py::arg("radius") = 3.0f, py::arg("threshold") = 0.2f,
            py::arg("cube") = 1.0f, py::arg("threads") = 0)
       .def("mesh", &Mesher::mesh, py::arg("positions"));
+  m.def("read_particles", &readParticles, py::arg("path"),
+        "Read a particle file (.xyz, .csv, .ply or legacy .vtk, as `fluiddemo mesh --in`) into an (n, 3) "
+        "float32 array. Raises ValueError naming the file and line for bad content.");
   m.def("scene_names", &fluid::sphSceneNames, "Names of the SPH scenes World() takes.");
 
   py::class_<World>(m, "World", "An SPH world made from a scene (dambreak, column, fountain, dambreak_box).")
@@ -202,7 +231,7 @@ PYBIND11_MODULE(fluiddemo, m) {
               py::gil_scoped_release unlocked;
               st = fluid::stepSph(w.scene->world, max_dt);
             }
-            if (!st.ok()) throw py::value_error(st.error);
+            if (!st.ok()) fail(st.error);
             return w.scene->world.last_dt;
           },
           py::arg("max_dt") = 0.0f, "One adaptive step of at most max_dt s (0: the scene's bound); returns dt.")
@@ -214,7 +243,7 @@ PYBIND11_MODULE(fluiddemo, m) {
               py::gil_scoped_release unlocked;
               st = fluid::advanceSph(w.scene->world, seconds, [](const fluid::SphStepStats&) {});
             }
-            if (!st.ok()) throw py::value_error(st.error);
+            if (!st.ok()) fail(st.error);
           },
           py::arg("seconds"), "Steps until `seconds` have passed (the last steps land on it).")
       .def_property_readonly(

@@ -55,6 +55,10 @@ IoStatus readParticleFile(const std::filesystem::path& path, ParticlePositions& 
 IoStatus parseParticleText(const std::string& text, const std::string& format, const std::string& name,
                            ParticlePositions& out);
 
+// Parses a whole legacy .vtk file held in `bytes` (fluid/io/vtk_io.hpp says which); `name` is
+// used in messages.
+IoStatus parseParticleVtk(const std::string& bytes, const std::string& name, ParticlePositions& out);
+
 enum class OverwritePolicy { refuse, replace };
 
 // Writes "x y z" lines with round-trip precision (max_digits10). Refuses to replace an

@@ -4,7 +4,7 @@
 //   particles in   legacy "# vtk DataFile Version x.y", ASCII or BINARY (big-endian, as VTK
 //                  writes it), any DATASET holding POINTS (POLYDATA, UNSTRUCTURED_GRID, ...):
 //                  the points are the particles, float or double; the rest of the file is ignored.
-//                  readParticleFile (particle_io.hpp) takes .vtk through this.
+//                  readParticleFile and parseParticleVtk (particle_io.hpp) read them.
 //   particles out  legacy POLYDATA with POINTS and one VERTICES cell per particle.
 //   meshes out     legacy BINARY POLYDATA (POINTS, POLYGONS, POINT_DATA NORMALS), or
 //                  .vtu UnstructuredGrid (ASCII XML, VTK_TRIANGLE cells, point data "Normals").
@@ -21,9 +21,6 @@
 #include <string>
 
 namespace fluid {
-
-// Parses a whole legacy .vtk file held in `bytes`; `name` is used in messages.
-IoStatus parseParticleVtk(const std::string& bytes, const std::string& name, ParticlePositions& out);
 
 enum class VtkEncoding { ascii, binary };
 

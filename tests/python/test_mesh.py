@@ -140,3 +140,42 @@ def test_mesher_keeps_its_scratch_and_gives_the_same_bits():
     again = mesher.mesh(explosion)
     alone = fluiddemo.mesh(explosion, 3.0, 0.2, 0.6)
     assert all(same_bits(a, b) and same_bits(a, c) for a, b, c in zip(first, again, alone))
+
+
+def test_read_particles_reads_what_the_cli_reads(tmp_path):
+    points = load("blob.xyz")
+    assert same_bits(fluiddemo.read_particles(str(DATA / "blob.xyz")), points)
+    for binary in (False, True):
+        write_vtk_particles(tmp_path / "p.vtk", points, binary)
+        assert same_bits(fluiddemo.read_particles(str(tmp_path / "p.vtk")), points)
+    with pytest.raises(ValueError, match="unknown particle file extension '.txt'"):
+        fluiddemo.read_particles(str(tmp_path / "p.txt"))
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_every_truncated_or_garbled_vtk_file_is_an_error_or_a_prefix(tmp_path, binary):
+    points = load("blob.xyz")[:20]
+    write_vtk_particles(tmp_path / "p.vtk", points, binary)
+    data = (tmp_path / "p.vtk").read_bytes()
+    # The particles end where the points do: after the header's 5 lines and the POINTS numbers.
+    header = data.index(b"POINTS") + data[data.index(b"POINTS"):].index(b"\n") + 1
+    points_end = header + 12 * len(points) if binary else data.index(b"VERTICES")
+    rng = np.random.default_rng(1)
+    cases = [data[:cut] for cut in range(len(data))]
+    for _ in range(300):
+        garbled = bytearray(data)
+        for at in rng.integers(0, len(data), size=3):
+            garbled[at] = int(rng.integers(0, 256))
+        cases.append(bytes(garbled))
+    for k, case in enumerate(cases):
+        (tmp_path / "case.vtk").write_bytes(case)
+        try:
+            got = fluiddemo.read_particles(str(tmp_path / "case.vtk"))
+        except ValueError as error:
+            assert str(error).startswith(str(tmp_path / "case.vtk") + ":"), error
+            continue
+        # A file cut before the last point's numbers is never taken for a whole one (a text number
+        # cut short is still a number: the bound is the last number's first digit).
+        last = points_end if binary else data.rindex(b" ", 0, points_end) + 2
+        assert k >= last, f"a file cut at {k} bytes was read"
+        assert got.shape[1] == 3 and np.isfinite(got).all()
