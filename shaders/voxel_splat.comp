@@ -6,6 +6,9 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Particles { vec4 centres[]; };
 layout(std430, binding = 2) buffer Bits { uint bits[]; };
 layout(std430, binding = 9) readonly buffer Selection { uint selected[]; };  // u_use_selection: indices
+// §4.3: full inner cells left out of the particles come back as one sphere each (centre, radius).
+layout(std430, binding = 10) readonly buffer InnerCells { vec4 inner_cells[]; };
+uniform uint u_inner_count;
 uniform mat4 u_world_to_view;
 uniform uint u_count;
 uniform uint u_row;  // invocations per dispatch row (the grid is 2D past 65535 groups)
@@ -17,14 +20,15 @@ int pixelOf(float ndc, int size) { return int(floor(clamp((ndc + 1.0) * 0.5 * fl
 
 void main() {
   uint i = gl_GlobalInvocationID.y * u_row + gl_GlobalInvocationID.x;
-  if (i >= u_count) return;
-  vec3 p = centres[u_use_selection ? selected[i] : i].xyz;
+  if (i >= u_count + u_inner_count) return;
+  vec4 sphere = i < u_count ? vec4(centres[u_use_selection ? selected[i] : i].xyz, u_radius) : inner_cells[i - u_count];
+  vec3 p = sphere.xyz;
   mat4 v = u_world_to_view;
   precise float cx = ((v[0][0] * p.x + v[1][0] * p.y) + v[2][0] * p.z) + v[3][0];
   precise float cy = ((v[0][1] * p.x + v[1][1] * p.y) + v[2][1] * p.z) + v[3][1];
   precise float cz = ((v[0][2] * p.x + v[1][2] * p.y) + v[2][2] * p.z) + v[3][2];
   vec3 c = vec3(cx, cy, cz);
-  float r = u_radius, d = -c.z;
+  float r = sphere.w, d = -c.z;
   if (d + r < layer_depth[0] || d - r >= layer_depth[u_layer_count]) return;
   ivec2 lo = u_tile.xy, hi = u_tile.xy + u_tile.zw - 1;
   if (d - r > 1e-4) {

@@ -21,6 +21,7 @@ enum Binding : GLuint {
   kDepthB = 7,
   kDepthC = 8,
   kSelection = 9,
+  kInnerCells = 10,
 };
 
 GLuint buildVoxelProgram(std::vector<ShaderStageFiles> stages, std::string& error) {
@@ -126,8 +127,8 @@ void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out) {
     return;
   }
   const bool scene_ok = createSceneTargets(w, h, out.scene);
-  for (GLuint* b : {&out.selection, &out.layer_table, &out.tile_bits, &out.spans, &out.meta, &out.links, &out.depth_raw,
-                    &out.depth_ping, &out.depth_pong, &out.normals}) {
+  for (GLuint* b : {&out.selection, &out.inner_cells, &out.layer_table, &out.tile_bits, &out.spans, &out.meta,
+                    &out.links, &out.depth_raw, &out.depth_ping, &out.depth_pong, &out.normals}) {
     glGenBuffers(1, b);
     resizeBuffer(*b, 16);
   }
@@ -153,8 +154,8 @@ void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out) {
 GlObjectNames glNames(const VoxelRenderer& r) {
   GlObjectNames n;
   if (r.scene.fbo != 0) listNames(r.scene, n);
-  for (GLuint b : {r.particles.buffer, r.selection, r.layer_table, r.tile_bits, r.spans, r.meta, r.links, r.depth_raw,
-                   r.depth_ping, r.depth_pong, r.normals})
+  for (GLuint b : {r.particles.buffer, r.selection, r.inner_cells, r.layer_table, r.tile_bits, r.spans, r.meta, r.links,
+                   r.depth_raw, r.depth_ping, r.depth_pong, r.normals})
     if (b != 0) n.buffers.push_back(b);
   for (GLuint v : {r.vao, r.empty_vao})
     if (v != 0) n.vertex_arrays.push_back(v);
@@ -166,8 +167,8 @@ GlObjectNames glNames(const VoxelRenderer& r) {
 
 void destroyVoxelRenderer(VoxelRenderer& r) {
   destroySceneTargets(r.scene);
-  for (GLuint* b : {&r.particles.buffer, &r.selection, &r.layer_table, &r.tile_bits, &r.spans, &r.meta, &r.links,
-                    &r.depth_raw, &r.depth_ping, &r.depth_pong, &r.normals})
+  for (GLuint* b : {&r.particles.buffer, &r.selection, &r.inner_cells, &r.layer_table, &r.tile_bits, &r.spans, &r.meta,
+                    &r.links, &r.depth_raw, &r.depth_ping, &r.depth_pong, &r.normals})
     if (*b != 0) glDeleteBuffers(1, b);
   for (GLuint* v : {&r.vao, &r.empty_vao})
     if (*v != 0) glDeleteVertexArrays(1, v);
@@ -195,9 +196,11 @@ bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions
   r.bounds_hi = glm::vec3(-1.0f);
   r.use_selection = false;
   r.selection_count = 0;
+  r.inner_count = 0;
   if (!uploadParticles(r.particles, positions, error)) return false;
   r.stats.particles = r.particles.count;
   r.stats.splatted = r.particles.count;
+  r.stats.inner_cells = 0;
   if (positions.empty()) return true;
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
   for (const glm::vec3& p : positions) {
@@ -206,17 +209,25 @@ bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions
   }
   r.bounds_lo = lo;
   r.bounds_hi = hi;
-  if (cell > 0.0f && full_count > 0 && r.selection != 0) {
+  if (cell > 0.0f && r.selection != 0) {
     std::vector<std::uint32_t> kept;
+    std::vector<glm::vec3> inner;
     kept.reserve(positions.size());
-    fluid::dropInnerCellParticles(positions, cell, full_count, kept);
+    fluid::dropInnerCellParticles(positions, cell, full_count, kept, inner);
+    std::vector<glm::vec4> spheres(inner.size());
+    for (std::size_t i = 0; i < inner.size(); ++i) spheres[i] = glm::vec4(inner[i], fluid::kInnerCellRadius * cell);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.selection);
     glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(kept.size() * 4, 16)),
                  kept.data(), GL_STREAM_DRAW);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.inner_cells);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(spheres.size() * 16, 16)),
+                 spheres.data(), GL_STREAM_DRAW);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     r.use_selection = true;
     r.selection_count = static_cast<std::uint32_t>(kept.size());
+    r.inner_count = static_cast<std::uint32_t>(spheres.size());
     r.stats.splatted = r.selection_count;
+    r.stats.inner_cells = r.inner_count;
   }
   return true;
 }
@@ -292,14 +303,17 @@ void voxelSplatTile(VoxelRenderer& r, const VoxelParams& params, fluid::VoxelTil
   setUniform(p, "u_radius", std::max(params.radius, 1e-5f));
   glUniform4i(glGetUniformLocation(p, "u_tile"), tile.x, tile.y, tile.width, tile.height);
   const std::uint32_t count = r.use_selection ? r.selection_count : r.particles.count;
-  const std::uint32_t groups = (count + 63) / 64, row_groups = std::min<std::uint32_t>(groups, 65535);
+  const std::uint32_t inner = r.use_selection ? r.inner_count : 0u;
+  const std::uint32_t groups = (count + inner + 63) / 64, row_groups = std::min<std::uint32_t>(groups, 65535);
   glUniform1ui(glGetUniformLocation(p, "u_count"), count);
+  glUniform1ui(glGetUniformLocation(p, "u_inner_count"), inner);
   glUniform1ui(glGetUniformLocation(p, "u_row"), row_groups * 64);
   setUniform(p, "u_use_selection", r.use_selection ? 1 : 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kParticles, r.particles.buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kLayers, r.layer_table);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kBits, r.tile_bits);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSelection, r.selection);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kInnerCells, r.inner_cells);
   if (groups > 0) glDispatchCompute(row_groups, (groups + row_groups - 1) / row_groups, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   glUseProgram(0);  // Mesa 22.3 kept a program current after a compute dispatch alive past its deletion
@@ -459,7 +473,7 @@ void drawVoxelFluid(VoxelRenderer& r, GLuint target_fbo, const FluidCamera& came
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glDisable(GL_BLEND);
   glActiveTexture(GL_TEXTURE0);
-  for (GLuint i = 0; i <= kSelection; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i <= kInnerCells; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   glBindVertexArray(0);
   glUseProgram(0);  // a deleted program stays alive while current
   shade_timer.stop(s.shade_ms);

@@ -56,6 +56,7 @@ struct VoxelStats {
   float nearest = 0.0f, farthest = 0.0f;  // the grid's depth range, view metres (fitted to the particles)
   int tiles = 0, tile_width = 0, tile_height = 0;
   std::uint32_t particles = 0, splatted = 0;  // uploaded; splatted after the inner-cell pre-pass (§4.3)
+  std::uint32_t inner_cells = 0;              // spheres standing for the full inner cells left out
   std::uint64_t tile_grid_bytes = 0;          // the temporary bit grid (one tile)
   std::uint64_t span_bytes = 0;               // what outlives the tiles: spans, counts, links, depths, normals
   std::uint64_t dense_grid_bytes = 0;         // one bit per voxel of the whole screen at the same layers
@@ -72,6 +73,8 @@ struct VoxelRenderer {
   ParticleBuffer particles;
   GLuint selection = 0;  // §4.3 pre-pass: indices of the particles to splat
   std::uint32_t selection_count = 0;
+  GLuint inner_cells = 0;  // §4.3 pre-pass: one sphere (centre, radius) per full inner cell
+  std::uint32_t inner_count = 0;
   bool use_selection = false;
   glm::vec3 bounds_lo{0.0f}, bounds_hi{-1.0f};  // world box of the uploaded particles (empty: lo > hi)
   GLuint layer_table = 0;                       // float[layers + 1] boundaries
@@ -95,8 +98,9 @@ void beginVoxelOpaquePass(VoxelRenderer& renderer, glm::vec4 clear_colour);
 // False + error (nothing uploaded) when a position is not finite. Empty = no fluid.
 bool uploadVoxelParticles(VoxelRenderer& renderer, std::span<const glm::vec3> positions, std::string& error);
 // The same, leaving full inner cells out of the splat (§3.1, §4.3): cells of edge `cell` metres
-// holding at least `full_count` particles whose 26 neighbours are full too (fluid::dropInnerCellParticles).
-// Keep min_gap >= cell so the compression bridges what they leave out. cell <= 0: keep all.
+// holding at least `full_count` particles whose 26 neighbours are full too (fluid::dropInnerCellParticles;
+// full_count <= 0: from the set's median cell); each inner cell is splatted as its circumscribed
+// sphere instead, so the body stays filled. cell <= 0: keep all.
 bool uploadVoxelParticles(VoxelRenderer& renderer, std::span<const glm::vec3> positions, float cell, int full_count,
                           std::string& error);
 

@@ -156,8 +156,8 @@ void compressColumnReference(std::span<const std::uint32_t> column, const VoxelL
 }
 
 void dropInnerCellParticles(std::span<const glm::vec3> positions, float cell, int full_count,
-                            std::vector<std::uint32_t>& kept) {
-  if (!(cell > 0.0f) || full_count < 1) {
+                            std::vector<std::uint32_t>& kept, std::vector<glm::vec3>& inner_cells) {
+  if (!(cell > 0.0f)) {
     for (std::size_t i = 0; i < positions.size(); ++i) kept.push_back(static_cast<std::uint32_t>(i));
     return;
   }
@@ -171,6 +171,13 @@ void dropInnerCellParticles(std::span<const glm::vec3> positions, float cell, in
   std::unordered_map<std::uint64_t, int> counts;
   counts.reserve(positions.size() / 4 + 16);
   for (const glm::vec3& p : positions) ++counts[key(cellOf(p.x), cellOf(p.y), cellOf(p.z))];
+  if (full_count <= 0 && !counts.empty()) {
+    std::vector<int> occupied;
+    occupied.reserve(counts.size());
+    for (const auto& [k, n] : counts) occupied.push_back(n);
+    std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
+    full_count = std::max(2, occupied[occupied.size() / 2] / 2);
+  }
   std::unordered_map<std::uint64_t, bool> inner;
   inner.reserve(counts.size());
   auto isInner = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -190,6 +197,19 @@ void dropInnerCellParticles(std::span<const glm::vec3> positions, float cell, in
     const glm::vec3& p = positions[i];
     if (!isInner(cellOf(p.x), cellOf(p.y), cellOf(p.z))) kept.push_back(static_cast<std::uint32_t>(i));
   }
+  // One sphere per inner cell, in a fixed order (the map's order is not).
+  std::vector<std::uint64_t> cells;
+  for (const auto& [k, is_inner] : inner)
+    if (is_inner) cells.push_back(k);
+  std::sort(cells.begin(), cells.end());
+  auto unpack = [](std::uint64_t v) {  // 21-bit two's complement fields back to integers
+    const std::int64_t f = static_cast<std::int64_t>(v & 0x1fffff);
+    return f >= 0x100000 ? f - 0x200000 : f;
+  };
+  for (std::uint64_t k : cells)
+    inner_cells.push_back(glm::vec3(static_cast<float>(unpack(k >> 42)) + 0.5f,
+                                    static_cast<float>(unpack(k >> 21)) + 0.5f, static_cast<float>(unpack(k)) + 0.5f) *
+                          cell);
 }
 
 }  // namespace fluid

@@ -89,10 +89,16 @@ void compressColumnReference(std::span<const std::uint32_t> column, const VoxelL
 
 // The particles worth splatting (§3.1, §4.3, §5): those not in a full inner cell. Cells are cubes
 // of edge `cell` on a grid at the origin; a cell with at least `full_count` particles is full, and
-// a full cell whose 26 neighbours are all full is inner: its particles are inside the body and add
-// no surface (the compression's gap bridging closes any hole their absence leaves when min_gap is
-// at least `cell`). Appends the kept indices, in input order, to `kept`.
+// a full cell whose 26 neighbours are all full is inner: its particles add no surface. They are
+// replaced by one sphere per inner cell (its centre, radius kInnerCellRadius · cell: the cell's
+// circumscribed sphere, which reaches only into full neighbours), so the body stays filled for the
+// compression: without them its inside would be a hollow the minimum gap cannot bridge (the paper
+// marches the simulation grid during extraction instead, §4.3). full_count <= 0: 1/2 of the
+// median count of the occupied cells (a settled body's cells where the set has one; the paper takes
+// it from the simulation's constraints). Appends the kept indices, in input order, to `kept` and
+// the inner cells' centres to `inner_cells`.
+inline constexpr float kInnerCellRadius = 0.87f;  // > sqrt(3) / 2
 void dropInnerCellParticles(std::span<const glm::vec3> positions, float cell, int full_count,
-                            std::vector<std::uint32_t>& kept);
+                            std::vector<std::uint32_t>& kept, std::vector<glm::vec3>& inner_cells);
 
 }  // namespace fluid

@@ -168,6 +168,7 @@ struct RenderJob {
   float radius = 0.0f, spacing = 0.0f;
   int width = 640, height = 360, frames = 1;
   bool drop_inner = false;
+  int tile_width = 0, tile_height = 0;  // voxel: forced tile size (0 = the budget's)
   engine::FluidCamera camera;
   engine::WaterParams water;
   glm::vec3 sky{0.0f};
@@ -266,6 +267,8 @@ void timeParticleMethod(RenderJob& job, Renderer& r, Timing& t, Upload&& upload,
 bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t, std::string& error) {
   engine::VoxelDesc desc;
   desc.base = base;
+  desc.tile_width = job.tile_width;
+  desc.tile_height = job.tile_height;
   engine::VoxelRenderer r;
   engine::createVoxelRenderer(desc, r);
   if (!r.ready) {
@@ -277,14 +280,13 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
   p.min_gap = job.radius;
   p.filter_radius = 1.5f * job.radius;  // enough rounds to smooth a lattice's bumps (spacing 1.5 R)
   p.time_stages = true;
-  const float cell = 2.0f * job.spacing;
-  if (job.drop_inner) p.min_gap = std::max(p.min_gap, cell);
+  const float cell = 3.0f * job.spacing;  // about 27 particles per full cell
   bool ok = true;
   double stage_ms[6] = {0, 0, 0, 0, 0, 0};
   timeParticleMethod(
       job, r, t,
       [&] {
-        ok = ok && (job.drop_inner ? engine::uploadVoxelParticles(r, job.particles, cell, 7, error)
+        ok = ok && (job.drop_inner ? engine::uploadVoxelParticles(r, job.particles, cell, 0, error)
                                    : engine::uploadVoxelParticles(r, job.particles, error));
       },
       [&](bool timed) {
@@ -312,8 +314,11 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
                 static_cast<unsigned long long>(s.stored_spans), static_cast<unsigned long long>(s.overflow_columns),
                 s.dense_grid_bytes / kMiB);
   t.notes.push_back(line);
-  std::snprintf(line, sizeof line, "particles splatted %u of %u%s", s.splatted, s.particles,
-                job.drop_inner ? " (full inner cells left out, §4.3)" : "");
+  std::snprintf(
+      line, sizeof line, "particles splatted %u of %u%s", s.splatted, s.particles,
+      job.drop_inner
+          ? (", and " + std::to_string(s.inner_cells) + " spheres for the full inner cells left out (§4.3)").c_str()
+          : "");
   t.notes.push_back(line);
   engine::destroyVoxelRenderer(r);
   return ok;
@@ -401,6 +406,8 @@ int renderCommand(const Args& args) {
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
   app.add_flag("--silhouette", silhouette, "opaque, dark water: the image is the water's mask (for IoU)");
+  std::string tile_text;
+  app.add_option("--tile-size", tile_text, "voxel: tile WxH instead of the 64 MiB budget's (paper Table 1)");
   app.add_flag("--drop-inner-cells", drop_inner, "voxel: leave full inner cells out of the splat (paper §4.3)");
   app.add_flag("--force", force, "replace --out if it exists");
   if (const int code = parseCommandLine(app, "render", args); code >= 0) return code;
@@ -409,6 +416,13 @@ int renderCommand(const Args& args) {
     return usageError("render", "--camera " + camera_text + ": expected three numbers x,y,z");
   if (!look_text.empty() && !parseVec3(look_text, target))
     return usageError("render", "--look-at " + look_text + ": expected three numbers x,y,z");
+  int tile_w = 0, tile_h = 0;
+  if (!tile_text.empty()) {
+    char x = 0, extra = 0;
+    if (std::sscanf(tile_text.c_str(), "%d%c%d%c", &tile_w, &x, &tile_h, &extra) != 3 || x != 'x' || tile_w < 1 ||
+        tile_h < 1 || tile_w > 8192 || tile_h > 8192)
+      return usageError("render", "--tile-size " + tile_text + ": expected WxH, each 1..8192");
+  }
   if (const int code = checkPngOutput("render", "--out", out, force); code >= 0) return code;
 
   fluid::ParticlePositions read;
@@ -426,6 +440,8 @@ int renderCommand(const Args& args) {
   job.height = height;
   job.frames = frames;
   job.drop_inner = drop_inner;
+  job.tile_width = tile_w;
+  job.tile_height = tile_h;
   job.particles.resize(read.size());
   job.lo = glm::vec3(1e30f);
   job.hi = glm::vec3(-1e30f);
