@@ -39,3 +39,20 @@ def test_query_wants_points():
     crate = fluiddemo.bake_collider(str(REPO / "content/models/crate.obj"), resolution=16)
     with pytest.raises(ValueError, match=r"points: expected shape \(n, 3\)"):
         crate.query(np.zeros((4, 2)))
+
+
+def test_quads_slashes_and_negative_indices(tmp_path):
+    # The unit cube as six quads, written with v/vt/vn refs and indices relative to the end.
+    cube = tmp_path / "cube.obj"
+    corners = [(x, y, z) for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)]
+    faces = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    lines = ["o cube", "vt 0 0", "vn 0 0 1"] + [f"v {x} {y} {z}" for x, y, z in corners]
+    lines += ["f " + " ".join(f"{i - 9}/1/1" for i in face) for face in faces]
+    cube.write_text("\n".join(lines) + "\n")
+    collider = fluiddemo.bake_collider(str(cube), resolution=64)
+    distance, _, valid = collider.query([[0, 0, 0], [0, 0, 0.8]])
+    assert valid.all() and distance == pytest.approx([-0.5, 0.3], abs=0.002)
+    bad = tmp_path / "bad_ref.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n")
+    with pytest.raises(ValueError, match=r"bad_ref.obj:4: f vertex 4 refers to no vertex \(3 defined so far\)"):
+        fluiddemo.bake_collider(str(bad))
