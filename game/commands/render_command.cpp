@@ -24,6 +24,7 @@
 #include "fluid/surface/marching_slices.hpp"
 
 #include <CLI/CLI.hpp>
+#include <sys/resource.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -380,6 +381,32 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   return ok;
 }
 
+// The fountain's look: the scene lighting's sky and sun (engine::Lighting, the fountain scene
+// sets none of its own) and the water's colours of fluid_surface (game/world/fluid_surface.hpp).
+// `silhouette`: as bench_fluid_render, water dark wherever there is any (the image is its mask).
+void setFountainLook(bool silhouette, RenderJob& job) {
+  const engine::Lighting lighting;
+  job.sky = lighting.sky_horizon;
+  job.water.sky_zenith = lighting.sky_zenith;
+  job.water.sky_horizon = lighting.sky_horizon;
+  job.water.light_direction = lighting.sun_direction;
+  job.water.absorption = {1.6f, 0.45f, 0.25f};
+  if (silhouette) {
+    job.water.absorption = glm::vec3(1000.0f);
+    job.water.refraction = 0.0f;
+    job.water.opacity = 1.0f;
+  }
+}
+
+// Writes the target's pixels as a PNG; false + error.
+bool writeTarget(const RenderJob& job, const std::string& out, std::string& error) {
+  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(job.width) * job.height * 4);
+  glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
+  glReadPixels(0, 0, job.width, job.height, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  return engine::writePngBottomUp(out, job.width, job.height, pixels, error);
+}
+
 }  // namespace
 
 int renderCommand(const Args& args) {
@@ -469,19 +496,7 @@ int renderCommand(const Args& args) {
   job.camera.view = glm::lookAt(eye, target, up);
   job.camera.projection = glm::perspective(glm::radians(45.0f), static_cast<float>(width) / static_cast<float>(height),
                                            job.camera.near_plane, job.camera.far_plane);
-  // The fountain's look: the scene lighting's sky and sun (engine::Lighting, the fountain scene
-  // sets none of its own) and the water's colours of fluid_surface (game/world/fluid_surface.hpp).
-  const engine::Lighting lighting;
-  job.sky = lighting.sky_horizon;
-  job.water.sky_zenith = lighting.sky_zenith;
-  job.water.sky_horizon = lighting.sky_horizon;
-  job.water.light_direction = lighting.sun_direction;
-  job.water.absorption = {1.6f, 0.45f, 0.25f};
-  if (silhouette) {  // as bench_fluid_render: dark wherever there is water at all
-    job.water.absorption = glm::vec3(1000.0f);
-    job.water.refraction = 0.0f;
-    job.water.opacity = 1.0f;
-  }
+  setFountainLook(silhouette, job);
 
   engine::PlatformDesc platform_desc;
   platform_desc.title = "fluiddemo render";
@@ -511,15 +526,9 @@ int renderCommand(const Args& args) {
     code = 1;
   }
   const double total_ms = nowMs() - t0;
-  if (code == 0) {
-    std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height * 4);
-    glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
-    glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    if (!engine::writePngBottomUp(out, width, height, pixels, error)) {
-      std::fprintf(stderr, "fluiddemo render: %s\n", error.c_str());
-      code = 1;
-    }
+  if (code == 0 && !writeTarget(job, out, error)) {
+    std::fprintf(stderr, "fluiddemo render: %s\n", error.c_str());
+    code = 1;
   }
   if (code == 0) {
     std::printf("render %s: %zu particles from %s, %dx%d, radius %.4g m (spacing %.4g m%s), GL %s / %s\n",
@@ -531,6 +540,10 @@ int renderCommand(const Args& args) {
     std::printf("  all frames (%d + 1 warm-up) %.2f ms\n", frames, total_ms);
     std::printf("  GPU memory            %9.2f MiB (the renderer's targets and buffers)\n", timing.gpu_bytes / kMiB);
     for (const std::string& note : timing.notes) std::printf("  %s\n", note.c_str());
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    std::printf("  peak memory (process) %.0f MiB (resident: particles, mesh, driver)\n",
+                static_cast<double>(usage.ru_maxrss) / 1024.0);
     std::printf("wrote %s\n", out.c_str());
   }
   glDeleteFramebuffers(1, &job.fbo);

@@ -92,6 +92,9 @@ def parse(path):
         m = re.search(r"GPU memory\s+([0-9.]+) MiB", line)
         if m:
             out["mib"] = float(m.group(1))
+        m = re.search(r"peak memory \(process\)\s+([0-9.]+) MiB", line)
+        if m:
+            out["rss"] = float(m.group(1))
         for key in ("voxel grid", "voxel memory", "raycast pool", "triangles", "particles splatted"):
             if key in line:
                 out["notes"].append(line.strip())
@@ -104,8 +107,8 @@ def main():
     run, images = sys.argv[1], sys.argv[2]
     sets = sorted({f.split(".")[0] for f in os.listdir(run) if f.endswith(".none.txt")},
                   key=lambda s: (int(s.split("_")[1]), s))
-    print("| set | particles | method | seconds (process) | stages, ms | GPU MiB | PSNR vs mesh dB | water IoU vs mesh | water pixels |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| set | particles | method | seconds (process) | stages, ms | GPU MiB | process peak MiB | PSNR vs mesh dB | water IoU vs mesh | water pixels |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     notes = []
     for s in sets:
         kind, n = s.split("_")
@@ -119,7 +122,7 @@ def main():
             png = os.path.join(run, f"{s}.{m}.png")
             if info is None or "head" not in info or not os.path.exists(png):
                 why = open(sec_path).read().split(None, 1)[1].strip() if os.path.exists(sec_path) and len(open(sec_path).read().split(None, 1)) > 1 else "not run"
-                print(f"| {kind} | {int(n):,} | {m} | {seconds} | {why} | - | - | - | - |")
+                print(f"| {kind} | {int(n):,} | {m} | {seconds} | {why} | - | - | - | - | - |")
                 continue
             img = read_png(png)[2]
             msk = mask(img, bg) if bg else None
@@ -133,7 +136,8 @@ def main():
                 both = sum(1 for a, b in zip(msk, ref[1]) if a and b)
                 either = sum(1 for a, b in zip(msk, ref[1]) if a or b)
                 iou = f"{both / either:.3f}" if either else "-"
-            print(f"| {kind} | {int(n):,} | {m} | {seconds} | {stages} | {info.get('mib', 0):.1f} | {p} | {iou} | "
+            rss = f"{info['rss']:.0f}" if "rss" in info else "-"
+            print(f"| {kind} | {int(n):,} | {m} | {seconds} | {stages} | {info.get('mib', 0):.1f} | {rss} | {p} | {iou} | "
                   f"{sum(msk) if msk else '-'} |")
             for note in info["notes"]:
                 notes.append(f"- {kind} {int(n):,}, {m}: {note}")
