@@ -9,6 +9,7 @@
 #include "fluid/collide/mesh_checks.hpp"
 #include "fluid/io/obj_mesh.hpp"
 #include "fluid/io/particle_io.hpp"
+#include "fluid/io/vtk_io.hpp"
 #include "fluid/sph/sph.hpp"
 #include "fluid/sph/sph_scenes.hpp"
 #include "fluid/surface/marching_slices.hpp"
@@ -18,7 +19,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -121,6 +124,30 @@ py::array_t<float> readParticles(const std::string& path) {
   return out;
 }
 
+// Writes (n, 3) points as .xyz, .ply (binary) or legacy .vtk (binary or ASCII); never replaces a
+// file unless `force`.
+void writeParticles(const std::string& path, const py::handle& points, bool binary, bool force) {
+  const FloatArray a = pointsArgument(points, "points");
+  fluid::ParticlePositions particles;
+  const float* p = a.data();
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) particles.push_back({p[3 * i], p[3 * i + 1], p[3 * i + 2]});
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const fluid::OverwritePolicy overwrite = force ? fluid::OverwritePolicy::replace : fluid::OverwritePolicy::refuse;
+  fluid::IoStatus st;
+  if (ext == ".xyz") {
+    st = fluid::writeParticleXyz(path, particles, overwrite);
+  } else if (ext == ".ply") {
+    st = fluid::writeParticlePly(path, particles, overwrite);
+  } else if (ext == ".vtk") {
+    st = fluid::writeParticleVtk(path, particles, binary ? fluid::VtkEncoding::binary : fluid::VtkEncoding::ascii,
+                                 overwrite);
+  } else {
+    st.error = path + ": unknown particle file extension '" + ext + "' (write .xyz, .ply or .vtk)";
+  }
+  if (!st.ok()) fail(st.error);
+}
+
 // An SPH world made from a measurement scene (fluid/sph/sph_scenes.hpp).
 struct World {
   std::unique_ptr<fluid::SphScene> scene = std::make_unique<fluid::SphScene>();
@@ -218,6 +245,10 @@ PYBIND11_MODULE(fluiddemo, m) {
   m.def("read_particles", &readParticles, py::arg("path"),
         "Read a particle file (.xyz, .csv, .ply or legacy .vtk, as `fluiddemo mesh --in`) into an (n, 3) "
         "float32 array. Raises ValueError naming the file and line for bad content.");
+  m.def("write_particles", &writeParticles, py::arg("path"), py::arg("points"), py::arg("binary") = true,
+        py::arg("force") = false,
+        "Write (n, 3) points as .xyz, .ply or legacy .vtk (binary=False: ASCII VTK); an existing file is "
+        "replaced only with force=True.");
   m.def("scene_names", &fluid::sphSceneNames, "Names of the SPH scenes World() takes.");
 
   py::class_<World>(m, "World", "An SPH world made from a scene (dambreak, column, fountain, dambreak_box).")

@@ -179,3 +179,14 @@ def test_every_truncated_or_garbled_vtk_file_is_an_error_or_a_prefix(tmp_path, b
         last = points_end if binary else data.rindex(b" ", 0, points_end) + 2
         assert k >= last, f"a file cut at {k} bytes was read"
         assert got.shape[1] == 3 and np.isfinite(got).all()
+
+
+@pytest.mark.parametrize("name,binary", [("p.vtk", True), ("p.vtk", False), ("p.ply", True), ("p.xyz", True)])
+def test_written_particles_read_back_bit_for_bit(tmp_path, name, binary):
+    points = load("explosion.xyz") * np.float32(1.0001)  # floats with all their digits
+    fluiddemo.write_particles(str(tmp_path / name), points, binary=binary)
+    assert same_bits(fluiddemo.read_particles(str(tmp_path / name)), points)
+    with pytest.raises(ValueError, match="exists|not overwritten"):
+        fluiddemo.write_particles(str(tmp_path / name), points)
+    fluiddemo.write_particles(str(tmp_path / name), points[:5], binary=binary, force=True)
+    assert len(fluiddemo.read_particles(str(tmp_path / name))) == 5
