@@ -80,7 +80,9 @@ def main():
         for name, make in (("pool", pool), ("spray", spray)):
             path = os.path.join(args.out_dir, f"{name}_{n}.xyz")
             if os.path.exists(path) and not args.force:
-                print(f"{path}: exists, kept (--force to replace)")
+                count = sum(1 for _ in open(path))
+                s = (4.0 * 0.8 * 4.0 / (int(n * 0.88) if name == "pool" else n)) ** (1.0 / 3.0)
+                print(f"{path}: {count} particles, spacing {s:.4f} m (made before, kept; --force to replace)")
                 continue
             lines = []
             emit = lambda x, y, z: lines.append(f"{x:.5f} {y:.5f} {z:.5f}\n")
