@@ -317,6 +317,7 @@ int runFrames(Session& s, const std::filesystem::path& content_dir, engine::Fram
       submitLevel(s.assets, batches);
       submitWorld(world, batches, s.assets, alpha);
       engine::renderFrame(s.renderer, passes, view, s.lighting, batches);
+      readWorldRenderStats(world, engine::lastWaterStats(passes));
       if (!writeImages(s, view, last_frame, error)) code = 1;
       // Headless there is nobody to show the window to; the scene FBO is the output.
       if (!s.platform.headless) engine::presentToWindow(s.renderer, s.platform.width, s.platform.height);

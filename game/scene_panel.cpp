@@ -11,9 +11,12 @@
 namespace game {
 namespace {
 
+// A key's label: a fixed key (ParamSpec::live false) is marked, its edit waits for a restart.
+std::string knobLabel(const ParamSpec& param) { return std::string(param.key) + (param.live ? "" : " *"); }
+
 // One knob for one key, by its schema row; true when the value changed.
 bool editParam(const ParamSpec& param, ParamValue& value) {
-  const std::string label(param.key);
+  const std::string label = knobLabel(param);
   bool edited = false;
   switch (param.type) {
     case ParamType::number: {
@@ -51,7 +54,9 @@ bool editParam(const ParamSpec& param, ParamValue& value) {
       }
       break;
   }
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%.*s", static_cast<int>(param.doc.size()), param.doc.data());
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("%.*s%s", static_cast<int>(param.doc.size()), param.doc.data(),
+                      param.live ? "" : "\n(* applies on restart: the effect is built with it)");
   return edited;
 }
 
@@ -89,7 +94,7 @@ float widestLabel(const World& world) {
   const auto measure = [&widest](const SectionConfig& section) {
     if (const SectionSpec* spec = findSection(section.name))
       for (const ParamSpec& param : spec->params) {
-        const std::string label(param.key);
+        const std::string label = knobLabel(param);
         widest = std::max(widest, ImGui::CalcTextSize(label.c_str()).x);
       }
   };
@@ -126,7 +131,7 @@ std::pair<bool, bool> drawScenePanel(World& world, const engine::PanelPlacement&
   for (SectionConfig& effect : world.scene.effects) changed |= editSection(effect, effect.name.c_str());
   changed |= editSection(world.scene.scene, "scene");
   changed |= editSection(world.scene.graphics, "graphics");
-  ImGui::TextDisabled("counts, sizes, scene.* and graphics.* apply on restart");
+  ImGui::TextDisabled("keys marked *, scene.* and graphics.* apply on restart");
   ImGui::PopItemWidth();
   ImGui::PopTextWrapPos();
   const bool restart = ImGui::Button("Restart scene with these values");

@@ -179,4 +179,51 @@ std::optional<PlayerThrow> throwDue(ThrowSchedule& s, std::uint64_t step) {
   return t;
 }
 
+void SoakProbe::fail(const std::string& what) {
+  if (failure.empty()) failure = "step " + std::to_string(step) + ": " + what;
+}
+
+void SoakProbe::count(std::string_view name, std::size_t value) {
+  for (Range& r : ranges)
+    if (r.name == name) {
+      r.min = std::min(r.min, value);
+      r.max = std::max(r.max, value);
+      return;
+    }
+  ranges.push_back({std::string(name), value, value});
+}
+
+void SoakProbe::penetration(std::string_view name, const Penetration& p, float tolerance, const std::string& what) {
+  auto known = std::find_if(worst.begin(), worst.end(), [&](const Worst& w) { return w.name == name; });
+  if (known == worst.end()) known = worst.insert(worst.end(), Worst{std::string(name), 0.0f, step});
+  if (p.ratio > known->ratio) {
+    known->ratio = p.ratio;
+    known->step = step;
+  }
+  if (p.ratio > tolerance) fail(describePenetration(what, p, tolerance));
+}
+
+void SoakProbe::particleSpeed(float speed) {
+  has_particles = true;
+  max_particle_speed = std::max(max_particle_speed, speed);
+}
+
+void SoakProbe::bodySpeed(float speed) {
+  has_bodies = true;
+  max_body_speed = std::max(max_body_speed, speed);
+}
+
+const SoakProbe::Range* SoakProbe::range(std::string_view name) const {
+  for (const Range& r : ranges)
+    if (r.name == name) return &r;
+  return nullptr;
+}
+
+std::string describePenetration(const std::string& what, const Penetration& p, float tolerance) {
+  char text[160];
+  std::snprintf(text, sizeof(text), " %.4f m inside a collider (%.2f radii, tolerance %.2f) at (%.3f, %.3f, %.3f)",
+                p.depth, p.ratio, tolerance, p.position.x, p.position.y, p.position.z);
+  return what + text;
+}
+
 }  // namespace game

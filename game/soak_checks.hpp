@@ -10,10 +10,12 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <random>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace game {
@@ -108,6 +110,58 @@ struct PlacedShape {
 Penetration worstFreePenetration(std::span<const glm::vec3> points, const fluid::SignedDistanceShape& shape,
                                  const fluid::ColliderPose& pose, std::span<const PlacedShape> blockers, float radius,
                                  PenetrationScratch& scratch, std::size_t& squeezed);
+
+// ---- what each effect checks (Effect::soakBeforeStep / soakCheck) -----------------------------
+
+struct LevelColliders;  // game/world/fountain.hpp
+
+// What an effect's soak check reads and reports into. The monitor (game/soak_monitor.hpp) owns one
+// for the run, sets `step` before every frame's checks and prints the tallies in its summary; an
+// effect names its own particles and bodies, so nothing outside it knows what it checks.
+struct SoakProbe {
+  std::uint64_t step = 0;
+  // Tolerated penetration as a fraction of the particle radius and of a crate's edge (SoakDesc).
+  float particle_tolerance = 0.25f;
+  float crate_tolerance = 0.5f;
+  std::string level;  // the scene's level ("fountain", ...)
+  // The level's baked colliders: the world's (EffectLinks::colliders) or loaded by the first check
+  // that needs them.
+  std::shared_ptr<const LevelColliders> level_colliders;
+  PenetrationScratch scratch;
+  std::vector<glm::vec3> points;
+  std::vector<PlacedShape> blockers;
+  std::string failure;  // the first failure, "step N: what"
+
+  struct Range {  // a count over the run's frames ("sph", "sprites")
+    std::string name;
+    std::size_t min = 0, max = 0;
+  };
+  struct Worst {  // the deepest penetration / radius of one kind of thing, and when
+    std::string name;
+    float ratio = 0.0f;
+    std::uint64_t step = 0;
+  };
+  std::vector<Range> ranges;  // in the order first reported
+  std::vector<Worst> worst;
+  float max_particle_speed = 0.0f;  // m/s, fastest particle of any effect
+  float max_body_speed = 0.0f;      // m/s, fastest rigid body
+  bool has_particles = false, has_bodies = false;
+  // Particles inside a moving collider where it reaches into another (no free position; not failures,
+  // see worstFreePenetration): the most in one frame, and the frames with any.
+  std::size_t squeezed_max = 0;
+  std::uint64_t squeezed_frames = 0;
+
+  void fail(const std::string& what);
+  void count(std::string_view name, std::size_t value);
+  // Records `p` as a candidate for the deepest of `name`; fails naming `what` beyond `tolerance`.
+  void penetration(std::string_view name, const Penetration& p, float tolerance, const std::string& what);
+  void particleSpeed(float speed);
+  void bodySpeed(float speed);
+  const Range* range(std::string_view name) const;  // null when never counted
+};
+
+// "<what> 0.0123 m inside a collider (0.49 radii, tolerance 0.25) at (x, y, z)"
+std::string describePenetration(const std::string& what, const Penetration& p, float tolerance);
 
 // ---- the player's throws: crates and fused explosives -----------------------------------------
 

@@ -50,19 +50,8 @@ struct SoakStats {
   std::uint64_t steps = 0;
   int throws = 0;                                                 // crates and explosives
   int explosives = 0;                                             // of them
-  bool has_sph = false, has_sprites = false, has_crates = false;  // which systems the world has
-  std::size_t sph_min = 0, sph_max = 0;                           // SPH particle count over the run's frames
-  std::size_t sprite_min = 0, sprite_max = 0;                     // sprite particles
-  float max_speed = 0.0f;                                         // m/s, fastest SPH or sprite particle seen
-  float max_crate_speed = 0.0f;                                   // m/s, fastest crate seen
   std::uint64_t rss_warmup = 0, rss_end = 0;    // resident set at the end of warm-up and at the last frame
   std::uint64_t heap_warmup = 0, heap_end = 0;  // heap in use (heapInUseBytes), the same samples
-  float worst_sph = 0.0f, worst_sprite = 0.0f, worst_crate = 0.0f;  // deepest penetration / radius
-  std::uint64_t worst_sph_step = 0, worst_sprite_step = 0, worst_crate_step = 0;
-  // SPH particles inside a crate where the crate reaches into the fountain (no free position; not
-  // failures, see worstFreePenetration): the most in one frame, and the frames with any.
-  std::size_t sph_squeezed_max = 0;
-  std::uint64_t sph_squeezed_frames = 0;
   std::uint64_t memory_restart_step = 0;  // > 0: the samples started again at the first blast, this step
   MemoryGrowth memory;       // the resident set's verdict (its trend; the final level too without a heap figure)
   MemoryGrowth heap_memory;  // the heap in use's verdict (trend and final level)
@@ -75,13 +64,7 @@ struct SoakMonitor {
   SoakStats stats;
   std::vector<std::uint64_t> rss_samples;   // after warm-up; reserved up front
   std::vector<std::uint64_t> heap_samples;  // heap in use at the same samples
-  PenetrationScratch scratch;
-  std::vector<glm::vec3> points;      // crate centres
-  std::vector<PlacedShape> blockers;  // the SPH colliders other than the crate being checked
-  // The level's baked colliders the crates are checked against: the world's (EffectLinks::
-  // colliders) or, in a scene without particles, loaded at the first check.
-  std::shared_ptr<const LevelColliders> level;
-  bool have_counts = false;
+  SoakProbe probe;  // every effect's checks report here (Effect::soakCheck); counts, speeds, worst penetrations
   std::uint64_t detonations_seen = 0;  // the explosives' detonation count at the last frame
   std::string failure;                 // the first failure, naming the step and what
 };

@@ -1,4 +1,5 @@
 #include "engine/fluid_render/fluid_render.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 
 #include "engine/gl/gl.hpp"
 #include "fluid/core/finite.hpp"
@@ -349,6 +350,36 @@ OutOfOrder countOutOfOrderPairs(std::span<const glm::vec3> positions, std::span<
     d.swap(tmp);
   }
   return out;
+}
+
+// The mesh as a water backend (water_backend.hpp): the CPU marching-slices surface, blended in its
+// emitted order.
+namespace {
+class MeshWaterBackend final : public WaterBackend {
+ public:
+  explicit MeshWaterBackend(const FluidRenderDesc& desc) { createFluidRenderer(desc, renderer_); }
+  ~MeshWaterBackend() override { destroyFluidRenderer(renderer_); }
+  bool ready() const override { return renderer_.ready; }
+  const std::string& error() const override { return renderer_.error; }
+  GLuint upload(const WaterInput& in, std::string& error) override {
+    if (!renderer_.ready) return 0;
+    return uploadFluidMesh(renderer_, in.positions, in.normals, in.indices, in.attributes, error) ? renderer_.scene_fbo
+                                                                                                 : 0;
+  }
+  void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput&) override {
+    drawFluid(renderer_, target_fbo, camera, water);
+  }
+
+ private:
+  FluidRenderer renderer_;
+};
+}  // namespace
+
+const WaterBackendDesc& meshWaterBackend() {
+  static const WaterBackendDesc desc{
+      "mesh", "the marching-slices mesh (Rosenberg & Birdwell 2008), blended back-to-front", true,
+      [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> { return std::make_unique<MeshWaterBackend>(d); }};
+  return desc;
 }
 
 }  // namespace engine

@@ -37,7 +37,9 @@ struct FluidCamera {
 
 struct WaterParams {
   FluidStyle style = FluidStyle::water;
-  glm::vec3 absorption{0.9f, 0.25f, 0.12f};  // Beer–Lambert σ per metre, RGB (transmit exp(−σ·d))
+  // Beer–Lambert σ per metre, RGB (transmit exp(−σ·d)): the water of every scene unless it says
+  // otherwise (fluid_surface.absorption defaults to it; reds go first, a deep pool turns blue-green).
+  glm::vec3 absorption{1.6f, 0.45f, 0.25f};
   float refraction = 0.08f;                  // screen-uv offset per metre of thickness along the refracted ray
   float ior = 1.33f;                         // index of refraction (water 1.33)
   float opacity = 0.85f;                     // blend alpha of one water layer (Fresnel raises it to 1)

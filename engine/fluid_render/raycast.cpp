@@ -1,4 +1,5 @@
 #include "engine/fluid_render/raycast.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -240,6 +241,44 @@ void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& 
   }
   glBindVertexArray(0);
   glUseProgram(0);  // a deleted program stays alive while current
+}
+
+// Metaball ray casting as a water backend (water_backend.hpp); its fragment-list use is its stats.
+namespace {
+class RaycastWaterBackend final : public WaterBackend {
+ public:
+  explicit RaycastWaterBackend(const FluidRenderDesc& desc) {
+    RaycastDesc rc;
+    rc.base = desc;
+    createRaycastRenderer(rc, renderer_);
+  }
+  ~RaycastWaterBackend() override { destroyRaycastRenderer(renderer_); }
+  bool ready() const override { return renderer_.ready; }
+  const std::string& error() const override { return renderer_.error; }
+  GLuint upload(const WaterInput& in, std::string& error) override {
+    if (!renderer_.ready) return 0;
+    return uploadRaycastParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+  }
+  void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
+    RaycastParams params;
+    params.rc = in.rc;
+    params.threshold = in.threshold;
+    drawRaycastFluid(renderer_, target_fbo, camera, water, params);
+  }
+  WaterStats stats() const override {
+    return {renderer_.used, renderer_.dropped, renderer_.pool_records, renderer_.max_pool_records};
+  }
+
+ private:
+  RaycastRenderer renderer_;
+};
+}  // namespace
+
+const WaterBackendDesc& raycastWaterBackend() {
+  static const WaterBackendDesc desc{
+      "raycast", "metaballs ray cast through per-pixel fragment lists (Szecsi & Illes 2012)", false,
+      [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> { return std::make_unique<RaycastWaterBackend>(d); }};
+  return desc;
 }
 
 }  // namespace engine

@@ -1,4 +1,5 @@
 #include "engine/fluid_render/screen_space.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 
 #include <algorithm>
 
@@ -204,6 +205,39 @@ void drawScreenSpaceFluid(ScreenSpaceRenderer& r, GLuint target_fbo, const Fluid
   }
   glBindVertexArray(0);
   glUseProgram(0);  // a deleted program stays alive while current
+}
+
+// Screen-space splats as a water backend (water_backend.hpp).
+namespace {
+class ScreenSpaceWaterBackend final : public WaterBackend {
+ public:
+  explicit ScreenSpaceWaterBackend(const FluidRenderDesc& desc) { createScreenSpaceRenderer(desc, renderer_); }
+  ~ScreenSpaceWaterBackend() override { destroyScreenSpaceRenderer(renderer_); }
+  bool ready() const override { return renderer_.ready; }
+  const std::string& error() const override { return renderer_.error; }
+  GLuint upload(const WaterInput& in, std::string& error) override {
+    if (!renderer_.ready) return 0;
+    return uploadScreenSpaceParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+  }
+  void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
+    ScreenSpaceParams params;
+    params.radius = 0.975f * in.rc / 3.0f;  // a lone particle's iso-surface radius in the mesh's field
+    params.filter_radius = 0.5f * in.rc;
+    drawScreenSpaceFluid(renderer_, target_fbo, camera, water, params);
+  }
+
+ private:
+  ScreenSpaceRenderer renderer_;
+};
+}  // namespace
+
+const WaterBackendDesc& screenSpaceWaterBackend() {
+  static const WaterBackendDesc desc{"screen_space",
+                                     "sphere splats, depth smoothing, thickness (Janisz 3.1 after van der Laan 2009)",
+                                     false, [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> {
+                                       return std::make_unique<ScreenSpaceWaterBackend>(d);
+                                     }};
+  return desc;
 }
 
 }  // namespace engine

@@ -10,8 +10,8 @@
 
 namespace engine {
 
-void initAllocator(IndexAllocator& allocator, std::uint32_t capacity) {
-  allocator.free_heap.resize(capacity);
+void initAllocator(IndexAllocator& allocator, std::uint32_t capacity, std::uint32_t budget) {
+  allocator.free_heap.resize(budget == 0 ? capacity : std::min(budget, capacity));
   // 0..n-1 ascending is already a valid min-heap.
   std::iota(allocator.free_heap.begin(), allocator.free_heap.end(), 0u);
   allocator.live.assign(capacity, 0);

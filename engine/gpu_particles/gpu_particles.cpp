@@ -266,7 +266,7 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
     out.error = "gpu particles disabled: RGBA32F/RG32F render targets are not supported by this driver";
     return;
   }
-  initAllocator(out.allocator, out.capacity);
+  initAllocator(out.allocator, out.capacity, desc.budget);
   out.ready = true;
 }
 

@@ -50,8 +50,10 @@ struct IndexAllocator {
   std::uint32_t active_range = 0;  // 1 + highest live index (0 when none is live)
 };
 
-// Resets to `capacity` free indices 0..capacity-1.
-void initAllocator(IndexAllocator& allocator, std::uint32_t capacity);
+// Resets to `budget` free indices 0..budget-1 of `capacity` texels (budget 0 or above capacity:
+// all of them). A budget below the texture's size keeps the live count exact when the texture is
+// rounded up to a power of two for the sort.
+void initAllocator(IndexAllocator& allocator, std::uint32_t capacity, std::uint32_t budget = 0);
 // Smallest free index into `out`; false (out untouched) when all are live. O(log n).
 bool allocateIndex(IndexAllocator& allocator, std::uint32_t& out);
 // Returns a live index to the pool. Releasing a free or out-of-range index is a programmer error (assert).
@@ -166,6 +168,7 @@ struct GpuParticlesDesc {
   std::filesystem::path shader_dir;         // folder holding gpu_particles/*.glsl, *.vert, *.frag
   std::uint32_t sort_passes_per_frame = 5;  // §3.3.3: 4–5 per frame for 1024² in the paper
   float dt = 1.0f / 60.0f;                  // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
+  std::uint32_t budget = 0;                 // live particles at most; 0 = width·height (initAllocator)
 };
 
 inline constexpr int kMaxAttractors = 4;

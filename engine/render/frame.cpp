@@ -7,81 +7,62 @@
 namespace engine {
 namespace {
 
-void releaseWater(WaterRenderers& pass) {
-  if (pass.created) {
-    destroyFluidRenderer(pass.mesh);
-    destroyScreenSpaceRenderer(pass.screen_space);
-    destroyRaycastRenderer(pass.raycast);
-  }
-  pass.created = false;
+void releaseWater(WaterSlot& slot) {
+  slot.backend.reset();
+  slot.stats = {};
 }
 
-void createWater(WaterRenderers& pass, FluidMethod method, int width, int height,
-                 const std::filesystem::path& shader_dir) {
-  FluidRenderDesc desc;
-  desc.width = width;
-  desc.height = height;
-  desc.shader_dir = shader_dir;
-  bool ready = false;
-  std::string error;
-  if (method == FluidMethod::screen_space) {
-    createScreenSpaceRenderer(desc, pass.screen_space);
-    ready = pass.screen_space.ready;
-    error = pass.screen_space.error;
-  } else if (method == FluidMethod::raycast) {
-    RaycastDesc rc;
-    rc.base = desc;
-    createRaycastRenderer(rc, pass.raycast);
-    ready = pass.raycast.ready;
-    error = pass.raycast.error;
-  } else {
-    createFluidRenderer(desc, pass.mesh);
-    ready = pass.mesh.ready;
-    error = pass.mesh.error;
+// The slot's backend for this batch at this size: kept, or made anew from the registry.
+WaterBackend* backendFor(WaterSlot& slot, const WaterBatch& batch, int width, int height,
+                         const std::filesystem::path& shader_dir) {
+  if (slot.backend && slot.width == width && slot.height == height && slot.method == batch.method)
+    return slot.backend->ready() ? slot.backend.get() : nullptr;
+  const bool failed_before = !slot.backend && slot.method == batch.method && slot.width == width && slot.height == height;
+  releaseWater(slot);
+  slot.method = std::string(batch.method);
+  slot.width = width;
+  slot.height = height;
+  const WaterBackendDesc* desc = findWaterBackend(batch.method);
+  if (desc == nullptr) {
+    if (!failed_before) std::fprintf(stderr, "fluiddemo: no water renderer named '%s'\n", slot.method.c_str());
+    return nullptr;
   }
-  pass.method = method;
-  pass.width = width;
-  pass.height = height;
-  pass.created = true;
-  if (!ready)
-    std::fprintf(stderr, "fluiddemo: fluid_surface %s renderer unavailable: %s\n", fluidMethodName(method),
-                 error.c_str());
+  FluidRenderDesc create;
+  create.width = width;
+  create.height = height;
+  create.shader_dir = shader_dir;
+  slot.backend = desc->create(create);
+  if (!slot.backend->ready()) {
+    std::fprintf(stderr, "fluiddemo: fluid_surface %s renderer unavailable: %s\n", slot.method.c_str(),
+                 slot.backend->error().c_str());
+    return nullptr;
+  }
+  return slot.backend.get();
 }
 
-// Uploads the batch to the method's renderer; returns its scene FBO (0 when that renderer is
-// unavailable or the upload was refused).
-GLuint uploadWater(WaterRenderers& pass, const WaterBatch& batch) {
-  GLuint scene_fbo = 0;
-  std::string error;
-  bool uploaded = true;
-  if (batch.method == FluidMethod::screen_space && pass.screen_space.ready) {
-    scene_fbo = pass.screen_space.scene.fbo;
-    uploaded = uploadScreenSpaceParticles(pass.screen_space, batch.particles, error);
-  } else if (batch.method == FluidMethod::raycast && pass.raycast.ready) {
-    scene_fbo = pass.raycast.scene.fbo;
-    uploaded = uploadRaycastParticles(pass.raycast, batch.particles, error);
-  } else if (batch.method == FluidMethod::mesh && pass.mesh.ready) {
-    scene_fbo = pass.mesh.scene_fbo;
-    uploaded = uploadFluidMesh(pass.mesh, batch.positions, batch.normals, batch.indices, batch.attributes, error);
-  }
-  if (scene_fbo != 0 && !uploaded) {
-    std::fprintf(stderr, "fluiddemo: fluid upload: %s\n", error.c_str());
-    return 0;
-  }
-  return scene_fbo;
-}
-
-void drawWater(Renderer& renderer, WaterRenderers& pass, const FrameView& view, const Lighting& lighting,
+void drawWater(Renderer& renderer, WaterSlot& slot, const FrameView& view, const Lighting& lighting,
                const WaterBatch& batch, const std::filesystem::path& shader_dir) {
-  if (!batch.visible) return;  // the renderer's objects stay for when the water shows again
-  if (pass.created && (pass.width != renderer.width || pass.height != renderer.height || pass.method != batch.method))
-    releaseWater(pass);
-  if (!pass.created) createWater(pass, batch.method, renderer.width, renderer.height, shader_dir);
-  const GLuint water_fbo = uploadWater(pass, batch);
-  if (water_fbo == 0) return;
-  // The opaque scene (colour + depth) is the water's background: copy it into the water
-  // renderer's scene targets (same size, DEPTH24 both), then draw the water back into the scene
-  // FBO so screenshots and the window blit see it.
+  slot.stats = {};
+  if (!batch.visible) return;  // the backend's objects stay for when the water shows again
+  WaterBackend* backend = backendFor(slot, batch, renderer.width, renderer.height, shader_dir);
+  if (backend == nullptr) return;
+  WaterInput input;
+  input.positions = batch.positions;
+  input.normals = batch.normals;
+  input.indices = batch.indices;
+  input.attributes = batch.attributes;
+  input.particles = batch.particles;
+  input.rc = batch.rc;
+  input.threshold = batch.threshold;
+  std::string error;
+  const GLuint water_fbo = backend->upload(input, error);
+  if (water_fbo == 0) {
+    if (!error.empty()) std::fprintf(stderr, "fluiddemo: fluid upload: %s\n", error.c_str());
+    return;
+  }
+  // The opaque scene (colour + depth) is the water's background: copy it into the backend's scene
+  // targets (same size, DEPTH24 both), then draw the water back into the scene FBO so screenshots
+  // and the window blit see it.
   glBindFramebuffer(GL_READ_FRAMEBUFFER, renderer.scene_fbo.id());
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, water_fbo);
   glBlitFramebuffer(0, 0, renderer.width, renderer.height, 0, 0, renderer.width, renderer.height,
@@ -108,26 +89,9 @@ void drawWater(Renderer& renderer, WaterRenderers& pass, const FrameView& view, 
   water.flash_position = lighting.flash_position;
   water.flash_colour = lighting.flash_colour;
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
-  if (batch.method == FluidMethod::screen_space) {
-    ScreenSpaceParams ss;
-    ss.radius = 0.975f * batch.rc / 3.0f;  // a lone particle's iso-surface radius
-    ss.filter_radius = 0.5f * batch.rc;
-    drawScreenSpaceFluid(pass.screen_space, renderer.scene_fbo.id(), camera, water, ss);
-  } else if (batch.method == FluidMethod::raycast) {
-    RaycastParams rp;
-    rp.rc = batch.rc;
-    rp.threshold = batch.threshold;
-    drawRaycastFluid(pass.raycast, renderer.scene_fbo.id(), camera, water, rp);
-    if (batch.raycast_counts != nullptr) {
-      batch.raycast_counts->records = pass.raycast.used;
-      batch.raycast_counts->dropped = pass.raycast.dropped;
-      batch.raycast_counts->pool = pass.raycast.pool_records;
-      batch.raycast_counts->pool_bound = pass.raycast.max_pool_records;
-    }
-  } else {
-    drawFluid(pass.mesh, renderer.scene_fbo.id(), camera, water);
-  }
+  backend->draw(renderer.scene_fbo.id(), camera, water, input);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  slot.stats = backend->stats();
   checkGl(renderer.errors, "fluid surface");
 }
 
@@ -180,7 +144,14 @@ void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view,
 }
 
 void releaseFramePasses(FramePasses& passes) {
-  for (WaterRenderers& pass : passes.water) releaseWater(pass);
+  for (WaterSlot& slot : passes.water) releaseWater(slot);
+}
+
+std::vector<WaterStats> lastWaterStats(const FramePasses& passes) {
+  std::vector<WaterStats> out;
+  out.reserve(passes.water.size());
+  for (const WaterSlot& slot : passes.water) out.push_back(slot.stats);
+  return out;
 }
 
 }  // namespace engine

@@ -14,28 +14,25 @@
 // The UI (engine/ui) is drawn over the window after presentToWindow.
 
 #include "engine/fluid_render/fluid_render.hpp"
-#include "engine/fluid_render/particle_pass.hpp"
-#include "engine/fluid_render/raycast.hpp"
-#include "engine/fluid_render/screen_space.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 #include "engine/gpu_particles/gpu_particles.hpp"
 #include "engine/render/renderer.hpp"
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace engine {
 
-// The ray-cast renderer's fragment-list use in its last frame (RaycastRenderer used/dropped/
-// pool_records/max_pool_records).
-struct RaycastCounts {
-  std::uint64_t records = 0, dropped = 0, pool = 0, pool_bound = 0;
-};
-
 // One body of water. The spans must stay valid until renderFrame returns.
 struct WaterBatch {
-  FluidMethod method = FluidMethod::mesh;
+  // The water backend that draws it, by its registry name (water_backend.hpp); an unknown name
+  // draws nothing (the error printed once).
+  std::string_view method = "mesh";
   FluidStyle style = FluidStyle::water;  // mesh: refractive water, or translucent goo
   glm::vec3 goo_colour{0.35f, 0.8f, 0.2f};
   float goo_density = 12.0f;  // goo: extinction per metre of body (WaterParams::goo_density)
@@ -48,13 +45,12 @@ struct WaterBatch {
   // method mesh: the surface, triangles in draw order (back-to-front for blending).
   std::span<const glm::vec3> positions, normals;
   std::span<const std::uint32_t> indices;
-  // methods screen_space and raycast: the particle centres.
+  // particle methods (screen_space, raycast, ...): the particle centres.
   std::span<const glm::vec3> particles;
   float rc = 0.1f;         // field cutoff (m): the same field for all three methods
   float threshold = 0.2f;  // iso level of that field (raycast)
   float refraction = 0.08f, opacity = 0.85f;
-  glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre, RGB
-  RaycastCounts* raycast_counts = nullptr;   // method raycast: filled after the draw (may be null)
+  glm::vec3 absorption = WaterParams{}.absorption;  // Beer–Lambert σ per metre, RGB
 };
 
 struct FrameBatches {
@@ -72,21 +68,19 @@ struct FrameBatches {
   }
 };
 
-// The water renderers of one water slot: created on first need, recreated when the frame size or
-// the method changes; only the chosen method's renderer holds GL objects. A renderer whose
-// shaders failed stays unready: the frame goes on without that water (the error printed once).
-struct WaterRenderers {
-  FluidRenderer mesh;
-  ScreenSpaceRenderer screen_space;
-  RaycastRenderer raycast;
-  FluidMethod method = FluidMethod::mesh;
-  bool created = false;
+// The water backend of one water slot: created on first need, recreated when the frame size or the
+// method changes. A backend whose shaders failed stays unready: the frame goes on without that
+// water (the error printed once).
+struct WaterSlot {
+  std::unique_ptr<WaterBackend> backend;  // null until first drawn, and after a release
+  std::string method;                     // the backend's name
   int width = 0, height = 0;
+  WaterStats stats;  // the backend's account of its last frame (zero when it drew nothing)
 };
 
 struct FramePasses {
-  std::filesystem::path shader_dir;   // fluid/*.vert, *.frag live below it
-  std::vector<WaterRenderers> water;  // slot i draws FrameBatches::water[i]
+  std::filesystem::path shader_dir;  // fluid/*.vert, *.frag live below it
+  std::vector<WaterSlot> water;      // slot i draws FrameBatches::water[i]
 };
 
 // Draws the whole frame into renderer.scene_fbo. Needs the GL context current. Water slots
@@ -96,5 +90,9 @@ void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view,
 
 // Frees every water renderer (context current).
 void releaseFramePasses(FramePasses& passes);
+
+// What the last renderFrame tells back, per water batch in submission order (zero stats for a
+// slot that drew nothing). The game reads it; the engine writes nothing into game state.
+std::vector<WaterStats> lastWaterStats(const FramePasses& passes);
 
 }  // namespace engine

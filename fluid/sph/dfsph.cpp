@@ -14,9 +14,6 @@
 namespace fluid::sph_step {
 namespace {
 
-// Share of the last step's summed stiffness that warm-starts the constant-density solve.
-constexpr float kWarmShare = 0.2f;
-
 // The 32-byte aligned view of `count` elements of v (a 4-byte type), resized to fit: the AVX2 pair
 // loops load whole lane blocks with aligned loads that never straddle a cache line.
 template <typename T>
@@ -282,7 +279,8 @@ void DfsphStep::constantDensitySolve() {
     // solver never pulls particles back. The stored sum was found for the last step's dt; the part
     // that removed a standing compression scales as 1 / dt^2 (eq. 8-9), so when dt grew the share
     // is scaled by (dt_prev / dt)^2 and the warm start displaces no further than the last solve.
-    const float warm = dt > previous_dt_ ? kWarmShare * (previous_dt_ / dt) * (previous_dt_ / dt) : kWarmShare;
+    const float share = params_.warm_start_share;
+    const float warm = dt > previous_dt_ ? share * (previous_dt_ / dt) * (previous_dt_ / dt) : share;
     forChunks(n_, [&](std::size_t b, std::size_t e) {
       float rates[kGrain];
       densityRates(b, e, rates);

@@ -97,8 +97,8 @@ struct SphParams {
   int min_iterations = 1;
   int max_iterations = 100;  // per solve, >= 1
   bool divergence_solver = true;
-  // Warm start (2017 §4.3) of the constant-density solve: it starts from 0.2 x the previous
-  // step's summed stiffness (kappa/rho; scaled down when dt grew), applied only to particles that
+  // Warm start (2017 §4.3) of the constant-density solve: it starts from warm_start_share x the
+  // previous step's summed stiffness (kappa/rho; scaled down when dt grew), applied only to particles that
   // compress now. Off by default: the solve corrects compression only (rho* > rho_0, §4.2; an
   // expansion is left to gravity, or the free surface would be pulled together), so the share of
   // the last step's push that the particle does not need now is never taken back and stays as
@@ -109,6 +109,7 @@ struct SphParams {
   // solve is never warm-started: the pushes it repeats are never taken back, which adds energy to
   // a jet hitting a collider.
   bool warm_start = false;
+  float warm_start_share = 0.2f;  // of the last step's stiffness, in [0, 1] (warm_start on)
 
   // Neighbour grid extent (the grid clamps stray particles into its border cells).
   glm::vec3 domain_min{-1e30f};

@@ -76,6 +76,7 @@ SphStatus validateSphParams(const SphParams& p) {
       {"spray_speed", p.spray_speed, 0.0f, 1e6f, "0 (off) .. 1e6 m/s"},
       {"spray_terminal_speed", p.spray_terminal_speed, 0.0f, 1e6f, "0 (no drag) .. 1e6 m/s"},
       {"spray_neighbours", static_cast<float>(p.spray_neighbours), 1.0f, 1000.0f, "1 .. 1000"},
+      {"warm_start_share", p.warm_start_share, 0.0f, 1.0f, "0 .. 1"},
   };
   for (const Check& c : checks) {
     if (!std::isfinite(c.value) || c.value < c.lo || c.value > c.hi) return {fieldError(c.name, c.value, c.range)};

@@ -3,6 +3,7 @@
 // docs' key tables are this command's output.
 #include "game/commands.hpp"
 #include "game/commands/cli_parse.hpp"
+#include "game/effects/effect.hpp"
 #include "game/scene/scene_config.hpp"
 
 #include <CLI/CLI.hpp>
@@ -93,16 +94,37 @@ int sceneKeysCommand(const Args& args) {
       "Every scene section and key with its type, range, default and meaning, as Markdown (the docs' "
       "key tables are this output).",
       "fluiddemo scene-keys"};
+  bool columns = false;
+  app.add_flag("--columns", columns,
+               "print the replay CSV's effect columns instead (the table in docs/replay.md), from the effects' files");
   if (const int code = parseCommandLine(app, "scene-keys", args); code >= 0) return code;
+  if (columns) {
+    std::printf("<!-- written by `fluiddemo scene-keys --columns` from the effects' column lists; do not edit -->\n");
+    std::printf("| column | effect | meaning |\n|---|---|---|\n");
+    for (const ColumnSpec& column : frameColumnCatalogue()) {
+      std::string owners;
+      for (const EffectDesc* desc : effectRegistry())
+        for (const ColumnSpec& own : desc->columns)
+          if (own.name == column.name) {
+            if (!owners.empty()) owners += ", ";
+            owners += desc->name;
+          }
+      const std::string name(column.name), doc(column.doc);
+      std::printf("| `%s` | %s | %s |\n", name.c_str(), owners.c_str(), cell(doc).c_str());
+    }
+    return 0;
+  }
   std::printf("<!-- written by `fluiddemo scene-keys` from the effects' parameter tables; do not edit -->\n");
   for (const SectionSpec& section : sceneSchema()) {
     const std::string name(section.name), doc(section.doc);
     std::printf("\n**`%s`**%s: %s\n\n", name.c_str(), section.is_effect ? " (effect)" : "", doc.c_str());
-    std::printf("| key | type | range | default | meaning |\n|---|---|---|---|---|\n");
+    std::printf("| key | type | range | default | live | meaning |\n|---|---|---|---|---|---|\n");
     for (const ParamSpec& spec : section.params) {
       const std::string key(spec.key), meaning(spec.doc);
-      std::printf("| `%s` | %s | %s | %s | %s |\n", key.c_str(), typeName(spec).c_str(), rangeText(spec).c_str(),
-                  defaultText(spec).c_str(), cell(meaning).c_str());
+      // Live: the overlay's edit applies at once; "restart": the effect is built with it.
+      const char* live = !section.is_effect ? "" : spec.live ? "yes" : "restart";
+      std::printf("| `%s` | %s | %s | %s | %s | %s |\n", key.c_str(), typeName(spec).c_str(), rangeText(spec).c_str(),
+                  defaultText(spec).c_str(), live, cell(meaning).c_str());
     }
   }
   return 0;

@@ -70,14 +70,13 @@ struct AudioParams {
 const ParamTable<AudioParams>& table() {
   using P = AudioParams;
   static const ParamTable<P> rows{
-      param<&P::volume>("volume", 0.0, 4.0, "master gain (live; a peak limiter keeps the output under -1 dBFS)"),
-      param<&P::mute>("mute", "silence the output (live; M in the window toggles it)"),
-      param<&P::live_device>("live_device",
-                             "open the sound card in a rendered run (SDL; SDL_AUDIODRIVER=dummy without one; fixed "
-                             "at construction); replay --wav renders offline either way"),
-      param<&P::sample_rate>("sample_rate", 8000, 48000, "mixer rate in Hz (fixed at construction)"),
-      param<&P::max_voices>("max_voices", 1, 1024,
-                            "voices mixed at once; a new sound replaces the quietest (fixed at construction)"),
+      param<&P::volume>("volume", 0.0, 4.0, "master gain (a peak limiter keeps the output under -1 dBFS)"),
+      param<&P::mute>("mute", "silence the output (M in the window toggles it)"),
+      fixed(param<&P::live_device>("live_device",
+                                   "open the sound card in a rendered run (SDL; SDL_AUDIODRIVER=dummy without one); "
+                                   "replay --wav renders offline either way")),
+      fixed(param<&P::sample_rate>("sample_rate", 8000, 48000, "mixer rate in Hz")),
+      fixed(param<&P::max_voices>("max_voices", 1, 1024, "voices mixed at once; a new sound replaces the quietest")),
       param<&P::bubble_rate>("bubble_rate", 0.0, 20.0, "bubbles per impact, relative (0 = no water sounds)"),
       param<&P::radius_min>("radius_min", 0.0003, 0.05, "smallest bubble radius (m); Minnaert pitch 3.26/r Hz"),
       param<&P::radius_max>("radius_max", 0.0005, 0.1, "largest bubble radius (m)"),
@@ -193,10 +192,7 @@ class AudioEffect final : public EffectOf<AudioState> {
   std::string_view name() const override { return "audio"; }
 
   void applyLive(const SectionConfig& section, EffectLinks&) override {
-    AudioParams fresh = table().parse(section);
-    fresh.live_device = state.params.live_device;
-    fresh.sample_rate = state.params.sample_rate;
-    fresh.max_voices = state.params.max_voices;
+    const AudioParams fresh = table().parseLive(section, state.params);
     state.params = fresh;
     const std::lock_guard<std::mutex> hold(state.mixer.lock);
     engine::audio::setMixerLive(state.mixer, mixerParams(fresh));

@@ -13,7 +13,7 @@
 #include "fluid/collide/collider_cache.hpp"
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/surface/marching_slices_policy.hpp"
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
 #include "game/world/level_assets.hpp"
@@ -35,17 +35,17 @@ using Json = nlohmann::json;
 const ParamTable<BlobMonsterParams>& table() {
   using P = BlobMonsterParams;
   static const ParamTable<P> rows{
-      param<&P::particles>("particles", 1, 65536, "particles of the body (fixed at construction; the paper had 250)"),
-      param<&P::spacing>("spacing", 0.02, 0.3, "rest distance d (m); particle radius d/2 (fixed at construction)"),
-      param<&P::cohesion>("cohesion", 0.0, 50.0, "Akinci et al. 2013 cohesion peak (m/s^2): keeps it one body; live"),
+      fixed(param<&P::particles>("particles", 1, 65536, "particles of the body (the paper had 250)")),
+      fixed(param<&P::spacing>("spacing", 0.02, 0.3, "rest distance d (m); particle radius d/2")),
+      param<&P::cohesion>("cohesion", 0.0, 50.0, "Akinci et al. 2013 cohesion peak (m/s^2): keeps it one body"),
       param<&P::goal_stiffness>("goal_stiffness", 0.0, 5000.0,
-                                "Mueller et al. 2005 goal spring (1/s^2) toward the behaviour's shape; live"),
-      param<&P::substeps>("substeps", 1, 64, "explicit sub-steps per fixed step (stability); live"),
+                                "Mueller et al. 2005 goal spring (1/s^2) toward the behaviour's shape"),
+      param<&P::substeps>("substeps", 1, 64, "explicit sub-steps per fixed step (stability)"),
       param<&P::grate>("grate", -100.0, 100.0, "top of the sewer pipe (m): each round starts in the pipe below it"),
       param<&P::pipe_radius>("pipe_radius", 0.05, 2.0, "radius (m) of the particle column in the pipe"),
-      text<&P::program>("program",
-                        "behaviour program (states, their parameters and triggers), a JSON file relative to "
-                        "content/ (format: docs/blob.md); fixed at construction"),
+      fixed(text<&P::program>("program",
+                              "behaviour program (states, their parameters and triggers), a JSON file relative to "
+                              "content/ (format: docs/blob.md)")),
       param<&P::caught_seconds>("caught_seconds", 0.0, 10.0,
                                 "the caught effect (the camera is pulled into the goo, the screen tints, the goo "
                                 "flashes red, a banner gives the round's time) lasts this long, then the round resets"),
@@ -53,10 +53,10 @@ const ParamTable<BlobMonsterParams>& table() {
       param<&P::cube>("cube", 0.2, 2.0, "marching cube edge in spacings"),
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the field"),
       param<&P::colour>("colour", 0.0, 1.0, "goo colour (RGB)"),
-      param<&P::visible>("visible", "false: the monster is not drawn (it still moves); live"),
+      param<&P::visible>("visible", "false: the monster is not drawn (it still moves)"),
       param<&P::async>("async",
                        "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
-                       "(Janisz 3.2.6); false: mesh before drawing; live"),
+                       "(Janisz 3.2.6); false: mesh before drawing"),
   };
   return rows;
 }
@@ -322,10 +322,7 @@ class BlobEffect final : public EffectOf<BlobMonster> {
   std::string_view name() const override { return "blob"; }
 
   void applyLive(const SectionConfig& section, EffectLinks& links) override {
-    BlobMonsterParams fresh = table().parse(section);
-    fresh.particles = state.params.particles;
-    fresh.spacing = state.params.spacing;
-    fresh.program = state.params.program;
+    const BlobMonsterParams fresh = table().parseLive(section, state.params);
     state.params = fresh;
     deriveBody(fresh, links.gravity, step_seconds_, state.world.params);
   }
@@ -354,6 +351,26 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     if (bodies_ != nullptr) impulsesToCrates(s, *bodies_, ctx.step_seconds);
     stepRound(s, ctx);
     return {};
+  }
+
+  void reportColumns(FrameColumns& row) const override {
+    row.add("triangles", static_cast<double>(state.mesh.indices.size() / 3));
+    row.add("mesh_worker_ms", state.mesh_worker_ms);
+  }
+
+  // The goo's particles in index order (their order never changes), the behaviour machine, the round.
+  bool hashState(Fnv1a64& h, StateHashScratch&) const override {
+    const fluid::BlobParticles& p = state.world.particles;
+    h.add(static_cast<std::uint64_t>(p.size()));
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      hashVec3(h, p.position[i]);
+      hashVec3(h, p.velocity[i]);
+    }
+    h.add(static_cast<std::int64_t>(state.machine.state));
+    h.add(state.machine.time_in_state);
+    h.add(static_cast<std::int64_t>(state.catches));
+    h.add(state.caught_timer);
+    return true;
   }
 
   std::string findNonFinite() const override {
@@ -409,7 +426,7 @@ class BlobEffect final : public EffectOf<BlobMonster> {
 
   void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {
     engine::WaterBatch goo;
-    goo.method = engine::FluidMethod::mesh;
+    goo.method = "mesh";  // the goo is always the marching-slices mesh (its skin needs vertices)
     goo.style = engine::FluidStyle::goo;
     goo.visible = state.params.visible;
     // Caught: the goo pulses red while the caught effect plays.
@@ -564,6 +581,13 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
   return effect;
 }
 
+using enum ColumnFormat;
+constexpr ColumnSpec kColumns[] = {
+    {"triangles", count, "triangles of the meshed surfaces (the water's and the goo's)"},
+    {"mesh_worker_ms", milliseconds,
+     "the asynchronous meshing worker's time for the surfaces drawn (meshing_ms is then the main thread's wait)"},
+};
+
 }  // namespace
 
 const EffectDesc& blobEffect() {
@@ -572,7 +596,8 @@ const EffectDesc& blobEffect() {
                                "program, colliding with the level's baked colliders and the crates, meshed as goo",
                                table().specs,
                                {},
-                               &build};
+                               &build,
+                               kColumns};
   return desc;
 }
 

@@ -13,6 +13,9 @@
 //   submit                      what the renderer draws this frame (engine::FrameBatches)
 //   applyLive                   the overlay edited its section: re-parse the table and re-derive the
 //                               dependent values by the same code `build` uses
+//   hashState                   what the replay's checkpoints gate on (game/replay/state_hash.hpp)
+//   reportColumns               its cells of the replay CSV row (the columns its desc declares)
+//   soakCheck                   its checks after every frame of `fluiddemo soak` (game/soak_monitor.hpp)
 // Effects talk to each other only through EffectLinks (one slot per capability, filled at build).
 //
 // Adding an effect: one file game/effects/<name>.cpp defining `const EffectDesc& <name>Effect()`,
@@ -20,6 +23,7 @@
 
 #include "engine/profile/profiler.hpp"
 #include "fluid/core/blast.hpp"
+#include "game/effects/effect_report.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 
@@ -35,6 +39,7 @@
 
 namespace engine {
 struct FrameBatches;
+struct WaterStats;
 namespace audio {
 struct Mixer;
 }  // namespace audio
@@ -149,8 +154,19 @@ class Effect {
   // (the frame goes on without it).
   virtual bool prepareFrame(const FrameContext&, std::string& /*error*/) { return true; }
   virtual void submit(engine::FrameBatches& /*frame*/, const SubmitContext&) {}
+  // After the frame: the water backends' account of it, per FrameBatches::water entry in
+  // submission order (engine::lastWaterStats); an effect that submitted water reads its entry.
+  virtual void readRenderStats(std::span<const engine::WaterStats> /*water*/) {}
   virtual void drawStatus() const {}  // the overlay's status lines (ImGui text)
   virtual HudText hud() const { return {}; }  // the player-facing line and banner, every frame
+  // Feeds the CPU state a replay gates on into `hash` and returns true; false (the default): the
+  // effect has no such state (GPU-only or derived from the others every frame).
+  virtual bool hashState(Fnv1a64& /*hash*/, StateHashScratch& /*scratch*/) const { return false; }
+  // This frame's values of the CSV columns its EffectDesc declares (FrameColumns::set / add).
+  virtual void reportColumns(FrameColumns& /*row*/) const {}
+  // `fluiddemo soak`: before each step (e.g. ask for a GPU read-back) and after each frame.
+  virtual void soakBeforeStep(SoakProbe& /*probe*/) {}
+  virtual void soakCheck(SoakProbe& /*probe*/) const {}
 };
 
 // An effect whose state other code may read (tests, soak checks, state hashes): findState<State>.
@@ -167,6 +183,7 @@ struct EffectDesc {
   std::span<const std::string_view> needs;  // effects that must be listed too
   // Builds the effect for a listed section. False + error naming the effect, key and value.
   std::unique_ptr<Effect> (*build)(const SectionConfig& section, BuildContext& ctx, std::string& error);
+  std::span<const ColumnSpec> columns = {};  // its replay CSV columns (Effect::reportColumns fills them)
 };
 
 // Every effect the game knows, in build and step order (game/effects/registry.cpp).

@@ -66,6 +66,33 @@ class ExplosivesEffect final : public EffectOf<Explosives> {
     return {};
   }
 
+  // The charges in flight (their Bullet bodies, fuse clocks and the speed the impact test compares
+  // against), the effect's clock and counts: a replay whose fuse differs fails at the first
+  // checkpoint after the throw, before the blast moves anything else.
+  bool hashState(Fnv1a64& h, StateHashScratch&) const override {
+    h.add(state.time);
+    h.add(state.thrown);
+    h.add(state.detonated);
+    h.add(state.bodies_pushed);
+    h.add(static_cast<std::uint64_t>(state.charges.size()));
+    for (const Charge& charge : state.charges) {
+      h.add(static_cast<std::uint8_t>(charge.live));
+      if (!charge.live) continue;
+      h.add(charge.detonates_at);
+      hashVec3(h, charge.last_velocity);
+      const engine::BodyState body = engine::bodyState(*bodies_->physics, charge.body);
+      hashVec3(h, body.position);
+      hashQuat(h, body.rotation);
+      hashVec3(h, body.linear_velocity);
+      hashVec3(h, body.angular_velocity);
+    }
+    return true;
+  }
+
+  void reportColumns(FrameColumns& row) const override {
+    row.set("blasts", static_cast<double>(state.detonations.size()));
+  }
+
   // While the throw key is held: where a charge thrown now would fly and land (from the eye, along
   // the view, as playerThrowExplosive throws it).
   bool prepareFrame(const FrameContext& ctx, std::string&) override {
@@ -147,13 +174,14 @@ std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, s
 }
 
 constexpr std::string_view kNeeds[] = {"rigid_bodies"};
+constexpr ColumnSpec kColumns[] = {{"blasts", ColumnFormat::count, "explosives that went off in the frame's step"}};
 
 }  // namespace
 
 const EffectDesc& explosivesEffect() {
   static const EffectDesc desc{"explosives",
                                "fused charges the player throws; their blasts push water, crates, sprites",
-                               table().specs, kNeeds, &build};
+                               table().specs, kNeeds, &build, kColumns};
   return desc;
 }
 

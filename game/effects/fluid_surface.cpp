@@ -11,9 +11,6 @@
 namespace game {
 namespace {
 
-constexpr std::string_view kMethodNames[] = {"mesh", "screen_space", "raycast"};
-constexpr SurfaceMethodChoice kMethodValues[] = {SurfaceMethodChoice::mesh, SurfaceMethodChoice::screen_space,
-                                                 SurfaceMethodChoice::raycast};
 constexpr std::string_view kOrderNames[] = {"sorted", "unsorted", "exact"};
 constexpr SurfaceOrderChoice kOrderValues[] = {SurfaceOrderChoice::sorted, SurfaceOrderChoice::unsorted,
                                                SurfaceOrderChoice::exact};
@@ -22,24 +19,13 @@ constexpr fluid::SurfaceFieldRoute kFieldValues[] = {
     fluid::SurfaceFieldRoute::sliceSplat, fluid::SurfaceFieldRoute::particleCache, fluid::SurfaceFieldRoute::automatic};
 constexpr std::string_view kNeeds[] = {"sph_fluid"};
 
-engine::FluidMethod methodOf(SurfaceMethodChoice method) {
-  switch (method) {
-    case SurfaceMethodChoice::screen_space:
-      return engine::FluidMethod::screen_space;
-    case SurfaceMethodChoice::raycast:
-      return engine::FluidMethod::raycast;
-    case SurfaceMethodChoice::mesh:
-      break;
-  }
-  return engine::FluidMethod::mesh;
-}
-
 const ParamTable<FluidSurfaceParams>& table() {
   using P = FluidSurfaceParams;
   static const ParamTable<P> rows{
-      choice<&P::method>("method", kMethodNames, kMethodValues,
-                         "how the water is drawn: mesh (marching slices, CPU), screen_space (splat depth, bilateral "
-                         "smoothing; Janisz 3.1) or raycast (metaball fragment lists; Szecsi & Illes 2012); live"),
+      oneOf<&P::method>("method", engine::waterBackendNames(),
+                        "how the water is drawn, one of the engine's water backends: mesh (marching slices, CPU), "
+                        "screen_space (splat depth, bilateral smoothing; Janisz 3.1), raycast (metaball fragment "
+                        "lists; Szecsi & Illes 2012), ..."),
       choice<&P::order>("order", kOrderNames, kOrderValues,
                         "triangle order: sorted (back-to-front blocks), unsorted, exact (per slab, depth-sorted)"),
       param<&P::smoothing>("smoothing", 1.0, 4.0, "field cutoff Rc in particle spacings"),
@@ -47,16 +33,15 @@ const ParamTable<FluidSurfaceParams>& table() {
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the particle field"),
       choice<&P::field>("field", kFieldNames, kFieldValues,
                         "how the mesher sums a corner's field, the same mesh either way: splat (slice splat), cache "
-                        "(the paper's section 6 cache) or auto (the library's choice); live"),
+                        "(the paper's section 6 cache) or auto (the library's choice)"),
       param<&P::refraction>("refraction", 0.0, 1.0, "screen offset per metre of water; 0 = off"),
       param<&P::opacity>("opacity", 0.0, 1.0, "blend alpha of one water layer"),
       param<&P::absorption>("absorption", 0.0, 50.0, "Beer-Lambert sigma per metre, RGB"),
       param<&P::visible>("visible",
-                         "false: the water is not drawn (the same frame without it; docs/render.md's water masks); "
-                         "live"),
+                         "false: the water is not drawn (the same frame without it; docs/render.md's water masks)"),
       param<&P::async>("async",
                        "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
-                       "(Janisz 3.2.6); false: mesh before drawing; live"),
+                       "(Janisz 3.2.6); false: mesh before drawing"),
   };
   return rows;
 }
@@ -82,7 +67,7 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   void submit(engine::FrameBatches& frame, const SubmitContext&) override {
     const FluidSurfaceParams& p = state.params;
     engine::WaterBatch water;
-    water.method = methodOf(p.method);
+    water.method = p.method;
     water.visible = p.visible;
     water.positions = state.mesh.positions;
     water.normals = state.mesh.normals;
@@ -94,8 +79,18 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     water.refraction = p.refraction;
     water.opacity = p.opacity;
     water.absorption = p.absorption;
-    water.raycast_counts = &state.raycast;
+    water_slot_ = frame.water.size();
     frame.water.push_back(water);
+  }
+
+  void reportColumns(FrameColumns& row) const override {
+    row.add("triangles", static_cast<double>(state.mesh.indices.size() / 3));
+    row.add("mesh_worker_ms", state.mesh_worker_ms);
+    if (state.raycast.pool == 0) return;  // only the ray caster keeps fragment lists
+    row.set("raycast_records", static_cast<double>(state.raycast.records));
+    row.set("raycast_dropped", static_cast<double>(state.raycast.dropped));
+    row.set("raycast_pool", static_cast<double>(state.raycast.pool));
+    row.set("raycast_pool_bound", static_cast<double>(state.raycast.pool_bound));
   }
 
   // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases
@@ -106,7 +101,7 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
                 surface.blocks);
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
-    if (state.params.method == SurfaceMethodChoice::raycast) {
+    if (state.raycast.pool > 0) {
       ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
                   static_cast<unsigned long long>(state.raycast.records),
                   static_cast<unsigned long long>(state.raycast.dropped),
@@ -114,8 +109,14 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     }
   }
 
+  // The backend's account of the frame it drew this effect's water in (the ray caster's fragment lists).
+  void readRenderStats(std::span<const engine::WaterStats> water) override {
+    state.raycast = water_slot_ < water.size() ? water[water_slot_] : engine::WaterStats{};
+  }
+
  private:
   const SphFluid& fluid_;
+  std::size_t water_slot_ = 0;  // this frame's index in FrameBatches::water
 };
 
 std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {
@@ -135,10 +136,21 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
   return true;
 }
 
+using enum ColumnFormat;
+constexpr ColumnSpec kColumns[] = {
+    {"triangles", count, "triangles of the meshed surfaces (the water's and the goo's)"},
+    {"mesh_worker_ms", milliseconds,
+     "the asynchronous meshing worker's time for the surfaces drawn (meshing_ms is then the main thread's wait)"},
+    {"raycast_records", count, "method raycast: fragment records the frame asked for (0 otherwise)"},
+    {"raycast_dropped", count, "method raycast: records dropped because the pool was full"},
+    {"raycast_pool", count, "method raycast: the pool's size in records (16 bytes each)"},
+    {"raycast_pool_bound", count, "method raycast: the most records the pool may grow to"},
+};
+
 const EffectDesc& fluidSurfaceEffect() {
   static const EffectDesc desc{"fluid_surface",
                                "marching-slices mesh of sph_fluid drawn as refractive water (needs sph_fluid)",
-                               table().specs, kNeeds, &build};
+                               table().specs, kNeeds, &build, kColumns};
   return desc;
 }
 

@@ -108,6 +108,23 @@ ParamField<detail::ClassOf<Member>> choice(std::string_view key, std::span<const
   return field;
 }
 
+// A text row that takes one of `names` (which outlive the table), bound to a std::string member:
+// for choices another part owns, e.g. the water backends of engine/fluid_render's registry.
+template <auto Member>
+ParamField<detail::ClassOf<Member>> oneOf(std::string_view key, std::span<const std::string_view> names,
+                                          std::string_view doc) {
+  using P = detail::ClassOf<Member>;
+  static_assert(std::is_same_v<detail::TypeOf<Member>, std::string>, "oneOf<>: bind a std::string member");
+  ParamField<P> field;
+  field.spec.key = key;
+  field.spec.type = ParamType::text;
+  field.spec.doc = doc;
+  field.spec.choices = names;
+  field.spec.default_value = {ParamType::text, 0.0, false, {}, P{}.*Member};
+  field.read = [key](const SectionConfig& s, P& p) { p.*Member = s.text(key); };
+  return field;
+}
+
 // A free-text row (any value; e.g. a file name) bound to a std::string member.
 template <auto Member>
 ParamField<detail::ClassOf<Member>> text(std::string_view key, std::string_view doc) {
@@ -119,6 +136,14 @@ ParamField<detail::ClassOf<Member>> text(std::string_view key, std::string_view 
   field.spec.doc = doc;
   field.spec.default_value = {ParamType::text, 0.0, false, {}, P{}.*Member};
   field.read = [key](const SectionConfig& s, P& p) { p.*Member = s.text(key); };
+  return field;
+}
+
+// Marks a row fixed: read when the effect is built, and on a restart; the overlay's edit of it
+// waits for the restart (ParamSpec::live).
+template <class P>
+ParamField<P> fixed(ParamField<P> field) {
+  field.spec.live = false;
   return field;
 }
 
@@ -134,6 +159,14 @@ struct ParamTable {
   P parse(const SectionConfig& section) const {
     P p{};
     for (const ParamField<P>& f : fields) f.read(section, p);
+    return p;
+  }
+  // The live rows of a validated section read over `built` (the values the effect was built
+  // with): what Effect::applyLive takes, the fixed rows staying as built.
+  P parseLive(const SectionConfig& section, const P& built) const {
+    P p = built;
+    for (const ParamField<P>& f : fields)
+      if (f.spec.live) f.read(section, p);
     return p;
   }
 };

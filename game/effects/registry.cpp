@@ -2,7 +2,10 @@
 // above it publish (EffectLinks), and steps after them. One line per effect.
 #include "game/effects/effect.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cassert>
+#include <vector>
 
 namespace game {
 
@@ -31,6 +34,45 @@ const EffectDesc* findEffectDesc(std::string_view name) {
   for (const EffectDesc* desc : effectRegistry())
     if (desc->name == name) return desc;
   return nullptr;
+}
+
+std::span<const ColumnSpec> frameColumnCatalogue() {
+  static const std::vector<ColumnSpec> catalogue = [] {
+    std::vector<ColumnSpec> columns;
+    for (const EffectDesc* desc : effectRegistry())
+      for (const ColumnSpec& column : desc->columns) {
+        const auto same = [&](const ColumnSpec& c) { return c.name == column.name; };
+        const auto known = std::find_if(columns.begin(), columns.end(), same);
+        assert(known == columns.end() || known->format == column.format);  // one column, one format
+        if (known == columns.end()) columns.push_back(column);
+      }
+    return columns;
+  }();
+  return catalogue;
+}
+
+int frameColumnIndex(std::string_view name) {
+  const std::span<const ColumnSpec> columns = frameColumnCatalogue();
+  for (std::size_t i = 0; i < columns.size(); ++i)
+    if (columns[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+void FrameColumns::set(std::string_view name, double value) {
+  const int index = frameColumnIndex(name);
+  assert(index >= 0 && "FrameColumns::set: a column no effect declares");
+  if (index >= 0) values[static_cast<std::size_t>(index)] = value;
+}
+
+void FrameColumns::add(std::string_view name, double value) {
+  const int index = frameColumnIndex(name);
+  assert(index >= 0 && "FrameColumns::add: a column no effect declares");
+  if (index >= 0) values[static_cast<std::size_t>(index)] += value;
+}
+
+double FrameColumns::get(std::string_view name) const {
+  const int index = frameColumnIndex(name);
+  return index >= 0 ? values[static_cast<std::size_t>(index)] : 0.0;
 }
 
 }  // namespace game

@@ -5,6 +5,9 @@
 #include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "game/paths.hpp"
+#include "game/soak_checks.hpp"
+#include "game/world/fountain.hpp"
 #include "game/world/level_assets.hpp"
 
 #include <imgui.h>
@@ -17,11 +20,10 @@ namespace {
 const ParamTable<RigidBodyParams>& table() {
   static const ParamTable<RigidBodyParams> rows{
       param<&RigidBodyParams::gravity>("gravity", -100.0, 100.0, "m/s^2"),
-      param<&RigidBodyParams::crates>("crates", 0, 200, "crates stacked around the fountain"),
-      param<&RigidBodyParams::crate_size>("crate_size", 0.1, 5.0, "crate edge length (m)"),
-      param<&RigidBodyParams::density>(
-          "density", 10.0, 10000.0,
-          "crate density (kg/m^3; fixed at construction): in water (1000) a crate below it floats, above it sinks"),
+      fixed(param<&RigidBodyParams::crates>("crates", 0, 200, "crates stacked around the fountain")),
+      fixed(param<&RigidBodyParams::crate_size>("crate_size", 0.1, 5.0, "crate edge length (m)")),
+      fixed(param<&RigidBodyParams::density>(
+          "density", 10.0, 10000.0, "crate density (kg/m^3): in water (1000) a crate below it floats, above it sinks")),
       param<&RigidBodyParams::throw_speed>("throw_speed", 0.0, 100.0, "speed of a crate thrown with left click (m/s)"),
   };
   return rows;
@@ -38,12 +40,8 @@ class RigidBodiesEffect final : public EffectOf<RigidBodies> {
  public:
   std::string_view name() const override { return "rigid_bodies"; }
 
-  // Live: gravity and throw speed. The crates (count, size, density) are placed at construction.
   void applyLive(const SectionConfig& section, EffectLinks& links) override {
-    RigidBodyParams fresh = table().parse(section);
-    fresh.crates = state.params.crates;
-    fresh.crate_size = state.params.crate_size;
-    fresh.density = state.params.density;
+    const RigidBodyParams fresh = table().parseLive(section, state.params);
     if (fresh.gravity != state.params.gravity) engine::setGravity(*state.physics, fresh.gravity);
     state.params = fresh;
     links.gravity = fresh.gravity;
@@ -56,6 +54,47 @@ class RigidBodiesEffect final : public EffectOf<RigidBodies> {
   }
 
   std::string findNonFinite() const override { return findNonFiniteBodyState(state); }
+
+  // The crates' speeds, and their centres against the fountain's baked parts with the half edge as
+  // offset: only the fountain level has a basin for a crate to be inside. Resting contacts stay
+  // within Bullet's few-centimetre margin; half an edge means the centre reached the surface (the
+  // crate sank or went through a wall). The depth maps answer "beyond reach" farther than their
+  // margin from a part: a centre that far is no penetration.
+  void soakCheck(SoakProbe& probe) const override {
+    for (const engine::BodyState& body : state.current) probe.bodySpeed(glm::length(body.linear_velocity));
+    if (probe.level != "fountain") return;
+    probe.points.clear();
+    for (const engine::BodyState& body : state.current) probe.points.push_back(body.position);
+    const float size = state.params.crate_size;
+    std::string error;
+    if (!ensureFountainColliders(contentDir(), probe.level_colliders, error))
+      return probe.fail("level colliders: " + error);
+    for (const fluid::CachedCollider& part : probe.level_colliders->parts) {
+      const Penetration p =
+          worstPenetration(probe.points, part.collider, fluid::ColliderPose{}, size, 0.5f * size, probe.scratch);
+      probe.penetration("crates", p, probe.crate_tolerance,
+                        "crate " + std::to_string(p.index) + " (edge " + std::to_string(size) + " m, " + part.name + ")");
+    }
+  }
+
+  // Every crate's transform and velocities as Bullet holds them, the pending external forces (the
+  // water's push for the next step) and the crates thrown.
+  bool hashState(Fnv1a64& h, StateHashScratch&) const override {
+    h.add(static_cast<std::uint64_t>(state.crates.size()));
+    h.add(static_cast<std::int64_t>(state.thrown));
+    const engine::PhysicsWorld& physics = *state.physics;
+    for (engine::BodyId id : state.crates) {
+      const engine::BodyState s = engine::bodyState(physics, id);
+      hashVec3(h, s.position);
+      hashQuat(h, s.rotation);
+      hashVec3(h, s.linear_velocity);
+      hashVec3(h, s.angular_velocity);
+      const auto k = static_cast<std::size_t>(id);
+      hashVec3(h, k < physics.external_force.size() ? physics.external_force[k] : glm::vec3(0.0f));
+      hashVec3(h, k < physics.external_torque.size() ? physics.external_torque[k] : glm::vec3(0.0f));
+    }
+    return true;
+  }
 
   // Every crate, interpolated between the last two steps (slerp for the rotation).
   void submit(engine::FrameBatches& frame, const SubmitContext& ctx) override {

@@ -4,10 +4,16 @@
 #include "fluid/sph/blast.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "game/soak_checks.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/rigid_bodies.hpp"
 
 #include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
 
 namespace game {
 namespace {
@@ -18,21 +24,21 @@ constexpr fluid::SphSolverKind kSolverValues[] = {fluid::SphSolverKind::dfsph, f
 const ParamTable<SphFluidParams>& table() {
   using P = SphFluidParams;
   static const ParamTable<P> rows{
-      choice<&P::solver>("solver", kSolverNames, kSolverValues,
-                         "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)"),
-      param<&P::max_particles>("max_particles", 1, 50000,
-                               "the water in particles (fixed at construction): with the pump the basin starts "
-                               "filled with all of it; without, the jet's budget"),
-      param<&P::particle_radius>("particle_radius", 0.01, 0.2, "r (m); spacing 2r (fixed at construction)"),
+      fixed(choice<&P::solver>("solver", kSolverNames, kSolverValues,
+                               "dfsph (Bender & Koschier 2015) or wcsph (Becker & Teschner 2007)")),
+      fixed(param<&P::max_particles>("max_particles", 1, 50000,
+                                     "the water in particles: with the pump the basin starts filled with all of it; "
+                                     "without, the jet's budget")),
+      fixed(param<&P::particle_radius>("particle_radius", 0.01, 0.2, "r (m); spacing 2r")),
       param<&P::jet_speed>("jet_speed", 0.1, 20.0,
-                           "speed of the jet at the nozzle (m/s); live, with the speed cap, sound speed and top sink"),
-      param<&P::nozzle_radius>("nozzle_radius", 0.0, 0.5,
-                               "radius of the nozzle disc (m); particles per layer = lattice points inside"),
+                           "speed of the jet at the nozzle (m/s); the speed cap, sound speed and top sink follow it"),
+      fixed(param<&P::nozzle_radius>("nozzle_radius", 0.0, 0.5,
+                                     "radius of the nozzle disc (m); particles per layer = lattice points inside")),
       param<&P::rate>("rate", 0.0, 50000.0, "particles emitted per second (capped: layers never overlap)"),
       param<&P::viscosity>("viscosity", 0.0, 1.0, "kinematic viscosity nu (m^2/s)"),
-      param<&P::pump>("pump",
-                      "circulate the water: an intake in the basin floor, a gutter round the basin, the nozzle "
-                      "gives the same particles back (fixed at construction); false = the nozzle makes water"),
+      fixed(param<&P::pump>("pump",
+                            "circulate the water: an intake in the basin floor, a gutter round the basin, the nozzle "
+                            "gives the same particles back; false = the nozzle makes water")),
       param<&P::pump_delay>("pump_delay", 0.0, 10.0, "seconds a particle spends in the pump's pipe"),
       param<&P::spray_speed>("spray_speed", 0.0, 1000.0,
                              "water faster than this (m/s) with fewer than 6 calm neighbours flies ballistic outside "
@@ -47,13 +53,32 @@ const ParamTable<SphFluidParams>& table() {
           "force_bound", 0.0, 1.0,
           "dfsph: force condition |g| dt^2 <= force_bound * cfl * 2r (keeps resting water still); 0 = off"),
       param<&P::warm_start>("warm_start",
-                            "dfsph: start the density solve from 0.4 x the previous step's stiffness (Bender & "
-                            "Koschier 2017 sec. 4.3; fluid::SphParams::warm_start); false = from zero"),
-      param<&P::couple_bodies>("couple_bodies",
-                               "crates and water push each other, two-way (only when rigid_bodies is listed too; "
-                               "fixed at construction)"),
+                            "dfsph: start the density solve from warm_start_share x the previous step's stiffness "
+                            "(Bender & Koschier 2017 sec. 4.3; fluid::SphParams::warm_start); false = from zero"),
+      param<&P::warm_start_share>("warm_start_share", 0.0, 1.0,
+                                  "dfsph: the share of the previous step's stiffness a warm start begins from"),
+      fixed(param<&P::couple_bodies>(
+          "couple_bodies", "crates and water push each other, two-way (only when rigid_bodies is listed too)")),
   };
   return rows;
+}
+
+// Where a failing particle is: its signed distance to every collider within a particle radius of
+// it, so a soak report tells a particle squeezed between two crates from one that went through a wall.
+std::string collidersNear(const fluid::SphWorld& sph, glm::vec3 position, PenetrationScratch& scratch) {
+  const float radius = sph.params.particle_radius;
+  std::string out;
+  for (std::size_t c = 0; c < sph.colliders.size(); ++c) {
+    const fluid::SphCollider& collider = sph.colliders[c];
+    const Penetration p =
+        worstPenetration(std::span(&position, 1), *collider.shape, collider.pose, radius, radius, scratch);
+    if (p.depth <= 0.0f) continue;
+    char part[96];
+    std::snprintf(part, sizeof(part), "%s collider %zu%s %.4f m", out.empty() ? "; within a radius of" : ",", c,
+                  fluid::sphColliderMoves(collider) ? " (moving)" : "", static_cast<double>(radius - p.depth));
+    out += part;
+  }
+  return out;
 }
 
 class SphFluidEffect final : public EffectOf<SphFluid> {
@@ -64,14 +89,7 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
 
   // Everything but the construction-time fields, re-derived by initSphFluid's own code.
   void applyLive(const SectionConfig& section, EffectLinks& links) override {
-    SphFluidParams fresh = table().parse(section);
-    const SphFluidParams& built = state.params;
-    fresh.solver = built.solver;
-    fresh.max_particles = built.max_particles;
-    fresh.particle_radius = built.particle_radius;
-    fresh.nozzle_radius = built.nozzle_radius;
-    fresh.pump = built.pump;
-    fresh.couple_bodies = built.couple_bodies;
+    const SphFluidParams fresh = table().parseLive(section, state.params);
     state.params = fresh;
     deriveSphFluid(fresh, level_, links.gravity, state.world);
   }
@@ -147,6 +165,112 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
             "Should always be 0; any warns the frame (red).");
   }
 
+  // The particles in id order (the store is re-sorted by grid cell each step, so the hash says
+  // "same particles in the same states" whatever the storage order), the solver's clocks, the
+  // pump's water (the ids it will give back, in order, and when), the colliders and their forces.
+  bool hashState(Fnv1a64& h, StateHashScratch& scratch) const override {
+    const fluid::SphWorld& w = state.world;
+    const fluid::ParticleStore& p = w.particles;
+    scratch.order.resize(p.size());
+    std::iota(scratch.order.begin(), scratch.order.end(), 0u);
+    std::sort(scratch.order.begin(), scratch.order.end(),
+              [&p](std::uint32_t a, std::uint32_t b) { return p.id[a] < p.id[b]; });
+    h.add(static_cast<std::uint64_t>(p.size()));
+    for (std::uint32_t i : scratch.order) {
+      h.add(p.id[i]);
+      hashVec3(h, p.position[i]);
+      hashVec3(h, p.velocity[i]);
+      h.add(i < p.density.size() ? p.density[i] : 0.0f);
+      h.add(i < p.pressure.size() ? p.pressure[i] : 0.0f);
+    }
+    h.add(w.time);
+    h.add(w.step_count);
+    h.add(w.next_id);
+    h.add(w.last_dt);
+    for (const fluid::SphEmitter& e : w.emitters) h.add(e.accumulator);
+    if (w.pump.feeds_emitters || w.pump.size() > 0) {
+      h.add(static_cast<std::uint64_t>(w.pump.size()));
+      for (std::size_t k = w.pump.head; k < w.pump.held.size(); ++k) {
+        h.add(w.pump.held[k].id);
+        h.add(w.pump.held[k].ready_time);
+      }
+    }
+    for (const fluid::SphCollider& c : w.colliders) {
+      hashQuat(h, c.pose.rotation);
+      hashVec3(h, c.pose.translation);
+      hashVec3(h, c.pose.linear_velocity);
+      hashVec3(h, c.pose.angular_velocity);
+      hashVec3(h, c.force);
+      hashVec3(h, c.torque);
+    }
+    return true;
+  }
+
+  // All the water (the store and the pump), where it is, and the solver's health over the frame's
+  // one game step (fluid::SphStepTotals of its sub-steps).
+  void reportColumns(FrameColumns& row) const override {
+    const WaterWhereabouts where = waterWhereabouts(state, level_);
+    row.set("particles", static_cast<double>(state.world.particles.size() + where.pump));
+    row.set("water_pool", static_cast<double>(where.pool));
+    row.set("water_air", static_cast<double>(where.jet_and_air));
+    row.set("water_ground", static_cast<double>(where.ground));
+    row.set("water_pump", static_cast<double>(where.pump));
+    row.set("water_spray", static_cast<double>(where.spray));
+    const fluid::SphStepTotals& t = state.last_totals;
+    row.set("sph_steps", static_cast<double>(t.steps));
+    row.set("density_err_mean", t.meanDensityError());
+    row.set("density_err_p99", t.p99_density_error);
+    row.set("density_err_max", t.max_density_error);
+    row.set("pushed_out", static_cast<double>(t.pushed_out));
+    row.set("push_depth_mm", 1000.0 * t.max_push_depth);
+    row.set("speed_clamps", static_cast<double>(t.speed_clamps));
+    row.set("dt_min_clamps", static_cast<double>(t.dt_min_clamps));
+    row.set("dt_request_cuts", static_cast<double>(t.dt_request_cuts));
+    row.set("nonfinite", static_cast<double>(t.nonfinite));
+    row.set("warned", sphFluidWarns(state, t) ? 1.0 : 0.0);
+  }
+
+  // The particles against every collider the solver knows (the fountain and the coupled crates, at
+  // the poses the solver ended the step with). The solver ends every step with each centre on or
+  // outside every surface (Kolb et al. 2004 §3.3.2 push-out) except where a moving collider (a
+  // crate) overlaps another (the fountain, or a crate a blast pressed into it): no position is
+  // outside both and the solver leaves a particle between them inside one (still colliders win,
+  // else the last resolved), so inside a crate only counts where its way out is free
+  // (worstFreePenetration).
+  void soakCheck(SoakProbe& probe) const override {
+    const fluid::SphWorld& sph = state.world;
+    const float radius = sph.params.particle_radius;
+    probe.count("sph", sph.particles.size());
+    float fastest = 0.0f;
+    for (const glm::vec3& v : sph.particles.velocity) fastest = std::max(fastest, glm::dot(v, v));
+    probe.particleSpeed(std::sqrt(fastest));
+    std::size_t squeezed_now = 0;
+    for (std::size_t c = 0; c < sph.colliders.size(); ++c) {
+      const fluid::SphCollider& collider = sph.colliders[c];
+      const bool moves = fluid::sphColliderMoves(collider);
+      std::size_t squeezed = 0;
+      Penetration p;
+      if (moves) {
+        probe.blockers.clear();
+        for (std::size_t o = 0; o < sph.colliders.size(); ++o)
+          if (o != c) probe.blockers.push_back({sph.colliders[o].shape.get(), sph.colliders[o].pose});
+        p = worstFreePenetration(sph.particles.position, *collider.shape, collider.pose, probe.blockers, radius,
+                                 probe.scratch, squeezed);
+      } else {
+        p = worstPenetration(sph.particles.position, *collider.shape, collider.pose, radius, 0.0f, probe.scratch);
+      }
+      squeezed_now += squeezed;
+      if (p.ratio > probe.particle_tolerance && probe.failure.empty()) {
+        const std::string what = "sph particle id " + std::to_string(sph.particles.id[p.index]) + " (SPH collider " +
+                                 std::to_string(c) + (moves ? ", moving)" : ", still)");
+        probe.fail(describePenetration(what, p, probe.particle_tolerance) + collidersNear(sph, p.position, probe.scratch));
+      }
+      probe.penetration("sph", p, probe.particle_tolerance, {});
+    }
+    probe.squeezed_frames += squeezed_now > 0 ? 1u : 0u;
+    probe.squeezed_max = std::max(probe.squeezed_max, squeezed_now);
+  }
+
   std::string findNonFinite() const override {
     std::string bad = findNonFiniteSph(state);
     return bad.empty() ? coupling_error_ : bad;
@@ -184,12 +308,38 @@ bool sphParamsFrom(const SectionConfig& section, SphFluidParams& out, std::strin
   return true;
 }
 
+namespace {
+
+using enum ColumnFormat;
+constexpr ColumnSpec kColumns[] = {
+    {"particles", count, "all the water: the SPH store and the pump (constant with a pump)"},
+    {"water_pool", count, "of it, in the basin's pool (game::waterWhereabouts)"},
+    {"water_air", count, "in the jet and the air"},
+    {"water_ground", count, "on the ground, running to the gutter"},
+    {"water_pump", count, "inside the pump's pipe"},
+    {"water_spray", count, "of the water above, flying ballistic (fluid::SphParams::spray_speed)"},
+    {"sph_steps", count, "the solver's sub-steps in the frame's game step"},
+    {"density_err_mean", ratio, "mean over the sub-steps of the mean max(0, rho/rho_0 - 1)"},
+    {"density_err_p99", ratio, "largest over the sub-steps of the 99th percentile over particles"},
+    {"density_err_max", ratio, "largest density error of any particle"},
+    {"pushed_out", count, "particles pushed out of colliders"},
+    {"push_depth_mm", millimetres, "the deepest of them (mm)"},
+    {"speed_clamps", count, "particles whose speed was cut to max_speed"},
+    {"dt_min_clamps", count, "sub-steps held at min_time_step against the CFL bound"},
+    {"dt_request_cuts", count, "sub-steps shortened to land on the game step's end"},
+    {"nonfinite", count, "particles with a NaN/inf position or velocity"},
+    {"warned", flag, "1 where the overlay's frame plot draws a red marker (sphFluidWarns)"},
+};
+
+}  // namespace
+
 const EffectDesc& sphFluidEffect() {
   static const EffectDesc desc{"sph_fluid",
                                "SPH water (CPU): a filled basin, a pump and its jet, baked fountain colliders",
                                table().specs,
                                {},
-                               &build};
+                               &build,
+                               kColumns};
   return desc;
 }
 

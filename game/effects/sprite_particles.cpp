@@ -4,6 +4,7 @@
 #include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "game/soak_checks.hpp"
 #include "game/world/fountain.hpp"
 
 #include <imgui.h>
@@ -20,8 +21,8 @@ const ParamTable<SpriteParticleParams>& table() {
       param<&P::speed>("speed", 0.0, 50.0, "mist speed at the nozzle (m/s, +-20%)"),
       param<&P::spread_degrees>("spread_degrees", 0.0, 90.0, "half-angle of the mist cone"),
       param<&P::lifetime>("lifetime", 0.1, 60.0, "mist sprite lifetime (s, +-25%)"),
-      param<&P::max_particles>("max_particles", 0, 1000000,
-                               "GPU sprite budget, mist and spray (fixed at construction; 0 = no GPU resources)"),
+      fixed(param<&P::max_particles>("max_particles", 0, 1000000,
+                                     "GPU sprite budget, mist and spray (0 = no GPU resources)")),
       param<&P::size>("size", 0.005, 1.0, "sprite radius (m)"),
       param<&P::restitution>("restitution", 0.0, 1.0,
                              "Kolb 2004 resilience: bounce off the baked ground/basin/statue depth maps"),
@@ -64,6 +65,32 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
   }
 
   std::string findNonFinite() const override { return findNonFiniteSprite(state); }
+
+  void reportColumns(FrameColumns& row) const override { row.set("sprites", liveSprites(state)); }
+
+  // The sprites live on the GPU: read them back after every step so the NaN and penetration
+  // checks see every live sprite.
+  void soakBeforeStep(SoakProbe&) override { state.readback_every = 1; }
+
+  // The read-back against the depth maps the sprites collide with on the GPU (baked from the same
+  // models; the CPU lookup of fluid/collide is the reference the shader decodes).
+  void soakCheck(SoakProbe& probe) const override {
+    probe.count("sprites", liveSprites(state));
+    for (const glm::vec4& v : state.sample_velocities) probe.particleSpeed(glm::length(glm::vec3(v)));
+    // The read-back must be fresh: a check of stale data would pass whatever the GPU did.
+    if (state.attached && state.readback_every > 0 && state.sample_step != state.steps)
+      probe.fail("sprite read-back is stale (step " + std::to_string(state.sample_step) + " of " +
+                 std::to_string(state.steps) + ")");
+    probe.points.clear();
+    for (const glm::vec4& p : state.sample_positions) probe.points.emplace_back(p);
+    const std::size_t parts = state.level_colliders ? state.level_colliders->parts.size() : 0;
+    for (std::size_t c = 0; c < parts; ++c) {
+      const Penetration p = worstPenetration(probe.points, state.level_colliders->parts[c].collider,
+                                             fluid::ColliderPose{}, state.params.size, 0.0f, probe.scratch);
+      probe.penetration("sprites", p, probe.particle_tolerance,
+                        "live sprite " + std::to_string(p.index) + " (" + state.collider_names[c] + ")");
+    }
+  }
 
   void attachGpu(const GpuContext& gpu) override {
     if (!attachSpriteGpu(state, gpu.shader_dir, gpu.content_dir, static_cast<float>(gpu.step_seconds)))
@@ -122,12 +149,16 @@ SpriteParticleParams spriteParamsFrom(const SectionConfig& section, glm::vec3 gr
   return p;
 }
 
+constexpr ColumnSpec kColumns[] = {
+    {"sprites", ColumnFormat::count, "live GPU sprite particles (the allocator's count; 0 without GL)"}};
+
 const EffectDesc& spriteParticlesEffect() {
   static const EffectDesc desc{"sprite_particles",
                                "GPU sprites (Kolb 2004): nozzle mist and SPH spray, depth-map collisions",
                                table().specs,
                                {},
-                               &build};
+                               &build,
+                               kColumns};
   return desc;
 }
 

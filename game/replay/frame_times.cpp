@@ -24,13 +24,39 @@ std::string frameCsvHeader() {
     line += columnName(p);
     line += "_ms";
   }
-  line +=
-      ",particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,triangles,mesh_worker_ms,sph_steps,density_err_"
-      "mean,density_err_p99,density_err_max,pushed_"
-      "out,push_depth_mm,speed_clamps,"
-      "dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash";
+  for (const ColumnSpec& column : frameColumnCatalogue()) {
+    line += ',';
+    line += column.name;
+  }
+  line += ",state_hash";
   return line;
 }
+
+namespace {
+
+void appendCell(std::string& line, const ColumnSpec& column, double value) {
+  char number[64];
+  switch (column.format) {
+    case ColumnFormat::count:
+      std::snprintf(number, sizeof number, ",%llu", static_cast<unsigned long long>(std::llround(value)));
+      break;
+    case ColumnFormat::flag:
+      std::snprintf(number, sizeof number, ",%d", value != 0.0 ? 1 : 0);
+      break;
+    case ColumnFormat::milliseconds:
+      std::snprintf(number, sizeof number, ",%.4f", value);
+      break;
+    case ColumnFormat::ratio:  // %.9g: a float's value survives the text round trip
+      std::snprintf(number, sizeof number, ",%.9g", value);
+      break;
+    case ColumnFormat::millimetres:
+      std::snprintf(number, sizeof number, ",%.6g", value);
+      break;
+  }
+  line += number;
+}
+
+}  // namespace
 
 std::string frameCsvRow(const FrameRow& row) {
   char number[64];
@@ -39,27 +65,9 @@ std::string frameCsvRow(const FrameRow& row) {
     std::snprintf(number, sizeof number, ",%.4f", p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
     line += number;
   }
-  for (std::uint64_t count :
-       {row.particles, row.water_pool, row.water_air, row.water_ground, row.water_pump, row.water_spray, row.blasts,
-        row.sprites, row.triangles}) {
-    line += ',';
-    line += std::to_string(count);
-  }
-  std::snprintf(number, sizeof number, ",%.4f", row.mesh_worker_ms);
-  line += number;
-  line += ',' + std::to_string(row.truth.sph_steps);
-  const FrameTruth& t = row.truth;
-  // %.9g: a float's value survives the text round trip.
-  std::snprintf(number, sizeof number, ",%.9g,%.9g,%.9g", t.density_err_mean, t.density_err_p99, t.density_err_max);
-  line += number;
-  line += ',' + std::to_string(t.pushed_out);
-  std::snprintf(number, sizeof number, ",%.6g", t.push_depth_mm);
-  line += number;
-  for (std::uint64_t count : {t.speed_clamps, t.dt_min_clamps, t.dt_request_cuts, t.nonfinite}) {
-    line += ',';
-    line += std::to_string(count);
-  }
-  line += t.warned ? ",1," : ",0,";
+  const std::span<const ColumnSpec> columns = frameColumnCatalogue();
+  for (std::size_t c = 0; c < columns.size(); ++c) appendCell(line, columns[c], row.columns.values[c]);
+  line += ',';
   if (row.has_hash) line += hashHex(row.state_hash);
   return line;
 }
@@ -147,23 +155,12 @@ bool readFrameCsv(const std::filesystem::path& path, std::vector<FrameRow>& rows
     bool ok = parseCell(cells[c], row.frame) && parseCell(cells[++c], row.step);
     for (int p = 0; ok && p <= engine::kPhaseCount; ++p)
       ok = parseCell(cells[++c], p == engine::kPhaseCount ? row.frame_ms : row.phase_ms[p]);
-    if (ok)
-      ok = parseCell(cells[++c], row.particles) && parseCell(cells[++c], row.water_pool) &&
-           parseCell(cells[++c], row.water_air) && parseCell(cells[++c], row.water_ground) &&
-           parseCell(cells[++c], row.water_pump) && parseCell(cells[++c], row.water_spray) &&
-           parseCell(cells[++c], row.blasts) && parseCell(cells[++c], row.sprites) &&
-           parseCell(cells[++c], row.triangles) && parseCell(cells[++c], row.mesh_worker_ms);
-    FrameTruth& t = row.truth;
-    if (ok)
-      ok = parseCell(cells[++c], t.sph_steps) && parseCell(cells[++c], t.density_err_mean) &&
-           parseCell(cells[++c], t.density_err_p99) && parseCell(cells[++c], t.density_err_max) &&
-           parseCell(cells[++c], t.pushed_out) && parseCell(cells[++c], t.push_depth_mm) &&
-           parseCell(cells[++c], t.speed_clamps) && parseCell(cells[++c], t.dt_min_clamps) &&
-           parseCell(cells[++c], t.dt_request_cuts) && parseCell(cells[++c], t.nonfinite);
-    if (ok) {
-      int warned = 0;
-      ok = parseCell(cells[++c], warned) && (warned == 0 || warned == 1);
-      t.warned = warned == 1;
+    const std::span<const ColumnSpec> columns = frameColumnCatalogue();
+    for (std::size_t k = 0; ok && k < columns.size(); ++k) {
+      double& value = row.columns.values[k];
+      ok = parseCell(cells[++c], value);
+      if (ok && columns[k].format == ColumnFormat::flag) ok = value == 0.0 || value == 1.0;
+      if (ok && columns[k].format == ColumnFormat::count) ok = value >= 0.0 && value == std::floor(value);
     }
     if (ok && !cells[++c].empty()) ok = row.has_hash = parseCell(cells[c], row.state_hash, 16);
     if (!ok) {

@@ -3,17 +3,13 @@
 // scripts/plot_frame_times.py draws), percentiles per phase, and the B/A comparison of two runs.
 //
 // CSV columns, one row per rendered frame:
-//   frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,sprites,triangles,
-//   mesh_worker_ms,sph_steps,density_err_mean,density_err_max,pushed_out,push_depth_mm,speed_clamps,
-//   dt_min_clamps,dt_request_cuts,nonfinite,warned,state_hash
-// step is the simulation step count after the frame; particles the SPH particles, sprites the CPU
-// sprite particles, triangles the meshed surfaces' (water and blob); mesh_worker_ms the time the
-// asynchronous meshing's worker spent on the surfaces drawn (meshing_ms is then only the main thread's
-// wait and hand-over; 0 when meshing is synchronous); sph_steps .. nonfinite the SPH solver's health
-// counters over the frame's sub-steps (FrameTruth); warned is 1 where the overlay's plot draws a
-// red marker; state_hash is empty except on checkpoint steps.
+//   frame,step,input_ms,..,ui_ms,frame_ms, then every effect's columns (frameColumnCatalogue(): the
+//   columns each effect's file declares, in registry order; 0 where the scene does not list the
+//   effect), then state_hash (empty except on checkpoint steps). `fluiddemo scene-keys --columns`
+//   lists them with their docs (docs/replay.md).
 
 #include "engine/profile/profiler.hpp"
+#include "game/effects/effect_report.hpp"
 
 #include <array>
 #include <cstdint>
@@ -24,35 +20,12 @@
 
 namespace game {
 
-// The SPH solver's health over one frame (fluid::SphStepTotals of its steps), as the CSV has it.
-struct FrameTruth {
-  std::uint64_t sph_steps = 0;
-  double density_err_mean = 0.0;  // mean over the sub-steps of the mean max(0, rho/rho_0 - 1)
-  double density_err_p99 = 0.0;  // the largest over the sub-steps of the 99th percentile over particles
-  double density_err_max = 0.0;
-  std::uint64_t pushed_out = 0;  // particles pushed out of colliders
-  double push_depth_mm = 0.0;    // the deepest of them (mm)
-  std::uint64_t speed_clamps = 0;
-  std::uint64_t dt_min_clamps = 0;
-  std::uint64_t dt_request_cuts = 0;
-  std::uint64_t nonfinite = 0;
-  bool warned = false;  // a warning counter fired (the overlay's red marker)
-};
-
 struct FrameRow {
   int frame = 0;
   std::uint64_t step = 0;
   std::array<double, engine::kPhaseCount> phase_ms{};
   double frame_ms = 0.0;
-  std::uint64_t particles = 0;  // all the water: the SPH store and the pump
-  // Where it is (game::waterWhereabouts): pool, jet and air, ground, pump.
-  std::uint64_t water_pool = 0, water_air = 0, water_ground = 0, water_pump = 0;
-  std::uint64_t water_spray = 0;  // of the water above, flying ballistic (fluid::SphParams::spray_speed)
-  std::uint64_t blasts = 0;       // explosives that went off in this step
-  std::uint64_t sprites = 0;
-  std::uint64_t triangles = 0;
-  double mesh_worker_ms = 0.0;
-  FrameTruth truth;
+  FrameColumns columns;  // the effects' columns (Effect::reportColumns)
   bool has_hash = false;
   std::uint64_t state_hash = 0;
 };

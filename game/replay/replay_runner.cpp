@@ -2,9 +2,7 @@
 #include "game/replay/replay_runner.hpp"
 
 #include "engine/ui/overlay.hpp"
-#include "game/explosives/explosives.hpp"
 #include "game/paths.hpp"
-#include "game/world/blob_monster.hpp"
 #include "game/world/world.hpp"
 
 #include <algorithm>
@@ -160,47 +158,16 @@ void applyReplayInputs(ReplayPlayer& player, World& world) {
 bool checkReplayStep(ReplayPlayer& player, const World& world, FrameRow& row, ReplayResult& result) {
   const ReplayFile& replay = *player.replay;
   row.step = world.steps;
-  const FluidSurface* surface = findState<FluidSurface>(world);
-  if (const SphFluid* fluid = findState<SphFluid>(world)) {
-    const WaterWhereabouts where = waterWhereabouts(*fluid, world.links.level);
-    row.particles = fluid->world.particles.size() + where.pump;
-    row.water_pool = where.pool;
-    row.water_air = where.jet_and_air;
-    row.water_ground = where.ground;
-    row.water_pump = where.pump;
-    row.water_spray = where.spray;
-    const auto& t = fluid->last_totals;  // the frame's one game step (the variable hides namespace fluid)
-    row.truth = {t.steps,
-                 t.meanDensityError(),
-                 t.p99_density_error,
-                 t.max_density_error,
-                 t.pushed_out,
-                 1000.0 * t.max_push_depth,
-                 t.speed_clamps,
-                 t.dt_min_clamps,
-                 t.dt_request_cuts,
-                 t.nonfinite,
-                 sphFluidWarns(*fluid, t)};
-  }
-  if (const Explosives* explosives = findState<Explosives>(world)) row.blasts = explosives->detonations.size();
-  if (const SpriteParticles* sprites = findState<SpriteParticles>(world)) row.sprites = liveSprites(*sprites);
-  if (surface) {
-    row.triangles = surface->mesh.indices.size() / 3;
-    row.mesh_worker_ms = surface->mesh_worker_ms;
-  }
-  if (const BlobMonster* blob = findState<BlobMonster>(world)) {
-    row.triangles += blob->mesh.indices.size() / 3;
-    row.mesh_worker_ms += blob->mesh_worker_ms;
-  }
-  if (surface && surface->params.method == SurfaceMethodChoice::raycast && surface->raycast.pool > 0) {
-    const FluidSurface& s = *surface;
+  for (const std::unique_ptr<Effect>& effect : world.effects) effect->reportColumns(row.columns);
+  if (row.columns.get("raycast_pool") > 0.0) {
+    const auto cell = [&row](std::string_view name) { return static_cast<std::uint64_t>(row.columns.get(name)); };
     RaycastTally& t = result.raycast;
     ++t.frames;
-    t.records_max = std::max(t.records_max, s.raycast.records);
-    t.dropped_total += s.raycast.dropped;
-    t.frames_dropping += s.raycast.dropped > 0;
-    t.pool_records_max = std::max(t.pool_records_max, s.raycast.pool);
-    t.pool_bound = std::max(t.pool_bound, s.raycast.pool_bound);
+    t.records_max = std::max(t.records_max, cell("raycast_records"));
+    t.dropped_total += cell("raycast_dropped");
+    t.frames_dropping += cell("raycast_dropped") > 0;
+    t.pool_records_max = std::max(t.pool_records_max, cell("raycast_pool"));
+    t.pool_bound = std::max(t.pool_bound, cell("raycast_pool_bound"));
   }
   std::size_t& cursor = player.checkpoint_cursor;
   for (; cursor < replay.events.size() && replay.events[cursor].step <= world.steps; ++cursor) {

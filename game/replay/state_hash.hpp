@@ -4,19 +4,17 @@
 // every float's bytes): two runs agree only when they are bit-identical, which the game keeps
 // across runs, thread counts (fluid::par's deterministic loops) and windowed/headless runs.
 //
-// Hashed, per subsystem (a subsystem the scene does not list is left out):
-//   rigid_bodies      every crate's transform and velocities as Bullet holds them, the pending
-//                     external forces (the water's push for the next step), crates thrown
-//   sph_fluid         particles in id order (id, position, velocity, density, pressure), time,
-//                     step count, next id, the emitters' layer clocks, the colliders' poses and
-//                     the forces they took from the water
-// Left out: GPU-only state: the fluid surface's buffers and the sprite_particles effect (GPU
-// state-preserving sprites: they never feed back into SPH or Bullet, and GPU float results differ
-// between drivers, so a hash of them would tie a replay to one driver); the fluid surface
-// mesh (derived from the particles and the camera every frame), the camera (an input, not state),
-// and Bullet's internal caches (contact manifolds, sleep timers), which act on the state hashed.
+// Each listed effect hashes what it owns (Effect::hashState, in its own file), in registry order,
+// as one subsystem named after the effect; an effect with no CPU state a replay gates on adds
+// nothing. Today: rigid_bodies (the crates in Bullet, the pending water forces, crates thrown),
+// explosives (the charges in flight: bodies, fuse times; the detonation counts), sph_fluid (the
+// particles in id order, the solver's clocks, the pump, the colliders and their forces) and blob
+// (the goo, the behaviour machine, the round). Left out: GPU-only state (the sprites: GPU float
+// results differ between drivers, and they never feed back), what is derived every frame (the
+// surface meshes), inputs (the camera) and Bullet's internal caches (contact manifolds, sleep
+// timers), which act on the state hashed.
 
-#include "fluid/core/fnv1a.hpp"
+#include "game/effects/effect_report.hpp"
 
 #include <cstdint>
 #include <string>
@@ -27,21 +25,14 @@ namespace game {
 
 struct World;
 
-using Fnv1a64 = fluid::Fnv1a64;  // fluid/core/fnv1a.hpp
-
 struct SubsystemHash {
-  std::string_view name;  // "rigid_bodies", "sph_fluid"
+  std::string_view name;  // the effect's name: "rigid_bodies", "sph_fluid", ...
   std::uint64_t value = 0;
 };
 
 struct StateHash {
   std::uint64_t combined = 0;        // over the step count and every subsystem hash, in order
   std::vector<SubsystemHash> parts;  // present subsystems only, fixed order
-};
-
-// Caller-owned scratch so hashing every checkpoint allocates nothing after the first.
-struct StateHashScratch {
-  std::vector<std::uint32_t> order;
 };
 
 void hashWorldState(const World& world, StateHashScratch& scratch, StateHash& out);

@@ -45,6 +45,9 @@ struct ParamSpec {
   ParamValue default_value;
   std::string_view doc;
   std::span<const std::string_view> choices = {};  // text: the only accepted values (empty = any)
+  // Live keys take effect when the overlay edits them (Effect::applyLive re-reads only these);
+  // fixed ones size or shape what the effect builds and take effect on a restart.
+  bool live = true;
 };
 
 struct SectionSpec {

@@ -32,7 +32,8 @@ bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
 
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
   s.mesh_worker_ms = 0.0;
-  if (s.params.method != SurfaceMethodChoice::mesh) {  // the particle renderers need no mesh
+  const engine::WaterBackendDesc* backend = engine::findWaterBackend(s.params.method);
+  if (backend == nullptr || !backend->needs_mesh) {  // the particle renderers need no mesh
     s.async_job.reset();
     s.mesh.clear();
     s.error.clear();

@@ -21,11 +21,11 @@
 namespace game {
 
 enum class SurfaceOrderChoice { sorted, unsorted, exact };
-// Which renderer draws the water (engine::FluidMethod): only `mesh` runs the CPU mesher.
-enum class SurfaceMethodChoice { mesh, screen_space, raycast };
 
 struct FluidSurfaceParams {
-  SurfaceMethodChoice method = SurfaceMethodChoice::mesh;
+  // The engine's water backend that draws it (engine/fluid_render/water_backend.hpp); only the
+  // backends that draw a mesh run the CPU mesher.
+  std::string method = "mesh";
   SurfaceOrderChoice order = SurfaceOrderChoice::sorted;
   float smoothing = 2.0f;  // Rc in particle spacings
   float cube = 0.5f;       // lattice cube edge S in particle spacings
@@ -37,7 +37,7 @@ struct FluidSurfaceParams {
   fluid::SurfaceFieldRoute field = fluid::SurfaceFieldRoute::sliceSplat;
   float refraction = 0.08f;  // engine::WaterParams::refraction; 0 = off
   float opacity = 0.85f;
-  glm::vec3 absorption{1.6f, 0.45f, 0.25f};  // Beer–Lambert σ per metre
+  glm::vec3 absorption = engine::WaterParams{}.absorption;  // Beer–Lambert σ per metre
   bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
   // Mesh on a worker thread while the next steps run and draw the previous frame's surface
   // (Janisz §3.2.6); false: mesh the current particles before drawing them.
@@ -62,10 +62,10 @@ struct FluidSurface {
   double mesh_worker_ms = 0.0;  // async: the worker's time on `mesh` (0 when synchronous)
   std::uint64_t meshes = 0;     // frames meshed
   std::string error;            // last extraction error (mesh cleared then)
-  // Method raycast, last frame (written by the engine's water pass): fragment-list records asked
-  // for and records dropped because the pool was full, and the pool's size in records after the
-  // frame (it grows with the demand up to pool_bound).
-  engine::RaycastCounts raycast;
+  // Method raycast, last frame (engine::lastWaterStats, read after the frame): fragment-list
+  // records asked for and records dropped because the pool was full, and the pool's size in
+  // records after the frame (it grows with the demand up to pool_bound).
+  engine::WaterStats raycast;
 };
 
 // Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With

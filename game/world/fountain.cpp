@@ -1,6 +1,6 @@
 #include "game/world/fountain.hpp"
 
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 
 #include <algorithm>
 #include <cfloat>

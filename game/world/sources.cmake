@@ -1,6 +1,7 @@
 # Sources of the game world, added to fluiddemo_game.
 target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/fountain.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/collider_model.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sprite_particles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rigid_bodies.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_fluid.cpp

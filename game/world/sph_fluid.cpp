@@ -21,6 +21,7 @@ void applySolverKnobs(const SphFluidParams& params, fluid::SphParams& solver) {
   solver.max_density_error = params.density_error;
   solver.force_bound = params.force_bound;
   solver.warm_start = params.warm_start;
+  solver.warm_start_share = params.warm_start_share;
   solver.spray_speed = params.spray_speed;
   solver.spray_terminal_speed = params.spray_terminal_speed;
 }

@@ -42,6 +42,7 @@ struct SphFluidParams {
   float density_error = 0.0005f;  // dfsph tolerance (mean predicted compression)
   float force_bound = 0.0025f;    // dfsph force condition; 0 = off
   bool warm_start = true;         // dfsph warm start of the density solve (2017 §4.3)
+  float warm_start_share = fluid::SphParams{}.warm_start_share;
   bool couple_bodies = true;      // crates and water push each other (with rigid_bodies; fixed at construction)
 };
 

@@ -231,17 +231,13 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
   desc.shader_dir = shader_dir;
   desc.dt = dt;
   desc.sort_passes_per_frame = 6;
+  desc.budget = s.capacity;  // the texture rounds up to a power of two; the budget stays exact
   s.attached = true;
   engine::createGpuParticles(desc, s.gpu);
   if (!s.gpu.ready) {
     s.gpu_error = s.gpu.error;
     return false;
   }
-  // The GPU system's allocator may hold more texels than the budget: keep the budget exact.
-  s.gpu.allocator.free_heap.erase(std::remove_if(s.gpu.allocator.free_heap.begin(), s.gpu.allocator.free_heap.end(),
-                                                 [&](std::uint32_t i) { return i >= s.capacity; }),
-                                  s.gpu.allocator.free_heap.end());
-  std::make_heap(s.gpu.allocator.free_heap.begin(), s.gpu.allocator.free_heap.end(), std::greater<>());
   // The maps as baked, margin rings included: the shader does not read the ring flag, so a ring
   // texel's pair of equal depths votes like any other (fluid::DepthMap::margin_ring). Ring texels
   // lie outside the model's conservative cover, so their vote is never "inside": where the CPU

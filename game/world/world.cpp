@@ -146,6 +146,10 @@ void meshWorld(World& world, engine::Profiler* profiler) {
     if (!effect->prepareFrame(frame, error)) recordFailure(world, error);
 }
 
+void readWorldRenderStats(World& world, std::span<const engine::WaterStats> water) {
+  for (const std::unique_ptr<Effect>& effect : world.effects) effect->readRenderStats(water);
+}
+
 void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha) {
   const SubmitContext context{assets, alpha};
   for (const std::unique_ptr<Effect>& effect : world.effects) effect->submit(frame, context);

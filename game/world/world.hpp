@@ -95,6 +95,10 @@ void stepWorld(World& world, engine::Profiler* profiler);
 // (submitLevel, level_assets.hpp).
 void submitWorld(World& world, engine::FrameBatches& frame, const LevelAssets& assets, float alpha);
 
+// After engine::renderFrame: what the water backends tell of the frame, handed to every effect
+// (Effect::readRenderStats) by the game; the engine writes nothing into game state.
+void readWorldRenderStats(World& world, std::span<const engine::WaterStats> water);
+
 // Meshes the fluid surface for the camera (no-op without fluid_surface), timed into the
 // profiler's meshing phase (may be null). Call once per rendered frame, after stepping.
 // A failed extraction leaves an empty mesh and records the error in world.failures.

@@ -14,7 +14,7 @@
 // Usage: bench_collide_fountain [--points N] [--frames N] [--threads 1,2] [--variants 0,3,1,2] [--tables 0|1]
 // (--variants picks the SPH rows by number, see 3.; --tables 0 skips the accuracy tables.)
 #include "fluid/collide/collider_cache.hpp"
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/sph_fluid.hpp"
 #include "game/world/world.hpp"

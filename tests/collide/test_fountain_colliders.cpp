@@ -4,7 +4,7 @@
 // throws a particle farther than its step on them.
 #include "fluid/collide/collider_cache.hpp"
 #include "fluid/core/collider.hpp"
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 #include "game/world/sph_fluid.hpp"

@@ -3,7 +3,7 @@
 #include "collide_meshes.hpp"
 #include "fluid/collide/collide.hpp"
 #include "fluid/collide/mesh_checks.hpp"
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 
 #include <gtest/gtest.h>
 

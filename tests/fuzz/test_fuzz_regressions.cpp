@@ -5,7 +5,7 @@
 
 #include "fluid/collide/collide.hpp"
 #include "fluid/io/particle_io.hpp"
-#include "game/commands/collider_model.hpp"
+#include "game/world/collider_model.hpp"
 #include "game/scene/scene_config.hpp"
 
 #include <gtest/gtest.h>

@@ -19,13 +19,15 @@ fail() { echo "replay_outputs: FAIL: $*" >&2; exit 1; }
 grep -q "^frame .*p50\|^phase  *p50 ms  *p95 ms  *p99 ms  *max ms" "$work/out.txt" || fail "no percentile table"
 grep -q "checkpoints: 1 matched of 4" "$work/out.txt" || fail "checkpoint 150 not matched"
 
+"$exe" scene-keys --columns > "$work/columns.md"
 /usr/bin/env python3 - "$work" <<'PY'
 import csv, struct, sys, pathlib
 work = pathlib.Path(sys.argv[1])
 rows = list(csv.reader(open(work / "f.csv")))
-want = ("frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,"
-        "triangles,mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,"
-        "dt_request_cuts,nonfinite,warned,state_hash").split(",")
+# The phases, then every effect's declared columns as `scene-keys --columns` lists them, then the hash.
+declared = [line.split("`")[1] for line in open(work / "columns.md") if line.startswith("| `")]
+assert "particles" in declared and "triangles" in declared and "blasts" in declared, declared
+want = "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms".split(",") + declared + ["state_hash"]
 assert rows[0] == want, rows[0]
 body = rows[1:]
 assert len(body) == 150, len(body)

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <unistd.h>
 
 #include <filesystem>
@@ -286,21 +288,33 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
     rows[i].step = static_cast<std::uint64_t>(i + 1);
     rows[i].phase_ms = {0.5, 1.25, 2.0, 3.0, 4.5, 0.25};
     rows[i].frame_ms = 12.0 + i;
-    rows[i].particles = 100u * static_cast<unsigned>(i);
-    rows[i].triangles = 7;
-    rows[i].water_spray = 3u * static_cast<unsigned>(i);
-    rows[i].blasts = static_cast<unsigned>(i % 2);
-    rows[i].mesh_worker_ms = 0.125 * i;
+    rows[i].columns.set("particles", 100.0 * i);
+    rows[i].columns.set("triangles", 7);
+    rows[i].columns.set("water_spray", 3.0 * i);
+    rows[i].columns.set("blasts", i % 2);
+    rows[i].columns.set("mesh_worker_ms", 0.125 * i);
   }
-  rows[1].truth = {17, 0.000412345f, 0.00375f, 0.0213f, 42, 3.125, 5, 1, 2, 0, true};
-  rows[2].truth.nonfinite = 9;
+  game::FrameColumns& health = rows[1].columns;
+  health.set("sph_steps", 17);
+  health.set("density_err_mean", 0.000412345f);
+  health.set("density_err_p99", 0.00375f);
+  health.set("density_err_max", 0.0213f);
+  health.set("pushed_out", 42);
+  health.set("push_depth_mm", 3.125);
+  health.set("speed_clamps", 5);
+  health.set("dt_min_clamps", 1);
+  health.set("dt_request_cuts", 2);
+  health.set("warned", 1);
+  rows[2].columns.set("nonfinite", 9);
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
+  // The effects' columns in registry order (explosives, sph_fluid, sprite_particles, fluid_surface;
+  // the blob's triangles and worker time share the water's columns), between the phases and the hash.
   EXPECT_EQ(game::frameCsvHeader(),
-            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,particles,water_pool,water_air,water_ground,water_pump,water_spray,blasts,sprites,triangles,"
-            "mesh_worker_ms,sph_steps,density_err_mean,density_err_p99,density_err_max,pushed_out,push_depth_mm,speed_"
-            "clamps,dt_min_clamps,"
-            "dt_request_cuts,nonfinite,warned,state_hash");
+            "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,blasts,particles,water_pool,"
+            "water_air,water_ground,water_pump,water_spray,sph_steps,density_err_mean,density_err_p99,density_err_max,"
+            "pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,dt_request_cuts,nonfinite,warned,sprites,triangles,"
+            "mesh_worker_ms,raycast_records,raycast_dropped,raycast_pool,raycast_pool_bound,state_hash");
   const auto path = std::filesystem::temp_directory_path() / ("replay_csv_" + std::to_string(::getpid()) + ".csv");
   std::string error;
   ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
@@ -309,39 +323,49 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   ASSERT_EQ(back.size(), 3u);
   EXPECT_EQ(back[2].frame_ms, 14.0);
   EXPECT_EQ(back[1].phase_ms[4], 4.5);
-  EXPECT_EQ(back[2].particles, 200u);
-  EXPECT_EQ(back[2].water_spray, 6u);
-  EXPECT_EQ(back[1].blasts, 1u);
-  EXPECT_EQ(back[2].mesh_worker_ms, 0.25);
+  EXPECT_EQ(back[2].columns.get("particles"), 200.0);
+  EXPECT_EQ(back[2].columns.get("water_spray"), 6.0);
+  EXPECT_EQ(back[1].columns.get("blasts"), 1.0);
+  EXPECT_EQ(back[2].columns.get("mesh_worker_ms"), 0.25);
   // The SPH health columns come back as written (a float density error survives %.9g).
-  const game::FrameTruth& t = back[1].truth;
-  EXPECT_EQ(t.sph_steps, 17u);
-  EXPECT_EQ(static_cast<float>(t.density_err_mean), 0.000412345f);
-  EXPECT_EQ(static_cast<float>(t.density_err_p99), 0.00375f);
-  EXPECT_EQ(static_cast<float>(t.density_err_max), 0.0213f);
-  EXPECT_EQ(t.pushed_out, 42u);
-  EXPECT_EQ(t.push_depth_mm, 3.125);
-  EXPECT_EQ(t.speed_clamps, 5u);
-  EXPECT_EQ(t.dt_min_clamps, 1u);
-  EXPECT_EQ(t.dt_request_cuts, 2u);
-  EXPECT_EQ(t.nonfinite, 0u);
-  EXPECT_TRUE(t.warned);
-  EXPECT_FALSE(back[0].truth.warned);
-  EXPECT_EQ(back[2].truth.nonfinite, 9u);
+  const game::FrameColumns& t = back[1].columns;
+  EXPECT_EQ(t.get("sph_steps"), 17.0);
+  EXPECT_EQ(static_cast<float>(t.get("density_err_mean")), 0.000412345f);
+  EXPECT_EQ(static_cast<float>(t.get("density_err_p99")), 0.00375f);
+  EXPECT_EQ(static_cast<float>(t.get("density_err_max")), 0.0213f);
+  EXPECT_EQ(t.get("pushed_out"), 42.0);
+  EXPECT_EQ(t.get("push_depth_mm"), 3.125);
+  EXPECT_EQ(t.get("speed_clamps"), 5.0);
+  EXPECT_EQ(t.get("dt_min_clamps"), 1.0);
+  EXPECT_EQ(t.get("dt_request_cuts"), 2.0);
+  EXPECT_EQ(t.get("nonfinite"), 0.0);
+  EXPECT_EQ(t.get("warned"), 1.0);
+  EXPECT_EQ(back[0].columns.get("warned"), 0.0);
+  EXPECT_EQ(back[2].columns.get("nonfinite"), 9.0);
   EXPECT_FALSE(back[1].has_hash);
   EXPECT_TRUE(back[2].has_hash);
   EXPECT_EQ(back[2].state_hash, 0xabcdef0123456789ull);
-  // A bad cell is named by file, line and column.
+  // A bad cell is named by file, line and column: a written row with one cell replaced.
+  const auto rowWith = [&rows](std::string_view column, std::string_view value) {
+    const std::string header = game::frameCsvHeader();
+    std::string line = game::frameCsvRow(rows[0]);
+    const std::size_t index = static_cast<std::size_t>(
+        std::count(header.begin(), header.begin() + static_cast<long>(header.find(column)), ','));
+    std::size_t start = 0;
+    for (std::size_t k = 0; k < index; ++k) start = line.find(',', start) + 1;
+    const std::size_t end = line.find(',', start);
+    return line.replace(start, end - start, value) + "\n";
+  };
   {
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,x,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,0,\n";
+    out << rowWith("fluid_ms", "x");
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'fluid_ms': bad value 'x'"), std::string::npos) << error;
   {  // and so is a bad health cell (warned is 0 or 1)
     ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
     std::ofstream out(path, std::ios::app);
-    out << "3,4,0.1,0.1,0.1,0.1,0.1,0.1,1,0,0,0,0,0,0,0,0,0,0.5,0,0,0,0,0,0,0,0,0,0,2,\n";
+    out << rowWith("warned", "2");
   }
   EXPECT_FALSE(game::readFrameCsv(path, back, error));
   EXPECT_NE(error.find(":5: column 'warned': bad value '2'"), std::string::npos) << error;

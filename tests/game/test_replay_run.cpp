@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <unistd.h>
+#include <algorithm>
 #include <filesystem>
 
 namespace {
@@ -45,8 +46,9 @@ TEST(ReplayRun, CheckpointsHoldAndHashesAgreeAtOneAndTwoThreads) {
   }
   for (std::size_t i = 0; i < per_threads[0].size(); ++i) {
     EXPECT_EQ(per_threads[0][i].combined, per_threads[1][i].combined);
-    ASSERT_EQ(per_threads[0][i].parts.size(), 2u);  // rigid_bodies, sph_fluid (GPU sprites are not hashed)
-    for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(per_threads[0][i].parts[k].value, per_threads[1][i].parts[k].value);
+    // rigid_bodies, explosives, sph_fluid (GPU sprites are not hashed)
+    ASSERT_EQ(per_threads[0][i].parts.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(per_threads[0][i].parts[k].value, per_threads[1][i].parts[k].value);
   }
 }
 
@@ -71,6 +73,47 @@ TEST(ReplayRun, PerturbedViscosityFailsTheGateInTheFluid) {
   EXPECT_NE(error.find("checkpoint at step 150 failed"), std::string::npos) << error;
   EXPECT_NE(error.find("sph_fluid"), std::string::npos) << error;
   EXPECT_EQ(error.find("sprite_particles"), std::string::npos) << error;  // the sprites do not touch the water
+}
+
+// The explosives are hashed: a charge whose fuse differs fails the first checkpoint after the
+// throw, in the explosives' part, before its blast has moved anything else.
+TEST(ReplayRun, ADifferentFuseFailsTheGateInTheExplosives) {
+  game::ReplayFile replay = load("fountain_tour");
+  const auto thrown = std::find_if(replay.events.begin(), replay.events.end(), [](const game::ReplayEvent& e) {
+    return e.kind == game::ReplayEventKind::action && e.action == game::PlayerAction::throw_explosive;
+  });
+  ASSERT_NE(thrown, replay.events.end());
+  // 0.5 s after the throw: the 2.5 s fuse still runs.
+  const std::uint64_t check_step = thrown->step + 30;
+  replay.events.erase(std::remove_if(replay.events.begin(), replay.events.end(),
+                                     [](const game::ReplayEvent& e) { return e.kind == game::ReplayEventKind::checkpoint; }),
+                      replay.events.end());
+  game::ReplayEvent checkpoint;
+  checkpoint.kind = game::ReplayEventKind::checkpoint;
+  checkpoint.step = check_step;
+  const auto after = std::find_if(replay.events.begin(), replay.events.end(),
+                                  [&](const game::ReplayEvent& e) { return e.step > check_step; });
+  replay.events.insert(after, checkpoint);
+  // Record this build's hashes at the new checkpoint, then check against them.
+  game::ReplayRunOptions record;
+  record.render = false;
+  record.frames = static_cast<int>(check_step);
+  record.update_hashes = true;
+  game::ReplayResult recorded;
+  std::string error;
+  ASSERT_EQ(game::runReplay(replay, record, recorded, error), 0) << error;
+  ASSERT_EQ(recorded.checkpoints.size(), 1u);
+  for (game::ReplayEvent& e : replay.events) {
+    if (e.kind != game::ReplayEventKind::checkpoint) continue;
+    e.has_hash = true;
+    e.hash = recorded.checkpoints[0].combined;
+    e.parts = recorded.checkpoints[0].parts;
+  }
+  game::ReplayResult result;
+  ASSERT_EQ(simulate(replay, static_cast<int>(check_step), result, error), 0) << error;  // the control run passes
+  ASSERT_EQ(simulate(replay, static_cast<int>(check_step), result, error, {"explosives.fuse_seconds=2.4"}), 1);
+  EXPECT_NE(error.find("failed: first differing subsystem 'explosives'"), std::string::npos) << error;
+  EXPECT_NE(error.find("(differing: explosives)"), std::string::npos) << error;  // nothing else moved yet
 }
 
 // A "live" session driven through the recorder's own API (camera moving every step, throws at

@@ -281,8 +281,9 @@ TEST_F(SoakMonitorOnFountain, AHealthyWorldPasses) {
   EXPECT_TRUE(game::soakAfterFrame(monitor, world)) << monitor.failure;
   EXPECT_TRUE(monitor.failure.empty());
   EXPECT_GT(monitor.stats.throws, 0);
-  EXPECT_GT(monitor.stats.sph_max, 0u);
-  EXPECT_GT(monitor.stats.max_speed, 1.0f);
+  ASSERT_NE(monitor.probe.range("sph"), nullptr);
+  EXPECT_GT(monitor.probe.range("sph")->max, 0u);
+  EXPECT_GT(monitor.probe.max_particle_speed, 1.0f);
 }
 
 TEST_F(SoakMonitorOnFountain, AnSphParticleInTheBasinWallFails) {
@@ -311,7 +312,7 @@ TEST_F(SoakMonitorOnFountain, InsideTwoOverlappingCratesIsSqueezedButInsideOneFr
   // 2 cm inside the first crate's +x face, which lies 5 cm inside the second crate.
   sph.particles.position[0] = {6.28f, 1.0f, 0.0f};
   EXPECT_TRUE(game::soakAfterFrame(monitor, world)) << monitor.failure;
-  EXPECT_GT(monitor.stats.sph_squeezed_max, 0u);
+  EXPECT_GT(monitor.probe.squeezed_max, 0u);
   // 2 cm inside its -x face, in the open.
   sph.particles.position[0] = {5.72f, 1.0f, 0.0f};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));

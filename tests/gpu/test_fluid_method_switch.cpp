@@ -5,6 +5,7 @@
 #include "game/paths.hpp"
 #include "game/run_scene.hpp"
 #include "game/scene/scene_config.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 #include "game/world/fluid_surface.hpp"
 
 #include <gtest/gtest.h>
@@ -37,15 +38,18 @@ game::RunOptions headlessCapture(int frames) {
 
 }  // namespace
 
-TEST(FluidMethodSwitch, SchemaAcceptsTheThreeMethodsOnly) {
-  for (const char* m : {"mesh", "screen_space", "raycast"}) {
+// The scene key's choices are the engine's water backends (engine/fluid_render/water_backends.cpp):
+// a backend added there is a method here, with nothing else to edit.
+TEST(FluidMethodSwitch, SchemaAcceptsTheEnginesWaterBackendsOnly) {
+  ASSERT_GE(engine::waterBackendNames().size(), 3u);
+  for (std::string_view m : engine::waterBackendNames()) {
     game::SceneConfig scene = fountain();
-    const game::SceneStatus st = game::applyOverride(scene, std::string("fluid_surface.method=") + m);
+    const game::SceneStatus st = game::applyOverride(scene, "fluid_surface.method=" + std::string(m));
     ASSERT_TRUE(st.ok()) << st.error;
     game::FluidSurfaceParams p;
     std::string error;
     ASSERT_TRUE(game::surfaceParamsFrom(*scene.effect("fluid_surface"), p, error)) << error;
-    EXPECT_EQ(static_cast<int>(p.method), m[0] == 'm' ? 0 : m[0] == 's' ? 1 : 2);
+    EXPECT_EQ(p.method, m);
   }
   game::SceneConfig scene = fountain();
   const game::SceneStatus st = game::applyOverride(scene, "fluid_surface.method=voxels");
@@ -72,9 +76,10 @@ TEST(FluidMethodSwitch, EachMethodRunsTheFountainHeadless) {
   };
   game::RunReport dry;
   run(nullptr, dry);
-  for (const char* method : {"mesh", "screen_space", "raycast"}) {
+  for (std::string_view name : engine::waterBackendNames()) {
+    const std::string method(name);
     game::RunReport report;
-    run(method, report);
+    run(method.c_str(), report);
     ASSERT_EQ(report.last_frame_rgba.size(), dry.last_frame_rgba.size());
     std::size_t changed = 0;
     for (std::size_t p = 0; p < report.last_frame_rgba.size(); p += 4)
@@ -83,13 +88,13 @@ TEST(FluidMethodSwitch, EachMethodRunsTheFountainHeadless) {
           ++changed;
           break;
         }
-    std::printf("[ metric ] %s: %zu of %zu px differ from the run without fluid_surface\n", method, changed,
+    std::printf("[ metric ] %s: %zu of %zu px differ from the run without fluid_surface\n", method.c_str(), changed,
                 report.last_frame_rgba.size() / 4);
     EXPECT_GT(changed, 20u) << method;
     double meshing_ms = 0.0;
     for (const game::PhaseTiming& t : report.phases)
       if (t.phase == "meshing") meshing_ms = t.mean_ms;
-    if (std::string(method) != "mesh") {
+    if (!engine::findWaterBackend(method)->needs_mesh) {
       EXPECT_LT(meshing_ms, 0.05) << method << ": the mesher should be skipped";
     }
   }

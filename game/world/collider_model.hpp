@@ -1,5 +1,6 @@
 #pragma once
-// Model input of `fluiddemo bake-collider` (defined in collider_commands.cpp): every triangle of
+// Model input of the depth-map colliders (`fluiddemo bake-collider`, the level caches, the blob's
+// street; defined in collider_model.cpp): every triangle of
 // a model file read with assimp, node transforms applied, checked for what a depth-map collider
 // needs (fluid/collide/mesh_checks.hpp). Also used by the fuzz targets (tests/fuzz).
 
