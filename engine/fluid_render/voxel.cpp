@@ -1,6 +1,8 @@
 #include "engine/fluid_render/voxel.hpp"
+#include "engine/fluid_render/water_backend.hpp"
 
 #include <algorithm>
+#include <memory>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -487,6 +489,44 @@ void drawVoxelFluid(VoxelRenderer& r, GLuint target_fbo, const FluidCamera& came
       s.overflow_columns += c.total > c.stored;
     }
   }
+}
+
+// The voxel renderer as a water backend (water_backend.hpp): the game draws with it by name.
+namespace {
+
+class VoxelWaterBackend final : public WaterBackend {
+ public:
+  explicit VoxelWaterBackend(const FluidRenderDesc& desc) {
+    VoxelDesc voxel;
+    voxel.base = desc;
+    createVoxelRenderer(voxel, renderer_);
+  }
+  ~VoxelWaterBackend() override { destroyVoxelRenderer(renderer_); }
+  bool ready() const override { return renderer_.ready; }
+  const std::string& error() const override { return renderer_.error; }
+  GLuint upload(const WaterInput& in, std::string& error) override {
+    if (!renderer_.ready) return 0;
+    return uploadVoxelParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+  }
+  void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
+    VoxelParams params;
+    params.radius = 0.975f * in.rc / 3.0f;  // a lone particle's iso-surface radius in the mesh's field
+    params.min_gap = params.radius;         // §3.2: gaps under one radius are bridged
+    params.filter_radius = 1.5f * params.radius;
+    drawVoxelFluid(renderer_, target_fbo, camera, water, params);
+  }
+
+ private:
+  VoxelRenderer renderer_;
+};
+
+}  // namespace
+
+const WaterBackendDesc& voxelWaterBackend() {
+  static const WaterBackendDesc desc{
+      "voxel", "tiled perspective bit grid, spans per pixel, linked and filtered (Zirr & Dachsbacher 2015)", false,
+      [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> { return std::make_unique<VoxelWaterBackend>(d); }};
+  return desc;
 }
 
 }  // namespace engine

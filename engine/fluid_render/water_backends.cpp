@@ -6,16 +6,18 @@
 
 namespace engine {
 
-// Each backend's file defines its desc (fluid_render.cpp, screen_space.cpp, raycast.cpp).
+// Each backend's file defines its desc (fluid_render.cpp, screen_space.cpp, raycast.cpp, voxel.cpp).
 const WaterBackendDesc& meshWaterBackend();
 const WaterBackendDesc& screenSpaceWaterBackend();
 const WaterBackendDesc& raycastWaterBackend();
+const WaterBackendDesc& voxelWaterBackend();
 
 std::span<const WaterBackendDesc* const> waterBackends() {
   static const std::array kBackends = {
       &meshWaterBackend(),
       &screenSpaceWaterBackend(),
       &raycastWaterBackend(),
+      &voxelWaterBackend(),
   };
   return kBackends;
 }

@@ -390,7 +390,7 @@ void setFountainLook(bool silhouette, RenderJob& job) {
   job.water.sky_zenith = lighting.sky_zenith;
   job.water.sky_horizon = lighting.sky_horizon;
   job.water.light_direction = lighting.sun_direction;
-  job.water.absorption = {1.6f, 0.45f, 0.25f};
+  // the water's absorption: WaterParams' default, the game's
   if (silhouette) {
     job.water.absorption = glm::vec3(1000.0f);
     job.water.refraction = 0.0f;
