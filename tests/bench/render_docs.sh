@@ -56,5 +56,10 @@ renderer=$(sed -n 's/^renderer: //p' "$tmp/640x360.mesh.txt")
   echo "Load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo
   cat tests/bench/render_docs_tail.md
+  # The large sets' section (tests/bench/render_sets_docs.sh) has its own command: kept as it is.
+  if grep -q '^<!-- render_sets_docs.sh begin -->' docs/render.md; then
+    echo
+    sed -n '/^<!-- render_sets_docs.sh begin -->/,/^<!-- render_sets_docs.sh end -->/p' docs/render.md
+  fi
 } > docs/render.md.tmp
 mv docs/render.md.tmp docs/render.md
