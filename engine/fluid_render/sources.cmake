@@ -6,5 +6,6 @@ target_sources(engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/screen_space.cpp
   ${CMAKE_CURRENT_LIST_DIR}/raycast.cpp
   ${CMAKE_CURRENT_LIST_DIR}/water_backends.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/backdrop.cpp
   ${CMAKE_CURRENT_LIST_DIR}/voxel.cpp
 )

@@ -12,6 +12,7 @@
 #include "game/commands/cli_parse.hpp"
 #include "game/paths.hpp"
 
+#include "engine/fluid_render/backdrop.hpp"
 #include "engine/fluid_render/fluid_render.hpp"
 #include "engine/fluid_render/raycast.hpp"
 #include "engine/fluid_render/screen_space.hpp"
@@ -96,72 +97,6 @@ float estimateSpacing(const std::vector<glm::vec3>& p, glm::vec3 lo, glm::vec3 h
   return std::max(nearest[nearest.size() / 2], 1e-4f);
 }
 
-struct Backdrop {
-  GLuint program = 0, vao = 0, vbo = 0;
-};
-
-// A wall behind the set (seen from the camera) and a floor under it, striped, as the tests' scene.
-bool createBackdrop(const std::filesystem::path& shaders, glm::vec3 lo, glm::vec3 hi, float radius, glm::vec3 eye,
-                    Backdrop& b, std::string& error) {
-  const std::filesystem::path dir = shaders / "fluid";
-  b.program = engine::buildProgram(std::vector<engine::ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "backdrop.vert"}},
-                                                                         {GL_FRAGMENT_SHADER, {dir / "backdrop.frag"}}},
-                                   "", error);
-  if (b.program == 0) return false;
-  const glm::vec3 centre = 0.5f * (lo + hi);
-  const float size = 4.0f * std::max(glm::length(hi - lo), 1.0f);
-  const float floor_y = std::min(lo.y, 0.0f) - 3.0f * radius;  // below the lowest sphere: every method sees the bottom
-  // The wall behind the set at constant x (backdrop.frag stripes it along z), on the far side
-  // from the eye.
-  const float wall = eye.x > centre.x ? lo.x - 0.5f : hi.x + 0.5f;
-  auto wallPoint = [&](float u, float y) { return glm::vec3(wall, y, centre.z + u); };
-  const float top = floor_y + size;
-  const glm::vec3 w[6] = {wallPoint(-size, floor_y), wallPoint(size, floor_y), wallPoint(size, top),
-                          wallPoint(-size, floor_y), wallPoint(size, top),     wallPoint(-size, top)};
-  const glm::vec3 f[6] = {{centre.x - size, floor_y, centre.z - size}, {centre.x + size, floor_y, centre.z - size},
-                          {centre.x + size, floor_y, centre.z + size}, {centre.x - size, floor_y, centre.z - size},
-                          {centre.x + size, floor_y, centre.z + size}, {centre.x - size, floor_y, centre.z + size}};
-  std::vector<glm::vec3> v(w, w + 6);
-  v.insert(v.end(), f, f + 6);
-  glGenVertexArrays(1, &b.vao);
-  glGenBuffers(1, &b.vbo);
-  glBindVertexArray(b.vao);
-  glBindBuffer(GL_ARRAY_BUFFER, b.vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(glm::vec3)), v.data(), GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, nullptr);
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
-  return true;
-}
-
-void destroyBackdrop(Backdrop& b) {
-  if (b.program != 0) glDeleteProgram(b.program);
-  if (b.vbo != 0) glDeleteBuffers(1, &b.vbo);
-  if (b.vao != 0) glDeleteVertexArrays(1, &b.vao);
-  b = Backdrop{};
-}
-
-// Clears `fbo` to the sky's horizon colour and draws the backdrop with depth.
-void drawBackdrop(const Backdrop& b, GLuint fbo, const engine::FluidCamera& camera, int w, int h, glm::vec3 sky) {
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glViewport(0, 0, w, h);
-  glClearColor(sky.r, sky.g, sky.b, 1.0f);
-  glClearDepth(1.0);
-  glDepthMask(GL_TRUE);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glUseProgram(b.program);
-  const glm::mat4 vp = camera.projection * camera.view;
-  glUniformMatrix4fv(glGetUniformLocation(b.program, "u_view_projection"), 1, GL_FALSE, glm::value_ptr(vp));
-  glBindVertexArray(b.vao);
-  glDrawArrays(GL_TRIANGLES, 0, 12);
-  glBindVertexArray(0);
-  glUseProgram(0);
-  glDisable(GL_DEPTH_TEST);
-}
-
 struct RenderJob {
   std::string method;
   std::vector<glm::vec3> particles;
@@ -173,8 +108,8 @@ struct RenderJob {
   engine::FluidCamera camera;
   engine::WaterParams water;
   glm::vec3 sky{0.0f};
-  Backdrop backdrop;
-  GLuint fbo = 0, colour = 0;
+  engine::Backdrop backdrop;
+  engine::ColourTarget target;
 };
 
 struct Timing {
@@ -225,14 +160,14 @@ bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, 
       ok = false;
       return;
     }
-    drawBackdrop(job.backdrop, r.scene_fbo, job.camera, job.width, job.height, job.sky);
-    glFinish();
+    engine::drawBackdrop(job.backdrop, r.scene_fbo, job.camera, job.width, job.height, job.sky);
+    engine::finishGpu();
     const double t1 = nowMs();
     engine::uploadFluidMesh(r, mesh.positions, mesh.normals, mesh.indices, error);
-    glFinish();
+    engine::finishGpu();
     const double t2 = nowMs();
-    engine::drawFluid(r, job.fbo, job.camera, job.water);
-    glFinish();
+    engine::drawFluid(r, job.target.fbo, job.camera, job.water);
+    engine::finishGpu();
     if (timed) {
       t.add("extract (CPU marching slices)", t1 - t0);
       t.add("upload mesh", t2 - t1);
@@ -250,14 +185,14 @@ bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, 
 template <class Renderer, class Upload, class Draw>
 void timeParticleMethod(RenderJob& job, Renderer& r, Timing& t, Upload&& upload, Draw&& draw) {
   runFrames(job, [&](bool timed) {
-    drawBackdrop(job.backdrop, r.scene.fbo, job.camera, job.width, job.height, job.sky);
-    glFinish();
+    engine::drawBackdrop(job.backdrop, r.scene.fbo, job.camera, job.width, job.height, job.sky);
+    engine::finishGpu();
     const double t0 = nowMs();
     upload();
-    glFinish();
+    engine::finishGpu();
     const double t1 = nowMs();
     draw(timed);
-    glFinish();
+    engine::finishGpu();
     if (timed) {
       t.add("upload particles", t1 - t0);
       t.add("draw", nowMs() - t1);
@@ -291,7 +226,7 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
                                    : engine::uploadVoxelParticles(r, job.particles, error));
       },
       [&](bool timed) {
-        engine::drawVoxelFluid(r, job.fbo, job.camera, job.water, p);
+        engine::drawVoxelFluid(r, job.target.fbo, job.camera, job.water, p);
         if (!timed) return;
         const engine::VoxelStats& s = r.stats;
         const double ms[6] = {s.splat_ms, s.compress_ms, s.connect_ms, s.filter_ms, s.normals_ms, s.shade_ms};
@@ -334,8 +269,8 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   if (job.method == "none") {
     runFrames(job, [&](bool timed) {
       const double t0 = nowMs();
-      drawBackdrop(job.backdrop, job.fbo, job.camera, job.width, job.height, job.sky);
-      glFinish();
+      engine::drawBackdrop(job.backdrop, job.target.fbo, job.camera, job.width, job.height, job.sky);
+      engine::finishGpu();
       if (timed) t.add("backdrop", nowMs() - t0);
     });
     return true;
@@ -355,7 +290,7 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
     p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
     timeParticleMethod(
         job, r, t, [&] { ok = ok && engine::uploadScreenSpaceParticles(r, job.particles, error); },
-        [&](bool) { engine::drawScreenSpaceFluid(r, job.fbo, job.camera, job.water, p); });
+        [&](bool) { engine::drawScreenSpaceFluid(r, job.target.fbo, job.camera, job.water, p); });
     t.gpu_bytes = px * (4 + 4 + 4 * 4 + 4) + static_cast<double>(r.particles.capacity_bytes);
     engine::destroyScreenSpaceRenderer(r);
     return ok;
@@ -373,7 +308,7 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   p.threshold = 0.2f;
   timeParticleMethod(
       job, r, t, [&] { ok = ok && engine::uploadRaycastParticles(r, job.particles, error); },
-      [&](bool) { engine::drawRaycastFluid(r, job.fbo, job.camera, job.water, p); });
+      [&](bool) { engine::drawRaycastFluid(r, job.target.fbo, job.camera, job.water, p); });
   t.gpu_bytes = px * (4 + 4 + 4 + 16 + 4) + 16.0 * r.pool_records + static_cast<double>(r.particles.capacity_bytes);
   t.notes.push_back("raycast pool " + std::to_string(r.pool_records) + " records, asked for " + std::to_string(r.used) +
                     ", dropped " + std::to_string(r.dropped));
@@ -400,10 +335,8 @@ void setFountainLook(bool silhouette, RenderJob& job) {
 
 // Writes the target's pixels as a PNG; false + error.
 bool writeTarget(const RenderJob& job, const std::string& out, std::string& error) {
-  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(job.width) * job.height * 4);
-  glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
-  glReadPixels(0, 0, job.width, job.height, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  std::vector<std::uint8_t> pixels;
+  engine::readColourTarget(job.target, pixels);
   return engine::writePngBottomUp(out, job.width, job.height, pixels, error);
 }
 
@@ -510,15 +443,11 @@ int renderCommand(const Args& args) {
     return 1;
   }
   int code = 0;
-  if (!createBackdrop(shadersDir(), job.lo, job.hi, job.radius, eye, job.backdrop, error)) {
+  if (!engine::createBackdrop(shadersDir(), job.lo, job.hi, job.radius, eye, job.backdrop, error)) {
     std::fprintf(stderr, "fluiddemo render: backdrop shaders: %s\n", error.c_str());
     code = 1;
   }
-  job.colour = engine::createTexture2D(GL_RGBA8, width, height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-  glGenFramebuffers(1, &job.fbo);
-  glBindFramebuffer(GL_FRAMEBUFFER, job.fbo);
-  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, job.colour, 0);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  engine::createColourTarget(width, height, job.target);
   Timing timing;
   const double t0 = nowMs();
   if (code == 0 && !renderMethod(job, timing, error)) {
@@ -546,9 +475,8 @@ int renderCommand(const Args& args) {
                 static_cast<double>(usage.ru_maxrss) / 1024.0);
     std::printf("wrote %s\n", out.c_str());
   }
-  glDeleteFramebuffers(1, &job.fbo);
-  glDeleteTextures(1, &job.colour);
-  destroyBackdrop(job.backdrop);
+  engine::destroyColourTarget(job.target);
+  engine::destroyBackdrop(job.backdrop);
   engine::destroyPlatform(platform);
   return code;
 }
