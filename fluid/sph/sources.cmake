@@ -17,4 +17,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/spray.cpp
   ${CMAKE_CURRENT_LIST_DIR}/blast.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_scenes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/anisotropy.cpp
 )
