@@ -1,7 +1,11 @@
 #include "engine/fluid_render/screen_space.hpp"
 #include "engine/fluid_render/water_backend.hpp"
 
+#include "fluid/core/finite.hpp"
+
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 namespace engine {
 
@@ -18,13 +22,29 @@ GLuint colourTargetFbo(GLuint texture, GLuint depth) {
   return fbo;
 }
 
+bool drawsEllipsoids(const ScreenSpaceRenderer& r) {
+  return r.shape_count > 0 && r.shape_count == r.particles.count;
+}
+
 void drawParticles(const ScreenSpaceRenderer& r) {
-  glBindVertexArray(r.vao);
+  glBindVertexArray(drawsEllipsoids(r) ? r.ellipsoid_vao : r.vao);
   glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
   glBindVertexArray(0);
 }
 
 }  // namespace
+
+bool parseDepthFilter(std::string_view text, DepthFilter& out) {
+  if (text == "bilateral") {
+    out = DepthFilter::bilateral;
+    return true;
+  }
+  if (text == "narrow_range") {
+    out = DepthFilter::narrow_range;
+    return true;
+  }
+  return false;
+}
 
 void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer& out) {
   destroyScreenSpaceRenderer(out);
@@ -53,6 +73,17 @@ void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer&
                                   {dir / "shading.glsl", dir / "depth.glsl", dir / "ray.glsl", dir / "water_shade.glsl",
                                    dir / "ss_composite.frag"}}});
   out.blit_program = build({{GL_VERTEX_SHADER, {blit}}, {GL_FRAGMENT_SHADER, {dir / "blit.frag"}}});
+  out.narrow_program = build({{GL_VERTEX_SHADER, {blit}}, {GL_FRAGMENT_SHADER, {dir / "ss_narrow.frag"}}});
+  // The same splat shaders with ELLIPSOID defined (anisotropic kernels).
+  auto build_ellipsoid = [&](std::vector<ShaderStageFiles> stages) {
+    const GLuint p = buildProgram(stages, "#define ELLIPSOID 1", error);
+    out.error += error;
+    return p;
+  };
+  out.ellipsoid_depth_program = build_ellipsoid(
+      {{GL_VERTEX_SHADER, {billboard}}, {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "ss_depth.frag"}}});
+  out.ellipsoid_thickness_program = build_ellipsoid(
+      {{GL_VERTEX_SHADER, {billboard}}, {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "ss_thickness.frag"}}});
   if (!out.error.empty()) {
     out.error = "screen-space fluid disabled, shader build failed:\n" + out.error;
     return;
@@ -72,6 +103,22 @@ void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer&
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   createParticleBuffer(out.particles, out.vao);
   glGenVertexArrays(1, &out.empty_vao);
+  // Ellipsoids: attribute 0 the centres (the particle buffer), 1-3 g's columns (48 bytes each).
+  glGenBuffers(1, &out.shape_buffer);
+  glGenVertexArrays(1, &out.ellipsoid_vao);
+  glBindVertexArray(out.ellipsoid_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+  glVertexAttribDivisor(0, 1);
+  glBindBuffer(GL_ARRAY_BUFFER, out.shape_buffer);
+  for (GLuint a = 1; a <= 3; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 48, reinterpret_cast<const void*>(std::uintptr_t{16} * (a - 1)));
+    glVertexAttribDivisor(a, 1);
+  }
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
   if (!scene_ok || !depth_ok || !thickness_ok || glGetError() != GL_NO_ERROR) {
     out.error = "screen-space fluid disabled: float render targets not supported";
     return;
@@ -86,10 +133,12 @@ GlObjectNames glNames(const ScreenSpaceRenderer& r) {
     if (t != 0) n.textures.push_back(t);
   for (GLuint f : {r.depth_fbo, r.smooth_fbo[0], r.smooth_fbo[1], r.thickness_fbo})
     if (f != 0) n.framebuffers.push_back(f);
-  if (r.particles.buffer != 0) n.buffers.push_back(r.particles.buffer);
-  for (GLuint v : {r.vao, r.empty_vao})
+  for (GLuint b : {r.particles.buffer, r.shape_buffer})
+    if (b != 0) n.buffers.push_back(b);
+  for (GLuint v : {r.vao, r.empty_vao, r.ellipsoid_vao})
     if (v != 0) n.vertex_arrays.push_back(v);
-  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program})
+  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program,
+                   r.narrow_program, r.ellipsoid_depth_program, r.ellipsoid_thickness_program})
     if (p != 0) n.programs.push_back(p);
   return n;
 }
@@ -100,10 +149,12 @@ void destroyScreenSpaceRenderer(ScreenSpaceRenderer& r) {
     if (*t != 0) glDeleteTextures(1, t);
   for (GLuint* f : {&r.depth_fbo, &r.smooth_fbo[0], &r.smooth_fbo[1], &r.thickness_fbo})
     if (*f != 0) glDeleteFramebuffers(1, f);
-  if (r.particles.buffer != 0) glDeleteBuffers(1, &r.particles.buffer);
-  for (GLuint* v : {&r.vao, &r.empty_vao})
+  for (GLuint* b : {&r.particles.buffer, &r.shape_buffer})
+    if (*b != 0) glDeleteBuffers(1, b);
+  for (GLuint* v : {&r.vao, &r.empty_vao, &r.ellipsoid_vao})
     if (*v != 0) glDeleteVertexArrays(1, v);
-  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program})
+  for (GLuint p : {r.depth_program, r.thickness_program, r.smooth_program, r.composite_program, r.blit_program,
+                   r.narrow_program, r.ellipsoid_depth_program, r.ellipsoid_thickness_program})
     if (p != 0) glDeleteProgram(p);
   const FluidRenderDesc desc = r.desc;
   r = ScreenSpaceRenderer{};
@@ -121,7 +172,82 @@ void beginScreenSpaceOpaquePass(ScreenSpaceRenderer& r, glm::vec4 clear_colour) 
 }
 
 bool uploadScreenSpaceParticles(ScreenSpaceRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
+  r.shape_count = 0;  // spheres
   return uploadParticles(r.particles, positions, error);
+}
+
+bool uploadScreenSpaceEllipsoids(ScreenSpaceRenderer& r, std::span<const glm::vec3> centres,
+                                 std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error) {
+  r.shape_count = 0;
+  r.particles.count = 0;
+  if (g.size() != centres.size() || max_axis.size() != centres.size()) {
+    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
+            " matrices, " + std::to_string(max_axis.size()) + " axes";
+    return false;
+  }
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    bool finite = std::isfinite(max_axis[i]) && max_axis[i] > 0.0f;
+    for (int c = 0; c < 3; ++c) finite = finite && fluid::isFinite(g[i][c]);
+    if (!finite) {
+      error = "fluid ellipsoids: matrix " + std::to_string(i) + " is not finite";
+      return false;
+    }
+  }
+  if (!uploadParticles(r.particles, centres, error)) return false;
+  if (r.shape_buffer == 0 || centres.empty()) return true;
+  const std::size_t need = centres.size() * 3 * sizeof(glm::vec4);
+  glBindBuffer(GL_ARRAY_BUFFER, r.shape_buffer);
+  if (need > r.shape_capacity_bytes) r.shape_capacity_bytes = std::max(need, r.shape_capacity_bytes + r.shape_capacity_bytes / 2);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(r.shape_capacity_bytes), nullptr, GL_STREAM_DRAW);
+  auto* dst = static_cast<glm::vec4*>(glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(need),
+                                                       GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
+  if (dst == nullptr) {
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    r.particles.count = 0;
+    error = "fluid ellipsoids: glMapBufferRange failed";
+    return false;
+  }
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    dst[3 * i + 0] = glm::vec4(g[i][0], max_axis[i]);
+    dst[3 * i + 1] = glm::vec4(g[i][1], 0.0f);
+    dst[3 * i + 2] = glm::vec4(g[i][2], 0.0f);
+  }
+  glUnmapBuffer(GL_ARRAY_BUFFER);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  r.shape_count = static_cast<std::uint32_t>(g.size());
+  return true;
+}
+
+void filterScreenSpaceDepth(ScreenSpaceRenderer& r, const FluidCamera& camera, const ScreenSpaceParams& params) {
+  if (!r.ready) return;
+  const int w = r.desc.width, h = r.desc.height;
+  glViewport(0, 0, w, h);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glActiveTexture(GL_TEXTURE0);
+  const bool narrow = params.filter == DepthFilter::narrow_range;
+  const GLuint p = narrow ? r.narrow_program : r.smooth_program;
+  glUseProgram(p);
+  setUniform(p, "u_world_radius", std::max(params.filter_radius, 0.0f));
+  setUniform(p, "u_focal_px", camera.projection[1][1] * static_cast<float>(h) * 0.5f);
+  setUniform(p, "u_depth", 0);
+  if (narrow) {
+    const float radius = std::max(params.radius, 1e-5f);
+    setUniform(p, "u_threshold", radius * std::clamp(params.narrow_threshold, 0.0f, 1000.0f));
+    setUniform(p, "u_clamp", radius * std::clamp(params.narrow_clamp, 0.0f, 1000.0f));
+  } else {
+    setUniform(p, "u_depth_falloff", std::max(params.depth_falloff, 1e-4f));
+  }
+  glBindVertexArray(r.empty_vao);
+  const int iterations = std::clamp(params.smoothing_iterations, 0, 32);
+  for (int i = 0; i < 2 * iterations; ++i) {
+    const int from = i % 2, to = 1 - from;
+    glBindFramebuffer(GL_FRAMEBUFFER, r.smooth_fbo[to]);
+    glBindTexture(GL_TEXTURE_2D, r.smooth_depth[from]);
+    setUniform(p, "u_direction", from == 0 ? glm::vec2(1, 0) : glm::vec2(0, 1));
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glBindVertexArray(0);
 }
 
 void drawScreenSpaceFluid(ScreenSpaceRenderer& r, GLuint target_fbo, const FluidCamera& camera,
@@ -143,11 +269,14 @@ void drawScreenSpaceFluid(ScreenSpaceRenderer& r, GLuint target_fbo, const Fluid
     glClear(GL_DEPTH_BUFFER_BIT);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    glUseProgram(r.depth_program);
-    setParticleCamera(r.depth_program, camera, w, h);
-    setUniform(r.depth_program, "u_radius", radius);
+    const bool ellipsoids = drawsEllipsoids(r);
+    const GLuint depth_program = ellipsoids ? r.ellipsoid_depth_program : r.depth_program;
+    const GLuint thickness_program = ellipsoids ? r.ellipsoid_thickness_program : r.thickness_program;
+    glUseProgram(depth_program);
+    setParticleCamera(depth_program, camera, w, h);
+    setUniform(depth_program, "u_radius", radius);
     glBindTexture(GL_TEXTURE_2D, r.scene.depth);
-    setUniform(r.depth_program, "u_scene_depth", 0);
+    setUniform(depth_program, "u_scene_depth", 0);
     drawParticles(r);
     glDisable(GL_DEPTH_TEST);
     // Pass 2: thickness, additive.
@@ -156,27 +285,14 @@ void drawScreenSpaceFluid(ScreenSpaceRenderer& r, GLuint target_fbo, const Fluid
     glClearBufferfv(GL_COLOR, 0, zero);
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE);
-    glUseProgram(r.thickness_program);
-    setParticleCamera(r.thickness_program, camera, w, h);
-    setUniform(r.thickness_program, "u_radius", radius);
-    setUniform(r.thickness_program, "u_scene_depth", 0);
+    glUseProgram(thickness_program);
+    setParticleCamera(thickness_program, camera, w, h);
+    setUniform(thickness_program, "u_radius", radius);
+    setUniform(thickness_program, "u_scene_depth", 0);
     drawParticles(r);
     glDisable(GL_BLEND);
-    // Pass 3: bilateral smoothing, horizontal then vertical per iteration (ends in [0]).
-    glUseProgram(r.smooth_program);
-    setUniform(r.smooth_program, "u_world_radius", std::max(params.filter_radius, 0.0f));
-    setUniform(r.smooth_program, "u_focal_px", camera.projection[1][1] * static_cast<float>(h) * 0.5f);
-    setUniform(r.smooth_program, "u_depth_falloff", std::max(params.depth_falloff, 1e-4f));
-    setUniform(r.smooth_program, "u_depth", 0);
-    glBindVertexArray(r.empty_vao);
-    const int iterations = std::clamp(params.smoothing_iterations, 0, 32);
-    for (int i = 0; i < 2 * iterations; ++i) {
-      const int from = i % 2, to = 1 - from;
-      glBindFramebuffer(GL_FRAMEBUFFER, r.smooth_fbo[to]);
-      glBindTexture(GL_TEXTURE_2D, r.smooth_depth[from]);
-      setUniform(r.smooth_program, "u_direction", from == 0 ? glm::vec2(1, 0) : glm::vec2(0, 1));
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-    }
+    // Pass 3: the depth filter, horizontal then vertical per iteration (ends in [0]).
+    filterScreenSpaceDepth(r, camera, params);
   }
   // Scene colour into the target, then the water over it.
   glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
@@ -217,12 +333,19 @@ class ScreenSpaceWaterBackend final : public WaterBackend {
   const std::string& error() const override { return renderer_.error; }
   GLuint upload(const WaterInput& in, std::string& error) override {
     if (!renderer_.ready) return 0;
-    return uploadScreenSpaceParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+    // Anisotropic kernels when the input carries them (one per particle): ellipsoid splats at the
+    // smoothed centres.
+    const bool ellipsoids = !in.kernel_g.empty() && in.kernel_g.size() == in.particles.size();
+    const bool ok = ellipsoids ? uploadScreenSpaceEllipsoids(renderer_, in.kernel_centres, in.kernel_g,
+                                                             in.kernel_max_axis, error)
+                               : uploadScreenSpaceParticles(renderer_, in.particles, error);
+    return ok ? renderer_.scene.fbo : 0;
   }
   void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
     ScreenSpaceParams params;
     params.radius = 0.975f * in.rc / 3.0f;  // a lone particle's iso-surface radius in the mesh's field
     params.filter_radius = 0.5f * in.rc;
+    if (!parseDepthFilter(in.ss_filter, params.filter)) params.filter = DepthFilter::bilateral;
     drawScreenSpaceFluid(renderer_, target_fbo, camera, water, params);
   }
 
@@ -233,7 +356,8 @@ class ScreenSpaceWaterBackend final : public WaterBackend {
 
 const WaterBackendDesc& screenSpaceWaterBackend() {
   static const WaterBackendDesc desc{"screen_space",
-                                     "sphere splats, depth smoothing, thickness (Janisz 3.1 after van der Laan 2009)",
+                                     "sphere or ellipsoid splats, bilateral or narrow-range depth smoothing, thickness (Janisz 3.1 after "
+                                     "van der Laan 2009; Yu & Turk 2013; Truong & Yuksel 2018)",
                                      false, [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> {
                                        return std::make_unique<ScreenSpaceWaterBackend>(d);
                                      }};

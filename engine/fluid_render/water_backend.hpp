@@ -8,6 +8,7 @@
 
 #include "engine/fluid_render/fluid_render.hpp"
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -31,6 +32,13 @@ struct WaterInput {
   std::span<const glm::vec3> particles;
   float rc = 0.1f;
   float threshold = 0.2f;
+  // Anisotropic kernels (fluid/sph/anisotropy.hpp; empty: spheres at `particles`), one per particle:
+  // h G (symmetric, positive definite), its largest semi-axis factor and the smoothed centre x̄.
+  // A backend that draws particles draws { x : |g (x - x̄)| <= ρ } where it drew the sphere of ρ.
+  std::span<const glm::mat3> kernel_g;
+  std::span<const float> kernel_max_axis;
+  std::span<const glm::vec3> kernel_centres;
+  std::string_view ss_filter = "bilateral";  // screen_space's depth filter: bilateral | narrow_range
 };
 
 // What a backend tells about its last frame; zero where it has nothing to tell. The ray caster's

@@ -54,6 +54,10 @@ void drawWater(Renderer& renderer, WaterSlot& slot, const FrameView& view, const
   input.particles = batch.particles;
   input.rc = batch.rc;
   input.threshold = batch.threshold;
+  input.kernel_g = batch.kernel_g;
+  input.kernel_max_axis = batch.kernel_max_axis;
+  input.kernel_centres = batch.kernel_centres;
+  input.ss_filter = batch.ss_filter;
   std::string error;
   const GLuint water_fbo = backend->upload(input, error);
   if (water_fbo == 0) {

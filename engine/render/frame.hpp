@@ -49,6 +49,12 @@ struct WaterBatch {
   std::span<const glm::vec3> particles;
   float rc = 0.1f;         // field cutoff (m): the same field for all three methods
   float threshold = 0.2f;  // iso level of that field (raycast)
+  // Particle methods, anisotropic kernels (fluid/sph/anisotropy.hpp; empty: spheres): per particle
+  // h G, its largest semi-axis factor and the smoothed kernel centre (WaterInput's kernel_*).
+  std::span<const glm::mat3> kernel_g;
+  std::span<const float> kernel_max_axis;
+  std::span<const glm::vec3> kernel_centres;
+  std::string_view ss_filter = "bilateral";  // screen_space's depth filter: bilateral | narrow_range
   float refraction = 0.08f, opacity = 0.85f;
   glm::vec3 absorption = WaterParams{}.absorption;  // Beer–Lambert σ per metre, RGB
 };

@@ -7,6 +7,10 @@
 #include <cmath>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace fluid {
 namespace {
 
@@ -15,6 +19,7 @@ namespace {
 // the cost and the bits independent of the data).
 constexpr int kJacobiSweeps = 6;
 constexpr std::size_t kGrain = 256;
+constexpr float kHalfCell = 0.501f;  // just over r / 2, so that neighborReach is 2, not 3
 
 }  // namespace
 
@@ -43,9 +48,15 @@ void symmetricEigen3(const glm::mat3& in, glm::vec3& values, glm::mat3& vectors)
   }
   constexpr int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
   for (int sweep = 0; sweep < kJacobiSweeps; ++sweep) {
+    if (a[0][1] == 0.0 && a[0][2] == 0.0 && a[1][2] == 0.0) break;  // diagonal: the rest would do nothing
     for (const auto& pq : kPairs) {
       const int p = pq[0], q = pq[1];
-      if (a[p][q] == 0.0) continue;
+      // An entry this small against its diagonal moves the eigenvalues by less than 1e-12 of their
+      // size (second order in it), far below the float results' rounding: zero it.
+      if (std::abs(a[p][q]) <= 1e-6 * (std::abs(a[p][p]) + std::abs(a[q][q]))) {
+        a[p][q] = a[q][p] = 0.0;
+        continue;
+      }
       // The rotation that zeroes a_pq (Numerical Recipes §11.1, Eqs. 11.1.4-11.1.8): the smaller
       // root t of t^2 + 2 θ t - 1 = 0, stable for any θ.
       const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
@@ -105,8 +116,65 @@ glm::mat3 anisotropyMatrix(const glm::mat3& covariance, std::uint32_t neighbours
   return g;
 }
 
+namespace {
+
+// Weighted sums of one particle's neighbourhood, relative to x_i: sum w, sum w d, sum w d d^T
+// (Eqs. 9-11), and the count of neighbours within r (i itself included: d = 0, w = 1).
+struct Moments {
+  float w = 0, fx = 0, fy = 0, fz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  std::uint32_t count = 0;
+};
+
+#if defined(__SSE2__)
+// Four candidates at a time over the sorted SoA copies (SSE2, the x86-64 baseline): no branch per
+// candidate, a weight of exactly 0 beyond r (w = max(0, 1 - q^3)) and for lanes past the run, so
+// the sums are those of the accepted neighbours. The lanes are summed in a fixed order at the end:
+// the same bits whichever thread runs the particle.
+inline void accumulateRun(const float* sx, const float* sy, const float* sz, std::uint32_t b, std::uint32_t e,
+                          __m128 px, __m128 py, __m128 pz, __m128 r2, __m128 inv_r2, __m128 acc[10],
+                          std::uint32_t& count) {
+  const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+  for (std::uint32_t t = b; t < e; t += 4) {
+    const __m128 dx = _mm_sub_ps(_mm_loadu_ps(sx + t), px);
+    const __m128 dy = _mm_sub_ps(_mm_loadu_ps(sy + t), py);
+    const __m128 dz = _mm_sub_ps(_mm_loadu_ps(sz + t), pz);
+    const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    __m128 inside = _mm_cmplt_ps(d2, r2);
+    if (e - t < 4) {  // lanes past the run (the copies are padded)
+      alignas(16) static constexpr std::uint32_t kLive[4][4] = {
+          {0, 0, 0, 0}, {~0u, 0, 0, 0}, {~0u, ~0u, 0, 0}, {~0u, ~0u, ~0u, 0}};
+      inside = _mm_and_ps(inside, _mm_load_ps(reinterpret_cast<const float*>(kLive[e - t])));
+    }
+    constexpr std::uint8_t kBits[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};  // no POPCNT in the baseline
+    count += kBits[_mm_movemask_ps(inside)];
+    // Eq. 11: w = 1 - (|d| / r)^3 = 1 - q2 sqrt(q2), q2 = |d|^2 / r^2.
+    const __m128 q2 = _mm_mul_ps(d2, inv_r2);
+    const __m128 w = _mm_and_ps(inside, _mm_max_ps(_mm_sub_ps(one, _mm_mul_ps(q2, _mm_sqrt_ps(q2))), zero));
+    const __m128 wx = _mm_mul_ps(w, dx), wy = _mm_mul_ps(w, dy), wz = _mm_mul_ps(w, dz);
+    acc[0] = _mm_add_ps(acc[0], w);
+    acc[1] = _mm_add_ps(acc[1], wx);
+    acc[2] = _mm_add_ps(acc[2], wy);
+    acc[3] = _mm_add_ps(acc[3], wz);
+    acc[4] = _mm_add_ps(acc[4], _mm_mul_ps(wx, dx));
+    acc[5] = _mm_add_ps(acc[5], _mm_mul_ps(wx, dy));
+    acc[6] = _mm_add_ps(acc[6], _mm_mul_ps(wx, dz));
+    acc[7] = _mm_add_ps(acc[7], _mm_mul_ps(wy, dy));
+    acc[8] = _mm_add_ps(acc[8], _mm_mul_ps(wy, dz));
+    acc[9] = _mm_add_ps(acc[9], _mm_mul_ps(wz, dz));
+  }
+}
+
+inline float laneSum(__m128 v) {
+  alignas(16) float l[4];
+  _mm_store_ps(l, v);
+  return (l[0] + l[1]) + (l[2] + l[3]);
+}
+#endif
+
+}  // namespace
+
 void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions,
-                       const AnisotropyParams& raw, Anisotropy& out) {
+                       const AnisotropyParams& raw, AnisotropyScratch& scratch, Anisotropy& out) {
   const AnisotropyParams params = clampAnisotropyParams(raw);
   const std::size_t n = positions.size();
   assert(grid.order.size() == n);
@@ -114,59 +182,100 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
   out.g.resize(n);
   out.max_axis.resize(n);
   out.neighbours.resize(n);
-  const float r = params.radius, r2 = r * r, inv_r = 1.0f / r;
+  const float r = params.radius, r2 = r * r, inv_r2 = 1.0f / r2;
   const int reach = neighborReach(grid, r);
   const std::uint32_t* order = grid.order.data();
   const bool identity = grid.identity_order;
+  // The positions in sorted order (SoA, padded for one 4-wide load past a run's end): each row
+  // run of the grid is then one contiguous stretch of each array.
+  constexpr std::size_t kPad = 4;
+  scratch.sx.resize(n + kPad);
+  scratch.sy.resize(n + kPad);
+  scratch.sz.resize(n + kPad);
+  float* sx = scratch.sx.data();
+  float* sy = scratch.sy.data();
+  float* sz = scratch.sz.data();
+  par::parallelFor(par::Range<std::size_t>(0, n, 4096), [&](const par::Range<std::size_t>& range) {
+    for (std::size_t e = range.begin(); e != range.end(); ++e) {
+      const glm::vec3 x = positions[identity ? e : order[e]];
+      sx[e] = x.x;
+      sy[e] = x.y;
+      sz[e] = x.z;
+    }
+  });
+  for (std::size_t e = n; e < n + kPad; ++e) sx[e] = sy[e] = sz[e] = 0.0f;
   // Sorted entries in order: particles of one cell run together and share their rows in cache.
   par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& range) {
     for (std::size_t e = range.begin(); e != range.end(); ++e) {
       const std::uint32_t i = identity ? static_cast<std::uint32_t>(e) : order[e];
-      const glm::vec3 xi = positions[i];
+      const glm::vec3 xi(sx[e], sy[e], sz[e]);
       const glm::ivec3 cell = grid.cellOf(xi);
-      // Sums relative to x_i (exact translation invariance, small numbers): i itself adds w = 1 at 0.
-      float weight = 1.0f;
-      glm::vec3 first(0.0f);
-      float xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-      std::uint32_t count = 0;
       const int x0 = std::max(cell.x - reach, 0), x1 = std::min(cell.x + reach, grid.dims.x - 1);
+      Moments m;
+#if defined(__SSE2__)
+      __m128 acc[10];
+      for (__m128& a : acc) a = _mm_setzero_ps();
+      const __m128 px = _mm_set1_ps(xi.x), py = _mm_set1_ps(xi.y), pz = _mm_set1_ps(xi.z);
+      const __m128 vr2 = _mm_set1_ps(r2), vinv = _mm_set1_ps(inv_r2);
+#endif
+      const std::uint32_t dx = static_cast<std::uint32_t>(grid.dims.x), dxy = dx * static_cast<std::uint32_t>(grid.dims.y);
       for (int z = std::max(cell.z - reach, 0); z <= std::min(cell.z + reach, grid.dims.z - 1); ++z)
         for (int y = std::max(cell.y - reach, 0); y <= std::min(cell.y + reach, grid.dims.y - 1); ++y) {
-          const std::uint32_t b = grid.cell_start[grid.keyOf({x0, y, z})],
-                              end = grid.cell_start[grid.keyOf({x1, y, z}) + 1];
+          // Cells x0..x1 of row (y, z) are consecutive keys (NeighborGrid::keyOf, x fastest): one run.
+          const std::uint32_t row = static_cast<std::uint32_t>(z) * dxy + static_cast<std::uint32_t>(y) * dx;
+          const std::uint32_t b = grid.cell_start[row + static_cast<std::uint32_t>(x0)],
+                              end = grid.cell_start[row + static_cast<std::uint32_t>(x1) + 1];
+#if defined(__SSE2__)
+          accumulateRun(sx, sy, sz, b, end, px, py, pz, vr2, vinv, acc, m.count);
+#else
           for (std::uint32_t u = b; u < end; ++u) {
-            const std::uint32_t j = identity ? u : order[u];
-            if (j == i) continue;
-            const glm::vec3 d = positions[j] - xi;
+            const glm::vec3 d = glm::vec3(sx[u], sy[u], sz[u]) - xi;
             const float d2 = glm::dot(d, d);
             if (!(d2 < r2)) continue;
-            // Eq. 11: w = 1 - (|d| / r)^3, smooth at r and flat near i.
-            const float q = std::sqrt(d2) * inv_r;
-            const float w = 1.0f - q * q * q;
-            weight += w;
-            first += w * d;
-            xx += w * d.x * d.x;
-            xy += w * d.x * d.y;
-            xz += w * d.x * d.z;
-            yy += w * d.y * d.y;
-            yz += w * d.y * d.z;
-            zz += w * d.z * d.z;
-            ++count;
+            const float q2 = d2 * inv_r2;
+            const float w = std::max(1.0f - q2 * std::sqrt(q2), 0.0f);  // Eq. 11
+            m.w += w;
+            m.fx += w * d.x;
+            m.fy += w * d.y;
+            m.fz += w * d.z;
+            m.xx += w * d.x * d.x;
+            m.xy += w * d.x * d.y;
+            m.xz += w * d.x * d.z;
+            m.yy += w * d.y * d.y;
+            m.yz += w * d.y * d.z;
+            m.zz += w * d.z * d.z;
+            ++m.count;
           }
+#endif
         }
+#if defined(__SSE2__)
+      m.w = laneSum(acc[0]);
+      m.fx = laneSum(acc[1]);
+      m.fy = laneSum(acc[2]);
+      m.fz = laneSum(acc[3]);
+      m.xx = laneSum(acc[4]);
+      m.xy = laneSum(acc[5]);
+      m.xz = laneSum(acc[6]);
+      m.yy = laneSum(acc[7]);
+      m.yz = laneSum(acc[8]);
+      m.zz = laneSum(acc[9]);
+#endif
+      // i itself is among the candidates (d = 0, w = 1); a non-finite x_i matched nothing.
+      const std::uint32_t count = m.count > 0 ? m.count - 1 : 0;
+      const float weight = m.w > 0.0f ? m.w : 1.0f;
       // Eq. 10 (mean) and Eq. 9 (covariance about the mean): E[w d d^T] - m m^T. The sums are
       // relative to x_i and bounded by r^2, so the cancellation costs a few ulps of r^2 only.
       const float inv_w = 1.0f / weight;
-      const glm::vec3 m = first * inv_w;
+      const glm::vec3 mean = glm::vec3(m.fx, m.fy, m.fz) * inv_w;
       glm::mat3 c;
-      c[0][0] = xx * inv_w - m.x * m.x;
-      c[1][1] = yy * inv_w - m.y * m.y;
-      c[2][2] = zz * inv_w - m.z * m.z;
-      c[1][0] = c[0][1] = xy * inv_w - m.x * m.y;
-      c[2][0] = c[0][2] = xz * inv_w - m.x * m.z;
-      c[2][1] = c[1][2] = yz * inv_w - m.y * m.z;
+      c[0][0] = m.xx * inv_w - mean.x * mean.x;
+      c[1][1] = m.yy * inv_w - mean.y * mean.y;
+      c[2][2] = m.zz * inv_w - mean.z * mean.z;
+      c[1][0] = c[0][1] = m.xy * inv_w - mean.x * mean.y;
+      c[2][0] = c[0][2] = m.xz * inv_w - mean.x * mean.z;
+      c[2][1] = c[1][2] = m.yz * inv_w - mean.y * mean.z;
       // Eq. 6: x̄ = (1 - λ) x_i + λ x^w_i = x_i + λ (x^w_i - x_i).
-      out.centre[i] = xi + params.lambda * m;
+      out.centre[i] = xi + params.lambda * mean;
       out.g[i] = anisotropyMatrix(c, count, params, &out.max_axis[i]);
       out.neighbours[i] = count;
     }
@@ -180,8 +289,10 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
 void computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
                        AnisotropyScratch& scratch, Anisotropy& out) {
   const AnisotropyParams p = clampAnisotropyParams(params);
-  buildNeighborGrid(scratch.grid, positions, p.radius);
-  computeAnisotropy(scratch.grid, positions, p, out);
+  // Cells of about r / 2 (reach 2: 5 x 5 rows of 5 cells, 15.7 r^3 of candidates) rather than r
+  // (reach 1: 27 r^3): the sphere of radius r is 4.2 r^3, so fewer distance tests per neighbour.
+  buildNeighborGrid(scratch.grid, positions, kHalfCell * p.radius);
+  computeAnisotropy(scratch.grid, positions, p, scratch, out);
 }
 
 }  // namespace fluid

@@ -69,7 +69,8 @@ struct Anisotropy {
 };
 
 struct AnisotropyScratch {
-  NeighborGrid grid;  // the convenience overload's grid (cell = r)
+  NeighborGrid grid;          // the convenience overload's grid (cells of about r / 2)
+  std::vector<float> sx, sy, sz;  // the positions in the grid's sorted order (SoA, padded)
 };
 
 // Exact eigen-decomposition of the symmetric matrix `a` by cyclic Jacobi rotations (a fixed number
@@ -83,10 +84,11 @@ void symmetricEigen3(const glm::mat3& a, glm::vec3& values, glm::mat3& vectors);
 glm::mat3 anisotropyMatrix(const glm::mat3& covariance, std::uint32_t neighbours, const AnisotropyParams& params,
                            float* max_axis = nullptr);
 
-// Every particle of `positions` (finite) with `grid` built on them (any cell size > 0).
+// Every particle of `positions` (finite) with `grid` built on them (any cell size > 0); the
+// scratch's position copies are used, its grid is not.
 void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions,
-                       const AnisotropyParams& params, Anisotropy& out);
-// The same with the scratch's grid rebuilt on `positions` (cells of params.radius).
+                       const AnisotropyParams& params, AnisotropyScratch& scratch, Anisotropy& out);
+// The same with the scratch's grid rebuilt on `positions` (cells of about params.radius / 2).
 void computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
                        AnisotropyScratch& scratch, Anisotropy& out);
 

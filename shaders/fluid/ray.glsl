@@ -27,3 +27,25 @@ bool raySphere(vec3 eye, vec3 dir, vec3 centre, float radius, out float t0, out 
   t1 = m + h;
   return true;
 }
+
+// Ray (eye, dir) against the ellipsoid { x : |g (x - centre)| <= radius }, g symmetric positive
+// definite (Yu & Turk 2013's G times h, fluid/sph/anisotropy.hpp): mapped by g / radius the
+// ellipsoid is the unit sphere and the ray o + t d keeps its parameter t, so t0, t1 are distances
+// along `dir` as raySphere's. The closest approach q is formed directly (no b^2 - ac cancellation).
+bool rayEllipsoid(vec3 eye, vec3 dir, vec3 centre, mat3 g, float radius, out float t0, out float t1) {
+  vec3 o = g * (eye - centre) / radius;
+  vec3 d = g * dir / radius;
+  float a = dot(d, d);
+  if (!(a > 0.0)) return false;
+  float m = -dot(o, d) / a;  // parameter of the closest approach to the centre
+  vec3 q = o + m * d;
+  float h2 = (1.0 - dot(q, q)) / a;
+  if (h2 <= 0.0) return false;
+  float h = sqrt(h2);
+  t0 = m - h;
+  t1 = m + h;
+  return true;
+}
+
+// Outward normal of that ellipsoid at p (the gradient of |g (p - centre)|^2).
+vec3 ellipsoidNormal(vec3 p, vec3 centre, mat3 g) { return normalize(g * (g * (p - centre))); }

@@ -8,12 +8,24 @@ uniform mat4 u_view;
 uniform mat4 u_projection;
 uniform float u_radius;
 flat in vec3 v_centre;
+#ifdef ELLIPSOID
+flat in vec3 v_g0, v_g1, v_g2;
+#endif
+
+// The pixel's ray against this particle's sphere, or its ellipsoid with ELLIPSOID (ray.glsl).
+bool hitParticle(vec3 dir, out float t0, out float t1) {
+#ifdef ELLIPSOID
+  return rayEllipsoid(u_eye, dir, v_centre, mat3(v_g0, v_g1, v_g2), u_radius, t0, t1);
+#else
+  return raySphere(u_eye, dir, v_centre, u_radius, t0, t1);
+#endif
+}
 layout(location = 0) out float out_depth;
 
 void main() {
   vec3 dir = pixelRay(gl_FragCoord.xy);
   float t0, t1;
-  if (!raySphere(u_eye, dir, v_centre, u_radius, t0, t1) || t0 <= 0.0) discard;
+  if (!hitParticle(dir, t0, t1) || t0 <= 0.0) discard;
   vec3 p = u_eye + t0 * dir;
   vec4 clip = u_projection * u_view * vec4(p, 1.0);
   float window_depth = clip.z / clip.w * 0.5 + 0.5;
