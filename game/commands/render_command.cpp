@@ -4,6 +4,7 @@
 //   fluiddemo render --in FILE --method mesh|screen_space|raycast|voxel|none --out IMAGE.png
 //                    [--width W --height H] [--camera x,y,z --look-at x,y,z] [--radius R]
 //                    [--frames N] [--silhouette] [--drop-inner-cells] [--force]
+//                    [--kernel isotropic|anisotropic --kr K --ks K --kn N --lambda L] [--ss-filter bilateral|narrow_range]
 // Prints the milliseconds of each stage (each ended by glFinish) and the renderer's GPU memory.
 // The renderers are called directly (engine/fluid_render), not through the game's frame.
 // `none` draws the backdrop alone: the reference for water masks (tests/bench/render_sets_docs.sh).
@@ -22,6 +23,7 @@
 #include "engine/render/image_write.hpp"
 #include "engine/render/renderer.hpp"
 #include "fluid/io/particle_io.hpp"
+#include "fluid/sph/anisotropy.hpp"
 #include "fluid/surface/marching_slices.hpp"
 
 #include <CLI/CLI.hpp>
@@ -110,6 +112,10 @@ struct RenderJob {
   glm::vec3 sky{0.0f};
   engine::Backdrop backdrop;
   engine::ColourTarget target;
+  // screen_space: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings) and the depth filter.
+  bool anisotropic = false;
+  fluid::AnisotropyParams anisotropy;
+  engine::DepthFilter filter = engine::DepthFilter::bilateral;
 };
 
 struct Timing {
@@ -288,8 +294,24 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
     engine::ScreenSpaceParams p;
     p.radius = job.radius;
     p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
+    p.filter = job.filter;
+    fluid::Anisotropy kernels;
+    if (job.anisotropic) {
+      fluid::AnisotropyScratch scratch;
+      fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);  // warm-up
+      const double a0 = nowMs();
+      fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
+      t.add("anisotropy (CPU)", (nowMs() - a0) * job.frames);  // once, reported per frame
+      t.notes.push_back("anisotropic kernels: " + std::to_string(kernels.stretched) + " of " +
+                        std::to_string(job.particles.size()) + " stretched");
+    }
     timeParticleMethod(
-        job, r, t, [&] { ok = ok && engine::uploadScreenSpaceParticles(r, job.particles, error); },
+        job, r, t,
+        [&] {
+          ok = ok && (job.anisotropic ? engine::uploadScreenSpaceEllipsoids(r, kernels.centre, kernels.g,
+                                                                            kernels.max_axis, error)
+                                      : engine::uploadScreenSpaceParticles(r, job.particles, error));
+        },
         [&](bool) { engine::drawScreenSpaceFluid(r, job.target.fbo, job.camera, job.water, p); });
     t.gpu_bytes = px * (4 + 4 + 4 * 4 + 4) + static_cast<double>(r.particles.capacity_bytes);
     engine::destroyScreenSpaceRenderer(r);
@@ -370,6 +392,28 @@ int renderCommand(const Args& args) {
   app.add_option("--tile-size", tile_text, "voxel: tile WxH instead of the 64 MiB budget's (paper Table 1)");
   app.add_flag("--drop-inner-cells", drop_inner, "voxel: leave full inner cells out of the splat (paper §4.3)");
   app.add_flag("--force", force, "replace --out if it exists");
+  std::string kernel = "isotropic", ss_filter = "bilateral";
+  fluid::AnisotropyParams aniso;
+  app.add_option("--kernel", kernel,
+                 "screen_space: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; neighbourhood "
+                 "radius 3 particle spacings)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"isotropic", "anisotropic"}));
+  app.add_option("--kr", aniso.k_r, "anisotropic: largest axis ratio")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 16.0));
+  app.add_option("--ks", aniso.k_s, "anisotropic: axis scale (1: the sphere's volume)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.25, 4.0));
+  app.add_option("--kn", aniso.k_n, "anisotropic: neighbours needed to stretch (more than this)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 200));
+  app.add_option("--lambda", aniso.lambda, "anisotropic: kernel centre smoothing")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--ss-filter", ss_filter, "screen_space depth filter: bilateral or narrow_range (Truong & Yuksel 2018)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"bilateral", "narrow_range"}));
   if (const int code = parseCommandLine(app, "render", args); code >= 0) return code;
   glm::vec3 eye{0.0f}, target{0.0f};
   if (!camera_text.empty() && !parseVec3(camera_text, eye))
@@ -415,6 +459,10 @@ int renderCommand(const Args& args) {
   job.radius = radius > 0.0f ? radius : 0.65f * job.spacing;
   if (radius > 0.0f) job.spacing = radius / 0.65f;
   const double spacing_ms = nowMs() - t_spacing;
+  job.anisotropic = kernel == "anisotropic";
+  job.anisotropy = aniso;
+  job.anisotropy.radius = 3.0f * job.spacing;
+  engine::parseDepthFilter(ss_filter, job.filter);
   const glm::vec3 centre = 0.5f * (job.lo + job.hi);
   const float extent = std::max(0.5f * glm::length(job.hi - job.lo), 4.0f * job.radius);
   if (look_text.empty()) target = centre;

@@ -5,8 +5,11 @@
 #include "engine/render/frame.hpp"
 #include "game/effects/effect.hpp"
 #include "game/effects/params.hpp"
+#include "fluid/sph/anisotropy.hpp"
 
 #include <imgui.h>
+
+#include <chrono>
 
 namespace game {
 namespace {
@@ -18,6 +21,14 @@ constexpr std::string_view kFieldNames[] = {"splat", "cache", "auto"};
 constexpr fluid::SurfaceFieldRoute kFieldValues[] = {
     fluid::SurfaceFieldRoute::sliceSplat, fluid::SurfaceFieldRoute::particleCache, fluid::SurfaceFieldRoute::automatic};
 constexpr std::string_view kNeeds[] = {"sph_fluid"};
+constexpr std::string_view kKernelNames[] = {"isotropic", "anisotropic"};
+constexpr SurfaceKernel kKernelValues[] = {SurfaceKernel::isotropic, SurfaceKernel::anisotropic};
+constexpr std::string_view kFilterNames[] = {"bilateral", "narrow_range"};
+constexpr SurfaceDepthFilter kFilterValues[] = {SurfaceDepthFilter::bilateral, SurfaceDepthFilter::narrow_range};
+// The anisotropy's neighbourhood radius r, in particle spacings: 1.5 SPH supports (the paper's
+// r_i = 2h with h about one spacing would leave a surface particle of a lattice about 16
+// neighbours, too few for k_n = 25, the paper's N_ε).
+constexpr float kAnisotropyRadiusSpacings = 3.0f;
 
 const ParamTable<FluidSurfaceParams>& table() {
   using P = FluidSurfaceParams;
@@ -42,6 +53,16 @@ const ParamTable<FluidSurfaceParams>& table() {
       param<&P::async>("async",
                        "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
                        "(Janisz 3.2.6); false: mesh before drawing"),
+      choice<&P::kernel>("kernel", kKernelNames, kKernelValues,
+                         "particle renderers' kernel: isotropic (spheres) or anisotropic (ellipsoids along each "
+                         "particle's neighbourhood, Yu & Turk 2013; screen_space draws them)"),
+      param<&P::k_r>("k_r", 1.0, 16.0, "anisotropic: largest ratio of a kernel's longest axis to its shortest"),
+      param<&P::k_s>("k_s", 0.25, 4.0, "anisotropic: scale of a stretched kernel's axes (1: the sphere's volume)"),
+      param<&P::k_n>("k_n", 0, 200,
+                     "anisotropic: a particle with this many neighbours or fewer (within 3 spacings) stays a sphere"),
+      param<&P::lambda>("lambda", 0.0, 1.0, "anisotropic: kernel centre smoothing towards the neighbours' mean"),
+      choice<&P::ss_filter>("ss_filter", kFilterNames, kFilterValues,
+                            "screen_space depth smoothing: bilateral, or narrow_range (Truong & Yuksel 2018)"),
   };
   return rows;
 }
@@ -58,9 +79,12 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
 
   bool prepareFrame(const FrameContext& frame, std::string& error) override {
     const PhaseScope phase(frame.profiler, engine::Phase::meshing);
-    if (meshFluidSurface(state, fluid_, frame.eye, frame.view_dir)) return true;
-    error = state.error;
-    return false;
+    if (!meshFluidSurface(state, fluid_, frame.eye, frame.view_dir)) {
+      error = state.error;
+      return false;
+    }
+    updateAnisotropy();
+    return true;
   }
 
   // The mesh (back-to-front) or the particles, with the optics; the engine's water pass draws it.
@@ -76,6 +100,12 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
     water.rc = p.smoothing * fluid::sphSpacing(fluid_.world.params);
     water.threshold = p.threshold;
+    if (anisotropy_valid_) {
+      water.kernel_g = anisotropy_.g;
+      water.kernel_max_axis = anisotropy_.max_axis;
+      water.kernel_centres = anisotropy_.centre;
+    }
+    water.ss_filter = kFilterNames[p.ss_filter == SurfaceDepthFilter::narrow_range ? 1 : 0];
     water.refraction = p.refraction;
     water.opacity = p.opacity;
     water.absorption = p.absorption;
@@ -101,6 +131,9 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
                 surface.blocks);
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,
                 surface.marchMs, surface.prepareMs + surface.gatherMs);
+    if (anisotropy_valid_)
+      ImGui::Text("  anisotropic kernels: %zu of %zu stretched, %.2f ms", anisotropy_.stretched,
+                  anisotropy_.g.size(), anisotropy_ms_);
     if (state.raycast.pool > 0) {
       ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
                   static_cast<unsigned long long>(state.raycast.records),
@@ -115,8 +148,31 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   }
 
  private:
+  // Once per frame, for a particle renderer with kernel = anisotropic: g and the smoothed centres
+  // of every particle (fluid/sph/anisotropy.hpp) from the store's positions in place. Rendering
+  // only: nothing here enters the state hash.
+  void updateAnisotropy() {
+    const FluidSurfaceParams& p = state.params;
+    const engine::WaterBackendDesc* backend = engine::findWaterBackend(p.method);
+    anisotropy_valid_ = p.kernel == SurfaceKernel::anisotropic && backend != nullptr && !backend->needs_mesh;
+    if (!anisotropy_valid_) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    fluid::AnisotropyParams a;
+    a.radius = kAnisotropyRadiusSpacings * fluid::sphSpacing(fluid_.world.params);
+    a.k_r = p.k_r;
+    a.k_s = p.k_s;
+    a.k_n = p.k_n;
+    a.lambda = p.lambda;
+    fluid::computeAnisotropy(fluid_.world.particles.position, a, anisotropy_scratch_, anisotropy_);
+    anisotropy_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
   const SphFluid& fluid_;
   std::size_t water_slot_ = 0;  // this frame's index in FrameBatches::water
+  fluid::Anisotropy anisotropy_;
+  fluid::AnisotropyScratch anisotropy_scratch_;
+  bool anisotropy_valid_ = false;  // this frame's anisotropy_ matches the particles
+  double anisotropy_ms_ = 0.0;
 };
 
 std::unique_ptr<Effect> build(const SectionConfig& section, BuildContext& ctx, std::string& error) {

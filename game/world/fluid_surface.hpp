@@ -21,6 +21,10 @@
 namespace game {
 
 enum class SurfaceOrderChoice { sorted, unsorted, exact };
+// The particle renderers' kernel: spheres, or ellipsoids stretched along each particle's
+// neighbourhood (Yu & Turk 2013, fluid/sph/anisotropy.hpp). Screen-space's depth filter.
+enum class SurfaceKernel { isotropic, anisotropic };
+enum class SurfaceDepthFilter { bilateral, narrow_range };
 
 struct FluidSurfaceParams {
   // The engine's water backend that draws it (engine/fluid_render/water_backend.hpp); only the
@@ -42,6 +46,14 @@ struct FluidSurfaceParams {
   // Mesh on a worker thread while the next steps run and draw the previous frame's surface
   // (Janisz §3.2.6); false: mesh the current particles before drawing them.
   bool async = true;
+  // Anisotropic kernels (fluid::AnisotropyParams; the mapping to the paper's names is in
+  // fluid/sph/anisotropy.hpp), computed once per frame for the particle renderers.
+  SurfaceKernel kernel = SurfaceKernel::isotropic;
+  float k_r = 4.0f;     // largest axis ratio
+  float k_s = 1.0f;     // axis scale (1: the sphere's volume)
+  int k_n = 25;         // more neighbours than this to be stretched
+  float lambda = 0.9f;  // kernel centre smoothing
+  SurfaceDepthFilter ss_filter = SurfaceDepthFilter::bilateral;
 };
 
 // Reads a validated "fluid_surface" section through the effect's parameter table
