@@ -239,7 +239,14 @@ void filterScreenSpaceDepth(ScreenSpaceRenderer& r, const FluidCamera& camera, c
     setUniform(p, "u_depth_falloff", std::max(params.depth_falloff, 1e-4f));
   }
   glBindVertexArray(r.empty_vao);
-  const int iterations = std::clamp(params.smoothing_iterations, 0, 32);
+  int iterations = std::clamp(params.smoothing_iterations, 0, 32);
+  if (narrow && iterations > 1) {
+    // The narrow-range filter runs once (the paper's use): its clamp moves a surface in front of
+    // a far layer back by up to `clamp` per round, so repeated rounds would add up. One round as
+    // wide as the bilateral's n rounds together (Gaussians compose: sigma sqrt(n)).
+    setUniform(p, "u_world_radius", std::max(params.filter_radius, 0.0f) * std::sqrt(static_cast<float>(iterations)));
+    iterations = 1;
+  }
   for (int i = 0; i < 2 * iterations; ++i) {
     const int from = i % 2, to = 1 - from;
     glBindFramebuffer(GL_FRAMEBUFFER, r.smooth_fbo[to]);

@@ -5,12 +5,14 @@
 //   - a sample nearer than the range (z < z0 - threshold) is another surface in front: it is left
 //     out, and so is its mirror sample on the other side, which keeps the kernel symmetric so a
 //     plane stays a plane (a one-sided kernel would tilt it);
-//   - a sample farther than the range (z > z0 + threshold: water behind, or no water at a
-//     silhouette) is clamped to z0 + clamp, so silhouettes curve away gently instead of being
-//     pulled towards the background (the bilateral filter keeps them as cliffs);
+//   - a sample farther than the range (z > z0 + threshold: another layer of water behind) is
+//     clamped to z0 + clamp, so it bends the surface back by at most the clamp instead of pulling
+//     it towards the far layer;
 //   - a sample inside the range extends it (range extension), so a sloped surface seen at a
 //     grazing angle is followed along its slope instead of being cut off by the range.
-// Each side of the pixel keeps its own range. Empty pixels (>= 1e20) stay empty and count as far.
+// Each side of the pixel keeps its own range. Empty pixels (>= 1e20) stay empty; as samples they
+// are left out with their mirror (the authors' code reads the cleared depth as out of range on
+// the near side): clamping them would dimple the water around every pinhole between particles.
 uniform sampler2D u_depth;
 uniform vec2 u_direction;      // (1, 0) or (0, 1)
 uniform float u_world_radius;  // filter half-width in metres
@@ -22,7 +24,7 @@ layout(location = 0) out float out_depth;
 // One sample against its side's range: returns the depth to use; `keep` false leaves it (and its
 // mirror) out.
 float judge(float z, float z_clamped, inout float near, inout float far, out bool keep) {
-  keep = z >= near;
+  keep = z >= near && z < 1e20;
   if (!keep) return z;
   if (z > far) return z_clamped;
   near = min(near, z - u_threshold);  // range extension
