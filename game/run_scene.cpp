@@ -161,8 +161,8 @@ bool readInput(Session& s, int frame, double frame_dt, std::string& error) {
   for (PlayerAction action : s.actions) applyPlayerAction(s.world, action);
   s.hook_screenshot = std::move(frame_input.screenshot);
   if (input.resized && !s.options.headless)
-    return engine::resizeRenderer(s.renderer, scaled(s.platform.width, s.graphics), scaled(s.platform.height, s.graphics),
-                                  error);
+    return engine::resizeRenderer(s.renderer, scaled(s.platform.width, s.graphics),
+                                  scaled(s.platform.height, s.graphics), error);
   return true;
 }
 
@@ -177,8 +177,7 @@ bool writeImages(Session& s, const engine::FrameView& view, bool last_frame, std
   }
   const int width = viewWidth(s), height = viewHeight(s);
   bool ok = true;
-  if (!s.hook_screenshot.empty() &&
-      !engine::writePngBottomUp(s.hook_screenshot, width, height, s.pixels, error)) {
+  if (!s.hook_screenshot.empty() && !engine::writePngBottomUp(s.hook_screenshot, width, height, s.pixels, error)) {
     ok = false;
   }
   if (s.input.screenshot) {
@@ -191,8 +190,7 @@ bool writeImages(Session& s, const engine::FrameView& view, bool last_frame, std
     }
   }
   if (!last_frame) return ok;
-  if (!options.screenshot.empty() &&
-      !engine::writePngBottomUp(options.screenshot, width, height, s.pixels, error)) {
+  if (!options.screenshot.empty() && !engine::writePngBottomUp(options.screenshot, width, height, s.pixels, error)) {
     ok = false;
   }
   if (options.capture_last_frame) {
@@ -279,6 +277,7 @@ int runFrames(Session& s, const std::filesystem::path& content_dir, engine::Fram
   clock_desc.max_steps_per_frame = world.scene.scene.integer("max_steps_per_frame");
   engine::FixedStepClock clock = engine::makeFixedStepClock(clock_desc);
   engine::FrameBatches batches;
+  std::vector<engine::WaterStats> water_stats;  // what each frame's water passes tell back
   auto last_time = std::chrono::steady_clock::now();
   std::uint64_t steps_done = 0;
   int code = 0;
@@ -317,7 +316,8 @@ int runFrames(Session& s, const std::filesystem::path& content_dir, engine::Fram
       submitLevel(s.assets, batches);
       submitWorld(world, batches, s.assets, alpha);
       engine::renderFrame(s.renderer, passes, view, s.lighting, batches);
-      readWorldRenderStats(world, engine::lastWaterStats(passes));
+      engine::lastWaterStats(passes, water_stats);
+      readWorldRenderStats(world, water_stats);
       if (!writeImages(s, view, last_frame, error)) code = 1;
       // Headless there is nobody to show the window to; the scene FBO is the output.
       if (!s.platform.headless) engine::presentToWindow(s.renderer, s.platform.width, s.platform.height);

@@ -15,8 +15,9 @@ struct FpsCamera {
   float near_plane = 0.05f;
   float far_plane = 400.0f;
   // The box the player may move in (the level's edges); updateCamera keeps the position inside.
-  glm::vec3 bounds_min{-1e30f};
-  glm::vec3 bounds_max{1e30f};
+  // By default a 2 km box around the origin, the largest a scene may give.
+  glm::vec3 bounds_min{-1000.0f};
+  glm::vec3 bounds_max{1000.0f};
 };
 
 struct CameraInput {

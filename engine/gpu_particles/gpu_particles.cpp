@@ -55,6 +55,11 @@ void beginStatePass(const GpuParticles& s, GLuint fbo, GLsizei rows) {
   glDisable(GL_DEPTH_TEST);
 }
 
+// A birth vertex: index bits, position, velocity, birth time, death time, type, spin.
+constexpr std::size_t kBirthFloats = 11;
+// Records kept before step() runs them itself (a frame runs them far sooner: a few steps' worth).
+constexpr std::size_t kMaxPendingRecords = 1024;
+
 bool isPowerOfTwo(std::uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 
 // Rows covering the active range (§3.3.1: the heap keeps it packed at the start).
@@ -157,7 +162,8 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
   for (std::size_t t = 0; t < desc.types.size(); ++t)
     if (!std::isfinite(desc.types[t].gravity_scale) || !(desc.types[t].damping >= 0.0f) ||
         !std::isfinite(desc.types[t].damping)) {
-      out.error = "gpu particles: type " + std::to_string(t) + " has a non-finite gravity_scale or a damping that is "
+      out.error = "gpu particles: type " + std::to_string(t) +
+                  " has a non-finite gravity_scale or a damping that is "
                   "not finite and >= 0";
       return;
     }
@@ -249,7 +255,7 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
   glGenBuffers(1, &out.birth_vbo);
   glBindVertexArray(out.birth_vao);
   glBindBuffer(GL_ARRAY_BUFFER, out.birth_vbo);
-  constexpr GLsizei stride = 11 * 4;
+  constexpr auto stride = static_cast<GLsizei>(kBirthFloats * sizeof(float));
   glEnableVertexAttribArray(0);
   glVertexAttribIPointer(0, 1, GL_INT, stride, nullptr);
   glEnableVertexAttribArray(1);
@@ -304,6 +310,8 @@ void destroyGpuParticles(GpuParticles& s) {
     if (p->id != 0) glDeleteProgram(p->id);
     p->id = 0;
   }
+  s.pending.clear();  // work recorded for textures that no longer exist
+  s.pending_births.clear();
   s.ready = false;
 }
 
@@ -312,7 +320,9 @@ std::size_t spawn(GpuParticles& s, const BirthBatch& batch) {
   const std::size_t n = batch.size();
   assert(batch.velocities.size() == n && batch.lifetimes.size() == n && batch.types.size() == n &&
          batch.spins.size() == n);
-  s.birth_scratch.clear();
+  GpuWorkRecord record;
+  record.kind = GpuWorkRecord::Kind::births;
+  record.first = static_cast<std::uint32_t>(s.pending_births.size() / kBirthFloats);
   std::size_t born = 0;
   const auto type_count = static_cast<std::uint32_t>(s.desc.types.size());
   for (std::size_t k = 0; k < n; ++k) {
@@ -331,30 +341,18 @@ std::size_t spawn(GpuParticles& s, const BirthBatch& batch) {
     float index_bits;
     const auto index_int = static_cast<std::int32_t>(index);
     std::memcpy(&index_bits, &index_int, 4);
-    const float vertex[11] = {index_bits, p.x, p.y, p.z, v.x, v.y, v.z, s.time, death, type, spin};
-    s.birth_scratch.insert(s.birth_scratch.end(), vertex, vertex + 11);
+    const float vertex[kBirthFloats] = {index_bits, p.x, p.y, p.z, v.x, v.y, v.z, s.time, death, type, spin};
+    s.pending_births.insert(s.pending_births.end(), vertex, vertex + kBirthFloats);
     ++born;
   }
   if (born == 0) return 0;
-  // Orphan-and-fill: the buffer grows only when a bigger batch arrives.
-  glBindBuffer(GL_ARRAY_BUFFER, s.birth_vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(s.birth_scratch.size() * sizeof(float)), s.birth_scratch.data(),
-               GL_STREAM_DRAW);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
-  beginStatePass(s, s.birth_fbo[s.current], static_cast<GLsizei>(s.desc.height));
-  glEnable(GL_PROGRAM_POINT_SIZE);
-  glUseProgram(s.birth.id);
-  glUniform2i(loc(s.birth.id, "u_size"), static_cast<GLint>(s.desc.width), static_cast<GLint>(s.desc.height));
-  glUniform1i(loc(s.birth.id, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
-  glUniform1f(loc(s.birth.id, "u_dt"), s.desc.dt);
-  glBindVertexArray(s.birth_vao);
-  glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(born));
-  glBindVertexArray(0);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  record.count = static_cast<std::uint32_t>(born);
+  s.pending.push_back(record);
   return born;
 }
 
 bool setColliders(GpuParticles& s, std::span<const GpuColliderDesc> colliders, std::string& error) {
+  runPendingWork(s);  // the steps recorded so far collide with the colliders they were recorded with
   error.clear();
   if (colliders.size() > static_cast<std::size_t>(kMaxGpuColliders)) {
     error = "gpu colliders: at most " + std::to_string(kMaxGpuColliders) + " colliders (got " +
@@ -454,6 +452,7 @@ void setColliderPose(GpuParticles& s, int collider, const fluid::ColliderPose& p
 }
 
 bool setFlowField(GpuParticles& s, const FlowFieldDesc& flow, std::string& error) {
+  runPendingWork(s);
   error.clear();
   if (flow.velocities.empty()) {
     s.flow_enabled = false;
@@ -543,6 +542,7 @@ bool prepareStep(GpuParticles& s, const GpuStepParams& params) {
 void step(GpuParticles& s, const GpuStepParams& params) {
   if (!s.ready) return;
   s.time += s.desc.dt;
+  ++s.steps;
   // §3.3.1: the CPU registers deaths on its own and frees the indices (same float compare as
   // the shader: time >= death time).
   while (!s.death_queue.empty() && s.death_queue.front().first <= s.time) {
@@ -550,8 +550,53 @@ void step(GpuParticles& s, const GpuStepParams& params) {
     releaseIndex(s.allocator, s.death_queue.back().second);
     s.death_queue.pop_back();
   }
+  GpuWorkRecord record;
+  record.kind = GpuWorkRecord::Kind::step;
+  record.time = s.time;
   // Rows past the active range are not touched; dead texels there are flagged by their age.
-  const GLsizei rows = activeRows(s);
+  record.rows = activeRows(s);
+  record.params = params;
+  record.poses = s.collider_poses;
+  s.pending.push_back(record);
+  // A loop that steps without drawing (no frame runs the work) still has bounded memory.
+  if (s.pending.size() >= kMaxPendingRecords) runPendingWork(s);
+}
+
+void requestReadback(GpuParticles& s) {
+  if (!s.ready) return;
+  GpuWorkRecord record;
+  record.kind = GpuWorkRecord::Kind::readback;
+  record.step_index = s.steps;
+  // Which texels are live now: the work may run after later steps have freed or taken some.
+  s.readback_live.assign(s.allocator.live.begin(), s.allocator.live.begin() + s.allocator.active_range);
+  // One read-back at a time: an earlier one not yet run is replaced by this one.
+  std::erase_if(s.pending, [](const GpuWorkRecord& r) { return r.kind == GpuWorkRecord::Kind::readback; });
+  s.pending.push_back(record);
+}
+
+namespace {
+
+void runBirths(GpuParticles& s, const GpuWorkRecord& record) {
+  // Orphan-and-fill: the buffer grows only when a bigger batch arrives.
+  glBindBuffer(GL_ARRAY_BUFFER, s.birth_vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::size_t{record.count} * kBirthFloats * sizeof(float)),
+               s.pending_births.data() + std::size_t{record.first} * kBirthFloats, GL_STREAM_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  beginStatePass(s, s.birth_fbo[s.current], static_cast<GLsizei>(s.desc.height));
+  glEnable(GL_PROGRAM_POINT_SIZE);
+  glUseProgram(s.birth.id);
+  glUniform2i(loc(s.birth.id, "u_size"), static_cast<GLint>(s.desc.width), static_cast<GLint>(s.desc.height));
+  glUniform1i(loc(s.birth.id, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
+  glUniform1f(loc(s.birth.id, "u_dt"), s.desc.dt);
+  glBindVertexArray(s.birth_vao);
+  glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(record.count));
+  glBindVertexArray(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void runStepPass(GpuParticles& s, const GpuWorkRecord& record) {
+  const GpuStepParams& params = record.params;
+  const GLsizei rows = record.rows;
   const int src = s.current, dst = 1 - s.current;
   if (rows == 0) return;
   const int attractor_count = std::clamp(params.attractor_count, 0, kMaxAttractors);
@@ -572,7 +617,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   glUniform1i(loc(prog, "u_flow"), 3);
   glUniform1i(loc(prog, "u_map_words"), 4);
   glUniform1i(loc(prog, "u_normals"), 5);
-  glUniform1f(loc(prog, "u_time"), s.time);
+  glUniform1f(loc(prog, "u_time"), record.time);
   glUniform1f(loc(prog, "u_dt"), s.desc.dt);
   glUniform1i(loc(prog, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
   glUniform3fv(loc(prog, "u_gravity"), 1, glm::value_ptr(params.gravity));
@@ -611,7 +656,7 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   std::array<glm::vec4, kMaxGpuColliders> rot{};
   std::array<glm::vec3, kMaxGpuColliders> trans{}, lin{}, ang{};
   for (std::size_t c = 0; c < kMaxGpuColliders; ++c) {
-    const fluid::ColliderPose& pose = s.collider_poses[c];
+    const fluid::ColliderPose& pose = record.poses[c];
     rot[c] = glm::vec4(pose.rotation.x, pose.rotation.y, pose.rotation.z, pose.rotation.w);
     trans[c] = pose.translation;
     lin[c] = pose.linear_velocity;
@@ -635,6 +680,29 @@ void step(GpuParticles& s, const GpuStepParams& params) {
   s.current = dst;
 }
 
+void runReadback(GpuParticles& s, const GpuWorkRecord& record);
+
+}  // namespace
+
+void runPendingWork(GpuParticles& s) {
+  if (!s.ready || s.pending.empty()) return;
+  for (const GpuWorkRecord& record : s.pending) {
+    switch (record.kind) {
+      case GpuWorkRecord::Kind::births:
+        runBirths(s, record);
+        break;
+      case GpuWorkRecord::Kind::step:
+        runStepPass(s, record);
+        break;
+      case GpuWorkRecord::Kind::readback:
+        runReadback(s, record);
+        break;
+    }
+  }
+  s.pending.clear();
+  s.pending_births.clear();
+}
+
 float stokesDragRate(const GpuStepParams& params) {
   const float rate = 6.0f * std::numbers::pi_v<float> * params.viscosity * params.particle_radius /
                      std::max(params.particle_mass, 1e-12f);
@@ -643,6 +711,7 @@ float stokesDragRate(const GpuStepParams& params) {
 
 void refreshSortKeys(GpuParticles& s, glm::vec3 eye) {
   if (!s.ready) return;
+  runPendingWork(s);  // the keys are the positions after every recorded step
   const auto w = static_cast<GLsizei>(s.desc.width);
   beginStatePass(s, s.sort_fbo[1 - s.sort_current], static_cast<GLsizei>(s.desc.height));
   glBindVertexArray(s.empty_vao);
@@ -698,6 +767,7 @@ void sortStep(GpuParticles& s, glm::vec3 eye, std::uint32_t passes) {
 
 void drawSprites(GpuParticles& s, const glm::mat4& view_projection, float projection_scale_y, int viewport_height) {
   if (!s.ready) return;
+  runPendingWork(s);
   const GLuint prog = s.sprite.id;
   glUseProgram(prog);
   bindTexture(0, GL_TEXTURE_2D, s.sort_tex[s.sort_current]);
@@ -748,17 +818,34 @@ void readParticleTexture(const GpuParticles& s, GLuint fbo, GLenum attachment, G
   std::memcpy(out.data(), raw.data(), raw.size() * sizeof(float));
 }
 
+// The live texels of one state attachment, in index order, as they are between two records.
+void readLive(GpuParticles& s, GLenum attachment, std::vector<glm::vec4>& out) {
+  readParticleTexture(s, s.fbo[s.current], attachment, GL_RGBA, s.read_scratch);
+  out.clear();
+  for (std::size_t i = 0; i < s.readback_live.size() && i < s.read_scratch.size(); ++i)
+    if (s.readback_live[i] != 0) out.push_back(s.read_scratch[i]);
+}
+
+void runReadback(GpuParticles& s, const GpuWorkRecord& record) {
+  readLive(s, GL_COLOR_ATTACHMENT0, s.readback.positions);
+  readLive(s, GL_COLOR_ATTACHMENT1, s.readback.velocities);
+  s.readback.step = record.step_index;
+}
+
 }  // namespace
 
 void readPositions(GpuParticles& s, std::vector<glm::vec4>& out) {
+  runPendingWork(s);
   readParticleTexture(s, s.fbo[s.current], GL_COLOR_ATTACHMENT0, GL_RGBA, out);
 }
 
 void readState1(GpuParticles& s, std::vector<glm::vec4>& out) {
+  runPendingWork(s);
   readParticleTexture(s, s.fbo[s.current], GL_COLOR_ATTACHMENT1, GL_RGBA, out);
 }
 
 void readSortPairs(GpuParticles& s, std::vector<glm::vec2>& out) {
+  runPendingWork(s);
   readParticleTexture(s, s.sort_fbo[s.sort_current], GL_COLOR_ATTACHMENT0, GL_RG, out);
 }
 

@@ -218,6 +218,28 @@ struct GpuProgram {
   GLuint id = 0;
 };
 
+// ---- the GPU half of a fixed step, run by the frame ----------------------------------------
+// spawn() and step() do their CPU half at once (index allocation, the death queue, the clock:
+// §3.3.1) and record their GPU half; the frame's sprite pass runs the records in order
+// (runPendingWork) before it sorts and draws, so a fixed-step loop issues no GL of its own.
+// Everything that reads the textures (read-backs, the sort, the draw) runs the records first.
+struct GpuWorkRecord {
+  enum class Kind : std::uint8_t { births, step, readback };
+  Kind kind = Kind::step;
+  std::uint32_t first = 0, count = 0;  // births: vertices [first, first + count) of pending_births
+  float time = 0.0f;                   // step: the clock after it (u_time)
+  std::int32_t rows = 0;               // step: texture rows holding the live range when recorded
+  std::uint64_t step_index = 0;        // readback: GpuParticles::steps when it was asked for
+  GpuStepParams params;                // step
+  std::array<fluid::ColliderPose, kMaxGpuColliders> poses{};  // step: collider poses when recorded
+};
+
+// What the last read-back saw: the live sprites (in index order) after step `step`.
+struct GpuReadback {
+  std::vector<glm::vec4> positions, velocities;  // xyz; velocities: Euler state1 (Verlet: P_{i-2})
+  std::uint64_t step = 0;                        // 0: none yet
+};
+
 struct GpuParticles {
   bool ready = false;
   std::string error;  // why not ready (shader file:line, GL limits)
@@ -240,10 +262,10 @@ struct GpuParticles {
   // Update-pass variants, built on first use: bit 0 attractors, 1 drag, 2 flow field,
   // 3 colliders, 4..7 depth-map formats present (float32, fixed8, front_back16, cube8).
   std::array<GLuint, 512> update_variants{};
-  float time = 0.0f;  // s since creation, advanced by step()
+  float time = 0.0f;        // s since creation, advanced by step()
+  std::uint64_t steps = 0;  // step() calls since creation
   IndexAllocator allocator;
   std::vector<std::pair<float, std::uint32_t>> death_queue;  // min-heap on death time
-  std::vector<float> birth_scratch;
   std::vector<std::uint32_t> sort_scratch;
   // Colliders uploaded by setColliders.
   int collider_count = 0;
@@ -260,6 +282,12 @@ struct GpuParticles {
   std::array<std::int32_t, kMaxGpuColliders> normal_offset{};
   bool flow_enabled = false;
   glm::vec3 flow_origin{0.0f}, flow_extent{1.0f};
+  // Recorded by spawn/step/requestReadback, run and cleared by runPendingWork.
+  std::vector<GpuWorkRecord> pending;
+  std::vector<float> pending_births;        // 11 floats per birth vertex (index bits, p, v, times, type, spin)
+  std::vector<std::uint8_t> readback_live;  // allocator.live when the pending read-back was asked for
+  GpuReadback readback;
+  std::vector<glm::vec4> read_scratch;
 };
 
 // Builds textures, FBOs and shaders. On failure `ready` is false and `error` says why (shader
@@ -267,8 +295,8 @@ struct GpuParticles {
 void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out);
 void destroyGpuParticles(GpuParticles& system);
 
-// Allocates indices (smallest first) and writes the batch into the current textures with one
-// point draw. Births beyond capacity are dropped; returns the number born.
+// Allocates indices (smallest first) and records the batch's upload (one point draw into the
+// current textures when the work runs). Births beyond capacity are dropped; returns the number born.
 std::size_t spawn(GpuParticles& system, const BirthBatch& batch);
 
 // Replaces the colliders (at most kMaxGpuColliders, kMaxGpuDepthMaps maps in all). Returns
@@ -280,9 +308,16 @@ void setColliderPose(GpuParticles& system, int collider, const fluid::ColliderPo
 // Uploads (or with an empty span disables) the drag flow field. False + error on size mismatch.
 bool setFlowField(GpuParticles& system, const FlowFieldDesc& flow, std::string& error);
 
-// One fixed step of desc.dt: the CPU retires particles whose lifetime ended (§3.3.1), then one fragment
-// pass integrates, collides and marks dead particles on the GPU (w = 0, moved far away).
+// One fixed step of desc.dt: the CPU retires particles whose lifetime ended (§3.3.1) at once, and
+// records the fragment pass that integrates, collides and marks dead particles on the GPU (w = 0,
+// moved far away), with the collider poses as they are now.
 void step(GpuParticles& system, const GpuStepParams& params);
+// Asks for the live sprites' positions and velocities as they are after the last recorded step;
+// they land in system.readback when the work runs.
+void requestReadback(GpuParticles& system);
+// Runs the recorded work in order (births, update passes, read-backs) and clears it. The frame's
+// sprite pass calls it; so do the read-back, sort and draw functions below. No-op when not ready.
+void runPendingWork(GpuParticles& system);
 // Builds now (once) the update-pass variant step() will use with these parameters and the
 // colliders uploaded, so the first step does not pay for the shader compile. False when the
 // system is not ready or the variant fails (then `ready` is false and `error` says why).

@@ -99,7 +99,10 @@ void drawWater(Renderer& renderer, WaterSlot& slot, const FrameView& view, const
   checkGl(renderer.errors, "fluid surface");
 }
 
+// Kolb §3.3: the fixed steps since the last frame (births, update passes, read-backs, recorded by
+// spawn/step), then the merge sort for this eye (§3.3.3), then the sprites back-to-front (§3.3.4).
 void drawSpritePass(Renderer& renderer, GpuParticles& system, const FrameView& view) {
+  runPendingWork(system);
   sortStep(system, view.eye);
   glBindFramebuffer(GL_FRAMEBUFFER, renderer.scene_fbo.id());
   glViewport(0, 0, renderer.width, renderer.height);
@@ -151,11 +154,9 @@ void releaseFramePasses(FramePasses& passes) {
   for (WaterSlot& slot : passes.water) releaseWater(slot);
 }
 
-std::vector<WaterStats> lastWaterStats(const FramePasses& passes) {
-  std::vector<WaterStats> out;
-  out.reserve(passes.water.size());
+void lastWaterStats(const FramePasses& passes, std::vector<WaterStats>& out) {
+  out.clear();
   for (const WaterSlot& slot : passes.water) out.push_back(slot.stats);
-  return out;
 }
 
 }  // namespace engine

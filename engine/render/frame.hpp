@@ -98,7 +98,8 @@ void renderFrame(Renderer& renderer, FramePasses& passes, const FrameView& view,
 void releaseFramePasses(FramePasses& passes);
 
 // What the last renderFrame tells back, per water batch in submission order (zero stats for a
-// slot that drew nothing). The game reads it; the engine writes nothing into game state.
-std::vector<WaterStats> lastWaterStats(const FramePasses& passes);
+// slot that drew nothing), into the caller's `out` (reused: no allocation once it has grown). The
+// game reads it; the engine writes nothing into game state.
+void lastWaterStats(const FramePasses& passes, std::vector<WaterStats>& out);
 
 }  // namespace engine

@@ -17,6 +17,8 @@ struct KeySpec {
   const char* help;
 };
 
+constexpr float kContainerResilience = 0.0f;
+
 const KeySpec kDambreak[] = {
     {"width", 0.2f, 0.01f, 100.0f, "column width a (m)"},
     {"height_ratio", 2.0f, 0.1f, 10.0f, "column height / a"},
@@ -47,23 +49,61 @@ const KeySpec kDambreakBox[] = {
     {"particle_radius", 1.0f / 60.0f, 1e-4f, 1.0f,
      "particle radius r (m); block is (1 m - 2r) / 2r particles per side"},
 };
-// Solver knobs, shared by all scenes (defaults: SphParams).
-const KeySpec kSolver[] = {
-    {"cfl", 0.4f, 0.01f, 1.0f, "CFL number: dt <= cfl * d / v_max"},
-    {"force_bound", 0.0025f, 0.0f, 1.0f, "DFSPH force condition |g| dt^2 <= force_bound * cfl * d; 0 = off"},
-    {"warm_start", 0.0f, 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)"},
-    {"max_dt", 0.005f, 1e-7f, 1.0f, "upper bound of the time step (s)"},
-    {"viscosity", 0.01f, 0.0f, 100.0f, "kinematic viscosity nu of the Laplacian term (m^2/s)"},
-    {"xsph", 0.0f, 0.0f, 1.0f, "XSPH epsilon"},
-    {"density_error", 0.0005f, 1e-7f, 1.0f, "DFSPH: mean density error tolerance (0.0005 = 0.05 %)"},
-    {"divergence_error", 0.001f, 1e-7f, 1.0f, "DFSPH: divergence error tolerance"},
-    {"min_iterations", 1.0f, 0.0f, 10000.0f, "DFSPH: minimum constant-density iterations per step (paper: 2)"},
-    {"max_iterations", 100.0f, 1.0f, 10000.0f, "DFSPH: iteration cap per solve"},
-    {"sound_speed", 0.0f, 0.0f, 1e5f, "WCSPH: c_s (m/s); 0 = 10 x the scene's expected max speed"},
-    {"artificial_viscosity", 0.0f, 0.0f, 10.0f, "WCSPH: B&T alpha"},
-    {"friction", 0.1f, 0.0f, 1.0f, "wall friction (Kolb 2004 nu)"},
-    {"resilience", 0.0f, 0.0f, 1.0f, "wall resilience (Kolb 2004 epsilon)"},
-    {"max_speed", 0.0f, 0.0f, 1e6f, "velocity clamp (m/s), 0 = off"},
+// Solver knobs, shared by all scenes. Each reads and writes one field, so its default is the
+// field's own (SphParams{}, CollisionMaterial{}), written once there; only the walls' resilience
+// is the scenes' choice: the measurement containers do not bounce (Kolb's epsilon = 0), where a
+// CollisionMaterial's default of 0.3 suits the game's props.
+struct SolverKnob {
+  const char* name;
+  float lo, hi;
+  const char* help;
+  float (*read)(const SphParams&, const CollisionMaterial&);
+  void (*write)(SphParams&, CollisionMaterial&, float);
+};
+using M = CollisionMaterial;
+const SolverKnob kSolver[] = {
+    {"cfl", 0.01f, 1.0f, "CFL number: dt <= cfl * d / v_max", [](const SphParams& p, const M&) { return p.cfl; },
+     [](SphParams& p, M&, float v) { p.cfl = v; }},
+    {"force_bound", 0.0f, 1.0f, "DFSPH force condition |g| dt^2 <= force_bound * cfl * d; 0 = off",
+     [](const SphParams& p, const M&) { return p.force_bound; }, [](SphParams& p, M&, float v) { p.force_bound = v; }},
+    {"warm_start", 0.0f, 1.0f, "DFSPH warm start of the constant-density solve (1 = on, 0 = off)",
+     [](const SphParams& p, const M&) { return p.warm_start ? 1.0f : 0.0f; },
+     [](SphParams& p, M&, float v) { p.warm_start = v != 0.0f; }},
+    {"max_dt", 1e-7f, 1.0f, "upper bound of the time step (s)",
+     [](const SphParams& p, const M&) { return p.max_time_step; },
+     [](SphParams& p, M&, float v) {
+       p.max_time_step = v;
+       p.min_time_step = std::min(p.min_time_step, v);
+     }},
+    {"viscosity", 0.0f, 100.0f, "kinematic viscosity nu of the Laplacian term (m^2/s)",
+     [](const SphParams& p, const M&) { return p.viscosity; }, [](SphParams& p, M&, float v) { p.viscosity = v; }},
+    {"xsph", 0.0f, 1.0f, "XSPH epsilon", [](const SphParams& p, const M&) { return p.xsph; },
+     [](SphParams& p, M&, float v) { p.xsph = v; }},
+    {"density_error", 1e-7f, 1.0f, "DFSPH: mean density error tolerance (0.0005 = 0.05 %)",
+     [](const SphParams& p, const M&) { return p.max_density_error; },
+     [](SphParams& p, M&, float v) { p.max_density_error = v; }},
+    {"divergence_error", 1e-7f, 1.0f, "DFSPH: divergence error tolerance",
+     [](const SphParams& p, const M&) { return p.max_divergence_error; },
+     [](SphParams& p, M&, float v) { p.max_divergence_error = v; }},
+    {"min_iterations", 0.0f, 10000.0f, "DFSPH: minimum constant-density iterations per step (paper: 2)",
+     [](const SphParams& p, const M&) { return static_cast<float>(p.min_iterations); },
+     [](SphParams& p, M&, float v) { p.min_iterations = static_cast<int>(v); }},
+    {"max_iterations", 1.0f, 10000.0f, "DFSPH: iteration cap per solve",
+     [](const SphParams& p, const M&) { return static_cast<float>(p.max_iterations); },
+     [](SphParams& p, M&, float v) { p.max_iterations = static_cast<int>(v); }},
+    // c_s = 0 asks for the scene's rule (10 x its expected top speed), set after the scene is built.
+    {"sound_speed", 0.0f, 1e5f, "WCSPH: c_s (m/s); 0 = 10 x the scene's expected max speed",
+     [](const SphParams&, const M&) { return 0.0f; }, [](SphParams& p, M&, float v) { p.sound_speed = v; }},
+    {"artificial_viscosity", 0.0f, 10.0f, "WCSPH: B&T alpha",
+     [](const SphParams& p, const M&) { return p.artificial_viscosity; },
+     [](SphParams& p, M&, float v) { p.artificial_viscosity = v; }},
+    {"friction", 0.0f, 1.0f, "wall friction (Kolb 2004 nu)", [](const SphParams&, const M& m) { return m.friction; },
+     [](SphParams&, M& m, float v) { m.friction = v; }},
+    {"resilience", 0.0f, 1.0f, "wall resilience (Kolb 2004 epsilon)",
+     [](const SphParams&, const M&) { return kContainerResilience; },
+     [](SphParams&, M& m, float v) { m.resilience = v; }},
+    {"max_speed", 0.0f, 1e6f, "velocity clamp (m/s), 0 = off", [](const SphParams& p, const M&) { return p.max_speed; },
+     [](SphParams& p, M&, float v) { p.max_speed = v; }},
 };
 
 // Solver keys whose default differs in one scene. The dam break reproduces Martin & Moyce's
@@ -104,7 +144,10 @@ float automaticViscosity(float water_height, float spacing) {
 
 std::vector<KeySpec> allSpecs(const std::string& scene, std::span<const KeySpec> specs) {
   std::vector<KeySpec> keys(specs.begin(), specs.end());
-  keys.insert(keys.end(), std::begin(kSolver), std::end(kSolver));
+  const SphParams defaults;
+  const CollisionMaterial material;
+  for (const SolverKnob& knob : kSolver)
+    keys.push_back({knob.name, knob.read(defaults, material), knob.lo, knob.hi, knob.help});
   for (const SceneDefault& d : kSceneDefaults)
     if (scene == d.scene)
       for (KeySpec& k : keys)
@@ -213,22 +256,9 @@ SphStatus makeSphScene(const std::string& scene, SphSolverKind solver,
   SphWorld& w = out.world;
   SphParams& p = w.params;
   p.solver = solver;
-  p.cfl = get("cfl");
-  p.force_bound = get("force_bound");
-  p.warm_start = get("warm_start") != 0.0f;
-  p.max_time_step = get("max_dt");
-  p.min_time_step = std::min(p.min_time_step, p.max_time_step);
-  p.viscosity = get("viscosity");
-  p.xsph = get("xsph");
-  p.max_density_error = get("density_error");
-  p.max_divergence_error = get("divergence_error");
-  p.max_iterations = static_cast<int>(get("max_iterations"));
-  p.min_iterations = std::min(static_cast<int>(get("min_iterations")), p.max_iterations);
-  p.artificial_viscosity = get("artificial_viscosity");
-  p.max_speed = get("max_speed");
   CollisionMaterial material;
-  material.friction = get("friction");
-  material.resilience = get("resilience");
+  for (const SolverKnob& knob : kSolver) knob.write(p, material, get(knob.name));
+  p.min_iterations = std::min(p.min_iterations, p.max_iterations);
   float expected_speed = 1.0f;
 
   if (scene == "dambreak") {

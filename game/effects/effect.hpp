@@ -18,8 +18,9 @@
 //   soakCheck                   its checks after every frame of `fluiddemo soak` (game/soak_monitor.hpp)
 // Effects talk to each other only through EffectLinks (one slot per capability, filled at build).
 //
-// Adding an effect: one file game/effects/<name>.cpp defining `const EffectDesc& <name>Effect()`,
-// one line in game/effects/registry.cpp, and the file in game/effects/sources.cmake.
+// Adding an effect: one file game/effects/<name>.cpp defining `const EffectDesc& <name>Effect()`
+// (sources.cmake takes every file there) and its line in game/effects/registry.cpp; gulls.cpp is
+// the smallest whole example.
 
 #include "engine/profile/profiler.hpp"
 #include "fluid/core/blast.hpp"

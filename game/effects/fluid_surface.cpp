@@ -93,9 +93,9 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     engine::WaterBatch water;
     water.method = p.method;
     water.visible = p.visible;
-    water.positions = state.mesh.positions;
-    water.normals = state.mesh.normals;
-    water.indices = state.mesh.indices;
+    water.positions = state.job.mesh.positions;
+    water.normals = state.job.mesh.normals;
+    water.indices = state.job.mesh.indices;
     water.particles = fluid_.world.particles.position;
     // The mesh's field: Rc and T in the same units, so all three methods draw the same surface.
     water.rc = p.smoothing * fluid::sphSpacing(fluid_.world.params);
@@ -114,8 +114,8 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   }
 
   void reportColumns(FrameColumns& row) const override {
-    row.add("triangles", static_cast<double>(state.mesh.indices.size() / 3));
-    row.add("mesh_worker_ms", state.mesh_worker_ms);
+    row.add("triangles", static_cast<double>(state.job.mesh.indices.size() / 3));
+    row.add("mesh_worker_ms", state.job.worker_ms);
     if (state.raycast.pool == 0) return;  // only the ray caster keeps fragment lists
     row.set("raycast_records", static_cast<double>(state.raycast.records));
     row.set("raycast_dropped", static_cast<double>(state.raycast.dropped));
@@ -126,7 +126,7 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   // The meshing phase split by the extractor's own clocks (fluid::SurfaceStats; block phases
   // summed over blocks).
   void drawStatus() const override {
-    const fluid::SurfaceStats& surface = state.mesh.stats;
+    const fluid::SurfaceStats& surface = state.job.mesh.stats;
     ImGui::Text("fluid surface: %llu triangles, %u blocks", static_cast<unsigned long long>(surface.triangles),
                 surface.blocks);
     ImGui::Text("  ms: cache %.2f  seed %.2f  march %.2f  prepare+gather %.2f", surface.cacheBuildMs, surface.seedMs,

@@ -15,6 +15,7 @@ const EffectDesc& sphFluidEffect();
 const EffectDesc& spriteParticlesEffect();
 const EffectDesc& fluidSurfaceEffect();
 const EffectDesc& blobEffect();
+const EffectDesc& gullsEffect();
 const EffectDesc& audioEffect();
 
 std::span<const EffectDesc* const> effectRegistry() {
@@ -25,6 +26,7 @@ std::span<const EffectDesc* const> effectRegistry() {
       &spriteParticlesEffect(),  // sprays from this step's particles
       &fluidSurfaceEffect(),     // meshes the particles per frame
       &blobEffect(),             // the blob monster: crates both ways, this step's blasts, chases the player
+      &gullsEffect(),            // circle over the fountain, scatter from this step's blasts
       &audioEffect(),            // hears what every effect above did this step (output only)
   };
   return kEffects;

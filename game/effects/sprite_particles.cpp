@@ -76,13 +76,15 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
   // models; the CPU lookup of fluid/collide is the reference the shader decodes).
   void soakCheck(SoakProbe& probe) const override {
     probe.count("sprites", liveSprites(state));
-    for (const glm::vec4& v : state.sample_velocities) probe.particleSpeed(glm::length(glm::vec3(v)));
-    // The read-back must be fresh: a check of stale data would pass whatever the GPU did.
-    if (state.attached && state.readback_every > 0 && state.sample_step != state.steps)
-      probe.fail("sprite read-back is stale (step " + std::to_string(state.sample_step) + " of " +
+    const engine::GpuReadback& sample = state.gpu.readback;
+    for (const glm::vec4& v : sample.velocities) probe.particleSpeed(glm::length(glm::vec3(v)));
+    // The read-back must be fresh (the frame just drawn ran it): a check of stale data would pass
+    // whatever the GPU did.
+    if (state.attached && state.readback_every > 0 && sample.step != state.steps)
+      probe.fail("sprite read-back is stale (step " + std::to_string(sample.step) + " of " +
                  std::to_string(state.steps) + ")");
     probe.points.clear();
-    for (const glm::vec4& p : state.sample_positions) probe.points.emplace_back(p);
+    for (const glm::vec4& p : sample.positions) probe.points.emplace_back(p);
     const std::size_t parts = state.level_colliders ? state.level_colliders->parts.size() : 0;
     for (std::size_t c = 0; c < parts; ++c) {
       const Penetration p = worstPenetration(probe.points, state.level_colliders->parts[c].collider,
@@ -116,11 +118,12 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
     const engine::IndexAllocator& a = s.gpu.allocator;
     ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
                 s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
-    ImGui::Text("  born: mist %llu, spray %llu (%u this step), blasts %llu (%llu shock rings on the water), "
-                "dropped (budget full) %llu",
-                static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray),
-                s.spray_last_step, static_cast<unsigned long long>(s.born_blast),
-                static_cast<unsigned long long>(s.shock_rings), static_cast<unsigned long long>(s.dropped));
+    ImGui::Text(
+        "  born: mist %llu, spray %llu (%u this step), blasts %llu (%llu shock rings on the water), "
+        "dropped (budget full) %llu",
+        static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray), s.spray_last_step,
+        static_cast<unsigned long long>(s.born_blast), static_cast<unsigned long long>(s.shock_rings),
+        static_cast<unsigned long long>(s.dropped));
     ImGui::Text("  sort pass %u of %u, colliders loaded in %.0f ms", s.gpu.sort_step,
                 engine::sortPassCount(s.gpu.capacity), s.bake_ms);
   }

@@ -1,8 +1,9 @@
-// The schema every scene file and --set override is validated against: the two fixed sections
-// (scene clock, camera) written here, then one section per effect, generated from each effect's
-// parameter table in registry order (game/effects/). An effect is constructed only when a scene
-// lists it.
+// The schema every scene file and --set override is validated against: the fixed sections (scene
+// clock, graphics) written here, the camera's bound to engine::FpsCamera (cameraParamTable), then one section per
+// effect, generated from each effect's parameter table in registry order (game/effects/). An effect is constructed only
+// when a scene lists it.
 #include "game/effects/effect.hpp"
+#include "game/scene/camera_params.hpp"
 #include "game/scene/scene_config.hpp"
 
 #include <array>
@@ -13,7 +14,6 @@ namespace {
 
 ParamValue num(double value) { return {ParamType::number, value, false, {}, {}}; }
 ParamValue integer(int value) { return {ParamType::integer, static_cast<double>(value), false, {}, {}}; }
-ParamValue vec(float x, float y, float z) { return {ParamType::vec3, 0.0, false, {x, y, z}, {}}; }
 
 // The levels game/world/level_assets.cpp knows: their models drawn and content/colliders/LEVEL.colliders.
 constexpr std::string_view kLevels[] = {"fountain", "blob_monster"};
@@ -33,18 +33,6 @@ const std::array kSceneParams = {
               kLevels},
 };
 
-const std::array kCameraParams = {
-    ParamSpec{"position", ParamType::vec3, -1000.0, 1000.0, vec(0.0f, 2.0f, 12.0f), "start position (m), y up"},
-    ParamSpec{"yaw_degrees", ParamType::number, -360.0, 360.0, num(-90.0), "heading; -90 looks along -z"},
-    ParamSpec{"pitch_degrees", ParamType::number, -89.0, 89.0, num(-8.0), "look up (+) or down (-)"},
-    ParamSpec{"fov_degrees", ParamType::number, 20.0, 120.0, num(60.0), "vertical field of view"},
-    ParamSpec{"move_speed", ParamType::number, 0.1, 100.0, num(5.0), "WASD speed (m/s)"},
-    ParamSpec{"bounds_min", ParamType::vec3, -1000.0, 1000.0, vec(-1000.0f, -1000.0f, -1000.0f),
-              "the player cannot move below these x, y, z (m): the level's edges"},
-    ParamSpec{"bounds_max", ParamType::vec3, -1000.0, 1000.0, vec(1000.0f, 1000.0f, 1000.0f),
-              "the player cannot move beyond these x, y, z (m): the level's edges"},
-};
-
 constexpr std::string_view kPresets[] = {"auto", "low", "medium", "high"};
 
 const std::array kGraphicsParams = {
@@ -62,11 +50,27 @@ const std::array kGraphicsParams = {
 
 }  // namespace
 
+const ParamTable<engine::FpsCamera>& cameraParamTable() {
+  using C = engine::FpsCamera;
+  static const ParamTable<C> rows{
+      param<&C::position>("position", -1000.0, 1000.0, "start position (m), y up"),
+      param<&C::yaw_degrees>("yaw_degrees", -360.0, 360.0, "heading; -90 looks along -z"),
+      param<&C::pitch_degrees>("pitch_degrees", -89.0, 89.0, "look up (+) or down (-)"),
+      param<&C::fov_degrees>("fov_degrees", 20.0, 120.0, "vertical field of view"),
+      param<&C::move_speed>("move_speed", 0.1, 100.0, "WASD speed (m/s)"),
+      param<&C::bounds_min>("bounds_min", -1000.0, 1000.0,
+                            "the player cannot move below these x, y, z (m): the level's edges"),
+      param<&C::bounds_max>("bounds_max", -1000.0, 1000.0,
+                            "the player cannot move beyond these x, y, z (m): the level's edges"),
+  };
+  return rows;
+}
+
 std::span<const SectionSpec> sceneSchema() {
   static const std::vector<SectionSpec> sections = [] {
     std::vector<SectionSpec> all = {
         SectionSpec{"scene", false, "simulation clock", kSceneParams},
-        SectionSpec{"camera", false, "first-person camera", kCameraParams},
+        SectionSpec{"camera", false, "first-person camera", cameraParamTable().specs},
         SectionSpec{"graphics", false, "rendering quality (never changes the simulation)", kGraphicsParams},
     };
     for (const EffectDesc* effect : effectRegistry())

@@ -5,8 +5,8 @@
 
 #include "fluid/blob/behaviour.hpp"
 #include "fluid/blob/blob.hpp"
-#include "fluid/surface/async_extractor.hpp"
 #include "fluid/surface/marching_slices.hpp"
+#include "game/world/surface_job.hpp"
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -41,7 +41,8 @@ struct BlobMonsterParams {
 };
 
 // What the goo's surface reads (prepareFrame): for the async job, a copy taken at the frame it
-// belongs to, since the next steps move the particles and change the tentacles while it meshes.
+// belongs to, since the next steps move the particles and change the tentacles while it meshes;
+// the synchronous path uses only its position arrays.
 struct BlobMeshFrame {
   fluid::BlobParticles particles;
   std::vector<std::vector<std::uint32_t>> tentacles;  // fluid::BlobTarget::tentacle_particles
@@ -59,7 +60,7 @@ struct BlobMonster {
   std::size_t level_colliders = 0;      // world.colliders[0, level_colliders) is the level; crates follow
   std::shared_ptr<const fluid::SignedDistanceShape> crate_shape;  // a crate's box (shared by its colliders)
   std::vector<int> crate_of_collider;     // per collider after the level: index into RigidBodies::crates
-  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (game/effects/blob.cpp)
+  std::uint64_t crate_forces_capped = 0;  // crate forces the stability cap shortened (blob_crates.hpp)
   glm::vec3 target{0.0f};                 // what the behaviours aim at this step (the player)
   float caught_timer = 0.0f;              // > 0 while the caught effect plays
   int catches = 0;
@@ -72,19 +73,12 @@ struct BlobMonster {
   glm::vec4 tint{0.0f};               // the screen tint this step (engine::FrameBatches::screen_tint)
   std::size_t blasted_particles = 0;  // reached by this step's blasts
   fluid::BlobStepStats stats;
-  // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy).
-  fluid::SurfaceExtractor extractor;  // params.async false
-  fluid::SurfaceMesh mesh;            // the surface drawn this frame (async: the previous frame's particles)
-  std::vector<float> xs, ys, zs;      // params.async false: the positions as SoA
-  // params.async: the worker and the frame it meshes, made at first use (the frame is left alone
-  // from startJob to collect, and outlives the worker, which waits for its job when destroyed).
-  struct MeshJob {
-    BlobMeshFrame frame;
-    fluid::AsyncSurfaceExtractor worker;
-  };
-  std::unique_ptr<MeshJob> async_job;
-  double mesh_worker_ms = 0.0;  // the worker's time on the surface drawn this frame (0 when synchronous)
-  std::string error;            // a refused step or mesh (the effect stops stepping on a refused step)
+  // Per frame: the surface with the tentacle (u, v) attributes (fluid::BlobTentaclePolicy), meshed
+  // by the shared job (game/world/surface_job.hpp). The frame is what the job reads; declared before
+  // the job so that it outlives the worker, which waits for its job when destroyed.
+  BlobMeshFrame mesh_frame;
+  SurfaceJob job;
+  std::string error;  // a refused step or mesh (the effect stops stepping on a refused step)
 };
 
 }  // namespace game

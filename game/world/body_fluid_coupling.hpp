@@ -29,17 +29,29 @@
 
 namespace game {
 
+// The stability cap above, shared by every particle body coupled to crates (the water here, the
+// blob's goo in game/world/blob_crates.hpp): a force longer than max_force is shortened to it, a
+// torque longer than max_torque likewise. Returns true when either was shortened.
+struct WrenchCap {
+  float max_force = 0.0f, max_torque = 0.0f;  // N, N m
+};
+bool capWrench(const WrenchCap& cap, glm::vec3& force, glm::vec3& torque);
+
+// The box of `points` grown by `grow` on every side: a crate whose centre lies outside it cannot
+// touch them this step and is left out of the coupling. Empty points give an empty box (lo > hi).
+void grownBounds(std::span<const glm::vec3> points, glm::vec3 grow, glm::vec3& lo, glm::vec3& hi);
+
 struct BodyFluidCoupling {
   std::shared_ptr<const fluid::SignedDistanceShape> box_shape;  // one shape, shared by every box
   fluid::CollisionMaterial material;
   float force_limit = 4.0f;                      // x full-submersion buoyancy (rho_0 |g| V of one box)
-  float max_force = 0.0f, max_torque = 0.0f;     // N, N m (from force_limit, set by init)
+  WrenchCap cap;                                 // from force_limit, set by init
   float reach = 0.0f;                            // half diagonal of a box (m)
   glm::vec3 region_min{0.0f}, region_max{0.0f};  // world AABB the box centres must be in
   std::size_t first_collider = 0;                // SPH colliders before this one are the scene's own
   std::vector<engine::BodyId> coupled;           // body of collider first_collider + k, last SPH step
   std::uint64_t forces_applied = 0;              // body forces handed to Bullet so far
-  std::uint64_t clamped = 0;                     // of those, capped by max_force / max_torque
+  std::uint64_t clamped = 0;                     // of those, shortened by the cap
 };
 
 // `half_extents` of the boxes (all equal, m); the SPH world's current colliders stay in front.

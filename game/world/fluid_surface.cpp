@@ -31,11 +31,9 @@ bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
 }  // namespace
 
 bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
-  s.mesh_worker_ms = 0.0;
   const engine::WaterBackendDesc* backend = engine::findWaterBackend(s.params.method);
   if (backend == nullptr || !backend->needs_mesh) {  // the particle renderers need no mesh
-    s.async_job.reset();
-    s.mesh.clear();
+    s.job.drop();
     s.error.clear();
     return true;
   }
@@ -44,7 +42,7 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   const fluid::SphPositionArrays positions = fluid::sphPositionArrays(fluid.world);
   const std::size_t n = fluid.world.particles.size();
   if (positions.x.size() != n) {
-    s.mesh.clear();
+    s.job.mesh.clear();
     s.error = "fluid_surface: the SPH position arrays hold " + std::to_string(positions.x.size()) + " of " +
               std::to_string(n) + " particles (positions written outside a step without refreshSphPositionArrays)";
     return false;
@@ -56,27 +54,20 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   input.y = positions.y;
   input.z = positions.z;
   if (!s.params.async) {
-    s.async_job.reset();
-    if (n == 0) {
-      s.mesh.clear();
-      return finish(s, {});
-    }
-    return finish(s, s.extractor.extract(input, sp, s.mesh));
+    return finish(s, s.job.meshNow([&](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
+      if (n == 0) {
+        mesh.clear();
+        return fluid::SurfaceStatus{};
+      }
+      return extractor.extract(input, sp, mesh);
+    }));
   }
-  if (!s.async_job) s.async_job = std::make_unique<fluid::AsyncSurfaceExtractor>();
-  fluid::AsyncSurfaceExtractor& job = *s.async_job;
-  // Refused input is reported in this frame, once, and starts no job: the job in flight is
-  // dropped, and the next good frame waits for its own surface like the first one.
-  if (const fluid::SurfaceStatus valid = fluid::validateSurface(input, sp); !valid.ok()) {
-    if (job.pending()) (void)job.collect(s.mesh);
-    s.mesh.clear();
-    return finish(s, valid);
-  }
-  if (!job.pending()) job.start(input, sp);  // first frame: this frame's own surface, waited for
-  const fluid::SurfaceStatus st = job.collect(s.mesh);
-  s.mesh_worker_ms = job.lastJobMs();
-  job.start(input, sp);
-  return finish(s, st);
+  // The worker's start() copies the particles, so the steps may move them at once.
+  return finish(s, s.job.meshBehind([&](fluid::AsyncSurfaceExtractor& worker) {
+    fluid::SurfaceStatus valid = fluid::validateSurface(input, sp);
+    if (valid.ok()) worker.start(input, sp);
+    return valid;
+  }));
 }
 
 }  // namespace game

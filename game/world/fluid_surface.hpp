@@ -6,15 +6,14 @@
 // effect submits the mesh or the particles as an engine::WaterBatch and the engine draws it.
 
 #include "engine/render/frame.hpp"
-#include "fluid/surface/async_extractor.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/sph_fluid.hpp"
+#include "game/world/surface_job.hpp"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -42,7 +41,7 @@ struct FluidSurfaceParams {
   float refraction = 0.08f;  // engine::WaterParams::refraction; 0 = off
   float opacity = 0.85f;
   glm::vec3 absorption = engine::WaterParams{}.absorption;  // Beer–Lambert σ per metre
-  bool visible = true;                       // false: the renderer draws no water (the mesher still runs)
+  bool visible = true;  // false: the renderer draws no water (the mesher still runs)
   // Mesh on a worker thread while the next steps run and draw the previous frame's surface
   // (Janisz §3.2.6); false: mesh the current particles before drawing them.
   bool async = true;
@@ -68,12 +67,9 @@ fluid::SurfaceParams surfaceParamsFor(const FluidSurfaceParams& p, float spacing
 
 struct FluidSurface {
   FluidSurfaceParams params;
-  fluid::SurfaceExtractor extractor;                        // params.async false
-  std::unique_ptr<fluid::AsyncSurfaceExtractor> async_job;  // params.async true, made at first use
-  fluid::SurfaceMesh mesh;      // the surface drawn this frame (async: the previous frame's particles)
-  double mesh_worker_ms = 0.0;  // async: the worker's time on `mesh` (0 when synchronous)
-  std::uint64_t meshes = 0;     // frames meshed
-  std::string error;            // last extraction error (mesh cleared then)
+  SurfaceJob job;            // the mesh drawn this frame and the worker's time on it (game/world/surface_job.hpp)
+  std::uint64_t meshes = 0;  // frames meshed
+  std::string error;         // last extraction error (mesh cleared then)
   // Method raycast, last frame (engine::lastWaterStats, read after the frame): fragment-list
   // records asked for and records dropped because the pool was full, and the pool's size in
   // records after the frame (it grows with the demand up to pool_bound).
@@ -82,9 +78,9 @@ struct FluidSurface {
 
 // Meshes the current particles of `fluid` for an eye at `eye` looking along `view_dir`. With
 // method screen_space or raycast the mesh is left empty (those renderers draw the particles).
-// With params.async, `mesh` becomes the surface of the particles handed over at the previous call
-// and the current ones start meshing on the worker; the first call (nothing handed over yet) waits
-// for its own job, so the first frame has water. Returns false with surface.error set when
+// With params.async, `job.mesh` becomes the surface of the particles handed over at the previous
+// call and the current ones start meshing on the worker; the first call (nothing handed over yet)
+// waits for its own job, so the first frame has water. Returns false with surface.error set when
 // extraction refuses the input (async: the input of the job collected).
 bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir);
 

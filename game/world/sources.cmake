@@ -6,6 +6,9 @@ target_sources(fluiddemo_game PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/rigid_bodies.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_fluid.cpp
   ${CMAKE_CURRENT_LIST_DIR}/fluid_surface.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/surface_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/blob_program.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/blob_crates.cpp
   ${CMAKE_CURRENT_LIST_DIR}/body_fluid_coupling.cpp
   ${CMAKE_CURRENT_LIST_DIR}/world.cpp
   ${CMAKE_CURRENT_LIST_DIR}/level.cpp

@@ -56,7 +56,8 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
   types[kSmokeType].gravity_scale = -0.2f;
   types[kSmokeType].damping = 1.5f;
   // Explosion fireball: white-yellow at the centre, orange, then dark red as it cools and dies,
-  // swelling to about a metre (in the fountain, whose sprites are 0.018 m); hot gas, so it rises and the air stops its outward rush at once.
+  // swelling to about a metre (in the fountain, whose sprites are 0.018 m); hot gas, so it rises and the air stops its
+  // outward rush at once.
   types[kFireType].keys = {{{glm::vec4(1.00f, 0.95f, 0.70f, 1.0f), 12.0f * d},
                             {glm::vec4(1.00f, 0.62f, 0.18f, 0.95f), 24.0f * d},
                             {glm::vec4(0.85f, 0.30f, 0.08f, 0.7f), 28.0f * d},
@@ -182,19 +183,6 @@ void emitMist(SpriteParticles& s, float dt) {
   mist.type = kMistType;
   mist.seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1));
   engine::emit(mist, s.births);
-}
-
-void readBack(SpriteParticles& s) {
-  const std::uint32_t range = s.gpu.allocator.active_range;
-  s.sample_positions.clear();
-  s.sample_velocities.clear();
-  engine::readPositions(s.gpu, s.read_scratch);
-  for (std::uint32_t i = 0; i < range && i < s.read_scratch.size(); ++i)
-    if (s.gpu.allocator.live[i] != 0) s.sample_positions.push_back(s.read_scratch[i]);
-  engine::readState1(s.gpu, s.read_scratch);
-  for (std::uint32_t i = 0; i < range && i < s.read_scratch.size(); ++i)
-    if (s.gpu.allocator.live[i] != 0) s.sample_velocities.push_back(s.read_scratch[i]);
-  s.sample_step = s.steps;
 }
 
 }  // namespace
@@ -341,10 +329,12 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
   s.dropped += s.births.size() - born;
   engine::GpuStepParams params = stepParams(s.params);
   params.blast_count = static_cast<int>(std::min<std::size_t>(blasts.size(), engine::kMaxBlasts));
-  for (int k = 0; k < params.blast_count; ++k) params.blasts[static_cast<std::size_t>(k)] = blasts[static_cast<std::size_t>(k)];
+  for (int k = 0; k < params.blast_count; ++k)
+    params.blasts[static_cast<std::size_t>(k)] = blasts[static_cast<std::size_t>(k)];
   engine::step(s.gpu, params);
   ++s.steps;
-  if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0) readBack(s);
+  if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0)
+    engine::requestReadback(s.gpu);
 }
 
 std::uint32_t liveSprites(const SpriteParticles& s) {
@@ -363,8 +353,8 @@ std::string findNonFiniteSprite(const SpriteParticles& s) {
     }
     return {};
   };
-  std::string bad = check(s.sample_positions, "position");
-  if (bad.empty()) bad = check(s.sample_velocities, "velocity");
+  std::string bad = check(s.gpu.readback.positions, "position");
+  if (bad.empty()) bad = check(s.gpu.readback.velocities, "velocity");
   return bad;
 }
 

@@ -28,8 +28,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
-#include <string>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace game {
@@ -71,8 +71,9 @@ inline constexpr std::uint32_t kMistType = 0;
 inline constexpr std::uint32_t kSprayType = 1;
 inline constexpr std::uint32_t kDebrisType = 2;  // explosion debris: dark grit thrown out, falls
 inline constexpr std::uint32_t kSmokeType = 3;   // explosion smoke: grows, rises slowly, fades
-inline constexpr std::uint32_t kFireType = 4;    // explosion fireball: a bright burst that rises and dies within half a second
-inline constexpr std::uint32_t kRingType = 5;    // a blast's shock ring on the water: white foam rushing out, slowing
+inline constexpr std::uint32_t kFireType =
+    4;  // explosion fireball: a bright burst that rises and dies within half a second
+inline constexpr std::uint32_t kRingType = 5;  // a blast's shock ring on the water: white foam rushing out, slowing
 
 struct SpriteParticles {
   SpriteParticleParams params;
@@ -95,14 +96,12 @@ struct SpriteParticles {
   // Counters for the overlay and tests.
   std::uint64_t born_mist = 0, born_spray = 0, born_blast = 0;
   std::uint64_t shock_rings = 0;  // blasts that met the water and threw a ring of foam
-  std::uint64_t dropped = 0;  // births refused because the budget was full
+  std::uint64_t dropped = 0;      // births refused because the budget was full
   std::uint32_t spray_last_step = 0;
-  // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the live
-  // sprites' positions and velocities are read into `sample` (xyz, w = 1) after the step.
+  // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the step asks
+  // for the live sprites' positions and velocities after it (engine::requestReadback); the frame's
+  // sprite pass reads them into gpu.readback (xyz, w = 1), with the step they belong to.
   int readback_every = 0;
-  std::vector<glm::vec4> sample_positions, sample_velocities;
-  std::uint64_t sample_step = 0;  // `steps` when the sample was taken (0 = none yet)
-  std::vector<glm::vec4> read_scratch;
 };
 
 // CPU only (no GL): parameters, budget and seed.
@@ -120,14 +119,16 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
                      const std::filesystem::path& content_dir, float dt);
 void detachSpriteGpu(SpriteParticles& s);
 
-// One fixed step (GPU; no-op when not attached): retire, emit mist and spray (from `sph` when
-// given), integrate and collide (Kolb §3.3.1–3.3.2), read back when due.
+// One fixed step (no-op when not attached): retire, emit mist and spray (from `sph` when given),
+// integrate and collide (Kolb §3.3.1–3.3.2), read back when due. No GL: the engine records the GPU
+// work and the frame runs it.
 // `blasts`: this step's explosions (EffectLinks::blasts): each throws debris and smoke sprites at
 // its centre, and every live sprite is pushed by it (fluid/core/blast.hpp, in the update shader).
 void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts = {});
 
-// Drawing: the effect submits `gpu` to the frame (engine::FrameBatches::sprites); the engine's
-// sprite pass sorts it for the eye (Kolb §3.3.3) and draws it.
+// The GPU half of each step (births, the update pass, read-backs) is recorded by the engine and run
+// by the frame: the effect submits `gpu` to the frame (engine::FrameBatches::sprites), whose sprite
+// pass runs the steps recorded since the last frame, sorts for the eye (Kolb §3.3.3) and draws.
 
 // Live sprites as the CPU allocator counts them (0 when not attached).
 std::uint32_t liveSprites(const SpriteParticles& s);

@@ -1,6 +1,7 @@
 #include "game/world/world.hpp"
 
 #include "game/explosives/explosives.hpp"
+#include "game/scene/camera_params.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,15 +10,16 @@ namespace game {
 namespace {
 
 void applyCamera(const SectionConfig& section, engine::FpsCamera& camera, bool include_pose) {
+  const engine::FpsCamera fresh = cameraParamTable().parse(section);
   if (include_pose) {
-    camera.position = section.vec3("position");
-    camera.yaw_degrees = static_cast<float>(section.number("yaw_degrees"));
-    camera.pitch_degrees = static_cast<float>(section.number("pitch_degrees"));
+    camera.position = fresh.position;
+    camera.yaw_degrees = fresh.yaw_degrees;
+    camera.pitch_degrees = fresh.pitch_degrees;
   }
-  camera.fov_degrees = static_cast<float>(section.number("fov_degrees"));
-  camera.move_speed = static_cast<float>(section.number("move_speed"));
-  camera.bounds_min = section.vec3("bounds_min");
-  camera.bounds_max = section.vec3("bounds_max");
+  camera.fov_degrees = fresh.fov_degrees;
+  camera.move_speed = fresh.move_speed;
+  camera.bounds_min = fresh.bounds_min;
+  camera.bounds_max = fresh.bounds_max;
 }
 
 // The camera's box must hold its start position (so the first frame does not snap it).

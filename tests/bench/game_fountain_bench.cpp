@@ -194,7 +194,7 @@ bool stepFrame(Run& r) {
       return false;
     }
     r.with_mesh_ms.push_back(frame_ms + wait_ms);
-    if (r.surface.mesh_worker_ms > 0.0) r.worker_ms.push_back(r.surface.mesh_worker_ms);
+    if (r.surface.job.worker_ms > 0.0) r.worker_ms.push_back(r.surface.job.worker_ms);
   }
   return ok;
 }

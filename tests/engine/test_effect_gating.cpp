@@ -253,7 +253,7 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
   const std::size_t n = game::findState<game::SphFluid>(world)->world.particles.size();
   EXPECT_GT(n, 100u);
   EXPECT_LE(n, 400u);
-  EXPECT_GT(game::findState<game::FluidSurface>(world)->mesh.indices.size(), 0u);
+  EXPECT_GT(game::findState<game::FluidSurface>(world)->job.mesh.indices.size(), 0u);
   EXPECT_EQ(game::findState<game::FluidSurface>(world)->meshes, 60u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::fluid)].frames, 60u);
   EXPECT_EQ(profiler.stats[static_cast<int>(engine::Phase::meshing)].frames, 60u);
@@ -267,8 +267,9 @@ TEST(EffectGating, SphFluidAndSurfaceRunWhenListed) {
 TEST(EffectGating, SphFluidWithoutSurfaceDoesNotMesh) {
   game::World world;
   std::string error;
-  ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200, "solver": "wcsph"}}})"),
-                               game::contentDir(), world, error))
+  ASSERT_TRUE(
+      game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200, "solver": "wcsph"}}})"),
+                       game::contentDir(), world, error))
       << error;
   EXPECT_EQ(game::findState<game::FluidSurface>(world), nullptr);
   engine::Profiler profiler;
@@ -335,7 +336,7 @@ TEST(EffectGating, SortedSurfaceIsBackToFrontForTheCamera) {
     EXPECT_TRUE(game::buildWorld(parse(text), game::contentDir(), world, error)) << error;
     engine::Profiler profiler;
     runFrames(world, profiler, 45);
-    const fluid::SurfaceMesh& mesh = game::findState<game::FluidSurface>(world)->mesh;
+    const fluid::SurfaceMesh& mesh = game::findState<game::FluidSurface>(world)->job.mesh;
     const engine::OutOfOrder o = engine::countOutOfOrderPairs(mesh.positions, mesh.indices, world.camera.position);
     triangles = o.triangles;
     return static_cast<double>(o.pairs) / std::max<double>(1.0, 0.5 * double(o.triangles) * double(o.triangles));
@@ -362,8 +363,8 @@ TEST(EffectGating, CratesAndWaterCoupleWhenBothAreListed) {
   std::string error;
   {
     game::World fluid_only, switched_off;
-    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200}}})"), game::contentDir(),
-                                 fluid_only, error))
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 200}}})"),
+                                 game::contentDir(), fluid_only, error))
         << error;
     EXPECT_EQ(game::findState<game::SphFluid>(fluid_only)->coupling, nullptr);
     ASSERT_TRUE(game::buildWorld(

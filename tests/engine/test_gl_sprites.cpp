@@ -107,7 +107,10 @@ TEST_F(SpriteGl, BudgetHoldsAndLiveCountFollowsBirthsAndDeaths) {
   for (int i = 0; i < 90; ++i) {
     game::stepWorld(world, nullptr);
     most = std::max(most, game::liveSprites(s));
-    ASSERT_EQ(s.sample_positions.size(), game::liveSprites(s)) << "read-back and allocator disagree at step " << i;
+    engine::runPendingWork(s.gpu);  // what the frame's sprite pass does before it sorts and draws
+    ASSERT_EQ(s.gpu.readback.step, s.steps);
+    ASSERT_EQ(s.gpu.readback.positions.size(), game::liveSprites(s))
+        << "read-back and allocator disagree at step " << i;
   }
   EXPECT_EQ(most, 100u);
   EXPECT_GT(s.dropped, 0u);
@@ -150,9 +153,9 @@ TEST(RunSceneSprites, FountainSpritesAreAliveFiniteOutsideAndDrawn) {
   options.hooks.after_frame = [&](const game::FrameResult& frame) {
     const game::SpriteParticles& s = *game::findState<game::SpriteParticles>(frame.world);
     live = game::liveSprites(s);
-    samples = static_cast<std::uint32_t>(s.sample_positions.size());
+    samples = static_cast<std::uint32_t>(s.gpu.readback.positions.size());
     spray = s.born_spray;
-    for (const glm::vec4& p : s.sample_positions) {
+    for (const glm::vec4& p : s.gpu.readback.positions) {
       finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
       lowest = std::min(lowest, p.y);
       highest = std::max(highest, p.y);

@@ -54,9 +54,9 @@ TEST(SpriteReadBack, NonFiniteValuesAreNamed) {
   std::string error;
   ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sprite_particles": {}}})"), game::contentDir(), world, error))
       << error;
-  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(0.0f, 1.0f, 0.0f, 1.0f)};
-  game::findState<game::SpriteParticles>(world)->sample_velocities = {glm::vec4(0.0f),
-                                                                      glm::vec4(0.0f, INFINITY, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->gpu.readback.positions = {glm::vec4(0.0f, 1.0f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->gpu.readback.velocities = {glm::vec4(0.0f),
+                                                                            glm::vec4(0.0f, INFINITY, 0.0f, 1.0f)};
   EXPECT_EQ(game::findNonFiniteSprite(*game::findState<game::SpriteParticles>(world)),
             "sprite_particles: live sprite 1 velocity.y = inf");
   game::stepWorld(world, nullptr);
@@ -67,8 +67,8 @@ class SprayFromSph : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string error;
-    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 600}}})"), game::contentDir(),
-                                 world, error))
+    ASSERT_TRUE(game::buildWorld(parse(R"({"effects": {"sph_fluid": {"pump": false, "max_particles": 600}}})"),
+                                 game::contentDir(), world, error))
         << error;
     for (int i = 0; i < 60; ++i) game::stepWorld(world, nullptr);  // the jet is up and falling
     ASSERT_EQ(world.nonfinite_state, "");

@@ -276,16 +276,16 @@ TEST(BlobEffect, AsyncDrawsThePreviousFramesGooBitForBit) {
     game::meshWorld(sync_world, nullptr);
     game::meshWorld(async_world, nullptr);
     ASSERT_EQ(async_world.failures.count, 0u) << async_world.failures.first;
-    const fluid::SurfaceMesh& expected = frame == 0 ? sync_blob.mesh : previous;
-    const fluid::SurfaceMesh& got = async_blob.mesh;
+    const fluid::SurfaceMesh& expected = frame == 0 ? sync_blob.job.mesh : previous;
+    const fluid::SurfaceMesh& got = async_blob.job.mesh;
     ASSERT_FALSE(got.indices.empty()) << "frame " << frame;
     ASSERT_EQ(test_support::meshBitsDiffer(got, expected), "") << "frame " << frame;
     bool has_u = false;
     for (const glm::vec4& a : got.attributes) has_u = has_u || (a.z > 0.5f && a.x > 0.0f);
     textured += has_u ? 1 : 0;
-    EXPECT_GT(async_blob.mesh_worker_ms, 0.0) << "frame " << frame;
-    EXPECT_EQ(sync_blob.mesh_worker_ms, 0.0);
-    previous = sync_blob.mesh;
+    EXPECT_GT(async_blob.job.worker_ms, 0.0) << "frame " << frame;
+    EXPECT_EQ(sync_blob.job.worker_ms, 0.0);
+    previous = sync_blob.job.mesh;
   }
   EXPECT_GE(textured, 100) << "the tentacles' u is on the surface in almost every frame";
   std::filesystem::remove(program);

@@ -39,10 +39,10 @@ TEST(FluidSurfaceAsync, DrawsThePreviousFramesSurfaceBitForBit) {
     game::meshWorld(sync_world, nullptr);
     game::meshWorld(async_world, nullptr);
     ASSERT_EQ(async_surface.error, "") << "frame " << frame;
-    const fluid::SurfaceMesh& expected = frame == 0 ? sync_surface.mesh : previous;
-    ASSERT_EQ(test_support::meshBitsDiffer(async_surface.mesh, expected), "") << "frame " << frame;
+    const fluid::SurfaceMesh& expected = frame == 0 ? sync_surface.job.mesh : previous;
+    ASSERT_EQ(test_support::meshBitsDiffer(async_surface.job.mesh, expected), "") << "frame " << frame;
     compared += expected.indices.empty() ? 0 : 1;
-    previous = sync_surface.mesh;
+    previous = sync_surface.job.mesh;
   }
   EXPECT_GE(compared, 80) << "the jet has a surface in almost every frame";
   EXPECT_EQ(async_surface.meshes, 90u);

@@ -60,12 +60,12 @@ TEST(FluidSurfaceField, SplatAndCacheMeshTheGamesFramesBitForBit) {
     game::meshWorld(cache_world, nullptr);
     ASSERT_EQ(splat.error, "") << "frame " << frame;
     ASSERT_EQ(cache.error, "") << "frame " << frame;
-    ASSERT_EQ(test_support::meshBitsDiffer(splat.mesh, cache.mesh), "") << "frame " << frame;
-    if (splat.mesh.indices.empty()) continue;
+    ASSERT_EQ(test_support::meshBitsDiffer(splat.job.mesh, cache.job.mesh), "") << "frame " << frame;
+    if (splat.job.mesh.indices.empty()) continue;
     ++meshed;
     // Which route ran: every block of the splat world by slice splat, none of the cache world's.
-    EXPECT_EQ(splat.mesh.stats.splatBlocks, splat.mesh.stats.blocks) << "frame " << frame;
-    EXPECT_EQ(cache.mesh.stats.splatBlocks, 0u) << "frame " << frame;
+    EXPECT_EQ(splat.job.mesh.stats.splatBlocks, splat.job.mesh.stats.blocks) << "frame " << frame;
+    EXPECT_EQ(cache.job.mesh.stats.splatBlocks, 0u) << "frame " << frame;
   }
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
 }
@@ -97,9 +97,9 @@ TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
     game::meshWorld(fixed_world, nullptr);
     game::meshWorld(switching_world, nullptr);
     ASSERT_EQ(switching.error, "") << "frame " << frame;
-    ASSERT_EQ(test_support::meshBitsDiffer(switching.mesh, fixed.mesh), "") << "frame " << frame;
-    if (cache && !switching.mesh.indices.empty()) {
-      EXPECT_EQ(switching.mesh.stats.splatBlocks, 0u) << "frame " << frame;
+    ASSERT_EQ(test_support::meshBitsDiffer(switching.job.mesh, fixed.job.mesh), "") << "frame " << frame;
+    if (cache && !switching.job.mesh.indices.empty()) {
+      EXPECT_EQ(switching.job.mesh.stats.splatBlocks, 0u) << "frame " << frame;
       ++cache_frames;
     }
   }

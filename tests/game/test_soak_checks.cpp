@@ -350,14 +350,14 @@ TEST_F(SoakMonitorOnFountain, MemorySamplesStartAgainAtTheFirstBlast) {
 
 TEST_F(SoakMonitorOnFountain, ASpriteUnderTheGroundFails) {
   // A read-back sprite 2.8 radii under the ground (the fountain's sprites are 0.018 m).
-  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f),
-                                                                     glm::vec4(5.0f, -0.05f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->gpu.readback.positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f),
+                                                                           glm::vec4(5.0f, -0.05f, 0.0f, 1.0f)};
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("live sprite 1 (ground)"), std::string::npos) << monitor.failure;
 }
 
 TEST_F(SoakMonitorOnFountain, ASpriteInTheAirPasses) {
-  game::findState<game::SpriteParticles>(world)->sample_positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f)};
+  game::findState<game::SpriteParticles>(world)->gpu.readback.positions = {glm::vec4(4.0f, 0.5f, 0.0f, 1.0f)};
   EXPECT_TRUE(game::soakAfterFrame(monitor, world)) << monitor.failure;
 }
 
@@ -385,12 +385,12 @@ TEST_F(SoakMonitorOnFountain, AMesherFailureIsCountedTheGameGoesOnAndTheSoakFail
       << world.failures.first;
   EXPECT_NE(world.failures.first.find("at step 40"), std::string::npos) << world.failures.first;
   EXPECT_TRUE(world.nonfinite_state.empty()) << world.nonfinite_state;
-  EXPECT_TRUE(game::findState<game::FluidSurface>(world)->mesh.indices.empty());
+  EXPECT_TRUE(game::findState<game::FluidSurface>(world)->job.mesh.indices.empty());
   game::findState<game::FluidSurface>(world)->params.threshold = threshold;
   game::stepWorld(world, nullptr);
   game::meshWorld(world, nullptr);
   EXPECT_EQ(world.failures.count, 1u);
-  EXPECT_GT(game::findState<game::FluidSurface>(world)->mesh.indices.size(), 0u);  // meshed again the next frame
+  EXPECT_GT(game::findState<game::FluidSurface>(world)->job.mesh.indices.size(), 0u);  // meshed again the next frame
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("run-time failure: fluid_surface: surface params"), std::string::npos)
       << monitor.failure;
