@@ -5,6 +5,8 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 namespace engine {
 
@@ -111,13 +113,70 @@ bool uploadParticles(ParticleBuffer& b, std::span<const glm::vec3> positions, st
   return true;
 }
 
-GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool compute, std::string& error) {
+void createShapeBuffer(const ParticleBuffer& particles, ShapeBuffer& shapes, GLuint& vao) {
+  glGenBuffers(1, &shapes.buffer);
+  glGenVertexArrays(1, &vao);
+  glBindVertexArray(vao);
+  glBindBuffer(GL_ARRAY_BUFFER, particles.buffer);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+  glVertexAttribDivisor(0, 1);
+  glBindBuffer(GL_ARRAY_BUFFER, shapes.buffer);
+  for (GLuint a = 1; a <= 3; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 48, reinterpret_cast<const void*>(std::uintptr_t{16} * (a - 1)));
+    glVertexAttribDivisor(a, 1);
+  }
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+bool uploadShapes(ShapeBuffer& s, std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error) {
+  error.clear();
+  s.count = 0;
+  if (max_axis.size() != g.size()) {
+    error = "fluid ellipsoids: " + std::to_string(g.size()) + " matrices, " + std::to_string(max_axis.size()) + " axes";
+    return false;
+  }
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    bool finite = std::isfinite(max_axis[i]) && max_axis[i] > 0.0f;
+    for (int c = 0; c < 3; ++c) finite = finite && fluid::isFinite(g[i][c]);
+    if (!finite) {
+      error = "fluid ellipsoids: matrix " + std::to_string(i) + " is not finite";
+      return false;
+    }
+  }
+  if (s.buffer == 0 || g.empty()) return true;
+  const std::size_t need = g.size() * 3 * sizeof(glm::vec4);
+  glBindBuffer(GL_ARRAY_BUFFER, s.buffer);
+  if (need > s.capacity_bytes) s.capacity_bytes = std::max(need, s.capacity_bytes + s.capacity_bytes / 2);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(s.capacity_bytes), nullptr, GL_STREAM_DRAW);
+  auto* dst = static_cast<glm::vec4*>(glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(need),
+                                                       GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
+  if (dst == nullptr) {
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    error = "fluid ellipsoids: glMapBufferRange failed";
+    return false;
+  }
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    dst[3 * i + 0] = glm::vec4(g[i][0], max_axis[i]);
+    dst[3 * i + 1] = glm::vec4(g[i][1], 0.0f);
+    dst[3 * i + 2] = glm::vec4(g[i][2], 0.0f);
+  }
+  glUnmapBuffer(GL_ARRAY_BUFFER);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  s.count = static_cast<std::uint32_t>(g.size());
+  return true;
+}
+
+GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool compute, std::string& error,
+                               std::string_view defines) {
   // The engine's programs are GLSL 3.30; the storage features come in as extensions so the
   // shared shading files (shading.glsl, depth.glsl) compile unchanged.
   const std::string prelude = std::string(compute ? "#extension GL_ARB_compute_shader : require\n" : "") +
                               "#extension GL_ARB_shader_storage_buffer_object : require\n"
                               "#extension GL_ARB_shader_image_load_store : require\n"
-                              "#extension GL_ARB_shading_language_420pack : require\n";
+                              "#extension GL_ARB_shading_language_420pack : require\n" + std::string(defines);
   return buildProgram(stages, prelude, error);
 }
 

@@ -60,10 +60,26 @@ void createParticleBuffer(ParticleBuffer& buffer, GLuint& vao);
 // False + error naming the particle (nothing uploaded, count 0) when a position is not finite.
 bool uploadParticles(ParticleBuffer& buffer, std::span<const glm::vec3> positions, std::string& error);
 
+// Per-particle kernel shapes for anisotropic kernels (fluid/sph/anisotropy.hpp): g's three columns
+// as vec4 (the first's w = the largest semi-axis factor), 48 bytes per particle, in one buffer used
+// as instanced attributes 1-3 and as a shader storage buffer. Grows like ParticleBuffer.
+struct ShapeBuffer {
+  GLuint buffer = 0;
+  std::size_t capacity_bytes = 0;
+  std::uint32_t count = 0;
+};
+// Creates the buffer and `vao`, which feeds `particles` to attribute 0 and the shapes to 1-3.
+void createShapeBuffer(const ParticleBuffer& particles, ShapeBuffer& shapes, GLuint& vao);
+// False + error (nothing uploaded, count 0) when a value is not finite, an axis is not positive
+// or the sizes differ.
+bool uploadShapes(ShapeBuffer& shapes, std::span<const glm::mat3> g, std::span<const float> max_axis,
+                  std::string& error);
+
 // Builds a program of GLSL 3.30 plus the extensions the fragment lists need (SSBOs, image
 // load/store, binding layouts, and compute shaders when `compute`), all of which GL 4.3+ (and
-// llvmpipe's 4.5 core) provide.
-GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool compute, std::string& error);
+// llvmpipe's 4.5 core) provide. `defines`: more prelude lines (e.g. "#define ELLIPSOID 1").
+GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool compute, std::string& error,
+                               std::string_view defines = "");
 
 // Sets u_view, u_projection, u_inv_view_projection, u_eye, u_near_far, u_viewport.
 void setParticleCamera(GLuint program, const FluidCamera& camera, int width, int height);

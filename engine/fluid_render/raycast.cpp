@@ -25,7 +25,11 @@ std::uint64_t readUsedRecords(GLuint counters) {
 
 // Gathering (§5): empty lists, zero counters, then every support sphere prepends records. The
 // target's colour is masked: the pass writes only the lists.
+bool drawsEllipsoids(const RaycastRenderer& r) { return r.shapes.count > 0 && r.shapes.count == r.particles.count; }
+
 void gather(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, float rc) {
+  const bool ellipsoids = drawsEllipsoids(r);
+  const GLuint program = ellipsoids ? r.ellipsoid_gather_program : r.gather_program;
   const GLuint empty_list = 0xffffffffu, zero[2] = {0, 0};
   glClearTexImage(r.heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, r.counters);
@@ -37,14 +41,14 @@ void gather(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, fl
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r.particles.buffer);
   glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
   glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // side effects only
-  glUseProgram(r.gather_program);
-  setParticleCamera(r.gather_program, camera, r.desc.base.width, r.desc.base.height);
-  setUniform(r.gather_program, "u_radius", rc);
-  glUniform1ui(glGetUniformLocation(r.gather_program, "u_pool"), r.pool_records);
+  glUseProgram(program);
+  setParticleCamera(program, camera, r.desc.base.width, r.desc.base.height);
+  setUniform(program, "u_radius", rc);
+  glUniform1ui(glGetUniformLocation(program, "u_pool"), r.pool_records);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, r.scene.depth);
-  setUniform(r.gather_program, "u_scene_depth", 0);
-  glBindVertexArray(r.vao);
+  setUniform(program, "u_scene_depth", 0);
+  glBindVertexArray(ellipsoids ? r.ellipsoid_vao : r.vao);
   glDrawArraysInstanced(GL_TRIANGLES, 0, 3, static_cast<GLsizei>(r.particles.count));
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
@@ -80,6 +84,15 @@ void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   out.cast_program = buildProgramWithStorage(
       std::vector<ShaderStageFiles>{{GL_COMPUTE_SHADER, {dir / "ray.glsl", dir / "rc_cast.comp"}}}, true, error);
   out.error += error;
+  out.ellipsoid_gather_program = buildProgramWithStorage(
+      std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "particle_billboard.vert"}},
+                                    {GL_FRAGMENT_SHADER, {dir / "ray.glsl", dir / "rc_gather.frag"}}},
+      false, error, "#define ELLIPSOID 1\n");
+  out.error += error;
+  out.ellipsoid_cast_program = buildProgramWithStorage(
+      std::vector<ShaderStageFiles>{{GL_COMPUTE_SHADER, {dir / "ray.glsl", dir / "rc_cast.comp"}}}, true, error,
+      "#define ELLIPSOID 1\n");
+  out.error += error;
   out.shade_program =
       buildProgram(std::vector<ShaderStageFiles>{{GL_VERTEX_SHADER, {dir / "blit.vert"}},
                                                  {GL_FRAGMENT_SHADER,
@@ -109,6 +122,7 @@ void createRaycastRenderer(const RaycastDesc& desc, RaycastRenderer& out) {
   glBufferData(GL_SHADER_STORAGE_BUFFER, 8, nullptr, GL_DYNAMIC_READ);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   createParticleBuffer(out.particles, out.vao);
+  createShapeBuffer(out.particles, out.shapes, out.ellipsoid_vao);
   glGenVertexArrays(1, &out.empty_vao);
   if (!scene_ok || glGetError() != GL_NO_ERROR) {
     out.error = "raycast fluid disabled: fragment-list storage not supported (needs GL 4.3 SSBOs and images)";
@@ -122,11 +136,12 @@ GlObjectNames glNames(const RaycastRenderer& r) {
   if (r.scene.fbo != 0) listNames(r.scene, n);
   for (GLuint t : {r.heads, r.hits, r.thickness})
     if (t != 0) n.textures.push_back(t);
-  for (GLuint b : {r.nodes, r.counters, r.particles.buffer})
+  for (GLuint b : {r.nodes, r.counters, r.particles.buffer, r.shapes.buffer})
     if (b != 0) n.buffers.push_back(b);
-  for (GLuint v : {r.vao, r.empty_vao})
+  for (GLuint v : {r.vao, r.empty_vao, r.ellipsoid_vao})
     if (v != 0) n.vertex_arrays.push_back(v);
-  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program})
+  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program, r.ellipsoid_gather_program,
+                   r.ellipsoid_cast_program})
     if (p != 0) n.programs.push_back(p);
   return n;
 }
@@ -135,11 +150,12 @@ void destroyRaycastRenderer(RaycastRenderer& r) {
   destroySceneTargets(r.scene);
   for (GLuint* t : {&r.heads, &r.hits, &r.thickness})
     if (*t != 0) glDeleteTextures(1, t);
-  for (GLuint* b : {&r.nodes, &r.counters, &r.particles.buffer})
+  for (GLuint* b : {&r.nodes, &r.counters, &r.particles.buffer, &r.shapes.buffer})
     if (*b != 0) glDeleteBuffers(1, b);
-  for (GLuint* v : {&r.vao, &r.empty_vao})
+  for (GLuint* v : {&r.vao, &r.empty_vao, &r.ellipsoid_vao})
     if (*v != 0) glDeleteVertexArrays(1, v);
-  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program})
+  for (GLuint p : {r.gather_program, r.cast_program, r.shade_program, r.blit_program, r.ellipsoid_gather_program,
+                   r.ellipsoid_cast_program})
     if (p != 0) glDeleteProgram(p);
   const RaycastDesc desc = r.desc;
   r = RaycastRenderer{};
@@ -157,7 +173,23 @@ void beginRaycastOpaquePass(RaycastRenderer& r, glm::vec4 clear_colour) {
 }
 
 bool uploadRaycastParticles(RaycastRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
+  r.shapes.count = 0;  // spherical metaballs
   return uploadParticles(r.particles, positions, error);
+}
+
+bool uploadRaycastEllipsoids(RaycastRenderer& r, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
+                             std::span<const float> max_axis, std::string& error) {
+  r.shapes.count = 0;
+  r.particles.count = 0;
+  if (g.size() != centres.size()) {
+    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
+            " matrices";
+    return false;
+  }
+  if (!uploadShapes(r.shapes, g, max_axis, error)) return false;
+  if (uploadParticles(r.particles, centres, error)) return true;
+  r.shapes.count = 0;
+  return false;
 }
 
 void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,
@@ -197,11 +229,14 @@ void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& 
       }
     }
     // The cast (§6) per pixel into the hit and thickness images.
-    glUseProgram(r.cast_program);
-    setParticleCamera(r.cast_program, camera, w, h);
-    setUniform(r.cast_program, "u_rc", rc);
-    setUniform(r.cast_program, "u_threshold", threshold);
-    setUniform(r.cast_program, "u_scene_depth", 0);
+    const bool ellipsoids = drawsEllipsoids(r);
+    const GLuint cast = ellipsoids ? r.ellipsoid_cast_program : r.cast_program;
+    if (ellipsoids) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, r.shapes.buffer);
+    glUseProgram(cast);
+    setParticleCamera(cast, camera, w, h);
+    setUniform(cast, "u_rc", rc);
+    setUniform(cast, "u_threshold", threshold);
+    setUniform(cast, "u_scene_depth", 0);
     glBindImageTexture(0, r.heads, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32UI);
     glBindImageTexture(1, r.hits, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(2, r.thickness, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
@@ -228,7 +263,7 @@ void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& 
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDisable(GL_BLEND);
     glActiveTexture(GL_TEXTURE0);
-    for (GLuint i = 0; i < 3; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+    for (GLuint i = 0; i < 4; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
     if (params.read_counters) {
       glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
       GLuint counts[2] = {0, 0};
@@ -257,7 +292,12 @@ class RaycastWaterBackend final : public WaterBackend {
   const std::string& error() const override { return renderer_.error; }
   GLuint upload(const WaterInput& in, std::string& error) override {
     if (!renderer_.ready) return 0;
-    return uploadRaycastParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+    // Ellipsoidal metaballs when the input carries anisotropic kernels (one per particle).
+    const bool ellipsoids = !in.kernel_g.empty() && in.kernel_g.size() == in.particles.size();
+    const bool ok = ellipsoids ? uploadRaycastEllipsoids(renderer_, in.kernel_centres, in.kernel_g,
+                                                         in.kernel_max_axis, error)
+                               : uploadRaycastParticles(renderer_, in.particles, error);
+    return ok ? renderer_.scene.fbo : 0;
   }
   void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
     RaycastParams params;
@@ -276,7 +316,8 @@ class RaycastWaterBackend final : public WaterBackend {
 
 const WaterBackendDesc& raycastWaterBackend() {
   static const WaterBackendDesc desc{
-      "raycast", "metaballs ray cast through per-pixel fragment lists (Szecsi & Illes 2012)", false,
+      "raycast",
+      "metaballs, spherical or ellipsoidal, ray cast through per-pixel fragment lists (Szecsi & Illes 2012)", false,
       [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> { return std::make_unique<RaycastWaterBackend>(d); }};
   return desc;
 }

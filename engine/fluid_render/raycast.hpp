@@ -11,6 +11,11 @@
 // asks for more records than the pool holds enlarges the pool (to 1.25x the demand, at most
 // max_pool_per_pixel) and gathers again, so only demand above the bound is dropped. Frame as in
 // screen_space.hpp.
+//
+// Anisotropic kernels (Yu & Turk 2013, fluid/sph/anisotropy.hpp): uploadRaycastEllipsoids gives each
+// particle its matrix g; the metaballs become ellipsoidal, f_j = (u − 1/2)^2 with
+// u = |g_j (x − x̄_j)|^2 / (2 Rc^2): |g (x − x̄)|^2 is still quadratic along a ray, so each record
+// still adds an exact quartic, over the ray's interval through the ellipsoid |g (x − x̄)| < Rc.
 
 #include "engine/fluid_render/particle_pass.hpp"
 
@@ -50,6 +55,10 @@ struct RaycastRenderer {
   GLuint vao = 0, empty_vao = 0;
   ParticleBuffer particles;
   GLuint gather_program = 0, cast_program = 0, shade_program = 0, blit_program = 0;
+  // Ellipsoidal metaballs: g per particle (particle_pass.hpp), drawn when shapes.count ==
+  // particles.count; the same gather and cast shaders built with ELLIPSOID.
+  ShapeBuffer shapes;
+  GLuint ellipsoid_vao = 0, ellipsoid_gather_program = 0, ellipsoid_cast_program = 0;
   // Last frame (when RaycastParams::read_counters): records asked for and records dropped (by the
   // final gather, after any growth).
   std::uint64_t used = 0, dropped = 0;
@@ -61,6 +70,11 @@ GlObjectNames glNames(const RaycastRenderer& renderer);
 
 void beginRaycastOpaquePass(RaycastRenderer& renderer, glm::vec4 clear_colour);
 bool uploadRaycastParticles(RaycastRenderer& renderer, std::span<const glm::vec3> positions, std::string& error);
+// Ellipsoidal metaballs at the smoothed centres, g = h G and its largest semi-axis factor per
+// particle (fluid/sph/anisotropy.hpp), all the same size. False + error (nothing uploaded) when a
+// value is not finite or the sizes differ.
+bool uploadRaycastEllipsoids(RaycastRenderer& renderer, std::span<const glm::vec3> centres,
+                             std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error);
 void drawRaycastFluid(RaycastRenderer& renderer, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,
                       const RaycastParams& params);
 

@@ -23,7 +23,7 @@ GLuint colourTargetFbo(GLuint texture, GLuint depth) {
 }
 
 bool drawsEllipsoids(const ScreenSpaceRenderer& r) {
-  return r.shape_count > 0 && r.shape_count == r.particles.count;
+  return r.shapes.count > 0 && r.shapes.count == r.particles.count;
 }
 
 void drawParticles(const ScreenSpaceRenderer& r) {
@@ -103,22 +103,7 @@ void createScreenSpaceRenderer(const FluidRenderDesc& desc, ScreenSpaceRenderer&
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   createParticleBuffer(out.particles, out.vao);
   glGenVertexArrays(1, &out.empty_vao);
-  // Ellipsoids: attribute 0 the centres (the particle buffer), 1-3 g's columns (48 bytes each).
-  glGenBuffers(1, &out.shape_buffer);
-  glGenVertexArrays(1, &out.ellipsoid_vao);
-  glBindVertexArray(out.ellipsoid_vao);
-  glBindBuffer(GL_ARRAY_BUFFER, out.particles.buffer);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
-  glVertexAttribDivisor(0, 1);
-  glBindBuffer(GL_ARRAY_BUFFER, out.shape_buffer);
-  for (GLuint a = 1; a <= 3; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 48, reinterpret_cast<const void*>(std::uintptr_t{16} * (a - 1)));
-    glVertexAttribDivisor(a, 1);
-  }
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  createShapeBuffer(out.particles, out.shapes, out.ellipsoid_vao);  // attributes 0-3: centre, g
   if (!scene_ok || !depth_ok || !thickness_ok || glGetError() != GL_NO_ERROR) {
     out.error = "screen-space fluid disabled: float render targets not supported";
     return;
@@ -133,7 +118,7 @@ GlObjectNames glNames(const ScreenSpaceRenderer& r) {
     if (t != 0) n.textures.push_back(t);
   for (GLuint f : {r.depth_fbo, r.smooth_fbo[0], r.smooth_fbo[1], r.thickness_fbo})
     if (f != 0) n.framebuffers.push_back(f);
-  for (GLuint b : {r.particles.buffer, r.shape_buffer})
+  for (GLuint b : {r.particles.buffer, r.shapes.buffer})
     if (b != 0) n.buffers.push_back(b);
   for (GLuint v : {r.vao, r.empty_vao, r.ellipsoid_vao})
     if (v != 0) n.vertex_arrays.push_back(v);
@@ -149,7 +134,7 @@ void destroyScreenSpaceRenderer(ScreenSpaceRenderer& r) {
     if (*t != 0) glDeleteTextures(1, t);
   for (GLuint* f : {&r.depth_fbo, &r.smooth_fbo[0], &r.smooth_fbo[1], &r.thickness_fbo})
     if (*f != 0) glDeleteFramebuffers(1, f);
-  for (GLuint* b : {&r.particles.buffer, &r.shape_buffer})
+  for (GLuint* b : {&r.particles.buffer, &r.shapes.buffer})
     if (*b != 0) glDeleteBuffers(1, b);
   for (GLuint* v : {&r.vao, &r.empty_vao, &r.ellipsoid_vao})
     if (*v != 0) glDeleteVertexArrays(1, v);
@@ -172,50 +157,23 @@ void beginScreenSpaceOpaquePass(ScreenSpaceRenderer& r, glm::vec4 clear_colour) 
 }
 
 bool uploadScreenSpaceParticles(ScreenSpaceRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
-  r.shape_count = 0;  // spheres
+  r.shapes.count = 0;  // spheres
   return uploadParticles(r.particles, positions, error);
 }
 
 bool uploadScreenSpaceEllipsoids(ScreenSpaceRenderer& r, std::span<const glm::vec3> centres,
                                  std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error) {
-  r.shape_count = 0;
+  r.shapes.count = 0;
   r.particles.count = 0;
-  if (g.size() != centres.size() || max_axis.size() != centres.size()) {
+  if (g.size() != centres.size()) {
     error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
-            " matrices, " + std::to_string(max_axis.size()) + " axes";
+            " matrices";
     return false;
   }
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    bool finite = std::isfinite(max_axis[i]) && max_axis[i] > 0.0f;
-    for (int c = 0; c < 3; ++c) finite = finite && fluid::isFinite(g[i][c]);
-    if (!finite) {
-      error = "fluid ellipsoids: matrix " + std::to_string(i) + " is not finite";
-      return false;
-    }
-  }
-  if (!uploadParticles(r.particles, centres, error)) return false;
-  if (r.shape_buffer == 0 || centres.empty()) return true;
-  const std::size_t need = centres.size() * 3 * sizeof(glm::vec4);
-  glBindBuffer(GL_ARRAY_BUFFER, r.shape_buffer);
-  if (need > r.shape_capacity_bytes) r.shape_capacity_bytes = std::max(need, r.shape_capacity_bytes + r.shape_capacity_bytes / 2);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(r.shape_capacity_bytes), nullptr, GL_STREAM_DRAW);
-  auto* dst = static_cast<glm::vec4*>(glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(need),
-                                                       GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
-  if (dst == nullptr) {
-    glBindBuffer(GL_ARRAY_BUFFER, 0);
-    r.particles.count = 0;
-    error = "fluid ellipsoids: glMapBufferRange failed";
-    return false;
-  }
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    dst[3 * i + 0] = glm::vec4(g[i][0], max_axis[i]);
-    dst[3 * i + 1] = glm::vec4(g[i][1], 0.0f);
-    dst[3 * i + 2] = glm::vec4(g[i][2], 0.0f);
-  }
-  glUnmapBuffer(GL_ARRAY_BUFFER);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
-  r.shape_count = static_cast<std::uint32_t>(g.size());
-  return true;
+  if (!uploadShapes(r.shapes, g, max_axis, error)) return false;
+  if (uploadParticles(r.particles, centres, error)) return true;
+  r.shapes.count = 0;
+  return false;
 }
 
 void filterScreenSpaceDepth(ScreenSpaceRenderer& r, const FluidCamera& camera, const ScreenSpaceParams& params) {

@@ -49,11 +49,10 @@ struct ScreenSpaceRenderer {
   GLuint vao = 0, empty_vao = 0;
   ParticleBuffer particles;
   GLuint depth_program = 0, thickness_program = 0, smooth_program = 0, composite_program = 0, blit_program = 0;
-  // Ellipsoid splats: per particle g's columns as three vec4 (the first's w = largest semi-axis
-  // factor), fed with the centres to `ellipsoid_vao`; drawn when shape_count == particles.count.
-  GLuint shape_buffer = 0, ellipsoid_vao = 0;
-  std::size_t shape_capacity_bytes = 0;
-  std::uint32_t shape_count = 0;
+  // Ellipsoid splats: per particle g (particle_pass.hpp ShapeBuffer), fed with the centres to
+  // `ellipsoid_vao`; drawn when shapes.count == particles.count.
+  ShapeBuffer shapes;
+  GLuint ellipsoid_vao = 0;
   GLuint ellipsoid_depth_program = 0, ellipsoid_thickness_program = 0, narrow_program = 0;
 };
 

@@ -55,7 +55,7 @@ const ParamTable<FluidSurfaceParams>& table() {
                        "(Janisz 3.2.6); false: mesh before drawing"),
       choice<&P::kernel>("kernel", kKernelNames, kKernelValues,
                          "particle renderers' kernel: isotropic (spheres) or anisotropic (ellipsoids along each "
-                         "particle's neighbourhood, Yu & Turk 2013; screen_space draws them)"),
+                         "particle's neighbourhood, Yu & Turk 2013; screen_space splats, raycast metaballs)"),
       param<&P::k_r>("k_r", 1.0, 16.0, "anisotropic: largest ratio of a kernel's longest axis to its shortest"),
       param<&P::k_s>("k_s", 0.25, 4.0, "anisotropic: scale of a stretched kernel's axes (1: the sphere's volume)"),
       param<&P::k_n>("k_n", 0, 200,

@@ -21,6 +21,12 @@ uniform sampler2D u_scene_depth;
 uniform vec3 u_eye;
 layout(std430, binding = 0) readonly buffer Nodes { uvec4 nodes[]; };
 layout(std430, binding = 2) readonly buffer Particles { vec4 centres[]; };
+#ifdef ELLIPSOID
+// Ellipsoidal metaballs (Yu & Turk 2013's G times h per particle, 3 vec4 columns): r^2 below is
+// |g (x - centre)|^2 instead of |x - centre|^2, still quadratic along the ray.
+layout(std430, binding = 3) readonly buffer Shapes { vec4 shapes[]; };
+mat3 shapeOf(int id) { return mat3(shapes[3 * id].xyz, shapes[3 * id + 1].xyz, shapes[3 * id + 2].xyz); }
+#endif
 uniform float u_rc;
 uniform float u_threshold;
 
@@ -43,6 +49,14 @@ void shiftOrigin(float delta) {
 
 // Adds sign × particle `id`'s quartic, in s = t − reference, to the running sum.
 void addParticle(int id, vec3 eye, vec3 dir, float reference, float sign) {
+#ifdef ELLIPSOID
+  // In g space the ray is P + s v (P at the reference), r^2 = |P + s v|^2.
+  mat3 g = shapeOf(id);
+  vec3 v = g * dir;
+  vec3 p = g * (eye + reference * dir - centres[id].xyz);  // the reference point is near the particle
+  float k = 1.0 / (2.0 * u_rc * u_rc);
+  float a = k * dot(v, v), b = 2.0 * k * dot(p, v), c = k * dot(p, p) - 0.5;
+#else
   vec3 oc = centres[id].xyz - eye;
   float m = dot(oc, dir);
   float q2 = max(dot(oc, oc) - m * m, 0.0);
@@ -50,6 +64,7 @@ void addParticle(int id, vec3 eye, vec3 dir, float reference, float sign) {
   float g = reference - m;
   // w(s) = k r^2 − 1/2 = A s^2 + B s + C, r^2 = (s + g)^2 + q2; f = w^2.
   float a = k, b = 2.0 * k * g, c = k * (g * g + q2) - 0.5;
+#endif
   coef[4] += sign * a * a;
   coef[3] += sign * 2.0 * a * b;
   coef[2] += sign * (b * b + 2.0 * a * c);
@@ -69,7 +84,13 @@ vec3 outwardNormal(vec3 x, float t, int count) {
   for (int i = 0; i < count; ++i) {
     if (t0s[i] > t || t1s[i] <= t) continue;
     vec3 d = x - centres[ids[i]].xyz;
+#ifdef ELLIPSOID
+    mat3 g = shapeOf(ids[i]);
+    vec3 y = g * d;  // gradient of |g d|^2 / 2 is g^T g d (g symmetric)
+    gradient += 4.0 * (dot(y, y) * k - 0.5) * k * (g * y);
+#else
     gradient += 4.0 * (dot(d, d) * k - 0.5) * k * d;
+#endif
   }
   return length(gradient) > 0.0 ? -normalize(gradient) : vec3(0.0, 1.0, 0.0);
 }

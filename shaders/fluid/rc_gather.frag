@@ -15,11 +15,18 @@ uniform float u_radius;  // Rc
 uniform uint u_pool;     // records in `nodes`
 flat in vec3 v_centre;
 flat in int v_index;
+#ifdef ELLIPSOID
+flat in vec3 v_g0, v_g1, v_g2;  // ellipsoidal metaballs: the support is |g (x - centre)| < Rc
+#endif
 
 void main() {
   vec3 dir = pixelRay(gl_FragCoord.xy);
   float t0, t1;
+#ifdef ELLIPSOID
+  if (!rayEllipsoid(u_eye, dir, v_centre, mat3(v_g0, v_g1, v_g2), u_radius, t0, t1)) discard;
+#else
   if (!raySphere(u_eye, dir, v_centre, u_radius, t0, t1)) discard;
+#endif
   float scene = rayDistance(gl_FragCoord.xy, texelFetch(u_scene_depth, ivec2(gl_FragCoord.xy), 0).r, u_eye);
   if (t1 <= 0.0 || t0 >= scene) discard;
   uint slot = atomicAdd(used, 1u);
