@@ -1,5 +1,6 @@
 #include "fluid/sph/anisotropy.hpp"
 
+#include "fluid/core/finite.hpp"
 #include "fluid/core/parallel.hpp"
 
 #include <algorithm>
@@ -286,13 +287,30 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
   out.stretched = stretched;
 }
 
-void computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
+bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
                        AnisotropyScratch& scratch, Anisotropy& out) {
   const AnisotropyParams p = clampAnisotropyParams(params);
+  const bool finite = par::parallelReduce(
+      par::Range<std::size_t>(0, positions.size(), 4096), true,
+      [&](const par::Range<std::size_t>& r, bool ok) {
+        for (std::size_t i = r.begin(); ok && i != r.end(); ++i) ok = isFinite(positions[i]);
+        return ok;
+      },
+      [](bool a, bool b) { return a && b; });
+  if (!finite) {
+    const std::size_t n = positions.size();
+    out.centre.assign(positions.begin(), positions.end());
+    out.g.assign(n, glm::mat3(1.0f));
+    out.max_axis.assign(n, 1.0f);
+    out.neighbours.assign(n, 0u);
+    out.stretched = 0;
+    return false;
+  }
   // Cells of about r / 2 (reach 2: 5 x 5 rows of 5 cells, 15.7 r^3 of candidates) rather than r
   // (reach 1: 27 r^3): the sphere of radius r is 4.2 r^3, so fewer distance tests per neighbour.
   buildNeighborGrid(scratch.grid, positions, kHalfCell * p.radius);
   computeAnisotropy(scratch.grid, positions, p, scratch, out);
+  return true;
 }
 
 }  // namespace fluid

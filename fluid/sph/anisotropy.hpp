@@ -89,7 +89,10 @@ glm::mat3 anisotropyMatrix(const glm::mat3& covariance, std::uint32_t neighbours
 void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions,
                        const AnisotropyParams& params, AnisotropyScratch& scratch, Anisotropy& out);
 // The same with the scratch's grid rebuilt on `positions` (cells of about params.radius / 2).
-void computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
+// Returns false, with every particle a sphere at its own position (g = I, centre = x) and nothing
+// searched, when a position is not finite (the grid needs finite positions; the renderers then
+// refuse the particles by their own check).
+bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
                        AnisotropyScratch& scratch, Anisotropy& out);
 
 }  // namespace fluid

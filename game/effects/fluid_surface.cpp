@@ -163,7 +163,9 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     a.k_s = p.k_s;
     a.k_n = p.k_n;
     a.lambda = p.lambda;
-    fluid::computeAnisotropy(fluid_.world.particles.position, a, anisotropy_scratch_, anisotropy_);
+    // False for a non-finite position: the batch then carries the particles alone and the
+    // renderer refuses them with its own message.
+    anisotropy_valid_ = fluid::computeAnisotropy(fluid_.world.particles.position, a, anisotropy_scratch_, anisotropy_);
     anisotropy_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 

@@ -216,6 +216,21 @@ TEST(Anisotropy, DegenerateSetsStayFinite) {
         EXPECT_GT(glm::determinant(out.g[i]), 0.0f);
       }
     }
+  // A non-finite position: refused, every particle a sphere at its own position, nothing searched.
+  {
+    std::vector<glm::vec3> bad_set = line;
+    bad_set[7].y = std::nanf("");
+    AnisotropyParams p;
+    p.radius = 0.05f;
+    Anisotropy out;
+    AnisotropyScratch scratch;
+    EXPECT_FALSE(fluid::computeAnisotropy(bad_set, p, scratch, out));
+    ASSERT_EQ(out.g.size(), bad_set.size());
+    EXPECT_EQ(out.g[0], glm::mat3(1.0f));
+    EXPECT_EQ(out.centre[3], bad_set[3]);
+    EXPECT_EQ(out.stretched, 0u);
+    EXPECT_TRUE(fluid::computeAnisotropy(line, p, scratch, out));
+  }
   // Garbage tunables are clamped, not propagated.
   AnisotropyParams bad;
   bad.radius = std::nanf("");
