@@ -174,8 +174,8 @@ inline float laneSum(__m128 v) {
 
 }  // namespace
 
-void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions,
-                       const AnisotropyParams& raw, AnisotropyScratch& scratch, Anisotropy& out) {
+void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions, const AnisotropyParams& raw,
+                       AnisotropyScratch& scratch, Anisotropy& out) {
   const AnisotropyParams params = clampAnisotropyParams(raw);
   const std::size_t n = positions.size();
   assert(grid.order.size() == n);
@@ -219,7 +219,8 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
       const __m128 px = _mm_set1_ps(xi.x), py = _mm_set1_ps(xi.y), pz = _mm_set1_ps(xi.z);
       const __m128 vr2 = _mm_set1_ps(r2), vinv = _mm_set1_ps(inv_r2);
 #endif
-      const std::uint32_t dx = static_cast<std::uint32_t>(grid.dims.x), dxy = dx * static_cast<std::uint32_t>(grid.dims.y);
+      const std::uint32_t dx = static_cast<std::uint32_t>(grid.dims.x),
+                          dxy = dx * static_cast<std::uint32_t>(grid.dims.y);
       for (int z = std::max(cell.z - reach, 0); z <= std::min(cell.z + reach, grid.dims.z - 1); ++z)
         for (int y = std::max(cell.y - reach, 0); y <= std::min(cell.y + reach, grid.dims.y - 1); ++y) {
           // Cells x0..x1 of row (y, z) are consecutive keys (NeighborGrid::keyOf, x fastest): one run.
@@ -287,8 +288,8 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
   out.stretched = stretched;
 }
 
-bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
-                       AnisotropyScratch& scratch, Anisotropy& out) {
+bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params, AnisotropyScratch& scratch,
+                       Anisotropy& out) {
   const AnisotropyParams p = clampAnisotropyParams(params);
   const bool finite = par::parallelReduce(
       par::Range<std::size_t>(0, positions.size(), 4096), true,

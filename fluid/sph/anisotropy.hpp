@@ -69,7 +69,7 @@ struct Anisotropy {
 };
 
 struct AnisotropyScratch {
-  NeighborGrid grid;          // the convenience overload's grid (cells of about r / 2)
+  NeighborGrid grid;              // the convenience overload's grid (cells of about r / 2)
   std::vector<float> sx, sy, sz;  // the positions in the grid's sorted order (SoA, padded)
 };
 
@@ -86,13 +86,13 @@ glm::mat3 anisotropyMatrix(const glm::mat3& covariance, std::uint32_t neighbours
 
 // Every particle of `positions` (finite) with `grid` built on them (any cell size > 0); the
 // scratch's position copies are used, its grid is not.
-void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions,
-                       const AnisotropyParams& params, AnisotropyScratch& scratch, Anisotropy& out);
+void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> positions, const AnisotropyParams& params,
+                       AnisotropyScratch& scratch, Anisotropy& out);
 // The same with the scratch's grid rebuilt on `positions` (cells of about params.radius / 2).
 // Returns false, with every particle a sphere at its own position (g = I, centre = x) and nothing
 // searched, when a position is not finite (the grid needs finite positions; the renderers then
 // refuse the particles by their own check).
-bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params,
-                       AnisotropyScratch& scratch, Anisotropy& out);
+bool computeAnisotropy(std::span<const glm::vec3> positions, const AnisotropyParams& params, AnisotropyScratch& scratch,
+                       Anisotropy& out);
 
 }  // namespace fluid

@@ -33,8 +33,8 @@ FluidCamera camera(int w, int h) {
   c.near_plane = 0.1f;
   c.far_plane = 20.0f;
   c.view = glm::lookAt(c.eye, glm::vec3(0.0f), glm::vec3(0, 1, 0));
-  c.projection = glm::perspective(glm::radians(45.0f), static_cast<float>(w) / static_cast<float>(h), c.near_plane,
-                                  c.far_plane);
+  c.projection =
+      glm::perspective(glm::radians(45.0f), static_cast<float>(w) / static_cast<float>(h), c.near_plane, c.far_plane);
   return c;
 }
 
@@ -139,13 +139,14 @@ TEST_F(ScreenSpaceAnisoTest, EllipsoidSplatMatchesTheAnalyticEllipsoid) {
       }
       if (hit && margin > 0.02) worst = std::max(worst, std::abs(static_cast<double>(got) - expected));
     }
-  std::printf("ellipsoid splat: %zu pixels analytic, %zu drawn, %zu differ (%zu at the silhouette), largest depth "
-              "error %.2e m inside\n",
-              inside, gpu_inside, mismatched, near_edge_mismatch, worst);
-  EXPECT_GT(inside, 600u);                       // a real footprint at 96 x 96
-  EXPECT_EQ(mismatched, near_edge_mismatch);     // only silhouette pixels may differ
+  std::printf(
+      "ellipsoid splat: %zu pixels analytic, %zu drawn, %zu differ (%zu at the silhouette), largest depth "
+      "error %.2e m inside\n",
+      inside, gpu_inside, mismatched, near_edge_mismatch, worst);
+  EXPECT_GT(inside, 600u);                    // a real footprint at 96 x 96
+  EXPECT_EQ(mismatched, near_edge_mismatch);  // only silhouette pixels may differ
   EXPECT_LE(mismatched, inside / 100 + 2);
-  EXPECT_LT(worst, 1e-4);                        // depth of the ray-ellipsoid hit
+  EXPECT_LT(worst, 1e-4);  // depth of the ray-ellipsoid hit
 
   // Not the bounding sphere: the sphere of the longest axis covers far more pixels.
   std::size_t sphere = 0;
@@ -200,7 +201,7 @@ TEST_F(ScreenSpaceAnisoTest, NonFiniteMatricesAreRefused) {
 constexpr float kNoise = 0.04f;
 
 struct FilterResult {
-  double rms_left = 0, rms_right = 0;  // deviation from the plane, interior columns
+  double rms_left = 0, rms_right = 0;    // deviation from the plane, interior columns
   double edge_left = 0, edge_right = 0;  // mean depth of the two columns at the step
 };
 
@@ -237,7 +238,8 @@ FilterResult filterStep(DepthFilter filter, std::vector<float>* out_before = nul
   std::size_t n = 0;
   for (int y = 12; y < h - 12; ++y) {
     for (int x = 8; x < 24; ++x) {
-      const double dl = f[static_cast<std::size_t>(y) * w + x] - 3.0, dr = f[static_cast<std::size_t>(y) * w + x + 32] - 3.6;
+      const double dl = f[static_cast<std::size_t>(y) * w + x] - 3.0,
+                   dr = f[static_cast<std::size_t>(y) * w + x + 32] - 3.6;
       res.rms_left += dl * dl;
       res.rms_right += dr * dr;
       ++n;
@@ -355,9 +357,10 @@ TEST_F(ScreenSpaceAnisoTest, RaycastEllipsoidalMetaballHitsTheIsoEllipsoid) {
       }
       if (hit && margin > 0.05) worst = std::max(worst, std::abs(static_cast<double>(got.w) - expected));
     }
-  std::printf("ellipsoidal metaball: %zu pixels analytic, %zu cast, %zu differ (%zu at the silhouette), largest hit "
-              "error %.2e m inside\n",
-              inside, drawn, mismatched, at_silhouette, worst);
+  std::printf(
+      "ellipsoidal metaball: %zu pixels analytic, %zu cast, %zu differ (%zu at the silhouette), largest hit "
+      "error %.2e m inside\n",
+      inside, drawn, mismatched, at_silhouette, worst);
   EXPECT_GT(inside, 300u);
   EXPECT_EQ(mismatched, at_silhouette);
   EXPECT_LE(mismatched, inside / 50 + 2);

@@ -126,8 +126,7 @@ TEST(Anisotropy, BallOfNeighboursStaysIsotropic) {
       q[a] = s;
       pts.push_back(q);
     }
-  for (int k = 0; k < 8; ++k)
-    pts.push_back(0.3f * glm::vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
+  for (int k = 0; k < 8; ++k) pts.push_back(0.3f * glm::vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
   AnisotropyParams p;
   p.radius = 1.0f;
   p.k_n = 10;
@@ -188,9 +187,9 @@ bool finite(const glm::mat3& m) {
 // every output finite, g positive definite.
 TEST(Anisotropy, DegenerateSetsStayFinite) {
   std::vector<std::vector<glm::vec3>> sets;
-  sets.push_back(std::vector<glm::vec3>(40, glm::vec3(0.5f)));                 // all coincident
-  sets.push_back({glm::vec3(0.0f), glm::vec3(1e-7f, 0.0f, 0.0f)});           // a close pair
-  sets.push_back({glm::vec3(0.0f)});                                           // alone
+  sets.push_back(std::vector<glm::vec3>(40, glm::vec3(0.5f)));      // all coincident
+  sets.push_back({glm::vec3(0.0f), glm::vec3(1e-7f, 0.0f, 0.0f)});  // a close pair
+  sets.push_back({glm::vec3(0.0f)});                                // alone
   std::vector<glm::vec3> line, plane, far, mixed;
   for (int k = 0; k < 40; ++k) line.push_back(glm::vec3(0.01f * k, 0.0f, 0.0f));
   for (int k = 0; k < 49; ++k) plane.push_back(glm::vec3(0.01f * (k % 7), 0.0f, 0.01f * (k / 7)));
@@ -270,8 +269,8 @@ TEST(Anisotropy, OneAndTwoThreadsAreBitEqual) {
   EXPECT_EQ(std::memcmp(a.max_axis.data(), b.max_axis.data(), a.max_axis.size() * sizeof(float)), 0);
   EXPECT_EQ(a.neighbours, b.neighbours);
   EXPECT_EQ(a.stretched, b.stretched);
-  EXPECT_GT(a.stretched, 1000u);        // the core is stretched somewhere
-  EXPECT_LT(a.stretched, pts.size());   // the spray is not
+  EXPECT_GT(a.stretched, 1000u);       // the core is stretched somewhere
+  EXPECT_LT(a.stretched, pts.size());  // the spray is not
 }
 
 }  // namespace
