@@ -112,7 +112,8 @@ struct RenderJob {
   glm::vec3 sky{0.0f};
   engine::Backdrop backdrop;
   engine::ColourTarget target;
-  // screen_space: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings) and the depth filter.
+  // screen_space, raycast: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings);
+  // screen_space: the depth filter.
   bool anisotropic = false;
   fluid::AnisotropyParams anisotropy;
   engine::DepthFilter filter = engine::DepthFilter::bilateral;
@@ -266,6 +267,19 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
   return ok;
 }
 
+// --kernel anisotropic: the particles' kernels, computed once outside the timed frames (a warm-up
+// pass, then the timed one, reported per frame as the game computes them once per frame).
+void jobKernels(const RenderJob& job, Timing& t, fluid::Anisotropy& kernels) {
+  if (!job.anisotropic) return;
+  fluid::AnisotropyScratch scratch;
+  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
+  const double a0 = nowMs();
+  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
+  t.add("anisotropy (CPU)", (nowMs() - a0) * job.frames);
+  t.notes.push_back("anisotropic kernels: " + std::to_string(kernels.stretched) + " of " +
+                    std::to_string(job.particles.size()) + " stretched");
+}
+
 bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   engine::FluidRenderDesc desc;
   desc.width = job.width;
@@ -296,15 +310,7 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
     p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
     p.filter = job.filter;
     fluid::Anisotropy kernels;
-    if (job.anisotropic) {
-      fluid::AnisotropyScratch scratch;
-      fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);  // warm-up
-      const double a0 = nowMs();
-      fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
-      t.add("anisotropy (CPU)", (nowMs() - a0) * job.frames);  // once, reported per frame
-      t.notes.push_back("anisotropic kernels: " + std::to_string(kernels.stretched) + " of " +
-                        std::to_string(job.particles.size()) + " stretched");
-    }
+    jobKernels(job, t, kernels);
     timeParticleMethod(
         job, r, t,
         [&] {
@@ -328,8 +334,15 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   engine::RaycastParams p;
   p.rc = 3.0f * job.radius / 0.975f;
   p.threshold = 0.2f;
+  fluid::Anisotropy kernels;
+  jobKernels(job, t, kernels);
   timeParticleMethod(
-      job, r, t, [&] { ok = ok && engine::uploadRaycastParticles(r, job.particles, error); },
+      job, r, t,
+      [&] {
+        ok = ok && (job.anisotropic ? engine::uploadRaycastEllipsoids(r, kernels.centre, kernels.g, kernels.max_axis,
+                                                                      error)
+                                    : engine::uploadRaycastParticles(r, job.particles, error));
+      },
       [&](bool) { engine::drawRaycastFluid(r, job.target.fbo, job.camera, job.water, p); });
   t.gpu_bytes = px * (4 + 4 + 4 + 16 + 4) + 16.0 * r.pool_records + static_cast<double>(r.particles.capacity_bytes);
   t.notes.push_back("raycast pool " + std::to_string(r.pool_records) + " records, asked for " + std::to_string(r.used) +
@@ -395,8 +408,8 @@ int renderCommand(const Args& args) {
   std::string kernel = "isotropic", ss_filter = "bilateral";
   fluid::AnisotropyParams aniso;
   app.add_option("--kernel", kernel,
-                 "screen_space: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; neighbourhood "
-                 "radius 3 particle spacings)")
+                 "screen_space, raycast: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; "
+                 "neighbourhood radius 3 particle spacings)")
       ->capture_default_str()
       ->check(CLI::IsMember({"isotropic", "anisotropic"}));
   app.add_option("--kr", aniso.k_r, "anisotropic: largest axis ratio")
