@@ -1,8 +1,10 @@
 // Anisotropic kernels (fluid/sph/anisotropy.hpp) per frame against the SPH step, in one process:
 // a dambreak_box of about 2,500 / 13,000 / 50,000 particles (DFSPH) runs 20 steps, the median of
 // the last 10 step times is the reference, then the anisotropy pass runs on those particles.
-// Counters: particles, sph_step_ms (median), aniso_ms (mean per pass) and their ratio, the share
-// of stretched particles. Second argument: the neighbourhood radius in tenths of a particle
+// Counters: particles, sph_step_ms (median, wall), aniso_ms (mean per pass, wall) and their
+// ratio, and the same as processor time of all threads (sph_cpu_ms, aniso_cpu_ms, cpu_ratio: the
+// work, which a machine shared with other jobs distorts less than the wall clock), the share of
+// stretched particles. Second argument: the neighbourhood radius in tenths of a particle
 // spacing (30 = the game's 3 spacings).
 //   bench_anisotropy [--benchmark_filter=...]
 #include "fluid/sph/anisotropy.hpp"
@@ -14,12 +16,19 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
 namespace {
 
 using namespace fluid;
+
+double cpuMs() {  // processor time of the whole process (every thread), ms
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
 
 void BM_AnisotropyVsSphStep(benchmark::State& state) {
   const int per_side = static_cast<int>(state.range(0));
@@ -32,15 +41,21 @@ void BM_AnisotropyVsSphStep(benchmark::State& state) {
     return;
   }
   reserveSph(s.world, s.world.particles.size());
-  std::vector<double> step_ms;
+  std::vector<double> step_ms, step_cpu;
   for (int i = 0; i < 20; ++i) {
     SphStepStats stats;
+    const double c0 = cpuMs();
     if (!stepSph(s.world, 0.0f, &stats).ok()) {
       state.SkipWithError("stepSph failed");
       return;
     }
-    if (i >= 10) step_ms.push_back(stats.step_ms);
+    if (i >= 10) {
+      step_ms.push_back(stats.step_ms);
+      step_cpu.push_back(cpuMs() - c0);
+    }
   }
+  std::nth_element(step_cpu.begin(), step_cpu.begin() + step_cpu.size() / 2, step_cpu.end());
+  const double sph_cpu = step_cpu[step_cpu.size() / 2];
   std::nth_element(step_ms.begin(), step_ms.begin() + step_ms.size() / 2, step_ms.end());
   const double sph_ms = step_ms[step_ms.size() / 2];
 
@@ -49,11 +64,13 @@ void BM_AnisotropyVsSphStep(benchmark::State& state) {
   Anisotropy out;
   AnisotropyScratch scratch;
   computeAnisotropy(s.world.particles.position, a, scratch, out);  // warm-up (allocations)
-  double total_ms = 0.0;
+  double total_ms = 0.0, total_cpu = 0.0;
   std::int64_t passes = 0;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = cpuMs();
     computeAnisotropy(s.world.particles.position, a, scratch, out);
+    total_cpu += cpuMs() - c0;
     total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ++passes;
     benchmark::DoNotOptimize(out.g.data());
@@ -65,6 +82,10 @@ void BM_AnisotropyVsSphStep(benchmark::State& state) {
   state.counters["sph_step_ms"] = sph_ms;
   state.counters["aniso_ms"] = aniso_ms;
   state.counters["aniso_per_step"] = aniso_ms / sph_ms;
+  const double aniso_cpu = total_cpu / static_cast<double>(std::max<std::int64_t>(passes, 1));
+  state.counters["sph_cpu_ms"] = sph_cpu;
+  state.counters["aniso_cpu_ms"] = aniso_cpu;
+  state.counters["cpu_ratio"] = aniso_cpu / sph_cpu;
   state.counters["stretched"] = static_cast<double>(out.stretched) / static_cast<double>(out.g.size());
   state.counters["mean_neighbours"] = neighbours / static_cast<double>(out.neighbours.size());
 }
