@@ -154,7 +154,8 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   void updateAnisotropy() {
     const FluidSurfaceParams& p = state.params;
     const engine::WaterBackendDesc* backend = engine::findWaterBackend(p.method);
-    anisotropy_valid_ = p.kernel == SurfaceKernel::anisotropic && backend != nullptr && !backend->needs_mesh;
+    anisotropy_valid_ =
+        p.kernel == SurfaceKernel::anisotropic && p.visible && backend != nullptr && !backend->needs_mesh;
     if (!anisotropy_valid_) return;
     const auto t0 = std::chrono::steady_clock::now();
     fluid::AnisotropyParams a;
