@@ -90,7 +90,9 @@ glm::vec3 desiredVelocity(const Gulls& g, const Gull& gull) {
   const glm::vec3 tangent = gull.direction * glm::vec3(-out.z, 0.0f, out.x);
   const float radius_error = p.circle_radius * gull.radius_scale - r;
   const float height_error = g.centre.y + p.height + gull.height_offset - gull.position.y;
-  return p.speed * tangent + 0.8f * radius_error * out + glm::vec3(0.0f, 0.8f * height_error, 0.0f);
+  // No faster than the gull flies when fleeing: far from its circle it flies back, not faster.
+  return clampLength(p.speed * tangent + 0.8f * radius_error * out + glm::vec3(0.0f, 0.8f * height_error, 0.0f),
+                     std::max(p.speed, p.flee_speed));
 }
 
 void stepGulls(Gulls& g, std::span<const fluid::Blast> blasts, float dt) {
@@ -186,12 +188,13 @@ class GullsEffect final : public EffectOf<Gulls> {
     row.set("gulls_fleeing", static_cast<double>(fleeing(state)));
   }
 
-  // A gull stays in the sky near the fountain: above the ground, within a few circles of it, and
-  // no faster than it can fly.
+  // A gull stays in the sky near the fountain: above the ground, within its circle plus one
+  // flight from a blast (and the way back), and no faster than it can fly.
   void soakCheck(SoakProbe& probe) const override {
     probe.count("gulls", state.flock.size());
-    const float reach = 4.0f * (state.params.circle_radius + state.params.height);
-    const float fastest = 1.5f * std::max(state.params.flee_speed, state.params.speed) + 2.0f * state.params.size;
+    const GullParams& p = state.params;
+    const float reach = 1.5f * (p.circle_radius + p.height) + 1.5f * p.flee_speed * p.scare_seconds + 10.0f;
+    const float fastest = 1.5f * std::max(p.flee_speed, p.speed) + 2.0f * p.size;
     for (std::size_t i = 0; i < state.flock.size(); ++i) {
       const Gull& gull = state.flock[i];
       if (glm::length(gull.position - state.centre) > reach || gull.position.y < state.centre.y ||

@@ -147,7 +147,7 @@ TEST(RunScene, FixedFrameTimeIsOneStepPerFrameAndDeterministic) {
   EXPECT_EQ(first.nonfinite_state, "");
   EXPECT_EQ(first.systems_constructed,
             (std::vector<std::string>{"rigid_bodies", "explosives", "sph_fluid", "sprite_particles", "fluid_surface",
-                                      "audio"}));
+                                      "gulls", "audio"}));
   ASSERT_EQ(first.last_frame_rgba.size(), 96u * 64u * 4u);
   EXPECT_EQ(first.blank_frame_rgba.size(), first.last_frame_rgba.size());
   EXPECT_NE(first.last_frame_rgba, first.blank_frame_rgba);

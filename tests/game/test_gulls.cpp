@@ -95,16 +95,24 @@ TEST(Gulls, TheSoakCheckCatchesAGullThatLeavesTheSky) {
   game::SoakProbe probe;
   gulls(world).soakCheck(probe);
   EXPECT_EQ(probe.failure, "");
-  // Gulls that flee at 40 m/s for 30 s end up a kilometre away: within the parameters' ranges,
-  // beyond what the check allows (four circles' reach).
-  for (game::SectionConfig& section : world.scene.effects)
-    if (section.name == "gulls") {
-      section.params["flee_speed"].number = 40.0;
-      section.params["scare_seconds"].number = 30.0;
-    }
-  game::applyLiveParams(world);
+  // Gulls sent fleeing at 40 m/s for 30 s are some 400 m away after 10 s; with the flight then
+  // cut back to the default (2.5 s at 8 m/s) the check's bound is their circle plus that flight
+  // (about 60 m), and every gull far out of it is named.
+  auto set = [&](double flee_speed, double scare_seconds) {
+    for (game::SectionConfig& section : world.scene.effects)
+      if (section.name == "gulls") {
+        section.params["flee_speed"].number = flee_speed;
+        section.params["scare_seconds"].number = scare_seconds;
+      }
+    game::applyLiveParams(world);
+  };
+  set(40.0, 30.0);
   game::playerThrowExplosive(world);
-  for (int i = 0; i < 60 * 20; ++i) game::stepWorld(world, nullptr);
+  for (int i = 0; i < 60 * 10; ++i) game::stepWorld(world, nullptr);
+  game::SoakProbe fleeing_far;
+  gulls(world).soakCheck(fleeing_far);
+  EXPECT_EQ(fleeing_far.failure, "") << "while their own flight is 1.2 km, 400 m is within it";
+  set(8.0, 2.5);
   game::SoakProbe after;
   gulls(world).soakCheck(after);
   EXPECT_NE(after.failure.find("left the sky over the fountain"), std::string::npos) << after.failure;
