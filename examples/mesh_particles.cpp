@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   // One extractor, reused across frames in a real program: it keeps its scratch memory.
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
-  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  const fluid::SurfaceInput input{fluid::pointView(particles)};
   if (const fluid::SurfaceStatus st = extractor.extract(input, params, mesh); !st.ok()) {
     std::fprintf(stderr, "%s: %s\n", argv[1], st.error.c_str());
     return 1;

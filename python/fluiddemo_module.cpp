@@ -52,6 +52,25 @@ FloatArray pointsArgument(const py::handle& points, const char* what) {
   return a;
 }
 
+// The mesher's positions argument as a pointer + stride view (fluid::PointView): a float32 (n, 3)
+// array whose three floats per row are adjacent is read in place whatever its row stride (a C array,
+// or the first three columns of a wider one); anything else is converted once to a C float32 array.
+// `keep` holds the array read for as long as the view is used.
+fluid::PointView positionsView(const py::handle& positions, py::object& keep) {
+  if (py::isinstance<py::array_t<float>>(positions)) {
+    const auto a = py::reinterpret_borrow<py::array>(positions);
+    if (a.ndim() == 2 && a.shape(1) == 3 && a.strides(1) == py::ssize_t(sizeof(float)) &&
+        a.strides(0) >= py::ssize_t(3 * sizeof(float)) && a.strides(0) % py::ssize_t(sizeof(float)) == 0) {
+      keep = a;
+      return {static_cast<const float*>(a.data()), static_cast<std::size_t>(a.shape(0)),
+              static_cast<std::size_t>(a.strides(0))};
+    }
+  }
+  const FloatArray c = pointsArgument(positions, "positions");
+  keep = c;
+  return {c.data(), static_cast<std::size_t>(c.shape(0)), 3 * sizeof(float)};
+}
+
 // Meshes particles as `fluiddemo mesh` does and returns the arrays its mesh file holds (the same
 // bits). Keeps its extractor and buffers, so meshing frame after frame allocates little.
 struct Mesher {
@@ -59,7 +78,6 @@ struct Mesher {
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh surface;
   fluid::WeldedMesh welded;
-  std::vector<float> x, y, z;
 
   Mesher(float radius, float threshold, float cube, int threads) {
     params.rc = radius;
@@ -69,14 +87,9 @@ struct Mesher {
   }
 
   py::tuple mesh(const py::handle& positions) {
-    const FloatArray a = pointsArgument(positions, "positions");
-    const std::size_t n = static_cast<std::size_t>(a.shape(0));
-    // The extractor takes SoA spans: one de-interleaving copy (the CLI's reader makes the same arrays).
-    x.resize(n), y.resize(n), z.resize(n);
-    const float* p = a.data();
-    for (std::size_t i = 0; i < n; ++i) x[i] = p[3 * i], y[i] = p[3 * i + 1], z[i] = p[3 * i + 2];
+    py::object kept;  // the array the view reads, alive until the mesh is made
+    const fluid::SurfaceInput input{positionsView(positions, kept)};
     fluid::SurfaceParams frame = params;
-    const fluid::SurfaceInput input{x, y, z, {}, {}, {}};
     if (const std::string error = fluid::unreachableThreshold(input, frame, "threshold", "positions"); !error.empty())
       fail(error);
     fluid::SurfaceStatus st;
@@ -119,8 +132,8 @@ py::array_t<float> readParticles(const std::string& path) {
   const py::ssize_t n = static_cast<py::ssize_t>(particles.size());
   py::array_t<float> out({n, py::ssize_t{3}});
   float* p = out.mutable_data();
-  for (std::size_t i = 0; i < particles.size(); ++i)
-    p[3 * i] = particles.x[i], p[3 * i + 1] = particles.y[i], p[3 * i + 2] = particles.z[i];
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  if (!particles.empty()) std::memcpy(p, particles.data(), particles.size() * sizeof(glm::vec3));
   return out;
 }
 
@@ -171,7 +184,7 @@ py::array vec3View(const std::vector<glm::vec3>& data, py::handle owner) {
   py::array view(py::dtype::of<float>(), {static_cast<py::ssize_t>(data.size()), py::ssize_t{3}},
                  {static_cast<py::ssize_t>(sizeof(glm::vec3)), static_cast<py::ssize_t>(sizeof(float))},
                  data.data(), owner);
-  // Read-only: the store keeps other copies of the positions (SoA arrays) that must stay in step.
+  // Read-only: the arrays are the solver's own store, which a step re-sorts and moves.
   view.attr("setflags")(py::arg("write") = false);
   return view;
 }

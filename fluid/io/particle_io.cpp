@@ -378,9 +378,7 @@ IoStatus readPly(std::istream& in, const std::string& name, ParticlePositions& o
     }
     if (is_vertex) {
       const std::size_t expected = header.ascii ? element.count / 6 : element.count;  // "0 0 0\n" is 6 bytes
-      out.x.reserve(out.size() + expected);
-      out.y.reserve(out.size() + expected);
-      out.z.reserve(out.size() + expected);
+      out.reserve(out.size() + expected);
     }
     values.assign(element.properties.size(), 0.0);
     for (std::size_t item = 0; item < element.count; ++item) {
@@ -526,7 +524,7 @@ IoStatus parseParticleVtk(const std::string& bytes, const std::string& name, Par
     count = static_cast<std::size_t>(n);
     break;
   }
-  auto reserve = [&] { out.x.reserve(count), out.y.reserve(count), out.z.reserve(count); };
+  auto reserve = [&] { out.reserve(count); };
   if (binary) {
     const std::size_t size = type == "FLOAT" ? 4 : 8;
     if (!c.ended && count > 0) return fail("end of file after the POINTS line (no point data)");
@@ -604,8 +602,8 @@ IoStatus writeParticleXyz(const std::filesystem::path& path, const ParticlePosit
   char buffer[128];
   for (std::size_t i = 0; i < particles.size(); ++i) {
     // %.9g round-trips every float.
-    const int length = std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g\n", static_cast<double>(particles.x[i]),
-                                     static_cast<double>(particles.y[i]), static_cast<double>(particles.z[i]));
+    const int length = std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g\n", static_cast<double>(particles[i].x),
+                                     static_cast<double>(particles[i].y), static_cast<double>(particles[i].z));
     text.append(buffer, static_cast<std::size_t>(length));
   }
   file << text;
@@ -624,8 +622,8 @@ IoStatus writeParticleXyzWithIds(const std::filesystem::path& path, const Partic
   text.reserve(particles.size() * 48);
   char buffer[160];
   for (std::size_t i = 0; i < particles.size(); ++i) {
-    const int length = std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %u\n", static_cast<double>(particles.x[i]),
-                                     static_cast<double>(particles.y[i]), static_cast<double>(particles.z[i]),
+    const int length = std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %u\n", static_cast<double>(particles[i].x),
+                                     static_cast<double>(particles[i].y), static_cast<double>(particles[i].z),
                                      static_cast<unsigned>(ids[i]));
     text.append(buffer, static_cast<std::size_t>(length));
   }
@@ -641,7 +639,7 @@ IoStatus writeParticlePly(const std::filesystem::path& path, const ParticlePosit
   file << "ply\nformat binary_little_endian 1.0\ncomment written by fluiddemo\nelement vertex " << particles.size()
        << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   for (std::size_t i = 0; i < particles.size(); ++i) {
-    const float xyz[3] = {particles.x[i], particles.y[i], particles.z[i]};
+    const float xyz[3] = {particles[i].x, particles[i].y, particles[i].z};
     for (float value : xyz) {
       auto bits = std::bit_cast<std::uint32_t>(value);
       if constexpr (std::endian::native == std::endian::big) bits = __builtin_bswap32(bits);

@@ -23,24 +23,9 @@
 
 namespace fluid {
 
-// SoA particle positions owned by the caller.
-struct ParticlePositions {
-  std::vector<float> x, y, z;
-
-  std::size_t size() const { return x.size(); }
-  bool empty() const { return x.empty(); }
-  void clear() {
-    x.clear();
-    y.clear();
-    z.clear();
-  }
-  void push_back(glm::vec3 p) {
-    x.push_back(p.x);
-    y.push_back(p.y);
-    z.push_back(p.z);
-  }
-  glm::vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
-};
+// Particle positions owned by the caller: packed vec3, the layout the SPH store and the goo keep and
+// the surface mesher reads in place (fluid::pointView in fluid/surface/marching_slices.hpp).
+using ParticlePositions = std::vector<glm::vec3>;
 
 // Empty error == success. The message is complete ("file.xyz:12: ..."), ready to print.
 struct IoStatus {

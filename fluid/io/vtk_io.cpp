@@ -35,10 +35,10 @@ IoStatus writeParticleVtk(const std::filesystem::path& path, const ParticlePosit
   char buf[96];
   for (std::size_t i = 0; i < n; ++i) {
     if (binary) {
-      putBigEndian(f, particles.x[i]), putBigEndian(f, particles.y[i]), putBigEndian(f, particles.z[i]);
+      putBigEndian(f, particles[i].x), putBigEndian(f, particles[i].y), putBigEndian(f, particles[i].z);
     } else {
-      std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", double(particles.x[i]), double(particles.y[i]),
-                    double(particles.z[i]));
+      std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", double(particles[i].x), double(particles[i].y),
+                    double(particles[i].z));
       f << buf;
     }
   }

@@ -127,11 +127,6 @@ struct ParticleStore {
       pressure;  // Pa. WCSPH: Tait pressure; DFSPH: the effective pressure rho_i^2 * sum of kappa_i/rho_i
                  // over the step's solver iterations (a per-step impulse: average it over steps)
   std::vector<std::uint32_t> id;
-  // The positions again as three float arrays (SoA): the layout fluid/surface reads
-  // (SurfaceInput::x/y/z take sphPositionArrays' spans as they are, no copy). stepSph writes them
-  // in its last pass over the particles and addSphParticle appends to them; code that writes
-  // `position` directly calls refreshSphPositionArrays before they are read.
-  std::vector<float> position_x, position_y, position_z;
   // Spray (SphParams::spray_speed): after a step the last spray_count particles fly ballistic,
   // outside the SPH solve; the first size() - spray_count are the SPH water.
   std::size_t spray_count = 0;
@@ -468,17 +463,6 @@ SphStatus advanceSphUntil(SphWorld& world, double until, F&& per_step, std::size
   }
   return {};
 }
-
-// The end-of-step positions as SoA spans over particles.position_x/y/z, in storage order.
-// Current after stepSph, advanceSph and addSphParticle; after a direct write to
-// particles.position, call refreshSphPositionArrays first. Spans of size 0 when the arrays'
-// size disagrees with the store's (they were not kept current), never stale data of another size.
-struct SphPositionArrays {
-  std::span<const float> x, y, z;
-};
-SphPositionArrays sphPositionArrays(const SphWorld& world);
-// Rewrites particles.position_x/y/z from particles.position (one parallel copy).
-void refreshSphPositionArrays(SphWorld& world);
 
 // Particle positions at time t in storage order: linear between the start and the end of the last
 // step, the path the advection x += dt v takes (collision projections aside). t is clamped to

@@ -113,13 +113,12 @@ void finishStep(StepContext& context, float requested) {
   stats.particles = context.total;
   stats.spray = context.total - context.count;
   stats.dt_limited_by_request = requested < params.max_time_step && dt >= requested;
-  // The speed cap, the kinetic energy (of the capped velocities), the SoA position arrays the
-  // surface mesher reads (sphPositionArrays) and the health counts in one pass. The energy sum
-  // is added in the same order as without the counts (same blocks, same joins).
+  // The speed cap, the kinetic energy (of the capped velocities) and the health counts in one
+  // pass. The energy sum is added in the same order as without the counts (same blocks, same
+  // joins).
   ParticleStore& store = context.particles;
   std::vector<glm::vec3>& velocities = store.velocity;
   const std::size_t total = context.total;
-  for (auto* v : {&store.position_x, &store.position_y, &store.position_z}) v->resize(total);
   SphScratch::SampleCarry& carry = context.scratch.carry;
   carry.position.resize(total);
   carry.count = context.count;  // the spray's samples are not carried
@@ -139,9 +138,6 @@ void finishStep(StepContext& context, float requested) {
         }
         acc.sum_v2 += glm::dot(velocities[i], velocities[i]);
         const glm::vec3 x = store.position[i];
-        store.position_x[i] = x.x;
-        store.position_y[i] = x.y;
-        store.position_z[i] = x.z;
         carry.position[i] = x;  // where the last collision pass sampled the colliders
         acc.nonfinite += isFinite(x) && isFinite(velocities[i]) && std::isfinite(store.density[i]) ? 0 : 1;
       },

@@ -105,9 +105,6 @@ bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position,
   std::vector<std::uint32_t>& last = world.scratch.last_neighbours;
   last.resize(s.size(), SphScratch::kUnknownNeighbours);
   s.position.push_back(position);
-  s.position_x.push_back(position.x);
-  s.position_y.push_back(position.y);
-  s.position_z.push_back(position.z);
   s.velocity.push_back(velocity);
   s.density.push_back(world.params.rest_density);
   s.pressure.push_back(0.0f);
@@ -118,9 +115,6 @@ bool addSphParticleWithId(SphWorld& world, std::uint32_t id, glm::vec3 position,
   if (spray > 0) {
     const auto toFront = [spray](auto& v) { std::rotate(v.end() - 1 - static_cast<std::ptrdiff_t>(spray), v.end() - 1, v.end()); };
     toFront(s.position);
-    toFront(s.position_x);
-    toFront(s.position_y);
-    toFront(s.position_z);
     toFront(s.velocity);
     toFront(s.density);
     toFront(s.pressure);
@@ -161,7 +155,6 @@ void reserveSph(SphWorld& world, std::size_t capacity) {
   s.density.reserve(capacity);
   s.pressure.reserve(capacity);
   s.id.reserve(capacity);
-  for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->reserve(capacity);
   SphScratch& w = world.scratch;
   for (auto* v : {&w.vec_a, &w.vec_b, &w.boundary_gradient, &w.old_position, &w.accel}) v->reserve(capacity);
   for (auto* v : {&w.factor, &w.kappa, &w.kappa_v, &w.warm_kappa, &w.density_adv, &w.kappa_scale, &w.boundary_volume,
@@ -291,26 +284,6 @@ SphStatus advanceSphImpl(SphWorld& world, double duration, void (*cb)(void*, con
     }
   }
   return {};
-}
-
-SphPositionArrays sphPositionArrays(const SphWorld& world) {
-  const ParticleStore& s = world.particles;
-  const std::size_t n = s.size();
-  if (s.position_x.size() != n || s.position_y.size() != n || s.position_z.size() != n) return {};
-  return {s.position_x, s.position_y, s.position_z};
-}
-
-void refreshSphPositionArrays(SphWorld& world) {
-  ParticleStore& s = world.particles;
-  const std::size_t n = s.size();
-  for (auto* v : {&s.position_x, &s.position_y, &s.position_z}) v->resize(n);
-  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      s.position_x[i] = s.position[i].x;
-      s.position_y[i] = s.position[i].y;
-      s.position_z[i] = s.position[i].z;
-    }
-  });
 }
 
 void sphPositionsAt(const SphWorld& world, double t, std::vector<glm::vec3>& out) {

@@ -1,6 +1,7 @@
 #include "fluid/surface/async_extractor.hpp"
 
 #include <chrono>
+#include <cstring>
 
 namespace fluid {
 
@@ -45,15 +46,18 @@ void AsyncSurfaceExtractor::launch(Job job) {
 
 void AsyncSurfaceExtractor::start(const SurfaceInput& input, const SurfaceParams& params) {
   waitForPending();  // the worker may still read the copy below
-  copyInto(x_, input.x);
-  copyInto(y_, input.y);
-  copyInto(z_, input.z);
+  const PointView& from = input.positions;
+  positions_.resize(from.count);
+  if (from.stride == sizeof(glm::vec3) && from.count > 0)  // packed: the layout the copy keeps
+    std::memcpy(positions_.data(), from.data, from.count * sizeof(glm::vec3));
+  else
+    for (std::size_t i = 0; i < from.count; ++i) positions_[i] = from[i];
   copyInto(strength_, input.strength);
   copyInto(radius_scale_, input.radiusScale);
   copyInto(user_, input.user);
   params_ = params;
   launch([this](SurfaceExtractor& extractor, SurfaceMesh& mesh) {
-    const SurfaceInput copy{x_, y_, z_, strength_, radius_scale_, user_};
+    const SurfaceInput copy{pointView(positions_), strength_, radius_scale_, user_};
     return extractor.extract(copy, params_, mesh);
   });
 }

@@ -56,8 +56,9 @@ class AsyncSurfaceExtractor {
   void launch(Job job);
 
   SurfaceExtractor extractor_;
-  // The job: a copy of the particles (one layout, the SurfaceInput's), its params and its result.
-  std::vector<float> x_, y_, z_, strength_, radius_scale_;
+  // The job: a copy of the particles (packed vec3 positions, the one layout), its params and its result.
+  std::vector<glm::vec3> positions_;
+  std::vector<float> strength_, radius_scale_;
   std::vector<glm::vec4> user_;
   SurfaceParams params_;
   Job job_;

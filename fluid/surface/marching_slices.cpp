@@ -22,9 +22,8 @@ void SurfaceMesh::clear() {
 namespace {
 bool finite(float v) { return std::isfinite(v); }
 
-std::string fieldError(const char* name, std::size_t i, float v) {
-  return std::string("surface input: ") + name + "[" + std::to_string(i) + "] = " + std::to_string(v) +
-         " is not finite";
+std::string fieldError(char axis, std::size_t i, float v) {
+  return "surface input: positions[" + std::to_string(i) + "]." + axis + " = " + std::to_string(v) + " is not finite";
 }
 }  // namespace
 
@@ -49,10 +48,11 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
         (p.viewDir.x == 0 && p.viewDir.y == 0 && p.viewDir.z == 0))
       return bad("surface params: viewDir must be finite and non-zero");
   }
-  const std::size_t n = in.x.size();
-  if (in.y.size() != n || in.z.size() != n)
-    return bad("surface input: x, y, z have different lengths (" + std::to_string(n) + ", " +
-               std::to_string(in.y.size()) + ", " + std::to_string(in.z.size()) + ")");
+  const std::size_t n = in.positions.count;
+  if (n > 0 && in.positions.data == nullptr) return bad("surface input: positions has no data for its count");
+  if (n > 0 && (in.positions.stride < 3 * sizeof(float) || in.positions.stride % sizeof(float) != 0))
+    return bad("surface input: positions stride = " + std::to_string(in.positions.stride) +
+               " bytes must be a multiple of 4 and at least 12");
   if (!in.strength.empty() && in.strength.size() != n)
     return bad("surface input: strength has " + std::to_string(in.strength.size()) + " entries, expected " +
                std::to_string(n));
@@ -62,13 +62,13 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
   if (!in.user.empty() && in.user.size() != n)
     return bad("surface input: user has " + std::to_string(in.user.size()) + " entries, expected " + std::to_string(n));
   if (n >= (std::size_t(1) << 31)) return bad("surface input: too many particles");
+  // Lattice indices must fit the 20-bit key window and int32 block maths comfortably.
+  const float lim = 4.0e5f * p.cube;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!finite(in.x[i])) return bad(fieldError("x", i, in.x[i]));
-    if (!finite(in.y[i])) return bad(fieldError("y", i, in.y[i]));
-    if (!finite(in.z[i])) return bad(fieldError("z", i, in.z[i]));
-    // Lattice indices must fit the 20-bit key window and int32 block maths comfortably.
-    const float lim = 4.0e5f * p.cube;
-    if (std::fabs(in.x[i]) > lim || std::fabs(in.y[i]) > lim || std::fabs(in.z[i]) > lim)
+    const glm::vec3 q = in.positions[i];
+    for (int a = 0; a < 3; ++a)
+      if (!finite(q[a])) return bad(fieldError("xyz"[a], i, q[a]));
+    if (std::fabs(q.x) > lim || std::fabs(q.y) > lim || std::fabs(q.z) > lim)
       return bad("surface input: particle " + std::to_string(i) + " is farther than 400000 cubes from the origin");
   }
   for (std::size_t i = 0; i < in.strength.size(); ++i)

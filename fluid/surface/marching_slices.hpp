@@ -13,7 +13,7 @@
 // after the first frames nothing is allocated):
 //   fluid::SurfaceExtractor extractor;
 //   fluid::SurfaceMesh mesh;
-//   fluid::SurfaceStatus st = extractor.extract({xs, ys, zs}, params, mesh);
+//   fluid::SurfaceStatus st = extractor.extract({fluid::pointView(positions)}, params, mesh);
 //
 // Custom field/vertex routines (paper §7, tentacle texturing) are compile-time policies: see
 // fluid/surface/marching_slices_policy.hpp. The built-in one interpolates a per-particle vec4
@@ -31,13 +31,37 @@
 
 namespace fluid {
 
-// Particle input, SoA, borrowed for the duration of one extract() call. x, y, z: world units,
-// equal lengths, finite. Optional arrays are empty or have the same length.
+// Particle positions read in place, meshoptimizer's convention (vertex_positions, vertex_count,
+// vertex_positions_stride): point i's x, y, z are the three floats at byte offset i * stride from
+// `data`. Borrowed, never copied by extract(); the caller's store (the SPH's vec3 positions, the
+// goo's, a NumPy (n, 3) array) is the one layout. stride: bytes, >= 12 and a multiple of 4.
+struct PointView {
+  const float* data = nullptr;  // x of point 0; may be null when count == 0
+  std::size_t count = 0;
+  std::size_t stride = sizeof(float) * 3;
+
+  std::size_t size() const { return count; }
+  bool empty() const { return count == 0; }
+  // Point i's coordinate on axis a (0 x, 1 y, 2 z). No checks: i < count, a < 3.
+  float at(std::size_t i, int a) const {
+    return reinterpret_cast<const float*>(reinterpret_cast<const char*>(data) + i * stride)[a];
+  }
+  glm::vec3 operator[](std::size_t i) const { return {at(i, 0), at(i, 1), at(i, 2)}; }
+};
+
+// A view of packed vec3 positions (glm::vec3 is three floats, stride 12).
+inline PointView pointView(std::span<const glm::vec3> points) {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  return {points.empty() ? nullptr : &points.data()->x, points.size(), sizeof(glm::vec3)};
+}
+
+// Particle input, borrowed for the duration of one extract() call. positions: world units, finite.
+// Optional arrays are empty or have positions.count entries.
 struct SurfaceInput {
-  std::span<const float> x, y, z;
-  std::span<const float> strength;     // s_i > 0, finite; default 1
-  std::span<const float> radiusScale;  // Rc_i = Rc * scale_i, scale_i > 0, finite; default 1
-  std::span<const glm::vec4> user;     // interpolated onto vertices (SurfaceMesh::attributes)
+  PointView positions{};
+  std::span<const float> strength{};     // s_i > 0, finite; default 1
+  std::span<const float> radiusScale{};  // Rc_i = Rc * scale_i, scale_i > 0, finite; default 1
+  std::span<const glm::vec4> user{};     // interpolated onto vertices (SurfaceMesh::attributes)
 };
 
 enum class SurfaceOrder : std::uint8_t {
@@ -52,6 +76,10 @@ enum class SurfaceOrder : std::uint8_t {
 enum class SurfaceFieldRoute : std::uint8_t {
   // sliceSplat where the block's whole field fits 8 MB per worker and ceil(Rc / S) <= 5 (dense
   // sets, small discs), else particleCache. Decided per extract() from the block plan, S and Rc.
+  // It trades time for a bound on working memory: where the whole field does not fit, the splat
+  // would be faster but take several times the cache's memory (spray set: about 25 % less time,
+  // 6.4 MB against 1 MB); docs/surface.md ("Field routes") has the figures. Callers with the
+  // memory force sliceSplat.
   automatic,
   // The paper's §6 2D-projection 1D-lookup cache, walked per corner the sweep needs (Figure 7).
   particleCache,

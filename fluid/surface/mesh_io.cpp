@@ -53,12 +53,13 @@ void weldSurfaceMesh(const SurfaceMesh& m, const MeshWriteOptions& o, WeldedMesh
 
 
 void centreSurfaceOrigin(const SurfaceInput& input, SurfaceParams& params) {
-  if (input.x.empty()) return;
+  if (input.positions.empty()) return;
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (std::size_t i = 0; i < input.x.size(); ++i) {
-    const double p[3] = {input.x[i], input.y[i], input.z[i]};
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
-  }
+  for (std::size_t i = 0; i < input.positions.count; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double p = input.positions.at(i, a);
+      lo[a] = std::min(lo[a], p), hi[a] = std::max(hi[a], p);
+    }
   const double s = params.cube;
   params.originX = std::round(0.5 * (lo[0] + hi[0]) / s) * s;
   params.originY = std::round(0.5 * (lo[1] + hi[1]) / s) * s;
@@ -82,7 +83,10 @@ double fieldUpperBound(const SurfaceInput& input, double rc) {
     }
   };
   std::unordered_map<std::array<std::int64_t, 3>, std::size_t, CellHash> counts;
-  for (std::size_t i = 0; i < input.x.size(); ++i) ++counts[{cell(input.x[i]), cell(input.y[i]), cell(input.z[i])}];
+  for (std::size_t i = 0; i < input.positions.count; ++i) {
+    const glm::vec3 p = input.positions[i];
+    ++counts[{cell(p.x), cell(p.y), cell(p.z)}];
+  }
   std::size_t most = 0;
   for (const auto& [c, count] : counts) {
     std::size_t around = 0;
@@ -101,7 +105,7 @@ double fieldUpperBound(const SurfaceInput& input, double rc) {
 
 std::string unreachableThreshold(const SurfaceInput& input, const SurfaceParams& params, const std::string& option,
                                  const std::string& source) {
-  if (input.x.empty() || !(params.threshold >= 0.25f) || !(params.rc > 0.0f)) return {};
+  if (input.positions.empty() || !(params.threshold >= 0.25f) || !(params.rc > 0.0f)) return {};
   const double bound = fieldUpperBound(input, params.rc);
   if (params.threshold < bound) return {};
   char buffer[160];

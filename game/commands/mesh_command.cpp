@@ -54,7 +54,7 @@ int meshFile(const std::string& in, const std::string& out, fluid::SurfaceParams
     error = read.error;
     return 1;
   }
-  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  const fluid::SurfaceInput input{fluid::pointView(particles)};
   if (error = fluid::unreachableThreshold(input, params, "--threshold", in); !error.empty()) return 2;
   fluid::centreSurfaceOrigin(input, params);
   if (const fluid::SurfaceStatus st = extractor.extract(input, params, mesh); !st.ok()) {
@@ -264,7 +264,7 @@ int meshCommand(const Args& args) {
     std::fprintf(stderr, "fluiddemo mesh: %s\n", read.error.c_str());
     return 1;
   }
-  const fluid::SurfaceInput input{particles.x, particles.y, particles.z, {}, {}, {}};
+  const fluid::SurfaceInput input{fluid::pointView(particles)};
   // A threshold the field can never exceed is a usage error, not an empty mesh.
   if (const std::string unreachable = fluid::unreachableThreshold(input, params, "--threshold", in);
       !unreachable.empty()) {

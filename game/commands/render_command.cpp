@@ -146,8 +146,6 @@ bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, 
     error = r.error;
     return false;
   }
-  std::vector<float> xs, ys, zs;
-  for (const glm::vec3& p : job.particles) xs.push_back(p.x), ys.push_back(p.y), zs.push_back(p.z);
   fluid::SurfaceParams sp;  // the game's field: Rc = 2 spacings, T = 0.2 (iso radius 0.975 Rc / 3), cube = spacing / 2
   sp.rc = 3.0f * job.radius / 0.975f;
   sp.threshold = 0.2f;
@@ -161,7 +159,7 @@ bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, 
   runFrames(job, [&](bool timed) {
     if (!ok) return;
     const double t0 = nowMs();
-    const fluid::SurfaceStatus st = extractor.extract({xs, ys, zs, {}, {}, {}}, sp, mesh);
+    const fluid::SurfaceStatus st = extractor.extract({fluid::pointView(job.particles)}, sp, mesh);
     if (!st.ok()) {
       error = "meshing failed: " + st.error;
       ok = false;
@@ -463,7 +461,7 @@ int renderCommand(const Args& args) {
   job.lo = glm::vec3(1e30f);
   job.hi = glm::vec3(-1e30f);
   for (std::size_t i = 0; i < read.size(); ++i) {
-    job.particles[i] = {read.x[i], read.y[i], read.z[i]};
+    job.particles[i] = read[i];
     job.lo = glm::min(job.lo, job.particles[i]);
     job.hi = glm::max(job.hi, job.particles[i]);
   }

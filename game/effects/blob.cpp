@@ -77,13 +77,9 @@ void startRound(BlobMonster& s) {
   s.caught_timer = 0.0f;
 }
 
-void toSoa(const std::vector<glm::vec3>& x, std::vector<float>& xs, std::vector<float>& ys, std::vector<float>& zs) {
-  xs.resize(x.size()), ys.resize(x.size()), zs.resize(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) xs[i] = x[i].x, ys[i] = x[i].y, zs[i] = x[i].z;
-}
-
-fluid::SurfaceInput inputOf(const BlobMeshFrame& f) {
-  return {f.xs, f.ys, f.zs, f.particles.strength, f.particles.radius_scale, {}};
+// The goo's particles as the mesher's input, positions read in place (one particle layout).
+fluid::SurfaceInput inputOf(const fluid::BlobParticles& p) {
+  return {fluid::pointView(p.position), p.strength, p.radius_scale, {}};
 }
 
 // The goo's surface of one set of particles (paper §7): marching slices with the tentacle texturing
@@ -174,10 +170,8 @@ class BlobEffect final : public EffectOf<BlobMonster> {
     BlobMeshFrame& f = s.mesh_frame;
     if (!s.params.async) {
       return meshed(s.job.meshNow([&](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
-        toSoa(s.world.particles.position, f.xs, f.ys, f.zs);  // after meshNow stopped any worker reading f
-        const fluid::SurfaceInput in{f.xs, f.ys, f.zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
-        return meshBlob(extractor, in, sp, s.world.particles, s.world.target.tentacle_particles, s.world.params.spacing,
-                        mesh);
+        return meshBlob(extractor, inputOf(s.world.particles), sp, s.world.particles, s.world.target.tentacle_particles,
+                        s.world.params.spacing, mesh);
       }),
                     error);
     }
@@ -188,11 +182,10 @@ class BlobEffect final : public EffectOf<BlobMonster> {
       f.tentacles = s.world.target.tentacle_particles;
       f.spacing = s.world.params.spacing;
       f.params = sp;
-      toSoa(f.particles.position, f.xs, f.ys, f.zs);
-      fluid::SurfaceStatus valid = fluid::validateSurface(inputOf(f), sp);
+      fluid::SurfaceStatus valid = fluid::validateSurface(inputOf(f.particles), sp);
       if (valid.ok())
         worker.startJob([&f](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
-          return meshBlob(extractor, inputOf(f), f.params, f.particles, f.tentacles, f.spacing, mesh);
+          return meshBlob(extractor, inputOf(f.particles), f.params, f.particles, f.tentacles, f.spacing, mesh);
         });
       return valid;
     }),

@@ -42,13 +42,12 @@ struct BlobMonsterParams {
 
 // What the goo's surface reads (prepareFrame): for the async job, a copy taken at the frame it
 // belongs to, since the next steps move the particles and change the tentacles while it meshes;
-// the synchronous path uses only its position arrays.
+// the synchronous path reads the world's particles in place.
 struct BlobMeshFrame {
   fluid::BlobParticles particles;
   std::vector<std::vector<std::uint32_t>> tentacles;  // fluid::BlobTarget::tentacle_particles
   float spacing = 0.0f;
   fluid::SurfaceParams params;
-  std::vector<float> xs, ys, zs;  // positions as the extractor's SoA input
 };
 
 struct BlobMonster {

@@ -37,22 +37,12 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
     s.error.clear();
     return true;
   }
-  // The SPH store's own SoA arrays (fluid/sph: one particle layout), read without a copy (the
-  // async job copies them, as it must: the next steps move them while it meshes).
-  const fluid::SphPositionArrays positions = fluid::sphPositionArrays(fluid.world);
+  // The SPH store's own positions, read in place through a pointer + stride view (one particle
+  // layout; the async job copies them, as it must: the next steps move them while it meshes).
   const std::size_t n = fluid.world.particles.size();
-  if (positions.x.size() != n) {
-    s.job.mesh.clear();
-    s.error = "fluid_surface: the SPH position arrays hold " + std::to_string(positions.x.size()) + " of " +
-              std::to_string(n) + " particles (positions written outside a step without refreshSphPositionArrays)";
-    return false;
-  }
   ++s.meshes;
   const fluid::SurfaceParams sp = surfaceParamsFor(s.params, fluid::sphSpacing(fluid.world.params), eye, view_dir);
-  fluid::SurfaceInput input;
-  input.x = positions.x;
-  input.y = positions.y;
-  input.z = positions.z;
+  const fluid::SurfaceInput input{fluid::pointView(fluid.world.particles.position)};
   if (!s.params.async) {
     return finish(s, s.job.meshNow([&](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
       if (n == 0) {

@@ -83,17 +83,13 @@ void BM_BlobStepAndMesh(benchmark::State& state) {
   sp.order = fluid::SurfaceOrder::backToFront;
   sp.eye = glm::vec3(2.5f, 2.0f, -3.0f);
   sp.viewDir = glm::normalize(glm::vec3(0.0f, 0.5f, 0.0f) - sp.eye);
-  std::vector<float> xs, ys, zs;
   std::vector<double> ms;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     frame(s);
-    const auto& x = s.world.particles.position;
-    xs.resize(x.size());
-    ys.resize(x.size());
-    zs.resize(x.size());
-    for (std::size_t i = 0; i < x.size(); ++i) xs[i] = x[i].x, ys[i] = x[i].y, zs[i] = x[i].z;
-    fluid::SurfaceInput in{xs, ys, zs, s.world.particles.strength, s.world.particles.radius_scale, {}};
+    // The goo's own positions, read in place (one layout).
+    const fluid::SurfaceInput in{
+        fluid::pointView(s.world.particles.position), s.world.particles.strength, s.world.particles.radius_scale, {}};
     const fluid::SurfaceStatus st = fluid::extractWithPolicy(
         extractor, in, sp, fluid::BlobTentaclePolicy{s.world.particles.length_coord.data()}, mesh);
     if (!st.ok()) state.SkipWithError(st.error.c_str());

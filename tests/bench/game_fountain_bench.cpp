@@ -241,7 +241,7 @@ void meshFrameTable(const fluid::ParticlePositions& ps, const fluid::SurfacePara
   // (both threads: when it about equals the one-thread CPU time while the wall time does not halve,
   // the second thread found no free core).
   std::vector<double> wall[2], cpu[2], process2;
-  const fluid::SurfaceInput input{ps.x, ps.y, ps.z, {}, {}, {}};
+  const fluid::SurfaceInput input{fluid::pointView(ps)};
   auto run = [&](int k) {
     fluid::SurfaceParams sp = game_params;
     sp.threads = k + 1;
@@ -394,10 +394,7 @@ int main(int argc, char** argv) {
       for (const Run& r : runs)
         printRow(config.label + (r.fresh ? " fresh shapes" : r.point_by_point ? " point by point" : ""), t, frames, r);
       if (t == threads.front() && (mesh_reps > 0 || !dump_frame.empty())) {
-        const fluid::SphPositionArrays pa = fluid::sphPositionArrays(runs[0].f.world);
-        last_frame.x.assign(pa.x.begin(), pa.x.end());
-        last_frame.y.assign(pa.y.begin(), pa.y.end());
-        last_frame.z.assign(pa.z.begin(), pa.z.end());
+        last_frame = runs[0].f.world.particles.position;
         frame_params =
             game::surfaceParamsFor(surface_params, fluid::sphSpacing(runs[0].f.world.params), view.eye, view.dir);
       }

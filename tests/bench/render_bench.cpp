@@ -201,12 +201,6 @@ Result run(FluidMethod method, const std::vector<glm::vec3>& particles, const Ba
     createFluidRenderer(desc, r);
     fluid::SurfaceExtractor extractor;
     fluid::SurfaceMesh mesh;
-    std::vector<float> xs, ys, zs;
-    for (const glm::vec3& p : particles) {
-      xs.push_back(p.x);
-      ys.push_back(p.y);
-      zs.push_back(p.z);
-    }
     fluid::SurfaceParams sp;
     sp.rc = kRc;
     sp.threshold = kThreshold;
@@ -217,7 +211,7 @@ Result run(FluidMethod method, const std::vector<glm::vec3>& particles, const Ba
     sp.viewDir = -glm::vec3(glm::transpose(camera.view)[2]);
     for (int f = -1; f < frames; ++f) {
       const double t0 = now();
-      extractor.extract({xs, ys, zs, {}, {}, {}}, sp, mesh);
+      extractor.extract({fluid::pointView(particles)}, sp, mesh);
       const double t1 = now();
       drawBackdrop(backdrop, r.scene_fbo, camera, w, h);
       uploadFluidMesh(r, mesh.positions, mesh.normals, mesh.indices, error);

@@ -9,9 +9,6 @@
 //   bench_sph seeds [--from A] [--to B]     the randomised stability runs of tests/sph for seeds
 //                                           A..B (tests/sph/randomised_runs.hpp): every run that
 //                                           breaks a bound, and the count
-//   bench_sph layout [--steps N]            the copy of positions into x/y/z arrays that the
-//                                           surface mesher's caller made per frame, against
-//                                           sphPositionArrays (spans over the step's own arrays)
 //   bench_sph steps [--solver S] [--steps N] [--threads T]
 //                                           N steps of dambreak_box from t = 0 (a fixed, short
 //                                           workload for callgrind instruction counts)
@@ -346,51 +343,13 @@ int seedSweep(int from, int to) {
   return 0;
 }
 
-// The per-frame copy that sphPositionArrays removes: positions (vec3) into three float arrays,
-// as game/world/fluid_surface.cpp did before meshing, timed (median of `reps`) for dam-break
-// worlds of about 13k (the game fountain's goal), 24k and 97k particles after one step.
-int layoutCopy(int reps) {
-  std::printf("| particles | copy vec3 -> x/y/z, serial (ms, median) | sphPositionArrays (ms, median) |\n");
-  std::printf("|---|---|---|\n");
-  for (int per_side : {24, 29, 46}) {
-    const float r = 1.0f / (2.0f * (per_side + 1));
-    SphScene s = makeScene("dambreak_box", SphSolverKind::dfsph, {{"particle_radius", std::to_string(r)}});
-    if (!stepSph(s.world, 0.0f).ok()) return 1;
-    const ParticleStore& store = s.world.particles;
-    const std::size_t n = store.size();
-    std::vector<float> xs, ys, zs;
-    std::vector<double> copy_ms, span_ms;
-    double checksum = 0.0;
-    for (int rep = 0; rep < reps; ++rep) {
-      const auto t0 = std::chrono::steady_clock::now();
-      xs.resize(n);
-      ys.resize(n);
-      zs.resize(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        xs[i] = store.position[i].x;
-        ys[i] = store.position[i].y;
-        zs[i] = store.position[i].z;
-      }
-      const auto t1 = std::chrono::steady_clock::now();
-      const SphPositionArrays arrays = sphPositionArrays(s.world);
-      const auto t2 = std::chrono::steady_clock::now();
-      checksum += static_cast<double>(xs[rep % n] + arrays.y[rep % n]);
-      copy_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-      span_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
-    }
-    std::printf("| %zu | %.4f | %.6f |\n", n, median(copy_ms), median(span_ms));
-    if (!std::isfinite(checksum)) return 1;
-  }
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: bench_sph throughput [--steps N] | dambreak_box [--seconds T] [--threads 1,2] [--solver S] "
-                 "[--set k=v] | accuracy [--csv FILE] | front | seeds [--from A] [--to B] | layout [--steps N] | steps "
+                 "[--set k=v] | accuracy [--csv FILE] | front | seeds [--from A] [--to B] | steps "
                  "[--solver S] "
                  "[--steps N] "
                  "[--threads T] [--set key=value ...]\n");
@@ -473,7 +432,6 @@ int main(int argc, char** argv) {
   if (cmd == "dambreak_box") return damBreakBox(seconds, threads, extra, solver_given ? &solver : nullptr);
   if (cmd == "accuracy") return accuracy(csv);
   if (cmd == "front") return frontAgainstExperiment();
-  if (cmd == "layout") return layoutCopy(std::max(steps, 50));
   if (cmd == "steps") return fixedSteps(solver, steps, threads.front(), extra);
   if (cmd == "seeds") return seedSweep(seed_from, seed_to);
   std::fprintf(stderr, "bench_sph: unknown subcommand %s\n", cmd.c_str());

@@ -410,8 +410,8 @@ int main(int argc, char** argv) {
     for (Shape& sh : shapes) {
       // Round particle positions to float first: that is what the extractor sees.
       for (glm::dvec3& p : sh.ps) p = glm::dvec3(glm::vec3(p));
-      std::vector<float> xs, ys, zs;
-      for (const glm::dvec3& p : sh.ps) xs.push_back(float(p.x)), ys.push_back(float(p.y)), zs.push_back(float(p.z));
+      std::vector<glm::vec3> fs;
+      for (const glm::dvec3& p : sh.ps) fs.push_back(glm::vec3(p));
       const int dirs = 4000;
       double trueVol = 0;
       const double rMax = 4.0 + 3.0 + 1.0;
@@ -433,7 +433,7 @@ int main(int argc, char** argv) {
         std::vector<double> t;
         const int r = quick ? 2 : std::max(3, reps / 2);
         for (int i = 0; i < r + 1; ++i) {
-          const double ms_ = timeMs([&] { ex.extract({xs, ys, zs, {}, {}, {}}, p, m); });
+          const double ms_ = timeMs([&] { ex.extract({fluid::pointView(fs)}, p, m); });
           if (i) t.push_back(ms_);
         }
         const surface_test::Topology topo = surface_test::checkTopology(m);

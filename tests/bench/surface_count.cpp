@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
-  const fluid::SurfaceInput in{ps.x, ps.y, ps.z, {}, {}, {}};
+  const fluid::SurfaceInput in{fluid::pointView(ps)};
   for (int r = 0; r <= reps; ++r) {
     const fluid::SurfaceStatus st = extractor.extract(in, params, mesh);
     if (!st.ok()) {

@@ -5,7 +5,7 @@
 //
 //   bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]
 //   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests;
-//                                           ROUTE = ours | cache | splat | peer)
+//                                           ROUTE = ours | cache | splat | peer | peer-scalar)
 //
 // Timings: rounds interleave ours and the peer (1 thread, then 2 threads); each timed mesh follows
 // an untimed one of the same route (steady state, as a game meshing every frame); medians of N
@@ -19,6 +19,7 @@
 #include "load_average.hpp"
 #include "surface_peers_vtk.hpp"
 
+#include <immintrin.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <valgrind/callgrind.h>
@@ -26,6 +27,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -68,14 +70,30 @@ double timeCpuMs(F&& f, std::vector<double>& cpu) {
 // The dense peer: the same field f (paper §2, Rc = 3, strength 1) splatted into every lattice point of
 // the particles' bounding box (plus Rc), then Flying Edges with normals. Point (i, j, k) sits at
 // (i0 + i) S etc. on the global lattice, so its triangles are the dense-MC triangles of ours.
+//
+// Made as fast as we could (a slow peer flatters us; issue 34): the particles are put in z order by a
+// counting sort of their lattice z (each slice's rows are then written by neighbouring particles,
+// while they are in cache, and a z-slab task finds its particles by binary search); each particle's
+// anchor and rest are computed once; a row of its ball is one to three 8-wide AVX2 windows starting
+// at its leftmost possible point (no chord, floor or sqrt per row), each lane adding w^2 where
+// r^2 < Rc^2 by a masked load and store, so lanes outside the ball touch no memory. `scalar` keeps
+// the row-chord loop it replaced (per-row sqrt and floor/ceil, particles in input order), for the
+// before/after of that change (--count SET peer-scalar).
 struct DensePeer {
   std::int64_t i0[3] = {0, 0, 0};
   int dims[3] = {0, 0, 0};
   std::vector<float> lattice;
   std::vector<float> offsets;  // float(d S), d in [-range, range]: the lattice offsets of field.hpp
+  struct Prepared {
+    std::int32_t c[3];  // anchor - i0 per axis (lattice point of the particle's floor corner)
+    float rest[3];      // float(p - anchor S)
+  };
+  std::vector<Prepared> prepared, sorted;  // per particle; in z order
+  std::vector<std::uint32_t> zCount;
   benchpeers::FlyingEdges fe;
   std::unique_ptr<tbb::task_arena> arena;
   int threads = 0;
+  bool scalar = false;
 
   std::size_t bytes() const { return lattice.size() * sizeof(float); }
 
@@ -86,10 +104,8 @@ struct DensePeer {
     }  // (benchpeers::setThreads(nThreads) comes first, from the caller, untimed)
     const std::size_t n = ps.size();
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    const std::vector<float>* xyz[3] = {&ps.x, &ps.y, &ps.z};
-    for (int a = 0; a < 3; ++a)
-      for (std::size_t i = 0; i < n; ++i)
-        lo[a] = std::min(lo[a], double((*xyz[a])[i])), hi[a] = std::max(hi[a], double((*xyz[a])[i]));
+    for (std::size_t i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], double(ps[i][a])), hi[a] = std::max(hi[a], double(ps[i][a]));
     for (int a = 0; a < 3; ++a) {
       i0[a] = std::int64_t(std::floor((lo[a] - kRc) / s)) - 1;
       dims[a] = int(std::int64_t(std::ceil((hi[a] + kRc) / s)) + 1 - i0[a] + 1);
@@ -99,16 +115,115 @@ struct DensePeer {
     const int range = int(std::ceil(kRc / s)) + 2;
     offsets.resize(std::size_t(2 * range + 1));
     for (int d = -range; d <= range; ++d) offsets[std::size_t(d + range)] = float(double(d) * s);
+    if (scalar) {
+      splatScalar(ps, s, nThreads, range);
+    } else {
+      prepare(ps, s);
+      const int r = range - 2;
+      auto slab = [&](int zBegin, int zEnd) {
+        // Particles whose z reach [c - r, c + r + 1] meets the slab: a run of the z-sorted list.
+        const Prepared* first = std::lower_bound(sorted.data(), sorted.data() + n, zBegin - r - 1,
+                                                 [](const Prepared& p, int z) { return p.c[2] < z; });
+        const Prepared* last = std::upper_bound(first, static_cast<const Prepared*>(sorted.data() + n), zEnd - 1 + r,
+                                                [](int z, const Prepared& p) { return z < p.c[2]; });
+        splatAvx2(first, last, zBegin, zEnd, r);
+      };
+      if (nThreads <= 1) {
+        slab(0, dims[2]);
+      } else {
+        arena->execute([&] {
+          tbb::parallel_for(0, nThreads, [&](int t) { slab(dims[2] * t / nThreads, dims[2] * (t + 1) / nThreads); });
+        });
+      }
+    }
+    const double origin[3] = {double(i0[0]) * s, double(i0[1]) * s, double(i0[2]) * s};
+    return fe.run(lattice.data(), dims, s, origin, kT);
+  }
+
+  // Anchors and rests once per particle, then a stable counting sort by lattice z.
+  void prepare(const fluid::ParticlePositions& ps, double s) {
+    const std::size_t n = ps.size();
+    prepared.resize(n);
+    sorted.resize(n);
+    zCount.assign(std::size_t(dims[2]) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      Prepared& q = prepared[i];
+      for (int a = 0; a < 3; ++a) {
+        const double p = ps[i][a];
+        const std::int64_t anchor = std::int64_t(std::floor(p / s));
+        q.c[a] = std::int32_t(anchor - i0[a]);
+        q.rest[a] = float(p - double(anchor) * s);
+      }
+      ++zCount[std::size_t(q.c[2]) + 1];
+    }
+    for (std::size_t z = 1; z < zCount.size(); ++z) zCount[z] += zCount[z - 1];
+    for (const Prepared& q : prepared) sorted[zCount[std::size_t(q.c[2])]++] = q;
+  }
+
+  // Rows of each particle's ball in slices [zBegin, zEnd): windows of 8 lanes from x = c - r.
+  [[gnu::target("avx2")]] void splatAvx2(const Prepared* first, const Prepared* last, int zBegin, int zEnd, int r) {
+    const std::size_t sx = std::size_t(dims[0]), sxy = sx * std::size_t(dims[1]);
+    const float* off0 = offsets.data() + (r + 2);
+    const float rc2 = kRc * kRc, k = float(1.0 / (2.0 * double(kRc) * double(kRc)));
+    const int windows = (2 * r + 2 + 7) / 8;  // lanes for x in [c - r, c + r + 1]
+    assert(windows <= 4 && 2 * r + 2 <= 64);  // Rc / S <= 14 (the sets: 3, 5, 10)
+    const __m256 vrc2 = _mm256_set1_ps(rc2), vk = _mm256_set1_ps(k), vhalf = _mm256_set1_ps(0.5f);
+    float dy2[64], dz2[64];  // per offset -r .. r + 1 (r <= 31 here)
+    for (const Prepared* p = first; p != last; ++p) {
+      const int z0 = std::max(zBegin, p->c[2] - r), z1 = std::min(zEnd - 1, p->c[2] + r + 1);
+      if (z0 > z1) continue;
+      for (int d = -r; d <= r + 1; ++d) {
+        const float dy = off0[d] - p->rest[1], dz = off0[d] - p->rest[2];
+        dy2[d + r] = dy * dy;
+        dz2[d + r] = dz * dz;
+      }
+      __m256 dx2[4];
+      for (int w = 0; w < windows; ++w) {
+        // Lane l: x = c - r + 8w + l, offset d = 8w + l - r (past r + 1 the lanes only read the table's
+        // slack and are outside the ball).
+        float lane[8];
+        for (int l = 0; l < 8; ++l) {
+          const int d = 8 * w + l - r;
+          const float dx = d <= r + 2 ? off0[d] - p->rest[0] : 1e9f;
+          lane[l] = dx * dx;
+        }
+        dx2[w] = _mm256_loadu_ps(lane);
+      }
+      const int y0 = std::max(0, p->c[1] - r), y1 = std::min(dims[1] - 1, p->c[1] + r + 1);
+      for (int z = z0; z <= z1; ++z) {
+        const float fz = dz2[z - p->c[2] + r];
+        if (fz >= rc2) continue;
+        float* slice = lattice.data() + std::size_t(z) * sxy + std::size_t(p->c[0] - r);
+        for (int y = y0; y <= y1; ++y) {
+          const float dyz = dy2[y - p->c[1] + r] + fz;
+          if (dyz >= rc2) continue;
+          float* row = slice + std::size_t(y) * sx;
+          const __m256 vdyz = _mm256_set1_ps(dyz);
+          for (int w = 0; w < windows; ++w) {
+            const __m256 r2 = _mm256_add_ps(dx2[w], vdyz);
+            const __m256i in = _mm256_castps_si256(_mm256_cmp_ps(r2, vrc2, _CMP_LT_OQ));
+            const __m256 t = _mm256_sub_ps(_mm256_mul_ps(r2, vk), vhalf);
+            float* at = row + 8 * w;
+            const __m256 v = _mm256_add_ps(_mm256_maskload_ps(at, in), _mm256_mul_ps(t, t));
+            _mm256_maskstore_ps(at, in, v);
+          }
+        }
+      }
+    }
+  }
+
+  // The row-chord loop (input order, per-row sqrt and floor/ceil): the peer before issue 34.
+  void splatScalar(const fluid::ParticlePositions& ps, double s, int nThreads, int range) {
+    const std::size_t n = ps.size();
+    const std::size_t sx = std::size_t(dims[0]), sxy = sx * std::size_t(dims[1]);
     const float* off0 = offsets.data() + range;
     const float rc2 = kRc * kRc, k = float(1.0 / (2.0 * double(kRc) * double(kRc)));
-    // Splat by z-slabs of the lattice (one task per slab range; a particle touches the slices of its
-    // reach that lie in the slab): the same sums as one pass, in input order per point.
     auto splat = [&](int zBegin, int zEnd) {
       for (std::size_t i = 0; i < n; ++i) {
         std::int64_t anchor[3];
         float rest[3];
         for (int a = 0; a < 3; ++a) {
-          const double p = (*xyz[a])[i];
+          const double p = ps[i][a];
           anchor[a] = std::int64_t(std::floor(p / s));
           rest[a] = float(p - double(anchor[a]) * s);
         }
@@ -150,8 +265,6 @@ struct DensePeer {
         tbb::parallel_for(0, nThreads, [&](int t) { splat(dims[2] * t / nThreads, dims[2] * (t + 1) / nThreads); });
       });
     }
-    const double origin[3] = {double(i0[0]) * s, double(i0[1]) * s, double(i0[2]) * s};
-    return fe.run(lattice.data(), dims, s, origin, kT);
   }
 };
 
@@ -164,7 +277,7 @@ struct Ours {
     p.threshold = kT;
     p.cube = float(s);
     p.threads = threads;
-    last = extractor.extract({ps.x, ps.y, ps.z, {}, {}, {}}, p, mesh);
+    last = extractor.extract({fluid::pointView(ps)}, p, mesh);
     if (!last.ok()) {
       std::fprintf(stderr, "bench_surface_peers: %s\n", last.error.c_str());
       std::exit(1);
@@ -195,18 +308,15 @@ fluid::ParticlePositions load(const char* name) {
 fluid::ParticlePositions tiled(const fluid::ParticlePositions& base, int t) {
   float lo[2] = {1e30f, 1e30f}, hi[2] = {-1e30f, -1e30f};
   for (std::size_t i = 0; i < base.size(); ++i) {
-    lo[0] = std::min(lo[0], base.x[i]), hi[0] = std::max(hi[0], base.x[i]);
-    lo[1] = std::min(lo[1], base.y[i]), hi[1] = std::max(hi[1], base.y[i]);
+    lo[0] = std::min(lo[0], base[i].x), hi[0] = std::max(hi[0], base[i].x);
+    lo[1] = std::min(lo[1], base[i].y), hi[1] = std::max(hi[1], base[i].y);
   }
   const float step[2] = {std::ceil(hi[0] - lo[0] + 2 * kRc), std::ceil(hi[1] - lo[1] + 2 * kRc)};
   fluid::ParticlePositions out;
   for (int ty = 0; ty < t; ++ty)
     for (int tx = 0; tx < t; ++tx)
-      for (std::size_t i = 0; i < base.size(); ++i) {
-        out.x.push_back(base.x[i] + float(tx) * step[0]);
-        out.y.push_back(base.y[i] + float(ty) * step[1]);
-        out.z.push_back(base.z[i]);
-      }
+      for (std::size_t i = 0; i < base.size(); ++i)
+        out.push_back({base[i].x + float(tx) * step[0], base[i].y + float(ty) * step[1], base[i].z});
   return out;
 }
 
@@ -216,7 +326,8 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-// --count: one warm mesh of SET by ROUTE (ours | peer), one thread, between callgrind's start and stop.
+// --count: one warm mesh of SET by ROUTE (ours | cache | splat | peer | peer-scalar), one thread, between
+// callgrind's start and stop.
 int countMode(const std::string& set, const std::string& route) {
   const float cube = set == "blob" ? 0.3f : set == "explosion" ? 0.6f : 1.0f;
   const fluid::ParticlePositions ps = load(set.c_str());
@@ -227,7 +338,8 @@ int countMode(const std::string& set, const std::string& route) {
   fluid::SurfaceParams params;
   if (route == "cache") params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
   if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
-  auto run = [&] { return route == "peer" ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
+  peer.scalar = route == "peer-scalar";
+  auto run = [&] { return route.rfind("peer", 0) == 0 ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
   CALLGRIND_START_INSTRUMENTATION;
   const std::size_t tris = run();
@@ -270,8 +382,9 @@ void setsTables(int reps, std::ostringstream& md) {
   std::ostringstream cpuTable;
   for (Set& set : sets) {
     Ours o1, o2, oc, os;  // oc, os: one thread with the field route fixed (cache, splat)
-    DensePeer p1, p2;
-    std::vector<double> to1, to2, tp1, tp2, co1, cp1, cc1, cs1;
+    DensePeer p1, p2, p0;  // p0: the peer's row-chord splat of before issue 34 (DensePeer::scalar)
+    p0.scalar = true;
+    std::vector<double> to1, to2, tp1, tp2, co1, cp1, cc1, cs1, cp0;
     fluid::SurfaceParams cacheRoute, splatRoute;
     cacheRoute.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
     splatRoute.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
@@ -292,9 +405,11 @@ void setsTables(int reps, std::ostringstream& md) {
       benchpeers::setThreads(1);
       p1.mesh(set.ps, set.cube, 1);
       tp1.push_back(timeCpuMs([&] { tri[1] = p1.mesh(set.ps, set.cube, 1); }, cp1));
+      p0.mesh(set.ps, set.cube, 1);
+      timeCpuMs([&] { p0.mesh(set.ps, set.cube, 1); }, cp0);
     }
     const double mo1 = median(to1), mp1 = median(tp1), mo2 = median(to2), mp2 = median(tp2);
-    const double mc1 = median(co1), mq1 = median(cp1), mcc = median(cc1), mcs = median(cs1);
+    const double mc1 = median(co1), mq1 = median(cp1), mcc = median(cc1), mcs = median(cs1), mq0 = median(cp0);
     const bool met = mo1 <= 0.8 * mp1, metCpu = mc1 <= 0.8 * mq1;
     allMet = allMet && met && tri[0] == tri[1];
     allMetCpu = allMetCpu && metCpu && tri[0] == tri[1];
@@ -310,7 +425,8 @@ void setsTables(int reps, std::ostringstream& md) {
     cpuTable << "| " << set.name << " | " << (o1.mesh.stats.splatBlocks ? "slice splat" : "particle cache") << " | "
              << fmt("%.3f", mc1) << " | " << fmt("%.3f", mq1) << " | " << fmt("%.2f", mc1 / mq1)
              << (metCpu ? " (met)" : " (**not met**)") << " | " << fmt("%.3f", mcc) << " | " << fmt("%.3f", mcs)
-             << " | " << fmt("%.2f", mcc / mq1) << " | " << fmt("%.2f", mcs / mq1) << " |\n";
+             << " | " << fmt("%.2f", mcc / mq1) << " | " << fmt("%.2f", mcs / mq1) << " | " << fmt("%.3f", mq0) << " | "
+             << fmt("%.2f", mc1 / mq0) << " |\n";
   }
   md << "\nThe same one-thread meshes timed by the CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`, "
         "medians of the same rounds): both routes run on the calling thread there, and this leaves out the time it "
@@ -319,7 +435,8 @@ void setsTables(int reps, std::ostringstream& md) {
         "four columns time both field routes forced, in the same rounds (both give the same bits).\n\n"
         "| set | route picked | ours CPU ms | peer CPU ms | ours / peer (CPU) | particle cache CPU ms | slice splat "
         "CPU "
-        "ms | cache / peer | splat / peer |\n|---|---|---|---|---|---|---|---|---|\n"
+        "ms | cache / peer | splat / peer | peer before issue 34 (row-chord splat) CPU ms | ours / that peer |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n"
      << cpuTable.str();
   md << "\nAll four one-thread ratios at most 0.8 with equal triangles: wall clock **" << (allMet ? "met" : "not met")
      << "**, CPU time **" << (allMetCpu ? "met" : "not met") << "**.\n";
@@ -328,18 +445,21 @@ void setsTables(int reps, std::ostringstream& md) {
 // Instruction counts of one warm mesh (fountain, spray) by each route, from callgrind runs of `self`.
 void callgrindTable(const char* self, std::ostringstream& md) {
   md << "\nInstruction counts (callgrind, one warm mesh on one thread between client requests: "
-        "`bench_surface_peers --count SET ours|cache|splat|peer` under `valgrind --tool=callgrind --instr-atstart=no`; "
-        "ours = the default automatic route, cache / splat = that field route forced; a memset counts about one "
-        "instruction per byte there):\n\n"
-        "| set | ours Ir | particle cache Ir | slice splat Ir | peer Ir | ours / peer | cache / peer | splat / peer |\n"
-        "|---|---|---|---|---|---|---|---|\n";
+        "`bench_surface_peers --count SET ours|cache|splat|peer|peer-scalar` under `valgrind --tool=callgrind "
+        "--instr-atstart=no`; ours = the default automatic route, cache / splat = that field route forced, "
+        "peer-scalar = the peer's row-chord splat of before issue 34; a memset counts about one instruction per "
+        "byte there):\n\n"
+        "| set | ours Ir | particle cache Ir | slice splat Ir | peer Ir | ours / peer | cache / peer | splat / peer | "
+        "peer before issue 34 Ir |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
   for (const char* set : {"fountain", "blob", "explosion", "spray"}) {
     const double a = callgrindIr(self, set, "ours"), c = callgrindIr(self, set, "cache"),
-                 sp = callgrindIr(self, set, "splat"), b = callgrindIr(self, set, "peer");
+                 sp = callgrindIr(self, set, "splat"), b = callgrindIr(self, set, "peer"),
+                 b0 = callgrindIr(self, set, "peer-scalar");
     std::printf("callgrind %s: ours %.0f cache %.0f splat %.0f peer %.0f ratio %.3f\n", set, a, c, sp, b, a / b);
     md << "| " << set << " | " << fmt("%.0f", a) << " | " << fmt("%.0f", c) << " | " << fmt("%.0f", sp) << " | "
        << fmt("%.0f", b) << " | " << fmt("%.3f", a / b) << " | " << fmt("%.3f", c / b) << " | " << fmt("%.3f", sp / b)
-       << " |\n";
+       << " | " << fmt("%.0f", b0) << " |\n";
   }
 }
 
@@ -427,7 +547,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|cache|splat|peer\n");
+                   "       bench_surface_peers --count SET ours|cache|splat|peer|peer-scalar\n");
       return 2;
     }
   }
@@ -439,7 +559,8 @@ int main(int argc, char** argv) {
      << " --out docs/surface.md` (optional target, built only when CMake finds VTK 9: "
      << "`apt-get install libvtk9-dev`, then `cmake --build build/dev --target bench_surface_peers` and run "
      << "`build/dev/tests/bench/bench_surface_peers`). Peer = every particle splatted into a dense float lattice over "
-     << "the particles' bounding box plus Rc (same f, same global lattice, rows of each particle's ball, split in "
+     << "the particles' bounding box plus Rc (same f, same global lattice; particles in lattice-z order by a counting "
+     << "sort, each row of a particle's ball one to three 8-wide AVX2 windows with masked loads and stores; split in "
      << "z-slabs over the threads), then VTK 9.1 `vtkFlyingEdges3D` with normals (TBB backend, "
      << "`vtkSMPTools::Initialize(threads)`). Ours = `SurfaceExtractor` with default `SurfaceParams` (Rc = 3, "
      << "T = 0.2; field route `automatic`: slice splat or the paper's §6 particle cache, per the CPU table below). "

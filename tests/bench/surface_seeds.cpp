@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     if (failure.empty()) continue;
     ++failed;
     std::printf("seed %lld (%s, %zu particles): %s\n  reproduce: bench_surface_seeds --from %lld --to %lld\n", seed,
-                r.what.c_str(), r.x.size(), failure.c_str(), seed, seed);
+                r.what.c_str(), r.points.size(), failure.c_str(), seed, seed);
     std::fflush(stdout);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

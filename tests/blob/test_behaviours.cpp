@@ -49,13 +49,7 @@ TEST(BlobBehaviours, BallReachesSphericity09WithinThreeSeconds) {
 // on the marching-slices mesh with the particles' strength and radius scale (paper §7).
 void tentacleMeshRadii(const fluid::BlobWorld& w, float& base, float& tip) {
   const auto& x = w.particles.position;
-  std::vector<float> xs, ys, zs;
-  for (const glm::vec3& p : x) {
-    xs.push_back(p.x);
-    ys.push_back(p.y);
-    zs.push_back(p.z);
-  }
-  fluid::SurfaceInput in{xs, ys, zs, w.particles.strength, w.particles.radius_scale, {}};
+  const fluid::SurfaceInput in{fluid::pointView(x), w.particles.strength, w.particles.radius_scale, {}};
   fluid::SurfaceParams sp;
   sp.rc = 2.0f * w.params.spacing;
   sp.cube = w.params.spacing / 4.0f;

@@ -39,10 +39,8 @@ TEST(BlobTentacleUv, VGrowsFromBaseToTipAndUGoesRound) {
   b.tentacle_length = 1.5f;
   blobtest::runUntilGoal(w, b, 1.0f, glm::vec3(6.0f, 1.0f, 0.0f), false);
 
-  const auto& x = w.particles.position;
-  std::vector<float> xs, ys, zs;
-  for (const glm::vec3& p : x) xs.push_back(p.x), ys.push_back(p.y), zs.push_back(p.z);
-  fluid::SurfaceInput in{xs, ys, zs, w.particles.strength, w.particles.radius_scale, {}};
+  const fluid::SurfaceInput in{
+      fluid::pointView(w.particles.position), w.particles.strength, w.particles.radius_scale, {}};
   fluid::SurfaceParams sp;
   sp.rc = 2.0f * w.params.spacing;
   sp.cube = w.params.spacing / 4.0f;

@@ -73,8 +73,7 @@ TEST(ParticleIo, BinaryPlyRoundTripsAndTruncationIsReported) {
   fluid::ParticlePositions loaded;
   auto status = fluid::readParticleFile(dir / "p.ply", loaded);
   ASSERT_TRUE(status.ok()) << status.error;
-  EXPECT_EQ(loaded.x, particles.x);
-  EXPECT_EQ(loaded.z, particles.z);
+  EXPECT_EQ(loaded, particles);
 
   const auto size = fs::file_size(dir / "p.ply");
   fs::resize_file(dir / "p.ply", size - 5);
@@ -93,9 +92,7 @@ TEST(ParticleIo, XyzRoundTripIsExactAndRefusesToOverwrite) {
   ASSERT_TRUE(fluid::writeParticleXyz(dir / "a.xyz", particles).ok());
   fluid::ParticlePositions loaded;
   ASSERT_TRUE(fluid::readParticleFile(dir / "a.xyz", loaded).ok());
-  EXPECT_EQ(loaded.x, particles.x);
-  EXPECT_EQ(loaded.y, particles.y);
-  EXPECT_EQ(loaded.z, particles.z);
+  EXPECT_EQ(loaded, particles);
 
   const auto refused = fluid::writeParticleXyz(dir / "a.xyz", {});
   EXPECT_NE(refused.error.find("already exists"), std::string::npos);

@@ -53,9 +53,7 @@ bool createFluidScene(FluidScene& s, int width, int height, glm::vec3 eye, std::
         for (int k = -6; k <= 6; ++k) {
           const glm::vec3 p = c + 0.1f * glm::vec3(i, j, k);
           if (glm::length(p - c) > r) continue;
-          s.x.push_back(p.x);
-          s.y.push_back(p.y);
-          s.z.push_back(p.z);
+          s.particles.push_back(p);
         }
   };
   blob({0.0f, 0.5f, 0.0f}, 0.4f);
@@ -86,7 +84,7 @@ bool extractMesh(FluidScene& s, fluid::SurfaceOrder order, bool exact_slabs, std
   p.eye = s.camera.eye;
   p.viewDir = kFluidTarget - s.camera.eye;
   p.exactSlabOrder = exact_slabs;
-  const fluid::SurfaceStatus st = s.extractor.extract({s.x, s.y, s.z, {}, {}, {}}, p, s.mesh);
+  const fluid::SurfaceStatus st = s.extractor.extract({fluid::pointView(s.particles)}, p, s.mesh);
   error = st.error;
   return st.ok();
 }

@@ -18,7 +18,7 @@ inline constexpr glm::vec3 kFluidTarget{-0.2f, 0.45f, 0.15f};  // the camera loo
 struct FluidScene {
   engine::FluidCamera camera;
   GLuint backdrop_program = 0, backdrop_vao = 0, backdrop_vbo = 0;
-  std::vector<float> x, y, z;  // particles
+  std::vector<glm::vec3> particles;
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
   int width = 0, height = 0;

@@ -34,11 +34,7 @@ std::vector<unsigned char> readRgba8(GLuint fbo, int w, int h) {
   return px;
 }
 
-std::vector<glm::vec3> positionsOf(const FluidScene& s) {
-  std::vector<glm::vec3> p(s.x.size());
-  for (std::size_t i = 0; i < p.size(); ++i) p[i] = {s.x[i], s.y[i], s.z[i]};
-  return p;
-}
+std::vector<glm::vec3> positionsOf(const FluidScene& s) { return s.particles; }
 
 // Water mask: pixels that differ from the frame without fluid by more than 2/255 in a channel.
 std::vector<std::uint8_t> waterMask(const std::vector<unsigned char>& image, const std::vector<unsigned char>& bg) {

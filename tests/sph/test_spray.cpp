@@ -216,8 +216,7 @@ TEST(SphSpray, ParticlesAddedWhileThereIsSprayAreWater) {
   EXPECT_EQ(w.particles.spray_count, spray);
   const auto at = std::find(w.particles.id.begin(), w.particles.id.end(), id) - w.particles.id.begin();
   EXPECT_EQ(static_cast<std::size_t>(at), w.particles.sphCount() - 1);
-  EXPECT_EQ(w.particles.position_x.size(), w.particles.size());
-  EXPECT_EQ(w.particles.position_x[static_cast<std::size_t>(at)], 0.51f);
+  EXPECT_EQ(w.particles.position[static_cast<std::size_t>(at)].x, 0.51f);
   ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
 }
 

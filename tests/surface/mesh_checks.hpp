@@ -86,7 +86,16 @@ inline fluid::ParticlePositions loadSet(const std::string& name) {
   return p;
 }
 
-inline fluid::SurfaceInput inputOf(const fluid::ParticlePositions& p) { return {p.x, p.y, p.z, {}, {}, {}}; }
+inline fluid::SurfaceInput inputOf(const fluid::ParticlePositions& p) { return {fluid::pointView(p)}; }
+
+// Points made from per-axis coordinate lists (test data written axis by axis), packed as the
+// mesher's input layout.
+inline std::vector<glm::vec3> packPoints(const std::vector<float>& x, const std::vector<float>& y,
+                                         const std::vector<float>& z) {
+  std::vector<glm::vec3> out(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) out[i] = {x[i], y[i], z[i]};
+  return out;
+}
 
 // Hidden-style case (paper Fig. 4b): a thin hemispherical bowl of radius 8 open at the top, whose
 // inner surface has local minima that no particle's downward step reaches. With S = 0.5 one block
@@ -95,9 +104,8 @@ inline fluid::ParticlePositions uprightBowl() {
   fluid::ParticlePositions p;
   for (float th = 0.0f; th < 1.55f; th += 0.09f)
     for (float ph = 0.0f; ph < 6.28f; ph += 0.09f / std::max(0.09f, std::sin(th))) {
-      p.x.push_back(16.0f + 8.0f * std::sin(th) * std::cos(ph));
-      p.y.push_back(16.0f + 8.0f * std::sin(th) * std::sin(ph));
-      p.z.push_back(-16.0f - 8.0f * std::cos(th));
+      p.push_back({16.0f + 8.0f * std::sin(th) * std::cos(ph), 16.0f + 8.0f * std::sin(th) * std::sin(ph),
+                   -16.0f - 8.0f * std::cos(th)});
     }
   return p;
 }
@@ -107,9 +115,9 @@ inline fluid::ParticlePositions uprightBowl() {
 inline fluid::ParticlePositions blobOffsetBy1e5(fluid::SurfaceParams& params) {
   fluid::ParticlePositions p = loadSet("blob.xyz");
   for (std::size_t i = 0; i < p.size(); ++i) {
-    p.x[i] += 1e5f;
-    p.y[i] -= 1e5f;
-    p.z[i] += 1e5f;
+    p[i].x += 1e5f;
+    p[i].y -= 1e5f;
+    p[i].z += 1e5f;
   }
   params.cube = 0.3f;
   params.originX = 1e5;

@@ -39,11 +39,12 @@
 namespace surface_test {
 
 struct RandomSet {
-  std::vector<float> x, y, z, strength, scale;
+  std::vector<glm::vec3> points;
+  std::vector<float> strength, scale;
   fluid::SurfaceParams params;
   int blockSizes[3] = {0, 0, 0};  // 0 = auto
   std::string what;               // the kinds drawn, for messages
-  fluid::SurfaceInput input() const { return {x, y, z, strength, scale, {}}; }
+  fluid::SurfaceInput input() const { return {fluid::pointView(points), strength, scale, {}}; }
 };
 
 namespace random_detail {
@@ -60,11 +61,7 @@ struct Draw {
 
 // Adds one group of particles of `kind` around `c` (world units); s = cube edge, span = set size.
 inline void addGroup(RandomSet& r, Draw& d, int kind, const double c[3], double s, double span) {
-  auto push = [&](double px, double py, double pz) {
-    r.x.push_back(float(px));
-    r.y.push_back(float(py));
-    r.z.push_back(float(pz));
-  };
+  auto push = [&](double px, double py, double pz) { r.points.push_back({float(px), float(py), float(pz)}); };
   // A coordinate snapped to the lattice (a multiple of S), sometimes one float step off it.
   auto snap = [&](double v) {
     float f = float(std::round(v / s) * double(float(s)));
@@ -191,17 +188,18 @@ inline RandomSet drawRandomSet(std::uint64_t seed) {
     p.rc = s * float(d.pick(2, 4));
     const double q = std::round(c[0] / s) * double(s), w = std::round(c[1] / s) * double(s),
                  e = std::round(c[2] / s) * double(s);
-    const std::vector<float> lx = {float(q)}, ly = {float(w)}, lz = {float(e)};
-    const std::int64_t ci = std::int64_t(std::floor(double(lx[0]) / double(s) + 0.5)),
-                       cj = std::int64_t(std::floor(double(ly[0]) / double(s) + 0.5)),
-                       ck = std::int64_t(std::floor(double(lz[0]) / double(s) + 0.5));
-    p.threshold = fluid::surfaceFieldAtCorner({lx, ly, lz, {}, {}, {}}, p, ci + 1, cj, ck);
+    const std::vector<glm::vec3> lone = {{float(q), float(w), float(e)}};
+    const std::int64_t ci = std::int64_t(std::floor(double(lone[0].x) / double(s) + 0.5)),
+                       cj = std::int64_t(std::floor(double(lone[0].y) / double(s) + 0.5)),
+                       ck = std::int64_t(std::floor(double(lone[0].z) / double(s) + 0.5));
+    p.threshold = fluid::surfaceFieldAtCorner({fluid::pointView(lone)}, p, ci + 1, cj, ck);
     if (!(p.threshold > 0.0f && p.threshold < 0.25f)) p.threshold = 0.2f;
     const int n = d.pick(1, 40), cells = std::max(2, int(span / s));
     for (int i = 0; i < n; ++i) {
-      r.x.push_back(float(q + d.pick(-cells / 2, cells / 2) * double(s)));
-      r.y.push_back(float(w + d.pick(-cells / 2, cells / 2) * double(s)));
-      r.z.push_back(float(e + d.pick(-cells / 2, cells / 2) * double(s)));
+      const float px = float(q + d.pick(-cells / 2, cells / 2) * double(s));
+      const float py = float(w + d.pick(-cells / 2, cells / 2) * double(s));
+      const float pz = float(e + d.pick(-cells / 2, cells / 2) * double(s));
+      r.points.push_back({px, py, pz});
     }
   } else {
     // Two or three groups of other kinds, with radius scales and strengths.
@@ -214,7 +212,7 @@ inline RandomSet drawRandomSet(std::uint64_t seed) {
       addGroup(r, d, k, cg, s, span * 0.5);
     }
     const bool scales = d.coin(0.7), strengths = d.coin(0.7);
-    for (std::size_t i = 0; i < r.x.size(); ++i) {
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
       if (scales) r.scale.push_back(float(d.uni(0.3, 2.0)));
       if (strengths) r.strength.push_back(float(d.uni(0.5, 2.0)));
     }
@@ -313,32 +311,31 @@ inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std:
   // in frame-z order. The oracle therefore meshes the set rotated into that frame (same sums, so
   // the same bits), and mesher positions are rotated the same way before they are compared.
   const fluid::detail::SweepFrame frame = fluid::detail::chooseFrame(p);
-  const std::span<const float> world[3] = {in.x, in.y, in.z};
-  std::vector<float> rotated[3];
+  std::vector<glm::vec3> rotated(r.points.size());
   const double origin[3] = {p.originX, p.originY, p.originZ};
   fluid::SurfaceParams po = p;
   po.order = fluid::SurfaceOrder::none;
   double* po3[3] = {&po.originX, &po.originY, &po.originZ};
   for (int a = 0; a < 3; ++a) {
-    for (float v : world[frame.axis[a]]) rotated[a].push_back(float(frame.sign[a]) * v);
+    for (std::size_t i = 0; i < rotated.size(); ++i) rotated[i][a] = float(frame.sign[a]) * r.points[i][frame.axis[a]];
     *po3[a] = frame.sign[a] * origin[frame.axis[a]];
   }
   auto toFrame = [&](glm::vec3 w) {
     return glm::vec3(float(frame.sign[0]) * w[frame.axis[0]], float(frame.sign[1]) * w[frame.axis[1]],
                      float(frame.sign[2]) * w[frame.axis[2]]);
   };
-  fluid::SurfaceStatus st = ck.dense.extract(
-      fluid::BaselineMethod::dense, {rotated[0], rotated[1], rotated[2], in.strength, in.radiusScale, {}}, po, ck.ref);
+  fluid::SurfaceStatus st = ck.dense.extract(fluid::BaselineMethod::dense,
+                                             {fluid::pointView(rotated), in.strength, in.radiusScale, {}}, po, ck.ref);
   if (!st.ok()) return "dense oracle: " + st.error;
   const std::vector<Tri> refTris = canonicalTriangles(ck.ref);
   std::unordered_map<std::uint64_t, glm::vec3> refPos;
   for (std::size_t v = 0; v < ck.ref.positions.size(); ++v) refPos[ck.ref.edgeKeys[v]] = ck.ref.positions[v];
   // Seeding corners (§4): each particle's nearest lattice corner, in the sweep frame.
   std::vector<glm::dvec3> frameSeeds;
-  for (std::size_t i = 0; i < rotated[0].size(); ++i)
-    frameSeeds.emplace_back(std::floor(double(rotated[0][i]) / double(p.cube) + 0.5),
-                            std::floor(double(rotated[1][i]) / double(p.cube) + 0.5),
-                            std::floor(double(rotated[2][i]) / double(p.cube) + 0.5));
+  for (const glm::vec3& q : rotated)
+    frameSeeds.emplace_back(std::floor(double(q.x) / double(p.cube) + 0.5),
+                            std::floor(double(q.y) / double(p.cube) + 0.5),
+                            std::floor(double(q.z) / double(p.cube) + 0.5));
   for (int b : r.blockSizes) {
     p.blockCubes = b;
     const std::string at = "blockCubes " + std::to_string(b);

@@ -78,13 +78,13 @@ TEST(BlockSeams, ParticleJustBelowALatticePlaneWithRcAWholeNumberOfCubes) {
     for (float x : {-2.87305838e-20f, -1e-30f, -std::numeric_limits<float>::denorm_min(), std::nextafter(0.0f, -1.0f),
                     -1e-9f, 0.0f}) {
       for (int blockCubes : {4, 5, 6, 10}) {
-        const std::vector<float> xs = {x, x, 3.0f * s}, ys = {0.0f, 0.5f, 0.25f}, zs = {0.0f, 0.1f, 0.3f};
+        const std::vector<glm::vec3> ps = {{x, 0.0f, 0.0f}, {x, 0.5f, 0.1f}, {3.0f * s, 0.25f, 0.3f}};
         fluid::SurfaceParams p;
         p.cube = s;
         p.rc = s * float(m);
         p.blockCubes = blockCubes;
         expectOracleAtOneTwoThreeThreads(
-            {xs, ys, zs, {}, {}, {}}, p, 8,
+            {fluid::pointView(ps)}, p, 8,
             "x " + std::to_string(x) + ", Rc/S " + std::to_string(m) + ", blockCubes " + std::to_string(blockCubes));
       }
     }

@@ -134,28 +134,28 @@ TEST(FieldRoutes, HiddenStyleCases) {
     expectRoutesAgree(inputOf(ps), p, "offset 1e5", 1000);
   }
   {  // field exactly T at corners (Rc = 2, S = 1, T = 1/8 - 1/2 squared)
-    const std::vector<float> x = {0, 3}, y = {0, 0}, z = {0, 1};
+    const std::vector<glm::vec3> ps = {{0, 0, 0}, {3, 0, 1}};
     fluid::SurfaceParams p;
     p.rc = 2.0f;
     p.threshold = 0.140625f;
-    expectRoutesAgree({x, y, z, {}, {}, {}}, p, "exactly T");
+    expectRoutesAgree({fluid::pointView(ps)}, p, "exactly T");
   }
   {  // coincident particles
-    const std::vector<float> x(7, 1.25f), y(7, -2.5f), z(7, 0.75f);
+    const std::vector<glm::vec3> ps(7, glm::vec3(1.25f, -2.5f, 0.75f));
     fluid::SurfaceParams p;
     p.cube = 0.25f;
-    expectRoutesAgree({x, y, z, {}, {}, {}}, p, "coincident", 100);
+    expectRoutesAgree({fluid::pointView(ps)}, p, "coincident", 100);
   }
   {  // particles on corners and block faces, tiny blocks (many seams, margins clamp every side)
-    std::vector<float> x, y, z;
+    std::vector<glm::vec3> ps;
     for (float a : {-4.0f, -2.5f, 0.0f, 1.5f, 4.0f, 4.5f, 8.0f})
       for (float b : {-4.0f, -1.0f, 0.0f, 4.0f})
-        for (float c : {0.0f, 2.0f, 4.0f}) x.push_back(a), y.push_back(b), z.push_back(c);
+        for (float c : {0.0f, 2.0f, 4.0f}) ps.push_back({a, b, c});
     for (int blockCubes : {4, 5, 8}) {
       fluid::SurfaceParams p;
       p.cube = 0.5f;
       p.blockCubes = blockCubes;
-      expectRoutesAgree({x, y, z, {}, {}, {}}, p, "corners, blockCubes " + std::to_string(blockCubes), 100);
+      expectRoutesAgree({fluid::pointView(ps)}, p, "corners, blockCubes " + std::to_string(blockCubes), 100);
     }
   }
   {  // per-particle strength and radius scale (Rc_i differ: reach and disc per particle)
@@ -167,7 +167,7 @@ TEST(FieldRoutes, HiddenStyleCases) {
     }
     fluid::SurfaceParams p;
     p.cube = 0.75f;
-    expectRoutesAgree({ps.x, ps.y, ps.z, strength, scale, {}}, p, "strength and radius scale", 1000);
+    expectRoutesAgree({fluid::pointView(ps), strength, scale, {}}, p, "strength and radius scale", 1000);
   }
 }
 
@@ -188,7 +188,7 @@ TEST(FieldRoutes, UserDataAndPoliciesKeepTheCacheRoute) {
   for (std::size_t i = 0; i < ps.size(); ++i) user[i] = glm::vec4(float(i), 1.0f, -2.0f, 0.5f);
   fluid::SurfaceParams p;
   p.cube = 0.3f;
-  const fluid::SurfaceInput in{ps.x, ps.y, ps.z, {}, {}, user};
+  const fluid::SurfaceInput in{fluid::pointView(ps), {}, {}, user};
   const fluid::SurfaceMesh cache = meshWith(in, p, fluid::SurfaceFieldRoute::particleCache);
   const fluid::SurfaceMesh splat = meshWith(in, p, fluid::SurfaceFieldRoute::sliceSplat);
   ASSERT_FALSE(cache.attributes.empty());

@@ -65,7 +65,7 @@ TEST(MarchingSlices, LoneParticleIsClosedSphereOfAnalyticRadius) {
   const std::vector<float> x = {0.37f}, y = {-0.21f}, z = {0.05f};
   fluid::SurfaceParams p;
   p.cube = 0.1f;
-  const fluid::SurfaceMesh m = slices({x, y, z, {}, {}, {}}, p);
+  const fluid::SurfaceMesh m = slices({fluid::pointView(packPoints(x, y, z))}, p);
   const Topology t = checkTopology(m);
   EXPECT_GT(t.triangles, 500u);
   EXPECT_EQ(t.badEdges, 0u);
@@ -195,7 +195,7 @@ TEST(MarchingSlices, ParticleOrderIsZThenIndexForRadixAndComparisonSorts) {
       std::vector<fluid::detail::Particle> ps;
       std::vector<fluid::detail::ParticleSortKey> scratch;
       double rcMax = 0;
-      fluid::detail::prepareParticles(fluid::SurfaceInput{x, y, z, {}, {}, {}}, params, f, ps, rcMax, &scratch);
+      fluid::detail::prepareParticles({fluid::pointView(packPoints(x, y, z))}, params, f, ps, rcMax, &scratch);
       ASSERT_EQ(ps.size(), n);
       for (std::size_t r = 0; r < n; ++r) {
         ASSERT_EQ(ps[r].index, expect[r]) << "n " << n << " frame " << frame << " rank " << r;
@@ -248,7 +248,8 @@ TEST(MarchingSlices, ParticlesOnCornersAndBlockBoundaries) {
     fluid::SurfaceParams p;
     p.cube = 0.5f;
     p.blockCubes = blockCubes;
-    const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+    const std::vector<glm::vec3> points = packPoints(x, y, z);
+    const fluid::SurfaceInput in{fluid::pointView(points)};
     const fluid::SurfaceMesh m = slices(in, p);
     std::size_t onFace = 0;
     for (const fluid::SurfaceBlockRange& b : m.blocks)
@@ -266,15 +267,13 @@ TEST(MarchingSlices, FieldExactlyEqualToThresholdAtCorners) {
   // Rc = 2, S = 1: a particle on a corner gives u = r^2 / 8 = 1/8 at its 6 axis neighbours, so
   // f = (1/8 - 1/2)^2 = 0.140625 exactly, a float. With T = 0.140625 those corners sit exactly
   // on the threshold (outside, since inside is f > T) and vertices land on corners.
-  const std::vector<float> x = {0, 3}, y = {0, 0}, z = {0, 1};
+  const std::vector<glm::vec3> points = {{0, 0, 0}, {3, 0, 1}};
   fluid::SurfaceParams p;
   p.rc = 2.0f;
   p.cube = 1.0f;
   p.threshold = 0.140625f;
-  const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
-  ASSERT_EQ(fluid::surfaceFieldAtCorner(
-                {std::span(x).first(1), std::span(y).first(1), std::span(z).first(1), {}, {}, {}}, p, 1, 0, 0),
-            p.threshold);
+  const fluid::SurfaceInput in{fluid::pointView(points)};
+  ASSERT_EQ(fluid::surfaceFieldAtCorner({fluid::pointView(std::span(points).first(1))}, p, 1, 0, 0), p.threshold);
   const fluid::SurfaceMesh m = slices(in, p);
   const Topology t = checkTopology(m);
   EXPECT_GT(t.triangles, 0u);
@@ -284,10 +283,10 @@ TEST(MarchingSlices, FieldExactlyEqualToThresholdAtCorners) {
 }
 
 TEST(MarchingSlices, CoincidentParticles) {
-  const std::vector<float> x(7, 1.25f), y(7, -2.5f), z(7, 0.75f);
+  const std::vector<glm::vec3> points(7, glm::vec3(1.25f, -2.5f, 0.75f));
   fluid::SurfaceParams p;
   p.cube = 0.25f;
-  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 100);
+  expectClosedAndEqualToOracle({fluid::pointView(points)}, p, 100);
 }
 
 TEST(MarchingSlices, UprightBowlSeedingFailureCaseOfFigure4b) {
@@ -315,31 +314,36 @@ TEST(MarchingSlices, ZeroAndOneParticle) {
   const fluid::SurfaceMesh empty = slices({}, p);
   EXPECT_TRUE(empty.indices.empty());
   EXPECT_TRUE(empty.positions.empty());
-  const std::vector<float> x = {5.5f}, y = {5.5f}, z = {5.5f};
-  expectClosedAndEqualToOracle({x, y, z, {}, {}, {}}, p, 8);
+  const std::vector<glm::vec3> points = {{5.5f, 5.5f, 5.5f}};
+  expectClosedAndEqualToOracle({fluid::pointView(points)}, p, 8);
 }
 
 TEST(MarchingSlices, RejectsNonFiniteInputWithClearError) {
-  std::vector<float> x = {0, 1, 2, 3}, y = {0, 0, 0, 0}, z = {0, 0, 0, 0};
-  x[3] = std::numeric_limits<float>::quiet_NaN();
+  std::vector<glm::vec3> points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
+  points[3].x = std::numeric_limits<float>::quiet_NaN();
   fluid::SurfaceExtractor ex;
   fluid::SurfaceMesh m;
-  fluid::SurfaceStatus st = ex.extract({x, y, z, {}, {}, {}}, {}, m);
+  fluid::SurfaceStatus st = ex.extract({fluid::pointView(points)}, {}, m);
   EXPECT_FALSE(st.ok());
-  EXPECT_NE(st.error.find("x[3]"), std::string::npos) << st.error;
+  EXPECT_NE(st.error.find("positions[3].x"), std::string::npos) << st.error;
   EXPECT_NE(st.error.find("not finite"), std::string::npos) << st.error;
-  x[3] = 3;
-  z[1] = std::numeric_limits<float>::infinity();
-  st = ex.extract({x, y, z, {}, {}, {}}, {}, m);
-  EXPECT_NE(st.error.find("z[1]"), std::string::npos) << st.error;
+  points[3].x = 3;
+  points[1].z = std::numeric_limits<float>::infinity();
+  st = ex.extract({fluid::pointView(points)}, {}, m);
+  EXPECT_NE(st.error.find("positions[1].z"), std::string::npos) << st.error;
   fluid::SurfaceParams bad;
   bad.cube = -1;
-  z[1] = 0;
-  st = ex.extract({x, y, z, {}, {}, {}}, bad, m);
+  points[1].z = 0;
+  st = ex.extract({fluid::pointView(points)}, bad, m);
   EXPECT_NE(st.error.find("cube"), std::string::npos) << st.error;
-  const std::vector<float> shortY = {0};
-  st = ex.extract({x, shortY, z, {}, {}, {}}, {}, m);
-  EXPECT_NE(st.error.find("different lengths"), std::string::npos) << st.error;
+  // Views the mesher cannot read: a stride shorter than a point or not a whole number of floats,
+  // no data behind a count.
+  for (std::size_t stride : {std::size_t(8), std::size_t(14)}) {
+    st = ex.extract({fluid::PointView{&points[0].x, 2, stride}}, {}, m);
+    EXPECT_NE(st.error.find("stride"), std::string::npos) << st.error;
+  }
+  st = ex.extract({fluid::PointView{nullptr, 2, 12}}, {}, m);
+  EXPECT_NE(st.error.find("no data"), std::string::npos) << st.error;
   EXPECT_TRUE(m.indices.empty());
 }
 
@@ -363,7 +367,8 @@ TEST(ParticleCache, ExactInTheOutermostMarginCubes) {
     const float d = edge(rng);
     z.push_back(i % 2 ? float(bs + p.rc) - d : -p.rc + d);
   }
-  const fluid::SurfaceInput in{x, y, z, {}, {}, {}};
+  const std::vector<glm::vec3> points = packPoints(x, y, z);
+  const fluid::SurfaceInput in{fluid::pointView(points)};
   fluid::detail::BlockCacheProbe probe(in, p, 0, 0, 0);
   ASSERT_EQ(probe.margin, 3);
   std::vector<std::uint32_t> found, expect;
@@ -400,7 +405,9 @@ TEST(ParticleCache, EveryLookupIsExactlyTheBruteForceSet) {
     p.cube = trial % 2 ? 0.5f : 0.37f;
     p.rc = trial < 3 ? 3.0f : 1.3f;
     p.blockCubes = 12;
-    const fluid::SurfaceInput in{x, y, z, {}, trial % 2 ? std::span<const float>(scale) : std::span<const float>(), {}};
+    const std::vector<glm::vec3> points = packPoints(x, y, z);
+    const fluid::SurfaceInput in{
+        fluid::pointView(points), {}, trial % 2 ? std::span<const float>(scale) : std::span<const float>(), {}};
     fluid::detail::SweepFrame frame;
     std::vector<fluid::detail::Particle> all;
     double rcMax = 0;

@@ -24,7 +24,7 @@ TEST_P(RandomSets, ClosedOrientedThreadInvariantAndEqualToTheDenseOracle) {
   for (int seed = first; seed < first + kChunk; ++seed) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     const std::string failure = checkRandomSet(r, checker);
-    EXPECT_TRUE(failure.empty()) << "seed " << seed << " (" << r.what << ", " << r.x.size()
+    EXPECT_TRUE(failure.empty()) << "seed " << seed << " (" << r.what << ", " << r.points.size()
                                  << " particles): " << failure << "\n  reproduce: bench_surface_seeds --from " << seed
                                  << " --to " << seed;
     triangles += checker.ref.indices.size() / 3;

@@ -109,11 +109,11 @@ TEST(SurfaceOrder, BackToFrontForRandomViewsAndExactSlabOrder) {
 
 TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
   // Two far-apart particles with different colours: every vertex carries its particle's colour.
-  const std::vector<float> x = {0, 10}, y = {0, 0}, z = {0, 0};
+  const std::vector<glm::vec3> points = {{0, 0, 0}, {10, 0, 0}};
   const std::vector<glm::vec4> user = {{1, 0, 0, 1}, {0, 0, 1, 0.5f}};
   fluid::SurfaceParams p;
   p.cube = 0.25f;
-  const fluid::SurfaceMesh m = run({x, y, z, {}, {}, user}, p);
+  const fluid::SurfaceMesh m = run({fluid::pointView(points), {}, {}, user}, p);
   ASSERT_EQ(m.attributes.size(), m.positions.size());
   ASSERT_GT(m.positions.size(), 100u);
   for (std::size_t v = 0; v < m.positions.size(); ++v) {
@@ -121,8 +121,8 @@ TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
     EXPECT_NEAR(glm::length(m.attributes[v] - expect), 0.0f, 1e-5f);
   }
   // Overlapping particles blend: attributes stay within the convex hull of the inputs.
-  const std::vector<float> x2 = {0, 1.2f}, y2 = {0, 0}, z2 = {0, 0};
-  const fluid::SurfaceMesh b = run({x2, y2, z2, {}, {}, user}, p);
+  const std::vector<glm::vec3> points2 = {{0, 0, 0}, {1.2f, 0, 0}};
+  const fluid::SurfaceMesh b = run({fluid::pointView(points2), {}, {}, user}, p);
   bool blended = false;
   for (const glm::vec4& a : b.attributes) {
     EXPECT_NEAR(a.x + a.z, 1.0f, 1e-4f);
@@ -131,7 +131,7 @@ TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
   }
   EXPECT_TRUE(blended);
   // Same geometry as without attributes.
-  const fluid::SurfaceMesh plain = run({x2, y2, z2, {}, {}, {}}, p);
+  const fluid::SurfaceMesh plain = run({fluid::pointView(points2)}, p);
   EXPECT_TRUE(plain.positions == b.positions);
   EXPECT_TRUE(plain.indices == b.indices);
 }
@@ -140,13 +140,13 @@ TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
 // more threads concatenate per-block outputs: attributes, like positions, must not differ.
 TEST(SurfaceAttributes, SameForOneAndTwoThreadsOverSeveralBlocks) {
   const fluid::ParticlePositions ps = loadSet("explosion.xyz");
-  std::vector<glm::vec4> user(ps.x.size());
+  std::vector<glm::vec4> user(ps.size());
   for (std::size_t i = 0; i < user.size(); ++i) user[i] = {float(i % 7), float(i % 3), 1.0f, float(i) * 1e-3f};
   fluid::SurfaceParams p;
   p.cube = 0.6f;
   p.blockCubes = 24;
   p.threads = 1;
-  const fluid::SurfaceInput in{ps.x, ps.y, ps.z, {}, {}, user};
+  const fluid::SurfaceInput in{fluid::pointView(ps), {}, {}, user};
   const fluid::SurfaceMesh one = run(in, p);
   p.threads = 2;
   const fluid::SurfaceMesh two = run(in, p);
@@ -158,7 +158,8 @@ TEST(SurfaceAttributes, SameForOneAndTwoThreadsOverSeveralBlocks) {
 }
 
 TEST(SurfaceStrength, StrengthAndRadiusScaleChangeTheLoneRadius) {
-  const std::vector<float> x = {0}, y = {0}, z = {0}, scale = {0.5f}, strength = {2.0f};
+  const std::vector<glm::vec3> points = {{0, 0, 0}};
+  const std::vector<float> scale = {0.5f}, strength = {2.0f};
   fluid::SurfaceParams p;
   p.cube = 0.05f;
   auto meanRadius = [](const fluid::SurfaceMesh& m) {
@@ -168,13 +169,13 @@ TEST(SurfaceStrength, StrengthAndRadiusScaleChangeTheLoneRadius) {
   };
   // f = s ((r/(sqrt2 Rc_i))^2 - 1/2)^2 = T  ->  r = Rc_i sqrt(2 (1/2 - sqrt(T / s)))
   const double rScaled = 1.5 * std::sqrt(2.0 * (0.5 - std::sqrt(0.2)));
-  EXPECT_NEAR(meanRadius(run({x, y, z, {}, scale, {}}, p)), rScaled, 0.003);
+  EXPECT_NEAR(meanRadius(run({fluid::pointView(points), {}, scale, {}}, p)), rScaled, 0.003);
   const double rStrong = 3.0 * std::sqrt(2.0 * (0.5 - std::sqrt(0.1)));
-  EXPECT_NEAR(meanRadius(run({x, y, z, strength, {}, {}}, p)), rStrong, 0.003);
+  EXPECT_NEAR(meanRadius(run({fluid::pointView(points), strength, {}, {}}, p)), rStrong, 0.003);
   fluid::SurfaceExtractor ex;
   fluid::SurfaceMesh m;
   const std::vector<float> bad = {-1.0f};
-  EXPECT_NE(ex.extract({x, y, z, bad, {}, {}}, p, m).error.find("strength[0]"), std::string::npos);
+  EXPECT_NE(ex.extract({fluid::pointView(points), bad, {}, {}}, p, m).error.find("strength[0]"), std::string::npos);
 }
 
 #include "fluid/surface/marching_slices_policy.hpp"
@@ -200,13 +201,13 @@ struct IndexMeanPolicy {
 }  // namespace
 
 TEST(SurfacePolicy, CallerPolicyIsInterpolatedAndGeometryUnchanged) {
-  const std::vector<float> x = {0, 0, 20}, y = {0, 0, 0}, z = {0, 0.1f, 0};
+  const std::vector<glm::vec3> points = {{0, 0, 0}, {0, 0, 0.1f}, {20, 0, 0}};
   fluid::SurfaceParams p;
   p.cube = 0.25f;
   fluid::SurfaceExtractor ex;
   fluid::SurfaceMesh m, plain;
-  ASSERT_TRUE(fluid::extractWithPolicy(ex, {x, y, z, {}, {}, {}}, p, IndexMeanPolicy{}, m).ok());
-  ASSERT_TRUE(ex.extract({x, y, z, {}, {}, {}}, p, plain).ok());
+  ASSERT_TRUE(fluid::extractWithPolicy(ex, {fluid::pointView(points)}, p, IndexMeanPolicy{}, m).ok());
+  ASSERT_TRUE(ex.extract({fluid::pointView(points)}, p, plain).ok());
   EXPECT_TRUE(m.positions == plain.positions);
   EXPECT_TRUE(m.indices == plain.indices);
   ASSERT_EQ(m.attributes.size(), m.positions.size());

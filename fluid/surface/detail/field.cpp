@@ -18,8 +18,11 @@ bool SweepFrame::flipsWinding() const {
 
 void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
                       std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys) {
-  const std::size_t n = input.x.size();
-  const std::span<const float> world[3] = {input.x, input.y, input.z};
+  // Positions are read in place through the caller's pointer + stride view (meshoptimizer's
+  // convention): each coordinate is the same float whatever the layout, so the records and their
+  // (z, index) order, and therefore the sums, do not depend on it.
+  const PointView world = input.positions;
+  const std::size_t n = world.count;
   // Sort by (z, index): the summation order every method uses (see the header). The keys are
   // unique, so sorting 16-byte (z, index) keys and building the records in that order gives the
   // same order as sorting the 80-byte records, with far less data moved.
@@ -38,7 +41,7 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
   ParticleSortKey* other = scratch.data() + n;
   std::uint32_t hist[4][256] = {};
   for (std::size_t i = 0; i < n; ++i) {
-    const float zf = float(frame.sign[2]) * world[frame.axis[2]][i];
+    const float zf = float(frame.sign[2]) * world.at(i, frame.axis[2]);
     const float zc = zf == 0.0f ? 0.0f : zf;  // -0 -> +0
     std::uint32_t bits;
     std::memcpy(&bits, &zc, sizeof bits);
@@ -69,8 +72,8 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
   for (std::size_t r = 0; r < n; ++r) {
     const std::size_t i = order[r].index;
     Particle& p = out[r];
-    p.x = frame.sign[0] * double(world[frame.axis[0]][i]);
-    p.y = frame.sign[1] * double(world[frame.axis[1]][i]);
+    p.x = frame.sign[0] * double(world.at(i, frame.axis[0]));
+    p.y = frame.sign[1] * double(world.at(i, frame.axis[1]));
     p.z = order[r].z;
     const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
     const double rci = rc * scale;
