@@ -98,6 +98,7 @@ GLuint buildUpdateVariant(const std::filesystem::path& dir, unsigned variant, st
   if (variant & 64u) defines += "#define FORMAT_FRONT_BACK16\n";
   if (variant & 128u) defines += "#define FORMAT_CUBE8\n";
   if (variant & 256u) defines += "#define BLASTS\n";
+  if (variant & 512u) defines += "#define DIFFUSE\n";
   const std::vector<ShaderStageFiles> stages{{GL_VERTEX_SHADER, {dir / "fullscreen.vert"}},
                                              {GL_FRAGMENT_SHADER, {dir / "collide.glsl", dir / "update.frag"}}};
   return buildProgram(stages, defines, error);
@@ -232,6 +233,12 @@ void createGpuParticles(const GpuParticlesDesc& desc, GpuParticles& out) {
   glTexImage3D(GL_TEXTURE_3D, 0, GL_RGBA32F, 1, 1, 1, 0, GL_RGBA, GL_FLOAT, zero4);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  // The same for the diffuse sprites' fluid grid (zero count: every diffuse sprite is spray).
+  glGenTextures(1, &out.fluid_tex);
+  glBindTexture(GL_TEXTURE_3D, out.fluid_tex);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_RGBA32F, 1, 1, 1, 0, GL_RGBA, GL_FLOAT, zero4);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glBindTexture(GL_TEXTURE_3D, 0);
   // Collider buffers (one word / one float so the buffer textures are never empty).
   const std::uint32_t word = 0;
@@ -287,9 +294,9 @@ void destroyGpuParticles(GpuParticles& s) {
   textures(s.state0);
   textures(s.state1);
   textures(s.sort_tex);
-  std::array<GLuint, 6> singles{s.attributes, s.type_tex, s.flow_tex, s.collider_tbo, s.normal_tbo, 0};
+  std::array<GLuint, 6> singles{s.attributes, s.type_tex, s.flow_tex, s.collider_tbo, s.normal_tbo, s.fluid_tex};
   textures(singles);
-  s.attributes = s.type_tex = s.flow_tex = s.collider_tbo = s.normal_tbo = 0;
+  s.attributes = s.type_tex = s.flow_tex = s.collider_tbo = s.normal_tbo = s.fluid_tex = 0;
   for (GLuint* fbo : {&s.fbo[0], &s.fbo[1], &s.birth_fbo[0], &s.birth_fbo[1], &s.sort_fbo[0], &s.sort_fbo[1]}) {
     if (*fbo != 0) glDeleteFramebuffers(1, fbo);
     *fbo = 0;
@@ -312,6 +319,7 @@ void destroyGpuParticles(GpuParticles& s) {
   }
   s.pending.clear();  // work recorded for textures that no longer exist
   s.pending_births.clear();
+  s.pending_grid.clear();
   s.ready = false;
 }
 
@@ -485,6 +493,45 @@ bool setFlowField(GpuParticles& s, const FlowFieldDesc& flow, std::string& error
   return true;
 }
 
+bool setFluidGrid(GpuParticles& s, const FluidGridDesc& grid, std::string& error) {
+  error.clear();
+  GpuWorkRecord record;
+  record.kind = GpuWorkRecord::Kind::fluid_grid;
+  if (!grid.cells.empty()) {
+    const glm::ivec3 n = grid.size;
+    if (n.x < 1 || n.y < 1 || n.z < 1 || n.x > 512 || n.y > 512 || n.z > 512 ||
+        grid.cells.size() != static_cast<std::size_t>(n.x) * n.y * n.z) {
+      error = "fluid grid: size " + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" + std::to_string(n.z) +
+              " (each 1..512) does not match " + std::to_string(grid.cells.size()) + " cells";
+      return false;
+    }
+    if (!(grid.cell > 0.0f) || !std::isfinite(grid.cell) || !fluid::isFinite(grid.origin) ||
+        !(grid.neighbour_scale >= 0.0f) || !std::isfinite(grid.neighbour_scale)) {
+      error = "fluid grid: cell must be positive, origin and neighbour_scale finite";
+      return false;
+    }
+    for (const glm::vec4& c : grid.cells)
+      if (!fluid::isFinite(glm::vec3(c)) || !std::isfinite(c.w)) {
+        error = "fluid grid: non-finite cell";
+        return false;
+      }
+  }
+  if (!s.ready) return true;
+  record.first = static_cast<std::uint32_t>(s.pending_grid.size());
+  record.count = static_cast<std::uint32_t>(grid.cells.size());
+  record.grid_size = grid.size;
+  record.grid_box = glm::vec4(grid.origin, grid.cell);
+  record.grid_scale = grid.neighbour_scale;
+  s.pending_grid.insert(s.pending_grid.end(), grid.cells.begin(), grid.cells.end());
+  // Only the last of several grids recorded between two steps matters: drop an unrun one before it.
+  if (!s.pending.empty() && s.pending.back().kind == GpuWorkRecord::Kind::fluid_grid) {
+    s.pending.back() = record;
+  } else {
+    s.pending.push_back(record);
+  }
+  return true;
+}
+
 namespace {
 
 int activeBlasts(const GpuStepParams& params) { return std::clamp(params.blast_count, 0, kMaxBlasts); }
@@ -494,7 +541,10 @@ unsigned updateVariant(const GpuParticles& s, const GpuStepParams& params) {
   const float drag = stokesDragRate(params);
   return (std::clamp(params.attractor_count, 0, kMaxAttractors) > 0 ? 1u : 0u) | (drag > 0.0f ? 2u : 0u) |
          (drag > 0.0f && s.flow_enabled ? 4u : 0u) | (s.collider_count > 0 ? 8u | (s.format_mask << 4) : 0u) |
-         (activeBlasts(params) > 0 ? 256u : 0u);
+         (activeBlasts(params) > 0 ? 256u : 0u) |
+         (std::any_of(s.desc.types.begin(), s.desc.types.end(), [](const ParticleTypeDesc& t) { return t.diffuse; })
+              ? 512u
+              : 0u);
 }
 
 }  // namespace
@@ -594,6 +644,21 @@ void runBirths(GpuParticles& s, const GpuWorkRecord& record) {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+void runFluidGrid(GpuParticles& s, const GpuWorkRecord& record) {
+  if (record.count == 0) {
+    s.fluid_enabled = false;
+    return;
+  }
+  glBindTexture(GL_TEXTURE_3D, s.fluid_tex);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_RGBA32F, record.grid_size.x, record.grid_size.y, record.grid_size.z, 0, GL_RGBA,
+               GL_FLOAT, s.pending_grid.data() + record.first);
+  glBindTexture(GL_TEXTURE_3D, 0);
+  s.fluid_enabled = true;
+  s.fluid_origin = glm::vec3(record.grid_box);
+  s.fluid_cell = record.grid_box.w;
+  s.fluid_neighbour_scale = record.grid_scale;
+}
+
 void runStepPass(GpuParticles& s, const GpuWorkRecord& record) {
   const GpuStepParams& params = record.params;
   const GLsizei rows = record.rows;
@@ -611,6 +676,16 @@ void runStepPass(GpuParticles& s, const GpuWorkRecord& record) {
   bindTexture(3, GL_TEXTURE_3D, s.flow_tex);
   bindTexture(4, GL_TEXTURE_BUFFER, s.collider_tbo);
   bindTexture(5, GL_TEXTURE_BUFFER, s.normal_tbo);
+  bindTexture(6, GL_TEXTURE_3D, s.fluid_tex);
+  glUniform1i(loc(prog, "u_fluid"), 6);
+  glUniform1i(loc(prog, "u_fluid_on"), s.fluid_enabled ? 1 : 0);
+  glUniform3fv(loc(prog, "u_fluid_origin"), 1, glm::value_ptr(s.fluid_origin));
+  glUniform1f(loc(prog, "u_fluid_cell"), s.fluid_cell);
+  glUniform1f(loc(prog, "u_neighbour_scale"), s.fluid_neighbour_scale);
+  glUniform2f(loc(prog, "u_class_counts"), params.diffuse.spray_below, params.diffuse.bubble_above);
+  glUniform1f(loc(prog, "u_buoyancy"), std::isfinite(params.diffuse.buoyancy) ? params.diffuse.buoyancy : 0.0f);
+  glUniform1f(loc(prog, "u_bubble_drag"),
+              std::isfinite(params.diffuse.drag) ? std::clamp(params.diffuse.drag, 0.0f, 1.0f) : 0.0f);
   glUniform1i(loc(prog, "u_state0"), 0);
   glUniform1i(loc(prog, "u_state1"), 1);
   glUniform1i(loc(prog, "u_attributes"), 2);
@@ -623,10 +698,13 @@ void runStepPass(GpuParticles& s, const GpuWorkRecord& record) {
   glUniform3fv(loc(prog, "u_gravity"), 1, glm::value_ptr(params.gravity));
   glUniform3fv(loc(prog, "u_wind"), 1, glm::value_ptr(params.wind));
   std::array<float, kMaxParticleTypes> type_gravity{}, type_damping{};
+  std::array<GLint, kMaxParticleTypes> type_diffuse{};
   for (std::size_t t = 0; t < s.desc.types.size(); ++t) {
     type_gravity[t] = s.desc.types[t].gravity_scale;
     type_damping[t] = s.desc.types[t].damping;
+    type_diffuse[t] = s.desc.types[t].diffuse ? 1 : 0;
   }
+  glUniform1iv(loc(prog, "u_type_diffuse"), kMaxParticleTypes, type_diffuse.data());
   glUniform1fv(loc(prog, "u_type_gravity"), kMaxParticleTypes, type_gravity.data());
   glUniform1fv(loc(prog, "u_type_damping"), kMaxParticleTypes, type_damping.data());
   const int attractors = attractor_count;
@@ -697,10 +775,14 @@ void runPendingWork(GpuParticles& s) {
       case GpuWorkRecord::Kind::readback:
         runReadback(s, record);
         break;
+      case GpuWorkRecord::Kind::fluid_grid:
+        runFluidGrid(s, record);
+        break;
     }
   }
   s.pending.clear();
   s.pending_births.clear();
+  s.pending_grid.clear();
 }
 
 float stokesDragRate(const GpuStepParams& params) {
@@ -774,10 +856,20 @@ void drawSprites(GpuParticles& s, const glm::mat4& view_projection, float projec
   bindTexture(1, GL_TEXTURE_2D, s.state0[s.current]);
   bindTexture(2, GL_TEXTURE_2D, s.attributes);
   bindTexture(3, GL_TEXTURE_2D, s.type_tex);
+  bindTexture(4, GL_TEXTURE_2D, s.state1[s.current]);
   glUniform1i(loc(prog, "u_pairs"), 0);
   glUniform1i(loc(prog, "u_state0"), 1);
   glUniform1i(loc(prog, "u_attributes"), 2);
   glUniform1i(loc(prog, "u_types"), 3);
+  glUniform1i(loc(prog, "u_state1"), 4);
+  std::array<GLint, kMaxParticleTypes> type_diffuse{};
+  for (std::size_t t = 0; t < s.desc.types.size(); ++t) type_diffuse[t] = s.desc.types[t].diffuse ? 1 : 0;
+  glUniform1iv(loc(prog, "u_type_diffuse"), kMaxParticleTypes, type_diffuse.data());
+  const auto last_type = static_cast<std::uint32_t>(s.desc.types.size() - 1);
+  glUniform3i(loc(prog, "u_class_types"), static_cast<GLint>(std::min(s.desc.class_types[0], last_type)),
+              static_cast<GLint>(std::min(s.desc.class_types[1], last_type)),
+              static_cast<GLint>(std::min(s.desc.class_types[2], last_type)));
+  glUniform1i(loc(prog, "u_verlet"), s.desc.integrator == Integrator::verlet ? 1 : 0);
   glUniformMatrix4fv(loc(prog, "u_view_projection"), 1, GL_FALSE, glm::value_ptr(view_projection));
   glUniform1f(loc(prog, "u_time"), s.time);
   glUniform1f(loc(prog, "u_point_scale"), projection_scale_y * static_cast<float>(viewport_height) * 0.5f);

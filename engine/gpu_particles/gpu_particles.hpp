@@ -76,6 +76,11 @@ struct ParticleTypeDesc {
   // what the air holds back (smoke, fire), so it drifts rather than flies.
   float gravity_scale = 1.0f;
   float damping = 0.0f;  // 1/s, >= 0
+  // Diffuse material (Ihmsen et al. 2012 §4.2): a diffuse sprite is classified every step by the
+  // fluid-neighbour count at its position (setFluidGrid) into spray, foam or bubble, moves as its
+  // class does (GpuStepParams::diffuse) and is drawn with the key-frames of
+  // GpuParticlesDesc::class_types[class]. Without a fluid grid it is spray.
+  bool diffuse = false;
 };
 
 // ---- births (uploaded in small batches) -----------------------------------------------
@@ -169,6 +174,8 @@ struct GpuParticlesDesc {
   std::uint32_t sort_passes_per_frame = 5;  // §3.3.3: 4–5 per frame for 1024² in the paper
   float dt = 1.0f / 60.0f;                  // fixed step, s (Verlet needs it at birth: P_{i-2} = P − v·dt)
   std::uint32_t budget = 0;                 // live particles at most; 0 = width·height (initAllocator)
+  // The types whose key-frames draw a diffuse sprite of class spray, foam, bubble (types[k].diffuse).
+  std::array<std::uint32_t, 3> class_types{0, 0, 0};
 };
 
 inline constexpr int kMaxAttractors = 4;
@@ -203,6 +210,30 @@ struct GpuStepParams {
   std::array<fluid::Blast, kMaxBlasts> blasts{};
   int blast_count = 0;
   float blast_max_speed_change = 40.0f;  // m/s
+  // Diffuse sprites (ParticleTypeDesc::diffuse; Ihmsen et al. 2012 §4.2), by the fluid-neighbour
+  // count n at the sprite, estimated from the fluid grid (setFluidGrid):
+  //   spray  (n < spray_below): the type's own motion (gravity, damping) and collisions;
+  //   foam   (spray_below <= n <= bubble_above): advected with the fluid velocity, x += dt v_f (eq. 7);
+  //   bubble (n > bubble_above): v += dt (-k_b g + k_d (v_f - v) / dt) (eq. 8), buoyancy and drag.
+  // A bubble that reaches the surface (fewer neighbours) turns into foam, spray landing in the water
+  // too. The class is kept in state1.w (Euler), where the sprite shader reads it.
+  struct Diffuse {
+    float spray_below = 6.0f, bubble_above = 20.0f;
+    float buoyancy = 2.0f;  // k_b (the paper's example value)
+    float drag = 0.5f;      // k_d in [0, 1]: the fraction of the velocity difference removed per step
+  } diffuse;
+};
+
+// The fluid grid of the diffuse sprites: per cell the sum of fluid velocities (xyz, m/s) and the
+// particle count (w), over an axis-aligned box of size·cell (fluid::FluidCellGrid). The shader
+// interpolates both trilinearly between cell centres: v_f = xyz / w, and the neighbour count
+// estimate n = w · neighbour_scale. Recorded (the upload runs with the frame's GPU work, in order).
+struct FluidGridDesc {
+  glm::ivec3 size{0};
+  glm::vec3 origin{0.0f};
+  float cell = 1.0f;                 // m
+  float neighbour_scale = 1.0f;      // (4/3 π h³) / cell³
+  std::span<const glm::vec4> cells;  // size.x·size.y·size.z, x fastest
 };
 
 // Flow field for the Stokes drag: a W×H×D grid of velocities (m/s) over an axis-aligned box;
@@ -224,9 +255,13 @@ struct GpuProgram {
 // (runPendingWork) before it sorts and draws, so a fixed-step loop issues no GL of its own.
 // Everything that reads the textures (read-backs, the sort, the draw) runs the records first.
 struct GpuWorkRecord {
-  enum class Kind : std::uint8_t { births, step, readback };
+  enum class Kind : std::uint8_t { births, step, readback, fluid_grid };
   Kind kind = Kind::step;
-  std::uint32_t first = 0, count = 0;  // births: vertices [first, first + count) of pending_births
+  std::uint32_t first = 0, count = 0;  // births: vertices [first, first + count) of pending_births;
+                                       // fluid_grid: vec4s [first, first + count) of pending_grid
+  glm::ivec3 grid_size{0};             // fluid_grid
+  glm::vec4 grid_box{0.0f};            // fluid_grid: origin xyz, cell
+  float grid_scale = 0.0f;             // fluid_grid: neighbour_scale
   float time = 0.0f;                   // step: the clock after it (u_time)
   std::int32_t rows = 0;               // step: texture rows holding the live range when recorded
   std::uint64_t step_index = 0;        // readback: GpuParticles::steps when it was asked for
@@ -261,7 +296,8 @@ struct GpuParticles {
   GpuProgram birth, sort_key, sort_pass, sprite;
   // Update-pass variants, built on first use: bit 0 attractors, 1 drag, 2 flow field,
   // 3 colliders, 4..7 depth-map formats present (float32, fixed8, front_back16, cube8).
-  std::array<GLuint, 512> update_variants{};
+  // Bit 8 blasts, 9 diffuse types present (desc.types).
+  std::array<GLuint, 1024> update_variants{};
   float time = 0.0f;        // s since creation, advanced by step()
   std::uint64_t steps = 0;  // step() calls since creation
   IndexAllocator allocator;
@@ -282,6 +318,13 @@ struct GpuParticles {
   std::array<std::int32_t, kMaxGpuColliders> normal_offset{};
   bool flow_enabled = false;
   glm::vec3 flow_origin{0.0f}, flow_extent{1.0f};
+  // Fluid grid of the diffuse sprites (setFluidGrid): RGBA32F 3D texture; the box and scale as
+  // recorded, current once the record has run.
+  GLuint fluid_tex = 0;
+  bool fluid_enabled = false;  // a grid has been uploaded (set when its record runs)
+  glm::vec3 fluid_origin{0.0f};
+  float fluid_cell = 1.0f, fluid_neighbour_scale = 1.0f;
+  std::vector<glm::vec4> pending_grid;
   // Recorded by spawn/step/requestReadback, run and cleared by runPendingWork.
   std::vector<GpuWorkRecord> pending;
   std::vector<float> pending_births;        // 11 floats per birth vertex (index bits, p, v, times, type, spin)
@@ -307,6 +350,11 @@ bool setColliders(GpuParticles& system, std::span<const GpuColliderDesc> collide
 void setColliderPose(GpuParticles& system, int collider, const fluid::ColliderPose& pose);
 // Uploads (or with an empty span disables) the drag flow field. False + error on size mismatch.
 bool setFlowField(GpuParticles& system, const FlowFieldDesc& flow, std::string& error);
+
+// Records the upload of the diffuse sprites' fluid grid (no GL now; it runs before the steps
+// recorded after it). An empty `cells` turns it off (diffuse sprites are then spray). False + error
+// on a size mismatch or a non-finite value (the previous grid is kept).
+bool setFluidGrid(GpuParticles& system, const FluidGridDesc& grid, std::string& error);
 
 // One fixed step of desc.dt: the CPU retires particles whose lifetime ended (§3.3.1) at once, and
 // records the fragment pass that integrates, collides and marks dead particles on the GPU (w = 0,

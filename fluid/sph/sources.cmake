@@ -18,4 +18,5 @@ target_sources(fluid PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/blast.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sph_scenes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/anisotropy.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/diffuse.cpp
 )

@@ -38,6 +38,30 @@ const ParamTable<SpriteParticleParams>& table() {
                                        "rho/rho0 at or below which an SPH particle counts as at the free surface"),
       param<&P::spray_lifetime>("spray_lifetime", 0.1, 60.0, "spray sprite lifetime (s, +-25%)"),
       param<&P::spray_max_per_step>("spray_max_per_step", 0, 100000, "cap on spray births per step"),
+      param<&P::foam_trapped_air_rate>(
+          "foam_trapped_air_rate", 0.0, 100000.0,
+          "Ihmsen 2012 k_ta: foam/bubble/spray sprites per second from an SPH particle with I_ta = I_k = 1 (0 with "
+          "foam_wave_crest_rate 0 = no foam)"),
+      param<&P::foam_wave_crest_rate>("foam_wave_crest_rate", 0.0, 100000.0,
+                                      "Ihmsen 2012 k_wc: the same for the wave-crest potential I_wc"),
+      param<&P::foam_ta_min>("foam_ta_min", 0.0, 1000.0,
+                             "Ihmsen 2012 tau_ta,min: trapped-air potential (sum |v_ij|(1 - v^.x^)W, m/s) where foam starts"),
+      param<&P::foam_ta_max>("foam_ta_max", 0.0, 1000.0, "Ihmsen 2012 tau_ta,max: trapped-air potential of full foam"),
+      param<&P::foam_wc_min>("foam_wc_min", 0.0, 1000.0,
+                             "Ihmsen 2012 tau_wc,min: wave-crest curvature sum (1 - n_i.n_j)W where foam starts"),
+      param<&P::foam_wc_max>("foam_wc_max", 0.0, 1000.0, "Ihmsen 2012 tau_wc,max: wave-crest curvature of full foam"),
+      param<&P::foam_energy_min>("foam_energy_min", 0.0, 1000.0,
+                                 "Ihmsen 2012 tau_k,min for foam: |v|^2/2 (J/kg) where diffuse births start"),
+      param<&P::foam_energy_max>("foam_energy_max", 0.0, 1000.0, "Ihmsen 2012 tau_k,max for foam: |v|^2/2 (J/kg)"),
+      param<&P::foam_lifetime>("foam_lifetime", 0.1, 60.0, "foam/bubble sprite lifetime (s, +-25%); foam fades over it"),
+      param<&P::bubble_buoyancy>("bubble_buoyancy", 0.0, 100.0, "Ihmsen 2012 eq. 8 k_b: bubble buoyancy (times -g)"),
+      param<&P::bubble_drag>("bubble_drag", 0.0, 1.0,
+                             "Ihmsen 2012 eq. 8 k_d: fraction of the bubble's slip against the water removed per step"),
+      param<&P::foam_spray_below>("foam_spray_below", 0, 1000,
+                                  "Ihmsen 2012 4.2: a diffuse sprite with fewer fluid neighbours is spray"),
+      param<&P::foam_bubble_above>("foam_bubble_above", 0, 1000,
+                                   "Ihmsen 2012 4.2: a diffuse sprite with more fluid neighbours is a bubble"),
+      param<&P::foam_max_per_step>("foam_max_per_step", 0, 100000, "cap on foam/bubble/spray births per step"),
       param<&P::blast_debris>("blast_debris",
                               "a blast throws dark grit besides its fireball and smoke (the blob's street: off, its "
                               "sewer's rim lets fast grit through)"),
@@ -124,6 +148,9 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
         static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray), s.spray_last_step,
         static_cast<unsigned long long>(s.born_blast), static_cast<unsigned long long>(s.shock_rings),
         static_cast<unsigned long long>(s.dropped));
+    ImGui::Text("  foam/bubbles (Ihmsen 2012): %llu born, last step %u spray / %u foam / %u bubbles at birth",
+                static_cast<unsigned long long>(s.born_diffuse), s.diffuse_last_step[0], s.diffuse_last_step[1],
+                s.diffuse_last_step[2]);
     ImGui::Text("  sort pass %u of %u, colliders loaded in %.0f ms", s.gpu.sort_step,
                 engine::sortPassCount(s.gpu.capacity), s.bake_ms);
   }
@@ -157,7 +184,7 @@ constexpr ColumnSpec kColumns[] = {
 
 const EffectDesc& spriteParticlesEffect() {
   static const EffectDesc desc{"sprite_particles",
-                               "GPU sprites (Kolb 2004): nozzle mist and SPH spray, depth-map collisions",
+                               "GPU sprites (Kolb 2004): nozzle mist, SPH spray, foam and bubbles (Ihmsen 2012), depth-map collisions",
                                table().specs,
                                {},
                                &build,

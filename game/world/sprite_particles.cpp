@@ -29,7 +29,7 @@ float clampPotential(float value, float lo, float hi) {
 }
 
 std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& p) {
-  std::vector<engine::ParticleTypeDesc> types(6);
+  std::vector<engine::ParticleTypeDesc> types(9);
   const float d = 2.0f * p.size;  // key-frame sizes are diameters
   // Mist: pale, grows a little as it disperses, fades out.
   types[kMistType].keys = {{{glm::vec4(0.86f, 0.91f, 0.96f, 0.55f), d},
@@ -72,6 +72,21 @@ std::vector<engine::ParticleTypeDesc> particleTypes(const SpriteParticleParams& 
                             {glm::vec4(0.90f, 0.94f, 0.98f, 0.0f), 12.0f * d}}};
   types[kRingType].gravity_scale = 0.25f;
   types[kRingType].damping = 2.5f;
+  // Diffuse sprites (Ihmsen et al. 2012 §4.2), drawn by the class the GPU gives them each step.
+  // Spray: like the SPH spray, with air drag (§4.3: ballistic with gravity and drag).
+  types[kDiffuseSprayType].keys = types[kSprayType].keys;
+  types[kDiffuseSprayType].damping = 0.5f;
+  // Foam: white flecks lying on the water, opaque, fading over the lifetime.
+  types[kFoamType].keys = {{{glm::vec4(0.97f, 0.98f, 1.00f, 0.95f), 1.6f * d},
+                            {glm::vec4(0.96f, 0.97f, 0.99f, 0.90f), 1.8f * d},
+                            {glm::vec4(0.94f, 0.96f, 0.99f, 0.60f), 1.8f * d},
+                            {glm::vec4(0.92f, 0.95f, 0.98f, 0.0f), 1.6f * d}}};
+  // Bubbles: small pale dots.
+  types[kBubbleType].keys = {{{glm::vec4(0.85f, 0.93f, 1.00f, 0.70f), 0.6f * d},
+                              {glm::vec4(0.85f, 0.93f, 1.00f, 0.70f), 0.6f * d},
+                              {glm::vec4(0.88f, 0.95f, 1.00f, 0.60f), 0.6f * d},
+                              {glm::vec4(0.90f, 0.96f, 1.00f, 0.0f), 0.5f * d}}};
+  for (std::uint32_t t : {kDiffuseSprayType, kFoamType, kBubbleType}) types[t].diffuse = true;
   return types;
 }
 
@@ -156,6 +171,10 @@ void emitBlastSprites(SpriteParticles& s, const SphFluid* sph, std::span<const f
 
 engine::GpuStepParams stepParams(const SpriteParticleParams& p) {
   engine::GpuStepParams g;
+  g.diffuse.spray_below = static_cast<float>(std::max(p.foam_spray_below, 0));
+  g.diffuse.bubble_above = static_cast<float>(std::max(p.foam_bubble_above, p.foam_spray_below));
+  g.diffuse.buoyancy = p.bubble_buoyancy;
+  g.diffuse.drag = std::clamp(p.bubble_drag, 0.0f, 1.0f);
   g.gravity = p.gravity;
   g.material.resilience = p.restitution;
   g.material.friction = p.friction;
@@ -220,6 +239,7 @@ bool attachSpriteGpu(SpriteParticles& s, const std::filesystem::path& shader_dir
   desc.dt = dt;
   desc.sort_passes_per_frame = 6;
   desc.budget = s.capacity;  // the texture rounds up to a power of two; the budget stays exact
+  desc.class_types = {kDiffuseSprayType, kFoamType, kBubbleType};
   s.attached = true;
   engine::createGpuParticles(desc, s.gpu);
   if (!s.gpu.ready) {
@@ -305,6 +325,49 @@ std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& p,
   return added;
 }
 
+fluid::DiffuseParams diffuseParams(const SpriteParticleParams& p, float h) {
+  fluid::DiffuseParams d;
+  d.radius = h;
+  d.ta_min = p.foam_ta_min;
+  d.ta_max = p.foam_ta_max;
+  d.wc_min = p.foam_wc_min;
+  d.wc_max = p.foam_wc_max;
+  d.k_min = p.foam_energy_min;
+  d.k_max = p.foam_energy_max;
+  d.k_ta = p.foam_trapped_air_rate;
+  d.k_wc = p.foam_wave_crest_rate;
+  d.spray_below = p.foam_spray_below;
+  d.bubble_above = p.foam_bubble_above;
+  return fluid::clampDiffuseParams(d);
+}
+
+std::size_t emitDiffuseFromSph(const SphFluid& sph, const SpriteParticleParams& p, float dt, std::uint64_t seed,
+                               DiffuseScratchSet scratch, engine::BirthBatch& batch,
+                               std::array<std::uint32_t, 3>& per_class) {
+  per_class = {};
+  const fluid::SphWorld& w = sph.world;
+  const fluid::ParticleStore& store = w.particles;
+  // The SPH water only (the ballistic drops at the store's end are not part of the fluid).
+  const std::size_t n = std::min({store.sphCount(), store.position.size(), store.velocity.size()});
+  const std::span<const glm::vec3> x(store.position.data(), n), v(store.velocity.data(), n);
+  const fluid::DiffuseParams params = diffuseParams(p, fluid::sphSupport(w.params));
+  if (!(params.k_ta > 0.0f || params.k_wc > 0.0f)) return 0;
+  if (!fluid::computeDiffusePotentials(x, v, params, scratch.scratch, scratch.potentials)) return 0;
+  scratch.births.clear();
+  fluid::generateDiffuse(x, v, scratch.potentials, params, dt, seed,
+                         static_cast<std::size_t>(std::max(p.foam_max_per_step, 0)), scratch.births);
+  std::mt19937_64 rng(seed ^ 0x2545f4914f6cdd1dull);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  constexpr std::uint32_t kTypes[3] = {kDiffuseSprayType, kFoamType, kBubbleType};
+  for (const fluid::DiffuseBirth& b : scratch.births) {
+    const auto c = static_cast<std::size_t>(b.type);
+    const float lifetime = std::max(1e-3f, p.foam_lifetime * (0.75f + 0.5f * unit(rng)));
+    batch.push(b.position, b.velocity, lifetime, kTypes[c], 0.0f);
+    ++per_class[c];
+  }
+  return scratch.births.size();
+}
+
 void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts) {
   if (!s.attached || !s.gpu.ready) return;
   s.births.clear();
@@ -315,6 +378,30 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
     s.spray_last_step = static_cast<std::uint32_t>(
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
+  s.diffuse_last_step = {};
+  // Foam off (both rates 0): no potentials and no grid; sprites already born keep the last grid.
+  const bool foam = s.params.foam_trapped_air_rate > 0.0f || s.params.foam_wave_crest_rate > 0.0f;
+  if (sph != nullptr && sph->error.empty() && foam) {
+    emitDiffuseFromSph(*sph, s.params, dt, s.seed ^ (0x94d049bb133111ebull * (s.steps + 1)),
+                       {s.diffuse_scratch, s.potentials, s.diffuse_births}, s.births, s.diffuse_last_step);
+    // The grid the GPU classes and moves the diffuse sprites by (recorded, uploaded by the frame).
+    const fluid::ParticleStore& store = sph->world.particles;
+    const std::size_t n = std::min({store.sphCount(), store.position.size(), store.velocity.size()});
+    const float h = fluid::sphSupport(sph->world.params);
+    std::string error;
+    engine::FluidGridDesc grid;
+    if (fluid::buildFluidCellGrid(std::span(store.position.data(), n), std::span(store.velocity.data(), n), h, h, 64,
+                                  s.fluid_grid)) {
+      grid.size = s.fluid_grid.size;
+      grid.origin = s.fluid_grid.origin;
+      grid.cell = s.fluid_grid.cell;
+      grid.neighbour_scale = s.fluid_grid.neighbour_scale;
+      grid.cells = s.fluid_grid.cells;
+    }
+    engine::setFluidGrid(s.gpu, grid, error);
+  }
+  const std::size_t before_diffuse =
+      s.births.size() - (s.diffuse_last_step[0] + s.diffuse_last_step[1] + s.diffuse_last_step[2]);
   const std::size_t before_blasts = s.births.size();
   emitBlastSprites(s, sph, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
@@ -322,10 +409,12 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
   // A blast's own sprites, born in its step, do not take its push (update.frag): they start as a
   // ball at the centre, and the step's collision check puts any born under a surface outside it.
   const std::size_t mist_born = std::min(born, mist);
-  const std::size_t spray_born = std::min(born, before_blasts) - mist_born;
+  const std::size_t spray_born = std::min(born, before_diffuse) - mist_born;
+  const std::size_t diffuse_born = std::min(born, before_blasts) - mist_born - spray_born;
   s.born_mist += mist_born;
   s.born_spray += spray_born;
-  s.born_blast += born - mist_born - spray_born;
+  s.born_diffuse += diffuse_born;
+  s.born_blast += born - mist_born - spray_born - diffuse_born;
   s.dropped += s.births.size() - born;
   engine::GpuStepParams params = stepParams(s.params);
   params.blast_count = static_cast<int>(std::min<std::size_t>(blasts.size(), engine::kMaxBlasts));

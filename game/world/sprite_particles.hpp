@@ -20,11 +20,13 @@
 
 #include "engine/gpu_particles/gpu_particles.hpp"
 #include "fluid/collide/collide.hpp"
+#include "fluid/sph/diffuse.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fountain.hpp"
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -57,6 +59,23 @@ struct SpriteParticleParams {
   float spray_lifetime = 1.2f;         // s (±25 %)
   int spray_max_per_step = 200;        // cap on spray births per step
   bool blast_debris = true;            // a blast throws grit too (off where it would fall into a level's holes)
+  // Foam and bubbles (Ihmsen et al. 2012, the rest of the paper; fluid/sph/diffuse.hpp): diffuse
+  // sprites born from the trapped-air and wave-crest potentials scaled by the kinetic energy
+  // (eq. 2), classed on the GPU each step by the fluid-neighbour count at the sprite (§4.2).
+  float foam_trapped_air_rate = 60.0f;  // k_ta: diffuse sprites per second at I_ta = I_k = 1 (0 = none)
+  float foam_wave_crest_rate = 20.0f;   // k_wc: the same for I_wc
+  float foam_ta_min = 2.0f;             // τ_ta,min (m/s)
+  float foam_ta_max = 10.0f;            // τ_ta,max
+  float foam_wc_min = 0.1f;             // τ_wc,min (dimensionless curvature)
+  float foam_wc_max = 1.0f;             // τ_wc,max
+  float foam_energy_min = 1.0f;         // τ_k,min on |v|^2/2 (J/kg)
+  float foam_energy_max = 10.0f;        // τ_k,max
+  float foam_lifetime = 3.0f;           // s (±25 %); foam fades over it
+  float bubble_buoyancy = 2.0f;         // k_b of eq. 8
+  float bubble_drag = 0.5f;             // k_d of eq. 8
+  int foam_spray_below = 6;             // §4.2: spray below this many fluid neighbours
+  int foam_bubble_above = 20;           // §4.2: bubble above
+  int foam_max_per_step = 300;          // cap on diffuse births per step
   // From the world, not the scene section: the particles' gravity and the level's nozzle.
   glm::vec3 gravity{0.0f};
   glm::vec3 nozzle{0.0f};
@@ -74,6 +93,10 @@ inline constexpr std::uint32_t kSmokeType = 3;   // explosion smoke: grows, rise
 inline constexpr std::uint32_t kFireType =
     4;  // explosion fireball: a bright burst that rises and dies within half a second
 inline constexpr std::uint32_t kRingType = 5;  // a blast's shock ring on the water: white foam rushing out, slowing
+// Diffuse sprites (engine ParticleTypeDesc::diffuse): classed on the GPU every step, drawn as their class.
+inline constexpr std::uint32_t kDiffuseSprayType = 6;
+inline constexpr std::uint32_t kFoamType = 7;
+inline constexpr std::uint32_t kBubbleType = 8;
 
 struct SpriteParticles {
   SpriteParticleParams params;
@@ -83,6 +106,11 @@ struct SpriteParticles {
   double emit_debt = 0.0;     // fractional mist sprites owed to the next step
   double spray_debt = 0.0;    // fractional spray sprites owed to the next step
   engine::BirthBatch births;  // scratch, reused every step
+  // Foam and bubbles: the potentials' scratch and the fluid grid, reused every step.
+  fluid::DiffuseScratch diffuse_scratch;
+  fluid::DiffusePotentials potentials;
+  std::vector<fluid::DiffuseBirth> diffuse_births;
+  fluid::FluidCellGrid fluid_grid;
   // GPU side (attachSpriteGpu).
   bool attached = false;
   engine::GpuParticles gpu;
@@ -95,8 +123,10 @@ struct SpriteParticles {
   double bake_ms = 0.0;  // loading them (a stale file is re-baked)
   // Counters for the overlay and tests.
   std::uint64_t born_mist = 0, born_spray = 0, born_blast = 0;
-  std::uint64_t shock_rings = 0;  // blasts that met the water and threw a ring of foam
-  std::uint64_t dropped = 0;      // births refused because the budget was full
+  std::uint64_t born_diffuse = 0;                    // foam/bubble/spray births from the potentials
+  std::array<std::uint32_t, 3> diffuse_last_step{};  // births of the last step by class at birth
+  std::uint64_t shock_rings = 0;                     // blasts that met the water and threw a ring of foam
+  std::uint64_t dropped = 0;                         // births refused because the budget was full
   std::uint32_t spray_last_step = 0;
   // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the step asks
   // for the live sprites' positions and velocities after it (engine::requestReadback); the frame's
@@ -137,6 +167,21 @@ std::uint32_t liveSprites(const SpriteParticles& s);
 // function of its inputs (seeded), no GL.
 std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& params, float dt, std::uint64_t seed,
                              double& debt, engine::BirthBatch& batch);
+
+// Foam and bubbles (Ihmsen et al. 2012): the potentials of every SPH particle, then eq. 2's
+// births, typed by their parent's neighbour count (kDiffuseSprayType / kFoamType / kBubbleType).
+// Appends to `batch`, returns the number appended. Pure function of its inputs (seeded), no GL.
+// `per_class` counts the births by class at birth (spray, foam, bubble).
+struct DiffuseScratchSet {
+  fluid::DiffuseScratch& scratch;
+  fluid::DiffusePotentials& potentials;
+  std::vector<fluid::DiffuseBirth>& births;
+};
+std::size_t emitDiffuseFromSph(const SphFluid& sph, const SpriteParticleParams& params, float dt, std::uint64_t seed,
+                               DiffuseScratchSet scratch, engine::BirthBatch& batch,
+                               std::array<std::uint32_t, 3>& per_class);
+// The diffuse parameters of fluid/sph/diffuse.hpp for neighbourhood radius h (the SPH support).
+fluid::DiffuseParams diffuseParams(const SpriteParticleParams& params, float h);
 
 // Empty when the last read-back holds only finite values; otherwise names the first bad one.
 std::string findNonFiniteSprite(const SpriteParticles& s);

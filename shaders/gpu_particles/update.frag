@@ -51,6 +51,42 @@ vec3 blastVelocityChange(vec3 p) {
 }
 #endif
 
+#ifdef DIFFUSE
+// Diffuse sprites (Ihmsen et al. 2012 §4.2): the fluid grid holds per cell the sum of the fluid
+// velocities (xyz) and the particle count (w); see engine::FluidGridDesc.
+uniform sampler3D u_fluid;
+uniform int u_fluid_on;
+uniform vec3 u_fluid_origin;
+uniform float u_fluid_cell;
+uniform float u_neighbour_scale;  // (4/3 pi h^3) / cell^3: count per cell -> neighbours within h
+uniform vec2 u_class_counts;      // spray below x, bubble above y
+uniform float u_buoyancy;         // k_b
+uniform float u_bubble_drag;      // k_d
+uniform int u_type_diffuse[16];
+
+// Trilinear between cell centres, zero outside the grid (no water there).
+vec4 fluidSample(vec3 p) {
+  ivec3 size = textureSize(u_fluid, 0);
+  vec3 g = (p - u_fluid_origin) / u_fluid_cell - 0.5;
+  if (any(lessThan(g, vec3(-0.5))) || any(greaterThan(g, vec3(size) - 0.5))) return vec4(0.0);
+  g = clamp(g, vec3(0.0), vec3(size - 1));
+  ivec3 i0 = ivec3(floor(g));
+  vec3 f = g - vec3(i0);
+  ivec3 i1 = min(i0 + 1, size - 1);
+  vec4 c000 = texelFetch(u_fluid, ivec3(i0.x, i0.y, i0.z), 0);
+  vec4 c100 = texelFetch(u_fluid, ivec3(i1.x, i0.y, i0.z), 0);
+  vec4 c010 = texelFetch(u_fluid, ivec3(i0.x, i1.y, i0.z), 0);
+  vec4 c110 = texelFetch(u_fluid, ivec3(i1.x, i1.y, i0.z), 0);
+  vec4 c001 = texelFetch(u_fluid, ivec3(i0.x, i0.y, i1.z), 0);
+  vec4 c101 = texelFetch(u_fluid, ivec3(i1.x, i0.y, i1.z), 0);
+  vec4 c011 = texelFetch(u_fluid, ivec3(i0.x, i1.y, i1.z), 0);
+  vec4 c111 = texelFetch(u_fluid, ivec3(i1.x, i1.y, i1.z), 0);
+  vec4 x00 = mix(c000, c100, f.x), x10 = mix(c010, c110, f.x);
+  vec4 x01 = mix(c001, c101, f.x), x11 = mix(c011, c111, f.x);
+  return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+#endif
+
 layout(location = 0) out vec4 out_state0;
 layout(location = 1) out vec4 out_state1;
 
@@ -126,12 +162,36 @@ void main() {
   // A sprite born in this step (a blast's own debris, fire and smoke) does not take the push of
   // this step's blasts: it starts with its own velocity at the centre instead of flying out as a ring.
   bool pushable = attributes.x < u_time - 1.5 * u_dt;  // born at this step's start: u_time - dt
+  float diffuse_class = 0.0;  // 0 spray (or not diffuse), 1 foam, 2 bubble: kept in state1.w
   if (u_verlet == 0) {
     vec3 v = s1.xyz;
 #ifdef BLASTS
     if (pushable) v += blastVelocityChange(p);
 #endif
-    next_v = v + acceleration(p, v, type) * u_dt;
+    vec3 fluid_velocity = vec3(0.0);
+#ifdef DIFFUSE
+    if (u_type_diffuse[type] != 0 && u_fluid_on != 0) {
+      // §4.2: the class follows the fluid-neighbour count at the sprite, estimated from the grid's
+      // interpolated count; v_f is the count-weighted mean velocity around it.
+      vec4 fluid = fluidSample(p);
+      float neighbours = fluid.w * u_neighbour_scale;
+      diffuse_class = neighbours < u_class_counts.x ? 0.0 : (neighbours > u_class_counts.y ? 2.0 : 1.0);
+      fluid_velocity = fluid.w > 1e-6 ? fluid.xyz / fluid.w : vec3(0.0);
+    }
+#endif
+#ifdef DIFFUSE
+    if (diffuse_class == 1.0) {
+      // Foam: carried by the surface (eq. 7), x += dt v_f.
+      next_v = fluid_velocity;
+    } else if (diffuse_class == 2.0) {
+      // Bubble (eq. 8): v += dt (-k_b g + k_d (v_f - v) / dt); it rises against gravity and the
+      // drag pulls it along with the water.
+      next_v = v - u_buoyancy * u_gravity * u_dt + u_bubble_drag * (fluid_velocity - v);
+    } else
+#endif
+    {
+      next_v = v + acceleration(p, v, type) * u_dt;
+    }
     next_p = p + next_v * u_dt;
     collide(p, next_p, next_v);
     next_s1 = next_v;
@@ -154,5 +214,5 @@ void main() {
     return;
   }
   out_state0 = vec4(next_p, 1.0);
-  out_state1 = vec4(next_s1, u_verlet == 0 ? 0.0 : 1.0);
+  out_state1 = vec4(next_s1, u_verlet == 0 ? diffuse_class : 1.0);
 }
