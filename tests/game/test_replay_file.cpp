@@ -308,13 +308,14 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   rows[2].columns.set("nonfinite", 9);
   rows[2].has_hash = true;
   rows[2].state_hash = 0xabcdef0123456789ull;
-  // The effects' columns in registry order (explosives, sph_fluid, sprite_particles, fluid_surface;
-  // the blob's triangles and worker time share the water's columns), between the phases and the hash.
+  // The effects' columns in registry order (explosives, sph_fluid, sprite_particles, fluid_surface,
+  // gulls; the blob's triangles and worker time share the water's columns), between the phases and
+  // the hash.
   EXPECT_EQ(game::frameCsvHeader(),
             "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,blasts,particles,water_pool,"
             "water_air,water_ground,water_pump,water_spray,sph_steps,density_err_mean,density_err_p99,density_err_max,"
             "pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,dt_request_cuts,nonfinite,warned,sprites,triangles,"
-            "mesh_worker_ms,raycast_records,raycast_dropped,raycast_pool,raycast_pool_bound,state_hash");
+            "mesh_worker_ms,raycast_records,raycast_dropped,raycast_pool,raycast_pool_bound,gulls_fleeing,state_hash");
   const auto path = std::filesystem::temp_directory_path() / ("replay_csv_" + std::to_string(::getpid()) + ".csv");
   std::string error;
   ASSERT_TRUE(game::writeFrameCsv(path, rows, error)) << error;
