@@ -17,7 +17,8 @@ WaterBackend* backendFor(WaterSlot& slot, const WaterBatch& batch, int width, in
                          const std::filesystem::path& shader_dir) {
   if (slot.backend && slot.width == width && slot.height == height && slot.method == batch.method)
     return slot.backend->ready() ? slot.backend.get() : nullptr;
-  const bool failed_before = !slot.backend && slot.method == batch.method && slot.width == width && slot.height == height;
+  const bool failed_before =
+      !slot.backend && slot.method == batch.method && slot.width == width && slot.height == height;
   releaseWater(slot);
   slot.method = std::string(batch.method);
   slot.width = width;
