@@ -169,6 +169,21 @@ bool uploadShapes(ShapeBuffer& s, std::span<const glm::mat3> g, std::span<const 
   return true;
 }
 
+bool uploadEllipsoids(ParticleBuffer& particles, ShapeBuffer& shapes, std::span<const glm::vec3> centres,
+                      std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error) {
+  shapes.count = 0;
+  particles.count = 0;
+  if (g.size() != centres.size()) {
+    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
+            " matrices";
+    return false;
+  }
+  if (!uploadShapes(shapes, g, max_axis, error)) return false;
+  if (uploadParticles(particles, centres, error)) return true;
+  shapes.count = 0;
+  return false;
+}
+
 GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool compute, std::string& error,
                                std::string_view defines) {
   // The engine's programs are GLSL 3.30; the storage features come in as extensions so the

@@ -74,6 +74,10 @@ void createShapeBuffer(const ParticleBuffer& particles, ShapeBuffer& shapes, GLu
 // or the sizes differ.
 bool uploadShapes(ShapeBuffer& shapes, std::span<const glm::mat3> g, std::span<const float> max_axis,
                   std::string& error);
+// The ellipsoid particles of screen_space and raycast: the smoothed centres and their shapes, one
+// per centre. On any error both counts are 0 and `error` names it.
+bool uploadEllipsoids(ParticleBuffer& particles, ShapeBuffer& shapes, std::span<const glm::vec3> centres,
+                      std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error);
 
 // Builds a program of GLSL 3.30 plus the extensions the fragment lists need (SSBOs, image
 // load/store, binding layouts, and compute shaders when `compute`), all of which GL 4.3+ (and

@@ -179,17 +179,7 @@ bool uploadRaycastParticles(RaycastRenderer& r, std::span<const glm::vec3> posit
 
 bool uploadRaycastEllipsoids(RaycastRenderer& r, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
                              std::span<const float> max_axis, std::string& error) {
-  r.shapes.count = 0;
-  r.particles.count = 0;
-  if (g.size() != centres.size()) {
-    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
-            " matrices";
-    return false;
-  }
-  if (!uploadShapes(r.shapes, g, max_axis, error)) return false;
-  if (uploadParticles(r.particles, centres, error)) return true;
-  r.shapes.count = 0;
-  return false;
+  return uploadEllipsoids(r.particles, r.shapes, centres, g, max_axis, error);
 }
 
 void drawRaycastFluid(RaycastRenderer& r, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,

@@ -163,17 +163,7 @@ bool uploadScreenSpaceParticles(ScreenSpaceRenderer& r, std::span<const glm::vec
 
 bool uploadScreenSpaceEllipsoids(ScreenSpaceRenderer& r, std::span<const glm::vec3> centres,
                                  std::span<const glm::mat3> g, std::span<const float> max_axis, std::string& error) {
-  r.shapes.count = 0;
-  r.particles.count = 0;
-  if (g.size() != centres.size()) {
-    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
-            " matrices";
-    return false;
-  }
-  if (!uploadShapes(r.shapes, g, max_axis, error)) return false;
-  if (uploadParticles(r.particles, centres, error)) return true;
-  r.shapes.count = 0;
-  return false;
+  return uploadEllipsoids(r.particles, r.shapes, centres, g, max_axis, error);
 }
 
 void filterScreenSpaceDepth(ScreenSpaceRenderer& r, const FluidCamera& camera, const ScreenSpaceParams& params) {
