@@ -174,8 +174,8 @@ bool uploadEllipsoids(ParticleBuffer& particles, ShapeBuffer& shapes, std::span<
   shapes.count = 0;
   particles.count = 0;
   if (g.size() != centres.size()) {
-    error = "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) +
-            " matrices";
+    error =
+        "fluid ellipsoids: " + std::to_string(centres.size()) + " centres, " + std::to_string(g.size()) + " matrices";
     return false;
   }
   if (!uploadShapes(shapes, g, max_axis, error)) return false;
@@ -191,7 +191,8 @@ GLuint buildProgramWithStorage(std::span<const ShaderStageFiles> stages, bool co
   const std::string prelude = std::string(compute ? "#extension GL_ARB_compute_shader : require\n" : "") +
                               "#extension GL_ARB_shader_storage_buffer_object : require\n"
                               "#extension GL_ARB_shader_image_load_store : require\n"
-                              "#extension GL_ARB_shading_language_420pack : require\n" + std::string(defines);
+                              "#extension GL_ARB_shading_language_420pack : require\n" +
+                              std::string(defines);
   return buildProgram(stages, prelude, error);
 }
 
