@@ -189,29 +189,15 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
   const bool identity = grid.identity_order;
   // The positions in sorted order (SoA, padded for one 4-wide load past a run's end): each row
   // run of the grid is then one contiguous stretch of each array.
-  constexpr std::size_t kPad = 4;
-  scratch.sx.resize(n + kPad);
-  scratch.sy.resize(n + kPad);
-  scratch.sz.resize(n + kPad);
-  float* sx = scratch.sx.data();
-  float* sy = scratch.sy.data();
-  float* sz = scratch.sz.data();
-  par::parallelFor(par::Range<std::size_t>(0, n, 4096), [&](const par::Range<std::size_t>& range) {
-    for (std::size_t e = range.begin(); e != range.end(); ++e) {
-      const glm::vec3 x = positions[identity ? e : order[e]];
-      sx[e] = x.x;
-      sy[e] = x.y;
-      sz[e] = x.z;
-    }
-  });
-  for (std::size_t e = n; e < n + kPad; ++e) sx[e] = sy[e] = sz[e] = 0.0f;
+  copySortedPositions(grid, positions, 4, scratch.sx, scratch.sy, scratch.sz);
+  const float* sx = scratch.sx.data();
+  const float* sy = scratch.sy.data();
+  const float* sz = scratch.sz.data();
   // Sorted entries in order: particles of one cell run together and share their rows in cache.
   par::parallelFor(par::Range<std::size_t>(0, n, kGrain), [&](const par::Range<std::size_t>& range) {
     for (std::size_t e = range.begin(); e != range.end(); ++e) {
       const std::uint32_t i = identity ? static_cast<std::uint32_t>(e) : order[e];
       const glm::vec3 xi(sx[e], sy[e], sz[e]);
-      const glm::ivec3 cell = grid.cellOf(xi);
-      const int x0 = std::max(cell.x - reach, 0), x1 = std::min(cell.x + reach, grid.dims.x - 1);
       Moments m;
 #if defined(__SSE2__)
       __m128 acc[10];
@@ -219,37 +205,30 @@ void computeAnisotropy(const NeighborGrid& grid, std::span<const glm::vec3> posi
       const __m128 px = _mm_set1_ps(xi.x), py = _mm_set1_ps(xi.y), pz = _mm_set1_ps(xi.z);
       const __m128 vr2 = _mm_set1_ps(r2), vinv = _mm_set1_ps(inv_r2);
 #endif
-      const std::uint32_t dx = static_cast<std::uint32_t>(grid.dims.x),
-                          dxy = dx * static_cast<std::uint32_t>(grid.dims.y);
-      for (int z = std::max(cell.z - reach, 0); z <= std::min(cell.z + reach, grid.dims.z - 1); ++z)
-        for (int y = std::max(cell.y - reach, 0); y <= std::min(cell.y + reach, grid.dims.y - 1); ++y) {
-          // Cells x0..x1 of row (y, z) are consecutive keys (NeighborGrid::keyOf, x fastest): one run.
-          const std::uint32_t row = static_cast<std::uint32_t>(z) * dxy + static_cast<std::uint32_t>(y) * dx;
-          const std::uint32_t b = grid.cell_start[row + static_cast<std::uint32_t>(x0)],
-                              end = grid.cell_start[row + static_cast<std::uint32_t>(x1) + 1];
+      forEachNeighborRun(grid, grid.cellOf(xi), reach, [&](std::uint32_t b, std::uint32_t end) {
 #if defined(__SSE2__)
-          accumulateRun(sx, sy, sz, b, end, px, py, pz, vr2, vinv, acc, m.count);
+        accumulateRun(sx, sy, sz, b, end, px, py, pz, vr2, vinv, acc, m.count);
 #else
-          for (std::uint32_t u = b; u < end; ++u) {
-            const glm::vec3 d = glm::vec3(sx[u], sy[u], sz[u]) - xi;
-            const float d2 = glm::dot(d, d);
-            if (!(d2 < r2)) continue;
-            const float q2 = d2 * inv_r2;
-            const float w = std::max(1.0f - q2 * std::sqrt(q2), 0.0f);  // Eq. 11
-            m.w += w;
-            m.fx += w * d.x;
-            m.fy += w * d.y;
-            m.fz += w * d.z;
-            m.xx += w * d.x * d.x;
-            m.xy += w * d.x * d.y;
-            m.xz += w * d.x * d.z;
-            m.yy += w * d.y * d.y;
-            m.yz += w * d.y * d.z;
-            m.zz += w * d.z * d.z;
-            ++m.count;
-          }
-#endif
+        for (std::uint32_t u = b; u < end; ++u) {
+          const glm::vec3 d = glm::vec3(sx[u], sy[u], sz[u]) - xi;
+          const float d2 = glm::dot(d, d);
+          if (!(d2 < r2)) continue;
+          const float q2 = d2 * inv_r2;
+          const float w = std::max(1.0f - q2 * std::sqrt(q2), 0.0f);  // Eq. 11
+          m.w += w;
+          m.fx += w * d.x;
+          m.fy += w * d.y;
+          m.fz += w * d.z;
+          m.xx += w * d.x * d.x;
+          m.xy += w * d.x * d.y;
+          m.xz += w * d.x * d.z;
+          m.yy += w * d.y * d.y;
+          m.yz += w * d.y * d.z;
+          m.zz += w * d.z * d.z;
+          ++m.count;
         }
+#endif
+      });
 #if defined(__SSE2__)
       m.w = laneSum(acc[0]);
       m.fx = laneSum(acc[1]);

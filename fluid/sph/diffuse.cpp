@@ -32,20 +32,13 @@ float unit(std::uint64_t& state) {
 template <typename F>
 void forNeighbours(const NeighborGrid& grid, int reach, const float* sx, const float* sy, const float* sz, glm::vec3 x,
                    float h2, F&& f) {
-  const glm::ivec3 cell = grid.cellOf(x);
-  const int x0 = std::max(cell.x - reach, 0), x1 = std::min(cell.x + reach, grid.dims.x - 1);
-  const auto dx = static_cast<std::uint32_t>(grid.dims.x), dxy = dx * static_cast<std::uint32_t>(grid.dims.y);
-  for (int z = std::max(cell.z - reach, 0); z <= std::min(cell.z + reach, grid.dims.z - 1); ++z)
-    for (int y = std::max(cell.y - reach, 0); y <= std::min(cell.y + reach, grid.dims.y - 1); ++y) {
-      const std::uint32_t row = static_cast<std::uint32_t>(z) * dxy + static_cast<std::uint32_t>(y) * dx;
-      const std::uint32_t b = grid.cell_start[row + static_cast<std::uint32_t>(x0)],
-                          e = grid.cell_start[row + static_cast<std::uint32_t>(x1) + 1];
-      for (std::uint32_t u = b; u < e; ++u) {
-        const glm::vec3 d(x.x - sx[u], x.y - sy[u], x.z - sz[u]);
-        const float d2 = glm::dot(d, d);
-        if (d2 < h2) f(u, d, d2);
-      }
+  forEachNeighborRun(grid, grid.cellOf(x), reach, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t u = b; u < e; ++u) {
+      const glm::vec3 d(x.x - sx[u], x.y - sy[u], x.z - sz[u]);
+      const float d2 = glm::dot(d, d);
+      if (d2 < h2) f(u, d, d2);
     }
+  });
 }
 
 }  // namespace
@@ -112,19 +105,11 @@ bool computeDiffusePotentials(std::span<const glm::vec3> positions, std::span<co
   const int reach = neighborReach(grid, h);
   const std::uint32_t* order = grid.order.data();
   const bool identity = grid.identity_order;
-  scratch.sx.resize(n);
-  scratch.sy.resize(n);
-  scratch.sz.resize(n);
-  float* sx = scratch.sx.data();
-  float* sy = scratch.sy.data();
-  float* sz = scratch.sz.data();
+  copySortedPositions(grid, positions, 0, scratch.sx, scratch.sy, scratch.sz);
+  const float* sx = scratch.sx.data();
+  const float* sy = scratch.sy.data();
+  const float* sz = scratch.sz.data();
   auto original = [&](std::uint32_t e) { return identity ? e : order[e]; };
-  for (std::size_t e = 0; e < n; ++e) {
-    const glm::vec3 x = positions[original(static_cast<std::uint32_t>(e))];
-    sx[e] = x.x;
-    sy[e] = x.y;
-    sz[e] = x.z;
-  }
   // I_k first: eq. 2 multiplies everything by it, so only particles with I_k > 0 need the
   // potentials, and only they and their neighbours need a normal.
   par::parallelFor(par::Range<std::size_t>(0, n, 4096), [&](const par::Range<std::size_t>& range) {

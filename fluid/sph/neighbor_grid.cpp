@@ -278,6 +278,25 @@ void reserveNeighborLists(NeighborLists& lists, std::size_t capacity) {
                                    NeighborLists::kReservePerParticle);
 }
 
+void copySortedPositions(const NeighborGrid& grid, std::span<const glm::vec3> positions, std::size_t pad,
+                         std::vector<float>& sx, std::vector<float>& sy, std::vector<float>& sz) {
+  const std::size_t n = positions.size();
+  sx.resize(n + pad);
+  sy.resize(n + pad);
+  sz.resize(n + pad);
+  const std::uint32_t* order = grid.order.data();
+  const bool identity = grid.identity_order;
+  par::parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const glm::vec3 x = positions[identity ? t : order[t]];
+      sx[t] = x.x;
+      sy[t] = x.y;
+      sz[t] = x.z;
+    }
+  });
+  for (std::size_t t = n; t < n + pad; ++t) sx[t] = sy[t] = sz[t] = 0.0f;
+}
+
 int neighborReach(const NeighborGrid& grid, float radius) {
   // Float slack: cell coordinates and the distance test are rounded relative to the coordinates'
   // magnitude (one ulp is 1.2e-7 of it); 5e-6 of the largest coordinate (and 1e-5 of the radius)
@@ -306,20 +325,14 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
   const bool identity = grid.identity_order;
   // SoA copies of the positions in sorted order, padded so that a 4- or 8-wide load at the end
   // of a run never reads past the arrays (the lanes past the run are masked off).
-  lists.sx.resize(n + kPad);
-  lists.sy.resize(n + kPad);
-  lists.sz.resize(n + kPad);
-  if (!positions_copied) {
-    par::parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t t = r.begin(); t != r.end(); ++t) {
-        const glm::vec3 x = positions[identity ? t : order[t]];
-        lists.sx[t] = x.x;
-        lists.sy[t] = x.y;
-        lists.sz[t] = x.z;
-      }
-    });
+  if (positions_copied) {
+    lists.sx.resize(n + kPad);
+    lists.sy.resize(n + kPad);
+    lists.sz.resize(n + kPad);
+    for (std::size_t t = n; t < n + kPad; ++t) lists.sx[t] = lists.sy[t] = lists.sz[t] = 0.0f;
+  } else {
+    copySortedPositions(grid, positions, kPad, lists.sx, lists.sy, lists.sz);
   }
-  for (std::size_t t = n; t < n + kPad; ++t) lists.sx[t] = lists.sy[t] = lists.sz[t] = 0.0f;
   const float* sx = lists.sx.data();
   const float* sy = lists.sy.data();
   const float* sz = lists.sz.data();
@@ -351,18 +364,14 @@ void findNeighbors(const NeighborGrid& grid, std::span<const glm::vec3> position
         const int cy =
             static_cast<int>((key / static_cast<std::uint32_t>(grid.dims.x)) % static_cast<std::uint32_t>(grid.dims.y));
         const int cz = static_cast<int>(key / static_cast<std::uint32_t>(grid.dims.x * grid.dims.y));
-        const int x0 = std::max(cx - reach, 0), x1 = std::min(cx + reach, grid.dims.x - 1);
         std::size_t rows = 0, candidates = 0;
-        for (int z = std::max(cz - reach, 0); z <= std::min(cz + reach, grid.dims.z - 1); ++z)
-          for (int y = std::max(cy - reach, 0); y <= std::min(cy + reach, grid.dims.y - 1); ++y) {
-            const std::uint32_t b = grid.cell_start[grid.keyOf({x0, y, z})],
-                                e = grid.cell_start[grid.keyOf({x1, y, z}) + 1];
-            if (b == e) continue;
-            runs[2 * rows] = b;
-            runs[2 * rows + 1] = e;
-            ++rows;
-            candidates += e - b;
-          }
+        forEachNeighborRun(grid, {cx, cy, cz}, reach, [&](std::uint32_t b, std::uint32_t e) {
+          if (b == e) return;
+          runs[2 * rows] = b;
+          runs[2 * rows + 1] = e;
+          ++rows;
+          candidates += e - b;
+        });
         for (; s < group_end; ++s) {
           // Room for every candidate (plus the 8-wide store of the packed scan), so the scan
           // writes through a plain pointer.

@@ -20,6 +20,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -87,6 +88,29 @@ struct NeighborLists {
 // Cells per axis on each side of a particle's cell that can hold neighbours within `radius`
 // (>= 1): ceil((radius + float slack) / cell_size).
 int neighborReach(const NeighborGrid& grid, float radius);
+
+// The candidates of a query around `cell`: the cells within `reach` of it, one run of sorted
+// entries [begin, end) per (y, z) row (cells x - reach .. x + reach of a row are consecutive keys,
+// x fastest), rows in z then y order. Calls run(begin, end) for each row, empty ones included. The
+// order is fixed, so sums taken in it are the same for every thread count.
+template <class Run>
+void forEachNeighborRun(const NeighborGrid& grid, glm::ivec3 cell, int reach, Run&& run) {
+  const auto x0 = static_cast<std::uint32_t>(std::max(cell.x - reach, 0)),
+             x1 = static_cast<std::uint32_t>(std::min(cell.x + reach, grid.dims.x - 1));
+  const auto dx = static_cast<std::uint32_t>(grid.dims.x), dy = static_cast<std::uint32_t>(grid.dims.y);
+  for (int z = std::max(cell.z - reach, 0); z <= std::min(cell.z + reach, grid.dims.z - 1); ++z)
+    for (int y = std::max(cell.y - reach, 0); y <= std::min(cell.y + reach, grid.dims.y - 1); ++y) {
+      // keyOf({x, y, z}), inline: this runs once per row of every query.
+      const std::uint32_t row = (static_cast<std::uint32_t>(z) * dy + static_cast<std::uint32_t>(y)) * dx;
+      run(grid.cell_start[row + x0], grid.cell_start[row + x1 + 1]);
+    }
+}
+
+// The positions in the grid's sorted order as three float arrays (SoA), each of n + pad floats with
+// the padding zeroed, so a run's neighbours are one contiguous stretch of each array and a wide
+// load at a run's end stays inside them. Parallel; the result does not depend on the thread count.
+void copySortedPositions(const NeighborGrid& grid, std::span<const glm::vec3> positions, std::size_t pad,
+                         std::vector<float>& sx, std::vector<float>& sy, std::vector<float>& sz);
 
 // Reserves the scratch of `lists` for `capacity` particles.
 void reserveNeighborLists(NeighborLists& lists, std::size_t capacity);
