@@ -379,6 +379,7 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
         emitSprayFromSph(*sph, s.params, dt, s.seed ^ (0xc2b2ae3d27d4eb4full * (s.steps + 1)), s.spray_debt, s.births));
   }
   s.diffuse_last_step = {};
+  const std::size_t before_diffuse = s.births.size();
   // Foam off (both rates 0): no potentials and no grid; sprites already born keep the last grid.
   const bool foam = s.params.foam_trapped_air_rate > 0.0f || s.params.foam_wave_crest_rate > 0.0f;
   if (sph != nullptr && sph->error.empty() && foam) {
@@ -400,8 +401,6 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
     }
     engine::setFluidGrid(s.gpu, grid, error);
   }
-  const std::size_t before_diffuse =
-      s.births.size() - (s.diffuse_last_step[0] + s.diffuse_last_step[1] + s.diffuse_last_step[2]);
   const std::size_t before_blasts = s.births.size();
   emitBlastSprites(s, sph, blasts);
   const std::size_t born = engine::spawn(s.gpu, s.births);
