@@ -2,11 +2,11 @@
 #include "engine/fluid_render/water_backend.hpp"
 
 #include <algorithm>
-#include <memory>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 namespace engine {
 namespace {
@@ -24,7 +24,10 @@ enum Binding : GLuint {
   kDepthC = 8,
   kSelection = 9,
   kInnerCells = 10,
+  kShapes = 11,
 };
+
+bool drawsEllipsoids(const VoxelRenderer& r) { return r.shapes.count > 0 && r.shapes.count == r.particles.count; }
 
 GLuint buildVoxelProgram(std::vector<ShaderStageFiles> stages, std::string& error) {
   // GLSL 3.30 (so the shared shading files compile unchanged) plus what the passes use: compute,
@@ -129,8 +132,8 @@ void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out) {
     return;
   }
   const bool scene_ok = createSceneTargets(w, h, out.scene);
-  for (GLuint* b : {&out.selection, &out.inner_cells, &out.layer_table, &out.tile_bits, &out.spans, &out.meta,
-                    &out.links, &out.depth_raw, &out.depth_ping, &out.depth_pong, &out.normals}) {
+  for (GLuint* b : {&out.shapes.buffer, &out.selection, &out.inner_cells, &out.layer_table, &out.tile_bits, &out.spans,
+                    &out.meta, &out.links, &out.depth_raw, &out.depth_ping, &out.depth_pong, &out.normals}) {
     glGenBuffers(1, b);
     resizeBuffer(*b, 16);
   }
@@ -156,8 +159,8 @@ void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out) {
 GlObjectNames glNames(const VoxelRenderer& r) {
   GlObjectNames n;
   if (r.scene.fbo != 0) listNames(r.scene, n);
-  for (GLuint b : {r.particles.buffer, r.selection, r.inner_cells, r.layer_table, r.tile_bits, r.spans, r.meta, r.links,
-                   r.depth_raw, r.depth_ping, r.depth_pong, r.normals})
+  for (GLuint b : {r.particles.buffer, r.shapes.buffer, r.selection, r.inner_cells, r.layer_table, r.tile_bits, r.spans,
+                   r.meta, r.links, r.depth_raw, r.depth_ping, r.depth_pong, r.normals})
     if (b != 0) n.buffers.push_back(b);
   for (GLuint v : {r.vao, r.empty_vao})
     if (v != 0) n.vertex_arrays.push_back(v);
@@ -169,8 +172,8 @@ GlObjectNames glNames(const VoxelRenderer& r) {
 
 void destroyVoxelRenderer(VoxelRenderer& r) {
   destroySceneTargets(r.scene);
-  for (GLuint* b : {&r.particles.buffer, &r.selection, &r.inner_cells, &r.layer_table, &r.tile_bits, &r.spans, &r.meta,
-                    &r.links, &r.depth_raw, &r.depth_ping, &r.depth_pong, &r.normals})
+  for (GLuint* b : {&r.particles.buffer, &r.shapes.buffer, &r.selection, &r.inner_cells, &r.layer_table, &r.tile_bits,
+                    &r.spans, &r.meta, &r.links, &r.depth_raw, &r.depth_ping, &r.depth_pong, &r.normals})
     if (*b != 0) glDeleteBuffers(1, b);
   for (GLuint* v : {&r.vao, &r.empty_vao})
     if (*v != 0) glDeleteVertexArrays(1, v);
@@ -192,14 +195,26 @@ void beginVoxelOpaquePass(VoxelRenderer& r, glm::vec4 clear_colour) {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 }
 
-bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions, float cell, int full_count,
-                          std::string& error) {
+namespace {
+
+// Spheres (g empty) or ellipsoids at `positions`, then the §4.3 pre-pass.
+bool uploadVoxelSet(VoxelRenderer& r, std::span<const glm::vec3> positions, std::span<const glm::mat3> g,
+                    std::span<const float> max_axis, bool ellipsoids, float cell, int full_count, std::string& error) {
   r.bounds_lo = glm::vec3(0.0f);
   r.bounds_hi = glm::vec3(-1.0f);
   r.use_selection = false;
   r.selection_count = 0;
   r.inner_count = 0;
-  if (!uploadParticles(r.particles, positions, error)) return false;
+  r.max_axis = 1.0f;
+  r.stats.ellipsoids = false;
+  if (ellipsoids) {
+    if (!uploadEllipsoids(r.particles, r.shapes, positions, g, max_axis, error)) return false;
+    for (float a : max_axis) r.max_axis = std::max(r.max_axis, a);
+    r.stats.ellipsoids = drawsEllipsoids(r);
+  } else {
+    r.shapes.count = 0;
+    if (!uploadParticles(r.particles, positions, error)) return false;
+  }
   r.stats.particles = r.particles.count;
   r.stats.splatted = r.particles.count;
   r.stats.inner_cells = 0;
@@ -234,8 +249,25 @@ bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions
   return true;
 }
 
+}  // namespace
+
+bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions, float cell, int full_count,
+                          std::string& error) {
+  return uploadVoxelSet(r, positions, {}, {}, false, cell, full_count, error);
+}
+
 bool uploadVoxelParticles(VoxelRenderer& r, std::span<const glm::vec3> positions, std::string& error) {
-  return uploadVoxelParticles(r, positions, 0.0f, 0, error);
+  return uploadVoxelSet(r, positions, {}, {}, false, 0.0f, 0, error);
+}
+
+bool uploadVoxelEllipsoids(VoxelRenderer& r, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
+                           std::span<const float> max_axis, float cell, int full_count, std::string& error) {
+  return uploadVoxelSet(r, centres, g, max_axis, true, cell, full_count, error);
+}
+
+bool uploadVoxelEllipsoids(VoxelRenderer& r, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
+                           std::span<const float> max_axis, std::string& error) {
+  return uploadVoxelSet(r, centres, g, max_axis, true, 0.0f, 0, error);
 }
 
 bool voxelBeginFrame(VoxelRenderer& r, const FluidCamera& camera, const VoxelParams& params,
@@ -244,9 +276,10 @@ bool voxelBeginFrame(VoxelRenderer& r, const FluidCamera& camera, const VoxelPar
   const int w = r.desc.base.width, h = r.desc.base.height;
   r.view = fluid::VoxelView{w, h, camera.view, camera.projection};
   if (!r.ready || r.particles.count == 0 || r.bounds_lo.x > r.bounds_hi.x) return false;
-  // View-adaptive depth range (§3.1): the particles' box in this view, widened by the radius and
-  // cut to the camera's planes, so the layers are spent where the water is.
-  const float radius = std::max(params.radius, 1e-5f);
+  // View-adaptive depth range (§3.1): the particles' box in this view, widened by the radius (an
+  // ellipsoid's bounding radius) and cut to the camera's planes, so the layers are spent where the
+  // water is.
+  const float radius = std::max(params.radius, 1e-5f) * std::max(r.max_axis, 1.0f);
   float dmin = std::numeric_limits<float>::max(), dmax = -dmin;
   for (int corner = 0; corner < 8; ++corner) {
     const glm::vec3 p((corner & 1) ? r.bounds_hi.x : r.bounds_lo.x, (corner & 2) ? r.bounds_hi.y : r.bounds_lo.y,
@@ -311,7 +344,9 @@ void voxelSplatTile(VoxelRenderer& r, const VoxelParams& params, fluid::VoxelTil
   glUniform1ui(glGetUniformLocation(p, "u_inner_count"), inner);
   glUniform1ui(glGetUniformLocation(p, "u_row"), row_groups * 64);
   setUniform(p, "u_use_selection", r.use_selection ? 1 : 0);
+  setUniform(p, "u_ellipsoids", drawsEllipsoids(r) ? 1 : 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kParticles, r.particles.buffer);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kShapes, r.shapes.buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kLayers, r.layer_table);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kBits, r.tile_bits);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSelection, r.selection);
@@ -475,7 +510,7 @@ void drawVoxelFluid(VoxelRenderer& r, GLuint target_fbo, const FluidCamera& came
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glDisable(GL_BLEND);
   glActiveTexture(GL_TEXTURE0);
-  for (GLuint i = 0; i <= kInnerCells; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i <= kShapes; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   glBindVertexArray(0);
   glUseProgram(0);  // a deleted program stays alive while current
   shade_timer.stop(s.shade_ms);
@@ -506,7 +541,13 @@ class VoxelWaterBackend final : public WaterBackend {
   const std::string& error() const override { return renderer_.error; }
   GLuint upload(const WaterInput& in, std::string& error) override {
     if (!renderer_.ready) return 0;
-    return uploadVoxelParticles(renderer_, in.particles, error) ? renderer_.scene.fbo : 0;
+    // Anisotropic kernels when the input carries them (one per particle): ellipsoids at the
+    // smoothed centres, the radius unchanged (a sphere's g is the identity).
+    const bool ellipsoids = !in.kernel_g.empty() && in.kernel_g.size() == in.particles.size();
+    const bool ok = ellipsoids
+                        ? uploadVoxelEllipsoids(renderer_, in.kernel_centres, in.kernel_g, in.kernel_max_axis, error)
+                        : uploadVoxelParticles(renderer_, in.particles, error);
+    return ok ? renderer_.scene.fbo : 0;
   }
   void draw(GLuint target_fbo, const FluidCamera& camera, const WaterParams& water, const WaterInput& in) override {
     VoxelParams params;
@@ -524,7 +565,10 @@ class VoxelWaterBackend final : public WaterBackend {
 
 const WaterBackendDesc& voxelWaterBackend() {
   static const WaterBackendDesc desc{
-      "voxel", "tiled perspective bit grid, spans per pixel, linked and filtered (Zirr & Dachsbacher 2015)", false,
+      "voxel",
+      "spheres or ellipsoids splatted into a tiled perspective bit grid, spans per pixel, linked and filtered "
+      "(Zirr & Dachsbacher 2015)",
+      false,
       [](const FluidRenderDesc& d) -> std::unique_ptr<WaterBackend> { return std::make_unique<VoxelWaterBackend>(d); }};
   return desc;
 }

@@ -15,6 +15,12 @@
 //       (or the column's span lengths), the other methods' water look (fluid/water_shade.glsl).
 // The bits and spans are those of fluid/surface/voxel_reference.hpp's CPU reference.
 //
+// Anisotropic kernels (Yu & Turk 2013, fluid/sph/anisotropy.hpp): uploadVoxelEllipsoids gives each
+// particle its matrix g; the splat then sets the voxels the pixel rays cross inside the ellipsoid
+// { x : |g (x − x̄)| <= radius } (the ray and centre mapped by g onto the sphere test, tile and
+// pixel bounds from the bounding sphere radius · max axis). The later stages work on the bits and
+// do not change. uploadVoxelParticles draws spheres.
+//
 // Frame as in screen_space.hpp: beginVoxelOpaquePass() (or draw/blit into `scene.fbo`) → the
 // caller draws the opaque scene → uploadVoxelParticles() → drawVoxelFluid(). Needs the creating
 // context current. A renderer whose shaders failed is `ready == false` and its calls do nothing.
@@ -57,6 +63,7 @@ struct VoxelStats {
   int tiles = 0, tile_width = 0, tile_height = 0;
   std::uint32_t particles = 0, splatted = 0;  // uploaded; splatted after the inner-cell pre-pass (§4.3)
   std::uint32_t inner_cells = 0;              // spheres standing for the full inner cells left out
+  bool ellipsoids = false;                    // the particles are anisotropic kernels
   std::uint64_t tile_grid_bytes = 0;          // the temporary bit grid (one tile)
   std::uint64_t span_bytes = 0;               // what outlives the tiles: spans, counts, links, depths, normals
   std::uint64_t dense_grid_bytes = 0;         // one bit per voxel of the whole screen at the same layers
@@ -71,6 +78,10 @@ struct VoxelRenderer {
   SceneTargets scene;
   GLuint vao = 0, empty_vao = 0;
   ParticleBuffer particles;
+  // Anisotropic kernels: g per particle (particle_pass.hpp ShapeBuffer, read as a storage buffer),
+  // splatted when shapes.count == particles.count; max_axis = the largest over the particles.
+  ShapeBuffer shapes;
+  float max_axis = 1.0f;
   GLuint selection = 0;  // §4.3 pre-pass: indices of the particles to splat
   std::uint32_t selection_count = 0;
   GLuint inner_cells = 0;  // §4.3 pre-pass: one sphere (centre, radius) per full inner cell
@@ -103,6 +114,15 @@ bool uploadVoxelParticles(VoxelRenderer& renderer, std::span<const glm::vec3> po
 // sphere instead, so the body stays filled. cell <= 0: keep all.
 bool uploadVoxelParticles(VoxelRenderer& renderer, std::span<const glm::vec3> positions, float cell, int full_count,
                           std::string& error);
+// Anisotropic kernels: `centres` (the smoothed kernel centres x̄), `g` (h G per particle: symmetric,
+// dimensionless) and its largest semi-axis factor (fluid::Anisotropy), one each per centre; every
+// particle is the ellipsoid { x : |g (x − x̄)| <= VoxelParams::radius }. False + error (nothing
+// uploaded) when a value is not finite, an axis is not positive or the sizes differ. `cell`,
+// `full_count`: as above (the inner cells of the centres stay spheres).
+bool uploadVoxelEllipsoids(VoxelRenderer& renderer, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
+                           std::span<const float> max_axis, std::string& error);
+bool uploadVoxelEllipsoids(VoxelRenderer& renderer, std::span<const glm::vec3> centres, std::span<const glm::mat3> g,
+                           std::span<const float> max_axis, float cell, int full_count, std::string& error);
 
 // Copies the scene colour into `target_fbo` (viewport = desc size) and blends the water over it.
 void drawVoxelFluid(VoxelRenderer& renderer, GLuint target_fbo, const FluidCamera& camera, const WaterParams& water,

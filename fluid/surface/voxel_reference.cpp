@@ -73,34 +73,87 @@ bool voxelSphereLayers(glm::vec3 ray, glm::vec3 c, float radius, std::span<const
   return true;
 }
 
+glm::mat3 voxelKernelMatrix(const glm::mat4& v, const glm::mat3& g) {
+  // R(i, k) = v[k][i]. D = g − I (exactly 0 for a sphere), T = D Rᵀ, M = I + R T.
+  float t[3][3];  // t[k][j] = T(k, j)
+  for (int k = 0; k < 3; ++k) {
+    const float d0 = g[0][k] - (k == 0 ? 1.0f : 0.0f), d1 = g[1][k] - (k == 1 ? 1.0f : 0.0f),
+                d2 = g[2][k] - (k == 2 ? 1.0f : 0.0f);
+    for (int j = 0; j < 3; ++j) t[k][j] = (d0 * v[0][j] + d1 * v[1][j]) + d2 * v[2][j];
+  }
+  glm::mat3 m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      m[j][i] = (i == j ? 1.0f : 0.0f) + ((v[0][i] * t[0][j] + v[1][i] * t[1][j]) + v[2][i] * t[2][j]);
+  return m;
+}
+
 namespace {
 glm::vec3 toView(const glm::mat4& v, glm::vec3 p) {
   return {((v[0][0] * p.x + v[1][0] * p.y) + v[2][0] * p.z) + v[3][0],
           ((v[0][1] * p.x + v[1][1] * p.y) + v[2][1] * p.z) + v[3][1],
           ((v[0][2] * p.x + v[1][2] * p.y) + v[2][2] * p.z) + v[3][2]};
 }
-}  // namespace
+glm::vec3 mapped(const glm::mat3& m, glm::vec3 p) {
+  return {(m[0][0] * p.x + m[1][0] * p.y) + m[2][0] * p.z, (m[0][1] * p.x + m[1][1] * p.y) + m[2][1] * p.z,
+          (m[0][2] * p.x + m[1][2] * p.y) + m[2][2] * p.z};
+}
 
-void voxelizeReference(std::span<const glm::vec3> centres, float radius, const VoxelView& view,
-                       const VoxelLayers& layers, VoxelTile tile, std::vector<std::uint32_t>& words) {
+// ORs layers [first, last] into one column's words.
+void setLayers(std::uint32_t* column, int first, int last) {
+  for (int w = first >> 5; w <= last >> 5; ++w) {
+    const int lo = std::max(first - 32 * w, 0), hi = std::min(last - 32 * w, 31);
+    const std::uint32_t upper = hi == 31 ? 0xffffffffu : ((1u << (hi + 1)) - 1u);
+    column[w] |= upper & ~((1u << lo) - 1u);
+  }
+}
+
+// Every particle against every pixel of the tile; `layersOf(i, ray, first, last)` tests particle i.
+template <class LayersOf>
+void voxelizeTile(std::size_t count, const VoxelView& view, const VoxelLayers& layers, VoxelTile tile,
+                  std::vector<std::uint32_t>& words, LayersOf&& layersOf) {
   const std::size_t per_column = static_cast<std::size_t>(layers.words);
   words.assign(static_cast<std::size_t>(tile.width) * static_cast<std::size_t>(tile.height) * per_column, 0u);
-  for (const glm::vec3& p : centres) {
-    const glm::vec3 c = toView(view.view, p);
+  for (std::size_t i = 0; i < count; ++i) {
     for (int ly = 0; ly < tile.height; ++ly) {
       for (int lx = 0; lx < tile.width; ++lx) {
         int first = 0, last = 0;
-        const glm::vec3 ray = voxelPixelRay(view, tile.x + lx, tile.y + ly);
-        if (!voxelSphereLayers(ray, c, radius, layers.depth, first, last)) continue;
-        std::uint32_t* column = &words[(static_cast<std::size_t>(ly) * tile.width + lx) * per_column];
-        for (int w = first >> 5; w <= last >> 5; ++w) {
-          const int lo = std::max(first - 32 * w, 0), hi = std::min(last - 32 * w, 31);
-          const std::uint32_t upper = hi == 31 ? 0xffffffffu : ((1u << (hi + 1)) - 1u);
-          column[w] |= upper & ~((1u << lo) - 1u);
-        }
+        if (!layersOf(i, voxelPixelRay(view, tile.x + lx, tile.y + ly), first, last)) continue;
+        setLayers(&words[(static_cast<std::size_t>(ly) * tile.width + lx) * per_column], first, last);
       }
     }
   }
+}
+}  // namespace
+
+bool voxelEllipsoidLayers(glm::vec3 ray, glm::vec3 c, const glm::mat3& m, float radius, std::span<const float> depth,
+                          int& first, int& last) {
+  // |m (d·ray − c)| = radius is |d·(m ray) − m c| = radius: the sphere's quadratic in d.
+  return voxelSphereLayers(mapped(m, ray), mapped(m, c), radius, depth, first, last);
+}
+
+void voxelizeReference(std::span<const glm::vec3> centres, float radius, const VoxelView& view,
+                       const VoxelLayers& layers, VoxelTile tile, std::vector<std::uint32_t>& words) {
+  std::vector<glm::vec3> c(centres.size());
+  for (std::size_t i = 0; i < centres.size(); ++i) c[i] = toView(view.view, centres[i]);
+  voxelizeTile(centres.size(), view, layers, tile, words, [&](std::size_t i, glm::vec3 ray, int& first, int& last) {
+    return voxelSphereLayers(ray, c[i], radius, layers.depth, first, last);
+  });
+}
+
+void voxelizeReference(std::span<const glm::vec3> centres, std::span<const glm::mat3> g, float radius,
+                       const VoxelView& view, const VoxelLayers& layers, VoxelTile tile,
+                       std::vector<std::uint32_t>& words) {
+  const std::size_t n = std::min(centres.size(), g.size());
+  std::vector<glm::vec3> c(n);
+  std::vector<glm::mat3> m(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m[i] = voxelKernelMatrix(view.view, g[i]);
+    c[i] = mapped(m[i], toView(view.view, centres[i]));
+  }
+  voxelizeTile(n, view, layers, tile, words, [&](std::size_t i, glm::vec3 ray, int& first, int& last) {
+    return voxelSphereLayers(mapped(m[i], ray), c[i], radius, layers.depth, first, last);
+  });
 }
 
 void compressColumnReference(std::span<const std::uint32_t> column, const VoxelLayers& layers, float min_gap,

@@ -13,7 +13,14 @@
 //
 // A voxel (pixel, layer) is set when the pixel-centre ray's segment inside a particle sphere meets
 // the layer's depth interval. Depth is view depth (−z in view space), not distance along the ray.
+//
+// Anisotropic kernels (Yu & Turk 2013, fluid/sph/anisotropy.hpp): a particle drawn as the sphere
+// of radius ρ is drawn as the ellipsoid { x : |g (x − x̄)| <= ρ } instead. In view space that is
+// |M (d·ray − c)| <= ρ with M = R g Rᵀ (R the view's rotation), i.e. the sphere of radius ρ at
+// M c met by the ray M ray: the same quadratic in the view depth d, so the sphere's layer test
+// runs unchanged on the mapped ray and centre (voxelEllipsoidLayers).
 
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
@@ -57,6 +64,17 @@ int voxelLayerOf(std::span<const float> depth, float d);
 bool voxelSphereLayers(glm::vec3 ray, glm::vec3 centre_view, float radius, std::span<const float> depth, int& first,
                        int& last);
 
+// The view-space kernel matrix M = R g Rᵀ of a world-space g (symmetric), computed as
+// I + R (g − I) Rᵀ so that a sphere's g (the identity) gives exactly I and its ellipsoid sets
+// exactly the sphere's bits. R is the upper 3x3 of `view` (a rigid transform). The GLSL side
+// (shaders/voxel_splat.comp kernelMatrix) runs the same operations in the same order.
+glm::mat3 voxelKernelMatrix(const glm::mat4& view, const glm::mat3& g);
+
+// The layers [first, last] the pixel ray meets inside the ellipsoid { p : |m (p − centre_view)|
+// <= radius } (view space, m from voxelKernelMatrix), clamped to the grid; false when it misses.
+bool voxelEllipsoidLayers(glm::vec3 ray, glm::vec3 centre_view, const glm::mat3& m, float radius,
+                          std::span<const float> depth, int& first, int& last);
+
 // A rectangle of pixels: one tile of the screen (§3.1).
 struct VoxelTile {
   int x = 0, y = 0, width = 0, height = 0;
@@ -67,6 +85,11 @@ struct VoxelTile {
 // (the reference, for small sets; the GPU walks each sphere's screen bounds instead).
 void voxelizeReference(std::span<const glm::vec3> centres, float radius, const VoxelView& view,
                        const VoxelLayers& layers, VoxelTile tile, std::vector<std::uint32_t>& words);
+// The same for anisotropic kernels: particle i is the ellipsoid { x : |g[i] (x − centres[i])| <=
+// radius } (g.size() == centres.size(); the smoothed centres x̄ of fluid/sph/anisotropy.hpp).
+void voxelizeReference(std::span<const glm::vec3> centres, std::span<const glm::mat3> g, float radius,
+                       const VoxelView& view, const VoxelLayers& layers, VoxelTile tile,
+                       std::vector<std::uint32_t>& words);
 
 // One span of a column: set layers [entry, exit) (exit exclusive), gaps shorter than the minimum
 // bridged (§3.2, §4.4).

@@ -112,7 +112,7 @@ struct RenderJob {
   glm::vec3 sky{0.0f};
   engine::Backdrop backdrop;
   engine::ColourTarget target;
-  // screen_space, raycast: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings);
+  // screen_space, raycast, voxel: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings);
   // screen_space: the depth filter.
   bool anisotropic = false;
   fluid::AnisotropyParams anisotropy;
@@ -205,6 +205,19 @@ void timeParticleMethod(RenderJob& job, Renderer& r, Timing& t, Upload&& upload,
   });
 }
 
+// --kernel anisotropic: the particles' kernels, computed once outside the timed frames (a warm-up
+// pass, then the timed one, reported per frame as the game computes them once per frame).
+void jobKernels(const RenderJob& job, Timing& t, fluid::Anisotropy& kernels) {
+  if (!job.anisotropic) return;
+  fluid::AnisotropyScratch scratch;
+  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
+  const double a0 = nowMs();
+  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
+  t.add("anisotropy (CPU)", (nowMs() - a0) * job.frames);
+  t.notes.push_back("anisotropic kernels: " + std::to_string(kernels.stretched) + " of " +
+                    std::to_string(job.particles.size()) + " stretched");
+}
+
 bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t, std::string& error) {
   engine::VoxelDesc desc;
   desc.base = base;
@@ -221,14 +234,17 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
   p.min_gap = job.radius;
   p.filter_radius = 1.5f * job.radius;  // enough rounds to smooth a lattice's bumps (spacing 1.5 R)
   p.time_stages = true;
-  const float cell = 3.0f * job.spacing;  // about 27 particles per full cell
+  const float cell = job.drop_inner ? 3.0f * job.spacing : 0.0f;  // about 27 particles per full cell
+  fluid::Anisotropy kernels;
+  jobKernels(job, t, kernels);
   bool ok = true;
   double stage_ms[6] = {0, 0, 0, 0, 0, 0};
   timeParticleMethod(
       job, r, t,
       [&] {
-        ok = ok && (job.drop_inner ? engine::uploadVoxelParticles(r, job.particles, cell, 0, error)
-                                   : engine::uploadVoxelParticles(r, job.particles, error));
+        ok = ok && (job.anisotropic
+                        ? engine::uploadVoxelEllipsoids(r, kernels.centre, kernels.g, kernels.max_axis, cell, 0, error)
+                        : engine::uploadVoxelParticles(r, job.particles, cell, 0, error));
       },
       [&](bool timed) {
         engine::drawVoxelFluid(r, job.target.fbo, job.camera, job.water, p);
@@ -265,19 +281,6 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
   return ok;
 }
 
-// --kernel anisotropic: the particles' kernels, computed once outside the timed frames (a warm-up
-// pass, then the timed one, reported per frame as the game computes them once per frame).
-void jobKernels(const RenderJob& job, Timing& t, fluid::Anisotropy& kernels) {
-  if (!job.anisotropic) return;
-  fluid::AnisotropyScratch scratch;
-  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
-  const double a0 = nowMs();
-  fluid::computeAnisotropy(job.particles, job.anisotropy, scratch, kernels);
-  t.add("anisotropy (CPU)", (nowMs() - a0) * job.frames);
-  t.notes.push_back("anisotropic kernels: " + std::to_string(kernels.stretched) + " of " +
-                    std::to_string(job.particles.size()) + " stretched");
-}
-
 bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   engine::FluidRenderDesc desc;
   desc.width = job.width;
@@ -312,9 +315,9 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
     timeParticleMethod(
         job, r, t,
         [&] {
-          ok = ok && (job.anisotropic ? engine::uploadScreenSpaceEllipsoids(r, kernels.centre, kernels.g,
-                                                                            kernels.max_axis, error)
-                                      : engine::uploadScreenSpaceParticles(r, job.particles, error));
+          ok = ok && (job.anisotropic
+                          ? engine::uploadScreenSpaceEllipsoids(r, kernels.centre, kernels.g, kernels.max_axis, error)
+                          : engine::uploadScreenSpaceParticles(r, job.particles, error));
         },
         [&](bool) { engine::drawScreenSpaceFluid(r, job.target.fbo, job.camera, job.water, p); });
     t.gpu_bytes = px * (4 + 4 + 4 * 4 + 4) + static_cast<double>(r.particles.capacity_bytes);
@@ -337,9 +340,9 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
   timeParticleMethod(
       job, r, t,
       [&] {
-        ok = ok && (job.anisotropic ? engine::uploadRaycastEllipsoids(r, kernels.centre, kernels.g, kernels.max_axis,
-                                                                      error)
-                                    : engine::uploadRaycastParticles(r, job.particles, error));
+        ok = ok &&
+             (job.anisotropic ? engine::uploadRaycastEllipsoids(r, kernels.centre, kernels.g, kernels.max_axis, error)
+                              : engine::uploadRaycastParticles(r, job.particles, error));
       },
       [&](bool) { engine::drawRaycastFluid(r, job.target.fbo, job.camera, job.water, p); });
   t.gpu_bytes = px * (4 + 4 + 4 + 16 + 4) + 16.0 * r.pool_records + static_cast<double>(r.particles.capacity_bytes);
@@ -406,7 +409,7 @@ int renderCommand(const Args& args) {
   std::string kernel = "isotropic", ss_filter = "bilateral";
   fluid::AnisotropyParams aniso;
   app.add_option("--kernel", kernel,
-                 "screen_space, raycast: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; "
+                 "screen_space, raycast, voxel: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; "
                  "neighbourhood radius 3 particle spacings)")
       ->capture_default_str()
       ->check(CLI::IsMember({"isotropic", "anisotropic"}));
@@ -422,7 +425,8 @@ int renderCommand(const Args& args) {
   app.add_option("--lambda", aniso.lambda, "anisotropic: kernel centre smoothing")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--ss-filter", ss_filter, "screen_space depth filter: bilateral or narrow_range (Truong & Yuksel 2018)")
+  app.add_option("--ss-filter", ss_filter,
+                 "screen_space depth filter: bilateral or narrow_range (Truong & Yuksel 2018)")
       ->capture_default_str()
       ->check(CLI::IsMember({"bilateral", "narrow_range"}));
   if (const int code = parseCommandLine(app, "render", args); code >= 0) return code;
