@@ -55,9 +55,10 @@ void AsyncSurfaceExtractor::start(const SurfaceInput& input, const SurfaceParams
   copyInto(strength_, input.strength);
   copyInto(radius_scale_, input.radiusScale);
   copyInto(user_, input.user);
+  copyInto(stretch_, input.stretch);
   params_ = params;
   launch([this](SurfaceExtractor& extractor, SurfaceMesh& mesh) {
-    const SurfaceInput copy{pointView(positions_), strength_, radius_scale_, user_};
+    const SurfaceInput copy{pointView(positions_), strength_, radius_scale_, user_, stretch_};
     return extractor.extract(copy, params_, mesh);
   });
 }

@@ -60,6 +60,7 @@ class AsyncSurfaceExtractor {
   std::vector<glm::vec3> positions_;
   std::vector<float> strength_, radius_scale_;
   std::vector<glm::vec4> user_;
+  std::vector<glm::mat3> stretch_;
   SurfaceParams params_;
   Job job_;
   SurfaceMesh mesh_;

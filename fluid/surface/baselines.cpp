@@ -121,6 +121,8 @@ struct HashIndex {
 struct BaselineState {
   std::vector<Particle> particles;
   std::vector<ParticleSortKey> sortKeys;  // prepareParticles scratch
+  std::vector<StretchTerm> stretch;          // SurfaceInput::stretch's terms (prepareParticles)
+  const StretchTerm* stretchTerms = nullptr;  // stretch.data() for this call, null for spheres
   // dense
   std::vector<CornerValue> lower, upper;
   std::vector<std::uint32_t> lowIx, lowIy, lowIz, upIx, upIy;
@@ -182,7 +184,7 @@ void dense(BaselineState& st, const SurfaceParams& params, double rcMax, Surface
           const double cx = double(i) * s, cy = double(j) * s;
           if (!influences(p, cx, cy, cz)) continue;
           CornerValue& c = slice[std::size_t(j - i0[1]) * nx + std::size_t(i - i0[0])];
-          accumulate(p, i, j, k, s, c.value, c.g[0], c.g[1], c.g[2]);
+          accumulateAt(p, st.stretchTerms, i, j, k, s, c.value, c.g[0], c.g[1], c.g[2]);
         }
     }
   };
@@ -271,7 +273,7 @@ void hashed(BaselineState& st, const SurfaceParams& params, double rcMax, Surfac
           const std::uint32_t first = st.cellRanges[2 * *cell], count = st.cellRanges[2 * *cell + 1];
           for (std::uint32_t q = first; q < first + count; ++q) {
             const Particle& p = ps[st.cellParticles[q]];
-            if (influences(p, cx, cy, cz)) accumulate(p, i, j, k, s, c.c.value, g[0], g[1], g[2]);
+            if (influences(p, cx, cy, cz)) accumulateAt(p, st.stretchTerms, i, j, k, s, c.c.value, g[0], g[1], g[2]);
           }
         }
     for (int a = 0; a < 3; ++a) c.c.g[a] = g[a];
@@ -346,13 +348,17 @@ SurfaceStatus BaselineExtractor::extract(BaselineMethod method, const SurfaceInp
                                          SurfaceMesh& out) {
   out.clear();
   SurfaceStatus status = validateSurface(input, params);
+  if (status.ok() && !input.stretch.empty() && method == BaselineMethod::blocked)
+    status.error = "surface input: stretch (anisotropic kernels) is not supported by the blocked baseline";
   if (!status.ok()) return status;
   if (!input.user.empty()) return {"baseline extractors do not interpolate user data"};
   if (method == BaselineMethod::blocked)
     return detail::extractBlockedSurfaceFollowing(state->blockedExtractor, input, params, out, state->cornerBytes,
                                                   state->particleBytes);
   double rcMax = 0;
-  detail::prepareParticles(input, params, detail::SweepFrame{}, state->particles, rcMax, &state->sortKeys);
+  detail::prepareParticles(input, params, detail::SweepFrame{}, state->particles, rcMax, &state->sortKeys,
+                           &state->stretch);
+  state->stretchTerms = input.stretch.empty() ? nullptr : state->stretch.data();
   if (method == BaselineMethod::dense)
     detail::dense(*state, params, rcMax, out);
   else

@@ -27,7 +27,9 @@ struct BaselineState;
 }
 
 // Scratch reused across calls (like SurfaceExtractor). threads/order/exactSlabOrder in params
-// are honoured by `blocked` (threads) and ignored by the others.
+// are honoured by `blocked` (threads) and ignored by the others. SurfaceInput::stretch
+// (anisotropic kernels) is summed by `dense` and `hashed` with the mesher's terms (the dense
+// oracle of the anisotropic tests); `blocked` refuses it.
 class BaselineExtractor {
  public:
   BaselineExtractor();

@@ -61,6 +61,9 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
                std::to_string(n));
   if (!in.user.empty() && in.user.size() != n)
     return bad("surface input: user has " + std::to_string(in.user.size()) + " entries, expected " + std::to_string(n));
+  if (!in.stretch.empty() && in.stretch.size() != n)
+    return bad("surface input: stretch has " + std::to_string(in.stretch.size()) + " entries, expected " +
+               std::to_string(n));
   if (n >= (std::size_t(1) << 31)) return bad("surface input: too many particles");
   // Lattice indices must fit the 20-bit key window and int32 block maths comfortably.
   const float lim = 4.0e5f * p.cube;
@@ -79,6 +82,23 @@ SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
     if (!(finite(in.radiusScale[i]) && in.radiusScale[i] > 0 && in.radiusScale[i] <= 64))
       return bad("surface input: radiusScale[" + std::to_string(i) + "] = " + std::to_string(in.radiusScale[i]) +
                  " must be in (0, 64]");
+  for (std::size_t i = 0; i < in.stretch.size(); ++i) {
+    const glm::mat3& g = in.stretch[i];
+    float largest = 0.0f;
+    bool ok = true;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) {
+        ok = ok && finite(g[c][r]);
+        largest = std::max(largest, std::fabs(g[c][r]));
+      }
+    for (int c = 0; c < 3 && ok; ++c)
+      for (int r = c + 1; r < 3; ++r) ok = ok && std::fabs(g[c][r] - g[r][c]) <= 1e-4f * largest;
+    if (!ok) return bad("surface input: stretch[" + std::to_string(i) + "] is not a finite symmetric matrix");
+    const double smallest = detail::smallestEigenvalue(g);
+    if (!(smallest >= 1.0 / 64.0))
+      return bad("surface input: stretch[" + std::to_string(i) + "] has smallest eigenvalue " +
+                 std::to_string(smallest) + ", must be >= 1/64 (a semi-axis of at most 64 Rc)");
+  }
   for (std::size_t i = 0; i < in.user.size(); ++i)
     if (!finite(in.user[i].x) || !finite(in.user[i].y) || !finite(in.user[i].z) || !finite(in.user[i].w))
       return bad("surface input: user[" + std::to_string(i) + "] is not finite");
@@ -308,13 +328,15 @@ SurfaceStatus SurfaceExtractor::extract(const SurfaceInput& input, const Surface
 float surfaceFieldAtCorner(const SurfaceInput& input, const SurfaceParams& params, std::int64_t i, std::int64_t j,
                            std::int64_t k) {
   std::vector<detail::Particle> ps;
+  std::vector<detail::StretchTerm> stretch;
   double rcMax = 0;
-  detail::prepareParticles(input, params, detail::SweepFrame{}, ps, rcMax);
+  detail::prepareParticles(input, params, detail::SweepFrame{}, ps, rcMax, nullptr, &stretch);
   const double s = params.cube;
   float value = 0, g[3] = {0, 0, 0};
-  for (const detail::Particle& p : ps)
-    if (detail::influences(p, double(i) * s, double(j) * s, double(k) * s))
-      detail::accumulate(p, i, j, k, s, value, g[0], g[1], g[2]);
+  for (const detail::Particle& p : ps) {
+    if (!detail::influences(p, double(i) * s, double(j) * s, double(k) * s)) continue;
+    detail::accumulateAt(p, stretch.empty() ? nullptr : stretch.data(), i, j, k, s, value, g[0], g[1], g[2]);
+  }
   return value;
 }
 

@@ -19,6 +19,7 @@
 // fluid/surface/marching_slices_policy.hpp. The built-in one interpolates a per-particle vec4
 // (colour, uv, ...) weighted by each particle's field contribution when `user` is given.
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -62,6 +63,15 @@ struct SurfaceInput {
   std::span<const float> strength{};     // s_i > 0, finite; default 1
   std::span<const float> radiusScale{};  // Rc_i = Rc * scale_i, scale_i > 0, finite; default 1
   std::span<const glm::vec4> user{};     // interpolated onto vertices (SurfaceMesh::attributes)
+  // Anisotropic kernels (Yu & Turk 2013, §5; fluid/sph/anisotropy.hpp's `g`, with `positions` its
+  // smoothed centres x̄): particle i's term becomes f(|g_i (c - x_i)|), i.e. u = |g_i d|^2 / (2 Rc_i^2)
+  // in the header's f, and 0 where |g_i d| >= Rc_i, an ellipsoid of semi-axes Rc_i a_k for
+  // g_i = R diag(1/a_k) R^T. Empty: spheres. Each g_i symmetric, finite, its smallest eigenvalue
+  // >= 1/64 (no semi-axis longer than 64 Rc_i). The §6 particle cache and the blocks' margins
+  // are sized by each ellipsoid's bounding sphere (Rc_i / smallest eigenvalue); the field is summed
+  // through the cache (SurfaceFieldRoute is not consulted) and the outputs stay closed, oriented
+  // and thread-count invariant. Marching slices only (the baselines refuse it).
+  std::span<const glm::mat3> stretch{};
 };
 
 enum class SurfaceOrder : std::uint8_t {

@@ -1,6 +1,7 @@
 // fluiddemo mesh: particles -> triangle mesh by marching slices (fluid/surface).
 //   fluiddemo mesh --in FILE --out FILE [--rc R] [--threshold T] [--cube S] [--threads N]
 //                  [--block N] [--field auto|cache|splat] [--reps N] [--idle-ms MS] [--stats] [--force]
+//                  [--kernel isotropic|anisotropic --kr K --ks K --kn N --lambda L --kernel-radius R]
 //   fluiddemo mesh --in 'frames/frame_{}.xyz' --out 'meshes/frame_{}.obj' [--frame-jobs N] [...]
 // Reads .xyz/.csv/.ply/.vtk particles (fluid/io), writes .obj, .ply, .vtk or .vtu with normals
 // (seams welded). With '{}' in --in, every file matching the pattern ({} = digits) is a frame,
@@ -10,11 +11,15 @@
 // output capacity kept, as in a game meshing every frame) and prints their median and min, the first
 // (cold) one separately. --idle-ms MS sleeps that long before each of them, as a game's mesher
 // waits for the next frame: the threads go idle in between, and waking them is part of the time.
+// --kernel anisotropic meshes Yu & Turk 2013's ellipsoids (fluid/sph/anisotropy.hpp, computed once
+// per file before the timed extractions) instead of spheres: SurfaceInput::stretch and the smoothed
+// centres.
 #include "game/commands.hpp"
 #include "game/commands/cli_outputs.hpp"
 #include "game/commands/cli_parse.hpp"
 
 #include "fluid/io/particle_io.hpp"
+#include "fluid/sph/anisotropy.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "fluid/surface/mesh_io.hpp"
 
@@ -45,16 +50,38 @@ std::string lowercaseExtension(const std::string& path) {
   return ext;
 }
 
+// Spheres, or Yu & Turk's anisotropic kernels with their parameters (--kernel).
+struct KernelChoice {
+  bool anisotropic = false;
+  fluid::AnisotropyParams params;  // radius 0 = 1.5 Rc (the game's 3 spacings at Rc = 2 spacings)
+};
+
+// The extractor's input for `particles`: the positions as they are, or the kernels' smoothed
+// centres and stretch (computed into `kernels`, which must outlive the input).
+fluid::SurfaceInput kernelInput(const fluid::ParticlePositions& particles, const KernelChoice& choice,
+                                const fluid::SurfaceParams& params, fluid::AnisotropyScratch& scratch,
+                                fluid::Anisotropy& kernels) {
+  if (!choice.anisotropic) return {fluid::pointView(particles)};
+  fluid::AnisotropyParams a = choice.params;
+  if (a.radius <= 0.0f) a.radius = 1.5f * params.rc;
+  // False only for a non-finite position: every kernel is then a sphere at its particle, and the
+  // extractor names the position.
+  (void)fluid::computeAnisotropy(particles, a, scratch, kernels);
+  return {fluid::pointView(kernels.centre), {}, {}, {}, kernels.g};
+}
+
 // One frame: read, check, extract, write. Returns 0, or the exit code of the single-file command
 // (1 failure, 2 usage) with the message (without the "fluiddemo mesh: " prefix) in `error`.
-int meshFile(const std::string& in, const std::string& out, fluid::SurfaceParams params, bool force,
-             fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh, std::string& error) {
+int meshFile(const std::string& in, const std::string& out, fluid::SurfaceParams params, const KernelChoice& kernel,
+             bool force, fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh, std::string& error) {
   fluid::ParticlePositions particles;
   if (const fluid::IoStatus read = fluid::readParticleFile(in, particles); !read.ok()) {
     error = read.error;
     return 1;
   }
-  const fluid::SurfaceInput input{fluid::pointView(particles)};
+  fluid::AnisotropyScratch scratch;
+  fluid::Anisotropy kernels;
+  const fluid::SurfaceInput input = kernelInput(particles, kernel, params, scratch, kernels);
   if (error = fluid::unreachableThreshold(input, params, "--threshold", in); !error.empty()) return 2;
   fluid::centreSurfaceOrigin(input, params);
   if (const fluid::SurfaceStatus st = extractor.extract(input, params, mesh); !st.ok()) {
@@ -114,7 +141,7 @@ std::vector<Frame> findFrames(const std::string& in_pattern, const std::string& 
 
 // Meshes every frame on `jobs` workers, each with its own extractor of params.threads threads.
 int meshSequence(const std::string& in_pattern, const std::string& out_pattern, const fluid::SurfaceParams& params,
-                 bool force, int jobs) {
+                 const KernelChoice& kernel, bool force, int jobs) {
   std::string error;
   const std::vector<Frame> frames = findFrames(in_pattern, out_pattern, error);
   if (frames.empty()) {
@@ -157,7 +184,7 @@ int meshSequence(const std::string& in_pattern, const std::string& out_pattern, 
     std::string message;
     for (std::size_t k; (k = next.fetch_add(1)) < todo.size();) {
       const Frame& frame = frames[todo[k]];
-      const int code = meshFile(frame.in, frame.out, params, force, extractor, mesh, message);
+      const int code = meshFile(frame.in, frame.out, params, kernel, force, extractor, mesh, message);
       std::lock_guard<std::mutex> guard(lock);
       ++done;
       if (code != 0) {
@@ -235,9 +262,33 @@ int meshCommand(const Args& args) {
                  "(faster than all threads on each frame in turn: docs/use-the-libraries.md)")
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
+  std::string kernel_name = "isotropic";
+  KernelChoice kernel;
+  app.add_option("--kernel", kernel_name,
+                 "each particle's kernel: isotropic (spheres) or anisotropic (Yu & Turk 2013 ellipsoids along its "
+                 "neighbourhood, centres smoothed)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"isotropic", "anisotropic"}));
+  app.add_option("--kr", kernel.params.k_r, "anisotropic: largest ratio of a kernel's longest axis to its shortest")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 16.0));
+  app.add_option("--ks", kernel.params.k_s, "anisotropic: scale of a stretched kernel's axes (1: the sphere's volume)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.25, 4.0));
+  app.add_option("--kn", kernel.params.k_n, "anisotropic: a particle with this many neighbours or fewer stays a sphere")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  app.add_option("--lambda", kernel.params.lambda, "anisotropic: kernel centre smoothing towards the neighbours' mean")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--kernel-radius", kernel.params.radius,
+                 "anisotropic: neighbourhood radius r of each particle's PCA (world units); default 1.5 x --rc "
+                 "(3 particle spacings at the game's Rc = 2 spacings)")
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--stats", stats, "print extraction statistics");
   app.add_flag("--force", force, "replace --out if it exists (sequences: remesh frames already meshed)");
   if (const int code = parseCommandLine(app, "mesh", args); code >= 0) return code;
+  kernel.anisotropic = kernel_name == "anisotropic";
   params.fieldRoute = field == "splat"   ? fluid::SurfaceFieldRoute::sliceSplat
                       : field == "cache" ? fluid::SurfaceFieldRoute::particleCache
                                          : fluid::SurfaceFieldRoute::automatic;
@@ -254,7 +305,7 @@ int meshCommand(const Args& args) {
     const int threads = params.threads > 0 ? params.threads : std::max(1, int(std::thread::hardware_concurrency()));
     const int jobs = frame_jobs > 0 ? std::min(frame_jobs, threads) : threads;
     params.threads = std::max(1, threads / jobs);
-    return meshSequence(in, out, params, force, jobs);
+    return meshSequence(in, out, params, kernel, force, jobs);
   }
   if (const int code = checkOutputFile("mesh", "--out", out, force); code >= 0) return code;
 
@@ -264,7 +315,11 @@ int meshCommand(const Args& args) {
     std::fprintf(stderr, "fluiddemo mesh: %s\n", read.error.c_str());
     return 1;
   }
-  const fluid::SurfaceInput input{fluid::pointView(particles)};
+  fluid::AnisotropyScratch kernel_scratch;
+  fluid::Anisotropy kernels;
+  const auto k0 = std::chrono::steady_clock::now();
+  const fluid::SurfaceInput input = kernelInput(particles, kernel, params, kernel_scratch, kernels);
+  const double kernel_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - k0).count();
   // A threshold the field can never exceed is a usage error, not an empty mesh.
   if (const std::string unreachable = fluid::unreachableThreshold(input, params, "--threshold", in);
       !unreachable.empty()) {
@@ -319,6 +374,9 @@ int meshCommand(const Args& args) {
   if (stats) {
     const fluid::SurfaceStats& s = mesh.stats;
     std::printf("particles            %zu\n", particles.size());
+    if (kernel.anisotropic)
+      std::printf("anisotropic kernels  %zu of %zu stretched, %.3f ms (one pass, untimed above)\n", kernels.stretched,
+                  particles.size(), kernel_ms);
     std::printf("triangles            %llu\n", static_cast<unsigned long long>(s.triangles));
     std::printf("vertices             %llu (before welding block seams)\n",
                 static_cast<unsigned long long>(s.vertices));

@@ -54,8 +54,9 @@ const ParamTable<FluidSurfaceParams>& table() {
                        "mesh on a worker thread while the next steps run, drawing the previous frame's surface "
                        "(Janisz 3.2.6); false: mesh before drawing"),
       choice<&P::kernel>("kernel", kKernelNames, kKernelValues,
-                         "particle renderers' kernel: isotropic (spheres) or anisotropic (ellipsoids along each "
-                         "particle's neighbourhood, Yu & Turk 2013; screen_space splats, raycast metaballs)"),
+                         "every renderer's kernel: isotropic (spheres) or anisotropic (ellipsoids along each "
+                         "particle's neighbourhood, Yu & Turk 2013: the mesh's field, screen_space splats, raycast "
+                         "metaballs, voxel splats)"),
       param<&P::k_r>("k_r", 1.0, 16.0, "anisotropic: largest ratio of a kernel's longest axis to its shortest"),
       param<&P::k_s>("k_s", 0.25, 4.0, "anisotropic: scale of a stretched kernel's axes (1: the sphere's volume)"),
       param<&P::k_n>("k_n", 0, 200,
@@ -79,11 +80,11 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
 
   bool prepareFrame(const FrameContext& frame, std::string& error) override {
     const PhaseScope phase(frame.profiler, engine::Phase::meshing);
-    if (!meshFluidSurface(state, fluid_, frame.eye, frame.view_dir)) {
+    updateAnisotropy();
+    if (!meshFluidSurface(state, fluid_, frame.eye, frame.view_dir, anisotropy_valid_ ? &anisotropy_ : nullptr)) {
       error = state.error;
       return false;
     }
-    updateAnisotropy();
     return true;
   }
 
@@ -148,14 +149,13 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   }
 
  private:
-  // Once per frame, for a particle renderer with kernel = anisotropic: g and the smoothed centres
-  // of every particle (fluid/sph/anisotropy.hpp) from the store's positions in place. Rendering
-  // only: nothing here enters the state hash.
+  // Once per frame, with kernel = anisotropic: g and the smoothed centres of every particle
+  // (fluid/sph/anisotropy.hpp) from the store's positions in place, for the mesher's field or the
+  // particle renderers. Rendering only: nothing here enters the state hash.
   void updateAnisotropy() {
     const FluidSurfaceParams& p = state.params;
-    const engine::WaterBackendDesc* backend = engine::findWaterBackend(p.method);
-    anisotropy_valid_ =
-        p.kernel == SurfaceKernel::anisotropic && p.visible && backend != nullptr && !backend->needs_mesh;
+    anisotropy_valid_ = p.kernel == SurfaceKernel::anisotropic && p.visible &&
+                        engine::findWaterBackend(p.method) != nullptr;
     if (!anisotropy_valid_) return;
     const auto t0 = std::chrono::steady_clock::now();
     fluid::AnisotropyParams a;

@@ -30,7 +30,8 @@ bool finish(FluidSurface& s, const fluid::SurfaceStatus& st) {
 
 }  // namespace
 
-bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir) {
+bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir,
+                      const fluid::Anisotropy* kernels) {
   const engine::WaterBackendDesc* backend = engine::findWaterBackend(s.params.method);
   if (backend == nullptr || !backend->needs_mesh) {  // the particle renderers need no mesh
     s.job.drop();
@@ -42,7 +43,9 @@ bool meshFluidSurface(FluidSurface& s, const SphFluid& fluid, glm::vec3 eye, glm
   const std::size_t n = fluid.world.particles.size();
   ++s.meshes;
   const fluid::SurfaceParams sp = surfaceParamsFor(s.params, fluid::sphSpacing(fluid.world.params), eye, view_dir);
-  const fluid::SurfaceInput input{fluid::pointView(fluid.world.particles.position)};
+  const fluid::SurfaceInput input =
+      kernels != nullptr ? fluid::SurfaceInput{fluid::pointView(kernels->centre), {}, {}, {}, kernels->g}
+                         : fluid::SurfaceInput{fluid::pointView(fluid.world.particles.position)};
   if (!s.params.async) {
     return finish(s, s.job.meshNow([&](fluid::SurfaceExtractor& extractor, fluid::SurfaceMesh& mesh) {
       if (n == 0) {

@@ -6,6 +6,7 @@
 // effect submits the mesh or the particles as an engine::WaterBatch and the engine draws it.
 
 #include "engine/render/frame.hpp"
+#include "fluid/sph/anisotropy.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/sph_fluid.hpp"
@@ -20,8 +21,8 @@
 namespace game {
 
 enum class SurfaceOrderChoice { sorted, unsorted, exact };
-// The particle renderers' kernel: spheres, or ellipsoids stretched along each particle's
-// neighbourhood (Yu & Turk 2013, fluid/sph/anisotropy.hpp). Screen-space's depth filter.
+// Every renderer's kernel: spheres, or ellipsoids stretched along each particle's neighbourhood
+// (Yu & Turk 2013, fluid/sph/anisotropy.hpp; the mesh's field too). Screen-space's depth filter.
 enum class SurfaceKernel { isotropic, anisotropic };
 enum class SurfaceDepthFilter { bilateral, narrow_range };
 
@@ -46,7 +47,7 @@ struct FluidSurfaceParams {
   // (Janisz §3.2.6); false: mesh the current particles before drawing them.
   bool async = true;
   // Anisotropic kernels (fluid::AnisotropyParams; the mapping to the paper's names is in
-  // fluid/sph/anisotropy.hpp), computed once per frame for the particle renderers.
+  // fluid/sph/anisotropy.hpp), computed once per frame for every renderer (the mesher too).
   SurfaceKernel kernel = SurfaceKernel::isotropic;
   float k_r = 4.0f;     // largest axis ratio
   float k_s = 1.0f;     // axis scale (1: the sphere's volume)
@@ -82,6 +83,9 @@ struct FluidSurface {
 // call and the current ones start meshing on the worker; the first call (nothing handed over yet)
 // waits for its own job, so the first frame has water. Returns false with surface.error set when
 // extraction refuses the input (async: the input of the job collected).
-bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir);
+// `kernels` (this frame's anisotropic kernels of every particle, or null for spheres): the mesh is
+// the field of their ellipsoids at the smoothed centres (fluid::SurfaceInput::stretch).
+bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir,
+                      const fluid::Anisotropy* kernels = nullptr);
 
 }  // namespace game

@@ -20,12 +20,14 @@
 //   - 2 and 3 threads give the one-thread mesh bit for bit (positions, normals, indices, keys).
 // Not a failure, counted: seeds whose block sizes left out different such components (a block
 // can reach one through its margin, where its field is partial; seam propagation then completes it).
+#include "fluid/sph/anisotropy.hpp"
 #include "fluid/surface/baselines.hpp"
 #include "fluid/surface/detail/field.hpp"
 #include "fluid/surface/marching_slices.hpp"
 #include "mesh_checks.hpp"
 
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -44,7 +46,8 @@ struct RandomSet {
   fluid::SurfaceParams params;
   int blockSizes[3] = {0, 0, 0};  // 0 = auto
   std::string what;               // the kinds drawn, for messages
-  fluid::SurfaceInput input() const { return {fluid::pointView(points), strength, scale, {}}; }
+  std::vector<glm::mat3> stretch;  // anisotropic kernels (withStretch), else empty
+  fluid::SurfaceInput input() const { return {fluid::pointView(points), strength, scale, {}, stretch}; }
 };
 
 namespace random_detail {
@@ -235,6 +238,96 @@ inline RandomSet drawRandomSet(std::uint64_t seed) {
   return r;
 }
 
+// The set with anisotropic kernels (SurfaceInput::stretch), drawn from `seed`: odd seeds give
+// each particle a random ellipsoid (a random rotation, semi-axis factors in [1/3, 3], a quarter of
+// them spheres); even seeds take Yu & Turk's kernels of the set itself (fluid::computeAnisotropy,
+// neighbourhood 1.5 Rc, k_n = 3 so small groups stretch too), centres included, as the game does.
+inline void withStretch(RandomSet& r, std::uint64_t seed) {
+  std::mt19937_64 rng(seed * 0x2545F4914F6CDD1Dull + 0xa11ull);
+  random_detail::Draw d{rng};
+  r.stretch.assign(r.points.size(), glm::mat3(1.0f));
+  if (seed % 2 == 0) {
+    fluid::AnisotropyParams a;
+    a.radius = 1.5f * r.params.rc;
+    a.k_n = 3;
+    fluid::AnisotropyScratch scratch;
+    fluid::Anisotropy out;
+    if (fluid::computeAnisotropy(r.points, a, scratch, out)) {
+      r.points = out.centre;
+      r.stretch = out.g;
+    }
+    r.what += ", Yu & Turk kernels";
+    return;
+  }
+  for (glm::mat3& g : r.stretch) {
+    if (d.coin(0.25)) continue;
+    glm::dquat q(d.uni(-1, 1), d.uni(-1, 1), d.uni(-1, 1), d.uni(-1, 1));
+    if (glm::length(q) < 1e-3) continue;
+    const glm::dmat3 rot = glm::mat3_cast(glm::normalize(q));
+    const glm::dvec3 inv(1.0 / std::exp(d.uni(-std::log(3.0), std::log(3.0))),
+                         1.0 / std::exp(d.uni(-std::log(3.0), std::log(3.0))),
+                         1.0 / std::exp(d.uni(-std::log(3.0), std::log(3.0))));
+    const glm::dmat3 m = rot * glm::dmat3(inv.x, 0, 0, 0, inv.y, 0, 0, 0, inv.z) * glm::transpose(rot);
+    for (int c = 0; c < 3; ++c)
+      for (int row = c; row < 3; ++row) g[c][row] = g[row][c] = float(m[c][row]);  // exactly symmetric
+  }
+  r.what += ", random ellipsoids";
+}
+
+// A check of the stretched field that shares no lookup with the extractors: every vertex of `m`
+// (meshed from r.input() with r.params) lies on a lattice edge whose two corners are on opposite
+// sides of T in the field summed over *all* particles (no bounding sphere, no cache), in the
+// extractors' (z, index) order. A bounding radius too small for an ellipsoid would leave out
+// terms and show here; the dense oracle would not see it, as it bounds the same way.
+inline std::string checkCrossingsByBruteForce(const RandomSet& r, const fluid::SurfaceMesh& m) {
+  namespace fd = fluid::detail;
+  const fluid::SurfaceParams& p = r.params;
+  const fd::SweepFrame frame = fd::chooseFrame(p);
+  std::vector<glm::vec3> rotated(r.points.size());
+  std::vector<glm::mat3> rotatedStretch(r.stretch.size());
+  for (std::size_t i = 0; i < r.points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      rotated[i][a] = float(frame.sign[a]) * r.points[i][frame.axis[a]];
+      for (int b = 0; b < 3 && !r.stretch.empty(); ++b)
+        rotatedStretch[i][b][a] = float(frame.sign[a] * frame.sign[b]) * r.stretch[i][frame.axis[b]][frame.axis[a]];
+    }
+  fluid::SurfaceParams po = p;
+  po.order = fluid::SurfaceOrder::none;
+  std::vector<fd::Particle> ps;
+  std::vector<fd::StretchTerm> terms;
+  double rcMax = 0;
+  fd::prepareParticles({fluid::pointView(rotated), r.strength, r.scale, {}, rotatedStretch}, po, fd::SweepFrame{}, ps,
+                       rcMax, nullptr, &terms);
+  const double s = p.cube;
+  auto field = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    float v = 0, gx = 0, gy = 0, gz = 0;
+    for (const fd::Particle& q : ps) fd::accumulateAt(q, terms.empty() ? nullptr : terms.data(), i, j, k, s, v, gx, gy, gz);
+    return v;
+  };
+  const double origin[3] = {p.originX, p.originY, p.originZ};
+  const std::int64_t wrap = std::int64_t(1) << 20;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const std::uint64_t key = m.edgeKeys[v];
+    const int axis = int(key & 3u);
+    const std::int64_t part[3] = {std::int64_t((key >> 42) & (wrap - 1)), std::int64_t((key >> 22) & (wrap - 1)),
+                                  std::int64_t((key >> 2) & (wrap - 1))};
+    std::int64_t c[3];
+    for (int a = 0; a < 3; ++a) {
+      // The frame lattice index near the vertex, then the representative of the key's residue.
+      const double w = double(m.positions[v][frame.axis[a]]) + origin[frame.axis[a]];
+      const double near = std::floor(double(frame.sign[a]) * w / s);
+      const std::int64_t base = std::int64_t(near) - ((std::int64_t(near) - part[a]) % wrap + wrap) % wrap;
+      c[a] = (std::int64_t(near) - base > wrap / 2) ? base + wrap : base;
+    }
+    std::int64_t d[3] = {c[0], c[1], c[2]};
+    ++d[axis];
+    const bool inA = field(c[0], c[1], c[2]) > p.threshold, inB = field(d[0], d[1], d[2]) > p.threshold;
+    if (inA == inB) return "vertex " + std::to_string(v) + " sits on an edge whose corners are both " +
+                           (inA ? "inside" : "outside") + " in the brute-force field";
+  }
+  return {};
+}
+
 // Caller-owned scratch: extractors stay warm across seeds.
 struct RandomSetChecker {
   fluid::SurfaceExtractor slices[3];  // 1, 2, 3 threads
@@ -324,8 +417,15 @@ inline std::string checkRandomSet(const RandomSet& r, RandomSetChecker& ck, std:
     return glm::vec3(float(frame.sign[0]) * w[frame.axis[0]], float(frame.sign[1]) * w[frame.axis[1]],
                      float(frame.sign[2]) * w[frame.axis[2]]);
   };
-  fluid::SurfaceStatus st = ck.dense.extract(fluid::BaselineMethod::dense,
-                                             {fluid::pointView(rotated), in.strength, in.radiusScale, {}}, po, ck.ref);
+  // Kernels rotate with the set: g_frame(a, b) = sign[a] sign[b] g(axis[a], axis[b]).
+  std::vector<glm::mat3> rotatedStretch(r.stretch.size());
+  for (std::size_t i = 0; i < r.stretch.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        rotatedStretch[i][b][a] = float(frame.sign[a] * frame.sign[b]) * r.stretch[i][frame.axis[b]][frame.axis[a]];
+  fluid::SurfaceStatus st =
+      ck.dense.extract(fluid::BaselineMethod::dense,
+                       {fluid::pointView(rotated), in.strength, in.radiusScale, {}, rotatedStretch}, po, ck.ref);
   if (!st.ok()) return "dense oracle: " + st.error;
   const std::vector<Tri> refTris = canonicalTriangles(ck.ref);
   std::unordered_map<std::uint64_t, glm::vec3> refPos;

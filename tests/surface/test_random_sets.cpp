@@ -38,6 +38,34 @@ INSTANTIATE_TEST_SUITE_P(Seeds, RandomSets, ::testing::Range(1, kSeeds + 1, kChu
                            return "from" + std::to_string(p.param) + "to" + std::to_string(p.param + kChunk - 1);
                          });
 
+// The same properties with anisotropic kernels (Yu & Turk 2013; SurfaceInput::stretch), random
+// ellipsoids and the sets' own kernels in turn (withStretch): closed, oriented, thread-count
+// invariant, and equal to the dense oracle summing the same stretched terms.
+class AnisotropicRandomSets : public ::testing::TestWithParam<int> {};
+
+TEST_P(AnisotropicRandomSets, ClosedOrientedThreadInvariantAndEqualToTheDenseOracle) {
+  RandomSetChecker checker;
+  const int first = GetParam();
+  std::size_t triangles = 0, stretched = 0;
+  for (int seed = first; seed < first + kChunk; ++seed) {
+    RandomSet r = drawRandomSet(std::uint64_t(seed));
+    withStretch(r, std::uint64_t(seed));
+    for (const glm::mat3& g : r.stretch) stretched += g != glm::mat3(1.0f);
+    std::string failure = checkRandomSet(r, checker);
+    if (failure.empty()) failure = checkCrossingsByBruteForce(r, checker.mesh[0]);
+    EXPECT_TRUE(failure.empty()) << "seed " << seed << " (" << r.what << ", " << r.points.size()
+                                 << " particles): " << failure;
+    triangles += checker.ref.indices.size() / 3;
+  }
+  EXPECT_GT(triangles, std::size_t(kChunk) * 50);
+  EXPECT_GT(stretched, std::size_t(kChunk) * 5);  // the kernels are not all spheres
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, AnisotropicRandomSets, ::testing::Range(1, 2 * kChunk + 1, kChunk),
+                         [](const ::testing::TestParamInfo<int>& p) {
+                           return "from" + std::to_string(p.param) + "to" + std::to_string(p.param + kChunk - 1);
+                         });
+
 // Seeds that left holes at block seams with margins of ceil(Rc/S) cubes (Rc/S whole: a particle
 // just over m - 1/2 cubes outside a block's interior seeded from the block's zero boundary, see
 // marginCubes()); closed and equal to the oracle with ceil(Rc/S + 1/2).

@@ -127,6 +127,9 @@ class BlockMesher {
   const float* off0_ = nullptr;  // offsets table at d = 0
   const CacheParticle* parts_ = nullptr;
   std::uint32_t indexOf(const CacheParticle& p) const { return particles_[std::size_t(&p - w_.local.data())].index; }
+  // Anisotropic policies: the block particles' StretchTerm records, in CacheParticle order.
+  const StretchTerm* stretch_ = nullptr;
+  const StretchTerm& stretchOf(const CacheParticle& p) const { return stretch_[std::size_t(&p - parts_)]; }
   int lowestTodo_ = std::numeric_limits<int>::max();
 
   std::size_t col(int x, int y) const { return std::size_t(y) * std::size_t(stride_) + std::size_t(x); }

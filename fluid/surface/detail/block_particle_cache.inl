@@ -95,6 +95,10 @@
     // zero-fill of the part that a larger block's build then overwrites anyway).
     if (w_.entries.size() < start[cols]) w_.entries.resize(start[cols]);
     w_.local.resize(particles.size());
+    if constexpr (isAnisotropic<Policy>()) {
+      w_.localStretch.resize(particles.size());
+      for (std::size_t li = 0; li < particles.size(); ++li) w_.localStretch[li] = su_.stretch[particles[li].index];
+    }
     ColumnEntry* entries = w_.entries.data();
     const int zmax = nz_ - 1;
     const std::array<std::int16_t, 2>* span = w_.rowSpans.data();
@@ -115,6 +119,10 @@
       // Away from the block's top and bottom (the usual case) the clamps below cannot act.
       const double reach = std::sqrt(p.rc2) * inv + 2.0;
       const bool clampFree = fz - reach >= 1.0 && fz + reach <= double(zmax);
+      if constexpr (isAnisotropic<Policy>()) {
+        fillDiscStretched(p, li, fz, clampFree, span, entries, cursor);
+        continue;
+      }
 #if defined(FLUID_SURFACE_AVX2_FILL)
       if (su_.avx2) {
         if (clampFree)
@@ -159,6 +167,7 @@
     entries_ = w_.entries.data();
     off0_ = w_.offsets.data() + offsetRange_;
     parts_ = w_.local.data();
+    if constexpr (isAnisotropic<Policy>()) stretch_ = w_.localStretch.data();
   }
 
   // Element for column x of a row: z range [lo, hi] (empty: stored as key 0 with max_z -32000),
@@ -230,6 +239,50 @@
       }
     }
     storeEntry(entries, rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi, li);
+  }
+
+  // An anisotropic particle's elements: the rows and spans of its bounding sphere's disc (as the
+  // count pass made them), each column's z range the ellipsoid's chord instead of the sphere's.
+  // Along a column, u(dz) = A dz^2 + 2 B dz + C (field.hpp's stretchedU in exact arithmetic), so
+  // u < L holds on [(-B - r) / A, (-B + r) / A], r = sqrt(B^2 - A (C - L)). L = 1/2 (1 + 2^-9)
+  // widens the chord past every corner whose float u comes out below 1/2 (a superset, like the
+  // bounding sphere: the sums test u themselves), and the chord stays within the sphere's.
+  void fillDiscStretched(const Particle& p, std::uint32_t li, double fz, bool clampFree,
+                         const std::array<std::int16_t, 2>*& span, ColumnEntry* entries, std::uint32_t* cursor) {
+    const double inv = 1.0 / su_.s;
+    const int zmax = nz_ - 1;
+    const float* m = w_.localStretch[li].m;
+    const double mxx = m[0], mxy = m[1], mxz = m[2], myy = m[3], myz = m[4], mzz = m[5];
+    const double limit = 0.5 * (1.0 + 1.0 / 512.0);
+    const double reach = std::sqrt(p.rc2) * inv;
+    const int sphereLo = iceil(fz - reach), sphereHi = ifloor(fz + reach);
+    std::int16_t* runMax = w_.runMax.data();
+    int y0, y1;
+    discRows(p, inv, y0, y1);
+    for (int y = y0; y <= y1; ++y, ++span) {
+      const double dy = w_.cy[y] - p.y;
+      const std::size_t rowBase = std::size_t(y) * std::size_t(stride_);
+      std::uint32_t* rowCursor = cursor + rowBase;
+      std::int16_t* rowRun = runMax + rowBase;
+      for (int x = (*span)[0]; x <= (*span)[1]; ++x) {
+        const double dx = w_.cx[x] - p.x;
+        const double b = mxz * dx + myz * dy;
+        const double c = mxx * dx * dx + 2.0 * mxy * dx * dy + myy * dy * dy - limit;
+        const double disc = b * b - mzz * c;
+        int lo = -32000, hi = -32000;
+        if (disc >= 0.0) {
+          const double r = std::sqrt(disc);
+          int l = std::max(iceil(fz + (-b - r) / mzz * inv), sphereLo);
+          int u = std::min(ifloor(fz + (-b + r) / mzz * inv), sphereHi);
+          if (!clampFree) {
+            l = std::max(l, 1);
+            u = std::min(u, zmax);
+          }
+          if (l <= u) lo = l, hi = u;
+        }
+        storeEntry(entries, rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi, li);
+      }
+    }
   }
 
   // One particle's elements, row by row of its disc (rows and spans as in the count pass).
@@ -499,7 +552,10 @@
       forEachInfluencing<true>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
         ++looked;
         const float before = v;
-        accumulateDz2S4(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, p.s4, v, gx, gy, gz);
+        if constexpr (isAnisotropic<Policy>())
+          accumulateStretched(stretchOf(p), dx, dy, dz, p.s, v, gx, gy, gz);
+        else
+          accumulateDz2S4(dx, dy, dx * dx + dy * dy, dz, dz2, p.k, p.s, p.s4, v, gx, gy, gz);
         if constexpr (Policy::kHasUser) pol_.add(c.user, indexOf(p), v - before);
         return false;
       });
@@ -518,9 +574,12 @@
   float sumUntilAbove(int x, int y, int z, const SliceDz* dzt, std::uint64_t& looked) {
     const float t = su_.threshold;
     float v = 0;
-    forEachInfluencing<kTable>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float, float dz2) {
+    forEachInfluencing<kTable>(x, y, z, dzt, [&](const CacheParticle& p, float dx, float dy, float dz, float dz2) {
       ++looked;
-      v += contributionDz2(dx * dx + dy * dy, dz2, p.k, p.s);
+      if constexpr (isAnisotropic<Policy>())
+        v += stretchedContribution(stretchOf(p), dx, dy, dz, p.s);
+      else
+        v += contributionDz2(dx * dx + dy * dy, dz2, p.k, p.s);
       return v > t;
     });
     return v;
@@ -597,14 +656,20 @@
           ++looked;
           const SliceDz& d = atParticle8(dzLo, pi);
           const float before = v0;
-          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
+          if constexpr (isAnisotropic<Policy>())
+            accumulateStretched(atParticle8(stretch_, pi), dx, dy, d.dz, p.s, v0, gx0, gy0, gz0);
+          else
+            accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v0, gx0, gy0, gz0);
           if constexpr (Policy::kHasUser) pol_.add(user0, indexOf(p), v0 - before);
         }
         if (in1) {
           ++looked;
           const SliceDz& d = atParticle8(dzHi, pi);
           const float before = v1;
-          accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
+          if constexpr (isAnisotropic<Policy>())
+            accumulateStretched(atParticle8(stretch_, pi), dx, dy, d.dz, p.s, v1, gx1, gy1, gz1);
+          else
+            accumulateDz2S4(dx, dy, dxy2, d.dz, d.dz2, p.k, p.s, p.s4, v1, gx1, gy1, gz1);
           if constexpr (Policy::kHasUser) pol_.add(user1, indexOf(p), v1 - before);
         }
       }

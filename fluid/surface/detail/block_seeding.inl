@@ -48,6 +48,14 @@
     }
   }
 
+  // The particle's own term at the corner offset (ox, oy, oz) from it.
+  float ownTerm(const Particle& p, float ox, float oy, float oz) const {
+    if constexpr (isAnisotropic<Policy>())
+      return stretchedContribution(su_.stretch[p.index], ox, oy, oz, p.strength);
+    else
+      return contribution(ox * ox + oy * oy, oz, p.k, p.strength);
+  }
+
   // One §4 descent from corner (x, y, z0) of the expanded block (1 <= x, y, z0 <= n - 1): pushes the
   // cube below the first outside corner, or stops after Rc_i + S (interior steps, see seed()).
   void seedWalk(const Particle& p, int x, int y, int z0) {
@@ -59,8 +67,7 @@
     const float ox = latticeOffset(g0_[0] + x, p.anchor[0], p.rest[0], su_.s);
     const float oy = latticeOffset(g0_[1] + y, p.anchor[1], p.rest[1], su_.s);
     const float oz = latticeOffset(g0_[2] + z0, p.anchor[2], p.rest[2], su_.s);
-    const bool ownInside =
-        influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) && contribution(ox * ox + oy * oy, oz, p.k, p.strength) > t;
+    const bool ownInside = influences(p, w_.cx[x], w_.cy[y], w_.cz[z0]) && ownTerm(p, ox, oy, oz) > t;
     if (!ownInside && !insideAt(x, y, z0)) return;  // start corner outside: no seed here
     const int steps = iceil(std::sqrt(p.rc2) * (1.0 / su_.s)) + 1;
     const bool fromMargin = !interiorCorner(x, y, z0);
@@ -74,8 +81,8 @@
       }
       // As at the start: the particle's own term above T proves the corner inside.
       const float ozb = latticeOffset(g0_[2] + below, p.anchor[2], p.rest[2], su_.s);
-      const bool ownBelow = below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) &&
-                            contribution(ox * ox + oy * oy, ozb, p.k, p.strength) > t;
+      const bool ownBelow =
+          below >= 1 && influences(p, w_.cx[x], w_.cy[y], w_.cz[below]) && ownTerm(p, ox, oy, ozb) > t;
       if (!ownBelow && !insideAt(x, y, below)) {
         pushTodo(below, x, y);
         joined = true;

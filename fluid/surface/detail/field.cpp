@@ -16,8 +16,27 @@ bool SweepFrame::flipsWinding() const {
   return ((inversions & 1) ? -1 : 1) * signs < 0;
 }
 
+double smallestEigenvalue(const glm::mat3& g) {
+  // The symmetric part, in double (glm is column-major; g is symmetric up to rounding).
+  auto at = [&](int r, int c) { return 0.5 * (double(g[c][r]) + double(g[r][c])); };
+  const double a = at(0, 0), b = at(1, 1), c = at(2, 2), d = at(0, 1), e = at(1, 2), f = at(0, 2);
+  const double off = d * d + e * e + f * f;
+  if (off == 0.0) return std::min({a, b, c});
+  const double q = (a + b + c) / 3.0;
+  const double p = std::sqrt(((a - q) * (a - q) + (b - q) * (b - q) + (c - q) * (c - q) + 2.0 * off) / 6.0);
+  if (p == 0.0) return q;
+  // r = det((A - q I) / p) / 2, in [-1, 1] up to rounding; the eigenvalues are
+  // q + 2 p cos(acos(r) / 3 + 2 pi k / 3), the smallest at k = 1.
+  const double ba = (a - q) / p, bb = (b - q) / p, bc = (c - q) / p, bd = d / p, be = e / p, bf = f / p;
+  const double det = ba * (bb * bc - be * be) - bd * (bd * bc - be * bf) + bf * (bd * be - bb * bf);
+  const double r = std::clamp(det / 2.0, -1.0, 1.0);
+  const double phi = std::acos(r) / 3.0;
+  return q + 2.0 * p * std::cos(phi + 2.0 * 3.14159265358979323846 / 3.0);
+}
+
 void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
-                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys) {
+                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys,
+                      std::vector<StretchTerm>* stretch) {
   // Positions are read in place through the caller's pointer + stride view (meshoptimizer's
   // convention): each coordinate is the same float whatever the layout, so the records and their
   // (z, index) order, and therefore the sums, do not depend on it.
@@ -77,8 +96,12 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
     p.z = order[r].z;
     const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
     const double rci = rc * scale;
-    p.rc2 = rci * rci;
-    p.k = float(1.0 / (2.0 * p.rc2));
+    p.k = float(1.0 / (2.0 * rci * rci));
+    // An ellipsoid |g d| < Rc_i lies within Rc_i / lambda_min(g); the factor 1 + 2^-10 covers the
+    // float rounding of u (stretchedU) near the ellipsoid's edge, so the bound stays a superset.
+    const double bound =
+        input.stretch.empty() ? rci : rci / smallestEigenvalue(input.stretch[i]) * (1.0 + 1.0 / 1024.0);
+    p.rc2 = bound * bound;
     p.strength = input.strength.empty() ? 1.0f : input.strength[i];
     p.index = static_cast<std::uint32_t>(i);
     const double pc[3] = {p.x, p.y, p.z};
@@ -89,7 +112,32 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
       p.anchor[a] = t - (q < double(t));
       p.rest[a] = float(pc[a] - double(p.anchor[a]) * double(params.cube));
     }
-    rcMax = std::max(rcMax, rci);
+    rcMax = std::max(rcMax, bound);
+  }
+  if (stretch == nullptr || input.stretch.empty()) return;
+  // M = g^T g / (2 Rc_i^2) in the sweep frame: local axis a is world axis frame.axis[a] times
+  // frame.sign[a], so M_local(a, b) = sign[a] sign[b] M_world(axis[a], axis[b]).
+  stretch->resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::mat3& g = input.stretch[i];
+    const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
+    const double k = 1.0 / (2.0 * rc * scale * rc * scale);
+    double mw[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        // (g^T g)(r, c) = sum_j g(j, r) g(j, c) (glm indexes [column][row]). Each product is exact
+        // in double; they are added in order of magnitude, so a set rotated into another sweep
+        // frame (a signed permutation of g's entries) gets the same bits (the oracle's check).
+        double t3[3];
+        for (int j = 0; j < 3; ++j) t3[j] = double(g[r][j]) * double(g[c][j]);
+        std::sort(t3, t3 + 3, [](double a, double b) { return std::fabs(a) < std::fabs(b); });
+        mw[r][c] = ((t3[0] + t3[1]) + t3[2]) * k;
+      }
+    auto sweepLocal = [&](int a, int b) {
+      return float(double(frame.sign[a] * frame.sign[b]) * mw[frame.axis[a]][frame.axis[b]]);
+    };
+    StretchTerm& t = (*stretch)[i];
+    t = {{sweepLocal(0, 0), sweepLocal(0, 1), sweepLocal(0, 2), sweepLocal(1, 1), sweepLocal(1, 2), sweepLocal(2, 2)}, {0.0f, 0.0f}};
   }
 }
 

@@ -6,6 +6,8 @@
 
 #include "fluid/surface/marching_slices.hpp"
 
+#include <glm/mat3x3.hpp>
+
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -77,6 +79,55 @@ inline void accumulate(const Particle& p, std::int64_t i, std::int64_t j, std::i
   accumulate(dx, dy, dx * dx + dy * dy, dz, p.k, p.strength, value, gx, gy, gz);
 }
 
+// An anisotropic particle's quadratic form (Yu & Turk 2013, Eq. 16 with the paper's kernel
+// W(x - x̄, G) = σ det(G) P(|G (x - x̄)|)): the marching-slices field keeps its f = s (u - 1/2)^2
+// but with u = |g (c - x̄)|^2 / (2 Rc_i^2) = d^T M d, M = g^T g / (2 Rc_i^2) in the sweep frame,
+// and no term where u >= 1/2 (outside the ellipsoid |g d| < Rc_i, where f reaches 0 as the
+// sphere's does at Rc_i). Symmetric: xx, xy, xz, yy, yz, zz. 32 bytes, so a block's copy is read
+// with the same scaled index as its CacheParticle records (atParticle8).
+struct StretchTerm {
+  float m[6];
+  float unused[2];
+};
+static_assert(sizeof(StretchTerm) == 32);
+
+// u = d^T M d with the off-diagonal terms doubled, in one fixed order of float operations (the
+// same bits in every route that sums it).
+inline float stretchedU(const StretchTerm& t, float dx, float dy, float dz) {
+  const float* m = t.m;
+  return (m[0] * dx * dx + m[3] * dy * dy + m[5] * dz * dz) + 2.0f * (m[1] * dx * dy + m[2] * dx * dz + m[4] * dy * dz);
+}
+// The anisotropic particle's term (0 outside its ellipsoid).
+inline float stretchedContribution(const StretchTerm& t, float dx, float dy, float dz, float s) {
+  const float u = stretchedU(t, dx, dy, dz);
+  if (!(u < 0.5f)) return 0.0f;
+  const float w = u - 0.5f;
+  return s * (w * w);
+}
+// Its term and gradient: df/dc = 2 s (u - 1/2) du/dc = 4 s (u - 1/2) M d.
+inline void accumulateStretched(const StretchTerm& t, float dx, float dy, float dz, float s, float& value, float& gx,
+                                float& gy, float& gz) {
+  const float u = stretchedU(t, dx, dy, dz);
+  if (!(u < 0.5f)) return;
+  const float w = u - 0.5f;
+  value += s * (w * w);
+  const float g = 4.0f * s * w;
+  const float* m = t.m;
+  gx += g * (m[0] * dx + m[1] * dy + m[2] * dz);
+  gy += g * (m[1] * dx + m[3] * dy + m[4] * dz);
+  gz += g * (m[2] * dx + m[4] * dy + m[5] * dz);
+}
+
+// Lattice-corner form of either kind (the dense oracle, the baselines): `stretch` is the
+// particles' StretchTerm array by input index, or null for spheres. Caller guarantees influences().
+inline void accumulateAt(const Particle& p, const StretchTerm* stretch, std::int64_t i, std::int64_t j, std::int64_t k,
+                         double s, float& value, float& gx, float& gy, float& gz) {
+  if (stretch == nullptr) return accumulate(p, i, j, k, s, value, gx, gy, gz);
+  const float dx = latticeOffset(i, p.anchor[0], p.rest[0], s), dy = latticeOffset(j, p.anchor[1], p.rest[1], s),
+              dz = latticeOffset(k, p.anchor[2], p.rest[2], s);
+  accumulateStretched(stretch[p.index], dx, dy, dz, p.strength, value, gx, gy, gz);
+}
+
 // Axis permutation used to sweep along the axis nearest the view (paper §5, "rotate the
 // rendering volume"): world axis of local axis a is axis[a], with sign[a] = +1 or -1.
 struct SweepFrame {
@@ -115,9 +166,18 @@ struct ParticleSortKey {
 
 // Prepares particles in sweep-frame coordinates, sorted by (z, index). Fills rcMax with the
 // largest Rc_i. Input must be valid (validateSurface). `keys`: sort scratch (a local one when
-// null).
+// null). With SurfaceInput::stretch, a particle's rc2 is its ellipsoid's bounding sphere
+// (Rc_i times g's largest semi-axis factor, so every lookup structure built on rc2 returns a
+// superset of the particles whose ellipsoid holds the corner), k stays 1 / (2 Rc_i^2), rcMax is
+// the largest bounding radius, and `stretch` (when given) receives each particle's StretchTerm in
+// the sweep frame, by input index.
 void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, const SweepFrame& frame,
-                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys = nullptr);
+                      std::vector<Particle>& out, double& rcMax, std::vector<ParticleSortKey>* keys = nullptr,
+                      std::vector<StretchTerm>* stretch = nullptr);
+
+// The smallest eigenvalue of the symmetric matrix g (closed form, double; Smith 1961's
+// trigonometric solution). The ellipsoid { d : |g d| <= R } lies in the sphere of R / that value.
+double smallestEigenvalue(const glm::mat3& g);
 
 // Lattice coordinate helpers: corner k sits at k * S.
 inline std::int64_t floorDiv(double v, double s) { return static_cast<std::int64_t>(std::floor(v / s)); }

@@ -64,6 +64,7 @@ struct FollowWorker;  // approach 2 (baselines.hpp), defined in marching_slices.
 struct ExtractorState {
   std::vector<Particle> particles;
   std::vector<ParticleSortKey> sortKeys;
+  std::vector<StretchTerm> stretchTerms;  // SurfaceInput::stretch in the sweep frame, by input index
   struct Pair {
     std::uint64_t key;
     std::uint32_t rank;
@@ -646,14 +647,21 @@ inline SurfaceStatus gatherBlocks(ExtractorState& st, const Setup& su, bool user
 template <class Policy>
 SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const SurfaceParams& params,
                           const Policy& policy, SurfaceMesh& out) {
+  if constexpr (!isAnisotropic<Policy>())
+    if (!input.stretch.empty()) return extractImpl(st, input, params, AnisotropicPolicy<Policy>(policy), out);
   const PhaseClock::time_point start = PhaseClock::now();
   out.clear();
   SurfaceStatus status = validateSurface(input, params);
   if (!status.ok()) return status;
+  if (isAnisotropic<Policy>() && st.method == 2)
+    return {"surface input: stretch (anisotropic kernels) is supported by marching slices only, not the approach-2 "
+            "baseline"};
 
   Setup su = setupFromParams(params);
 
-  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys);
+  prepareParticles(input, params, su.frame, st.particles, su.rcMax, &st.sortKeys,
+                   isAnisotropic<Policy>() ? &st.stretchTerms : nullptr);
+  if constexpr (isAnisotropic<Policy>()) su.stretch = st.stretchTerms.data();
   if (st.particles.empty()) return {};
   su.m = marginCubes(su.rcMax, su.s);
   // Marching slices keeps only a few slices per block, so its auto blocks can be as large as the
@@ -664,7 +672,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   su.octant = viewOctant(params, su.frame);
-  su.splat = !Policy::kHasUser && useSliceSplat(params.fieldRoute, su);
+  // The slice splat sums the sphere's terms only (anisotropic kernels take the §6 cache).
+  su.splat = !Policy::kHasUser && !isAnisotropic<Policy>() && useSliceSplat(params.fieldRoute, su);
 
   buildBlockLists(st, su, params);
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());

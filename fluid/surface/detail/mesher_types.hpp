@@ -41,6 +41,22 @@ struct PlainPolicy {
   glm::vec4 vertex(const CornerData&, const CornerData&, float) const { return {}; }
 };
 
+// SurfaceInput::stretch (anisotropic kernels, Yu & Turk 2013): the same policy with every field
+// term the stretched one of field.hpp. A wrapper type rather than a run-time flag, so the
+// isotropic sums keep their code and cost, and the extractor keeps separate workers for it.
+template <class Base>
+struct AnisotropicPolicy : Base {
+  explicit AnisotropicPolicy(const Base& base) : Base(base) {}
+  static constexpr bool kAnisotropic = true;
+};
+template <class Policy>
+constexpr bool isAnisotropic() {
+  if constexpr (requires { Policy::kAnisotropic; })
+    return Policy::kAnisotropic;
+  else
+    return false;
+}
+
 // Per-particle vec4 weighted by each particle's field contribution, normalised at the corner,
 // then interpolated linearly along the edge like positions and normals (the paper's tentacle
 // texturing: per-particle data interpolated onto the surface). Used when SurfaceInput::user is set.
@@ -229,6 +245,7 @@ struct Setup {
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
   bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
+  const StretchTerm* stretch = nullptr;  // by input index: SurfaceInput::stretch's terms (null: spheres)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
   double view[3] = {0, 0, 1};    // view direction; depth sign flipped for front-to-back
@@ -242,6 +259,7 @@ struct Worker {
   std::vector<std::int16_t> runMax;  // cache build: running max_z per column
   std::vector<ColumnEntry> entries;
   std::vector<CacheParticle> local;
+  std::vector<StretchTerm> localStretch;  // anisotropic: the block particles' terms, as `local`
   std::vector<std::array<std::int16_t, 2>> rowSpans;  // cache build: x0, x1 of each disc row
   std::vector<float> offsets;                         // float(d S), d in [-offsetRange, offsetRange]
   std::vector<double> cx, cy, cz;                     // corner coordinates of local indices
