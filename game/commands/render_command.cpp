@@ -112,7 +112,7 @@ struct RenderJob {
   glm::vec3 sky{0.0f};
   engine::Backdrop backdrop;
   engine::ColourTarget target;
-  // screen_space, raycast, voxel: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings);
+  // every method: anisotropic kernels (fluid/sph/anisotropy.hpp, r = 3 spacings);
   // screen_space: the depth filter.
   bool anisotropic = false;
   fluid::AnisotropyParams anisotropy;
@@ -139,6 +139,8 @@ void runFrames(const RenderJob& job, Frame&& frame) {
   for (int f = -1; f < job.frames; ++f) frame(f >= 0);
 }
 
+void jobKernels(const RenderJob& job, Timing& t, fluid::Anisotropy& kernels);
+
 bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, std::string& error) {
   engine::FluidRenderer r;
   engine::createFluidRenderer(desc, r);
@@ -155,11 +157,17 @@ bool renderMesh(RenderJob& job, const engine::FluidRenderDesc& desc, Timing& t, 
   sp.viewDir = -glm::vec3(glm::transpose(job.camera.view)[2]);
   fluid::SurfaceExtractor extractor;
   fluid::SurfaceMesh mesh;
+  // --kernel anisotropic: the field of the ellipsoids at the smoothed centres (SurfaceInput::stretch).
+  fluid::Anisotropy kernels;
+  jobKernels(job, t, kernels);
+  const fluid::SurfaceInput input = job.anisotropic
+                                        ? fluid::SurfaceInput{fluid::pointView(kernels.centre), {}, {}, {}, kernels.g}
+                                        : fluid::SurfaceInput{fluid::pointView(job.particles)};
   bool ok = true;
   runFrames(job, [&](bool timed) {
     if (!ok) return;
     const double t0 = nowMs();
-    const fluid::SurfaceStatus st = extractor.extract({fluid::pointView(job.particles)}, sp, mesh);
+    const fluid::SurfaceStatus st = extractor.extract(input, sp, mesh);
     if (!st.ok()) {
       error = "meshing failed: " + st.error;
       ok = false;
@@ -409,7 +417,7 @@ int renderCommand(const Args& args) {
   std::string kernel = "isotropic", ss_filter = "bilateral";
   fluid::AnisotropyParams aniso;
   app.add_option("--kernel", kernel,
-                 "screen_space, raycast, voxel: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; "
+                 "mesh, screen_space, raycast, voxel: isotropic (spheres) or anisotropic (ellipsoids, Yu & Turk 2013; "
                  "neighbourhood radius 3 particle spacings)")
       ->capture_default_str()
       ->check(CLI::IsMember({"isotropic", "anisotropic"}));

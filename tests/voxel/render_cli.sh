@@ -56,6 +56,8 @@ if [ "$size" -le 100000 ]; then
     --width 96 --height 64 --drop-inner-cells
   row 0 "anisotropic kernels: [0-9]+ of $size stretched" --in "$set_file" --method voxel --kernel anisotropic \
     --out aniso.png --width 96 --height 64
+  row 0 "anisotropic kernels: [0-9]+ of $size stretched" --in "$set_file" --method mesh --kernel anisotropic \
+    --out aniso_mesh.png --width 96 --height 64
 else
   row 0 "wrote voxel.png" --in "$set_file" --method voxel --out voxel.png --width 320 --height 180
 fi
