@@ -25,6 +25,47 @@
     y1 = std::min(ny_ - 1, ifloor((p.y + rc) * inv - double(g0_[1]) + 1e-6));
   }
 
+  // An anisotropic particle's disc: the rows and columns of its ellipsoid's shadow on the xy plane
+  // within its bounding sphere's disc. The shadow is the ellipse [dx dy] Q [dx dy]^T < L, Q the
+  // Schur complement of M's zz entry (u minimised over dz), L as in fillDiscStretched, each bound
+  // widened by 1e-6 cubes as discRow's: a superset of the columns whose chords are not empty.
+  struct Shadow {
+    double qxx = 0, qxy = 0, qyy = 0;
+    bool ok = false;  // false: a degenerate Q (not expected for M positive definite): the sphere's disc
+  };
+  static constexpr double kStretchLimit = 0.5 * (1.0 + 1.0 / 512.0);
+  Shadow shadowOf(const Particle& p) const {
+    const float* m = su_.stretch[p.index].m;
+    const double mzz = m[5];
+    Shadow sh;
+    sh.qxx = double(m[0]) - double(m[2]) * double(m[2]) / mzz;
+    sh.qxy = double(m[1]) - double(m[2]) * double(m[4]) / mzz;
+    sh.qyy = double(m[3]) - double(m[4]) * double(m[4]) / mzz;
+    sh.ok = mzz > 0.0 && sh.qxx > 0.0 && sh.qxx * sh.qyy - sh.qxy * sh.qxy > 0.0;
+    return sh;
+  }
+  void stretchedRows(const Particle& p, const Shadow& sh, double inv, int& y0, int& y1) const {
+    discRows(p, inv, y0, y1);
+    if (!sh.ok) return;
+    const double ey = std::sqrt(kStretchLimit * sh.qxx / (sh.qxx * sh.qyy - sh.qxy * sh.qxy));
+    y0 = std::max(y0, iceil((p.y - ey) * inv - double(g0_[1]) - 1e-6));
+    y1 = std::min(y1, ifloor((p.y + ey) * inv - double(g0_[1]) + 1e-6));
+  }
+  void stretchedRow(const Particle& p, const Shadow& sh, int y, double inv, int& x0, int& x1) const {
+    const DiscRow r = discRow(p, y, inv);
+    x0 = r.x0, x1 = r.x1;
+    if (!sh.ok) return;
+    const double dy = r.dy;
+    const double b = sh.qxy * dy, disc = b * b - sh.qxx * (sh.qyy * dy * dy - kStretchLimit);
+    if (disc < 0.0) {
+      x0 = 1, x1 = 0;  // empty row
+      return;
+    }
+    const double root = std::sqrt(disc);
+    x0 = std::max(x0, iceil((p.x + (-b - root) / sh.qxx) * inv - double(g0_[0]) - 1e-6));
+    x1 = std::min(x1, ifloor((p.x + (-b + root) / sh.qxx) * inv - double(g0_[0]) + 1e-6));
+  }
+
   void buildParticleCache(std::span<const Particle> particles) {
     const std::size_t cols = w_.columns();
     const std::size_t stride = std::size_t(stride_);
@@ -46,7 +87,19 @@
       --start[std::size_t(y) * stride + std::size_t(x1) + 2];  // x1 + 1 <= nx: same row
     };
     const double* cyRow = w_.cy.data();
-    for (const Particle& p : particles) {
+    if constexpr (isAnisotropic<Policy>()) {
+      for (const Particle& p : particles) {
+        const Shadow sh = shadowOf(p);
+        int y0, y1;
+        stretchedRows(p, sh, inv, y0, y1);
+        for (int y = y0; y <= y1; ++y) {
+          int x0, x1;
+          stretchedRow(p, sh, y, inv, x0, x1);
+          addRow(y, x0, x1);
+        }
+      }
+    }
+    for (const Particle& p : isAnisotropic<Policy>() ? std::span<const Particle>() : particles) {
       int y0, y1;
       discRows(p, inv, y0, y1);
       int y = y0;
@@ -258,7 +311,7 @@
     const int sphereLo = iceil(fz - reach), sphereHi = ifloor(fz + reach);
     std::int16_t* runMax = w_.runMax.data();
     int y0, y1;
-    discRows(p, inv, y0, y1);
+    stretchedRows(p, shadowOf(p), inv, y0, y1);  // the count pass's rows (its spans are in `span`)
     for (int y = y0; y <= y1; ++y, ++span) {
       const double dy = w_.cy[y] - p.y;
       const std::size_t rowBase = std::size_t(y) * std::size_t(stride_);

@@ -93,19 +93,19 @@ static_assert(sizeof(StretchTerm) == 32);
 
 // u = d^T M d with the off-diagonal terms doubled, in one fixed order of float operations (the
 // same bits in every route that sums it).
-inline float stretchedU(const StretchTerm& t, float dx, float dy, float dz) {
+[[gnu::always_inline]] inline float stretchedU(const StretchTerm& t, float dx, float dy, float dz) {
   const float* m = t.m;
   return (m[0] * dx * dx + m[3] * dy * dy + m[5] * dz * dz) + 2.0f * (m[1] * dx * dy + m[2] * dx * dz + m[4] * dy * dz);
 }
 // The anisotropic particle's term (0 outside its ellipsoid).
-inline float stretchedContribution(const StretchTerm& t, float dx, float dy, float dz, float s) {
+[[gnu::always_inline]] inline float stretchedContribution(const StretchTerm& t, float dx, float dy, float dz, float s) {
   const float u = stretchedU(t, dx, dy, dz);
   if (!(u < 0.5f)) return 0.0f;
   const float w = u - 0.5f;
   return s * (w * w);
 }
 // Its term and gradient: df/dc = 2 s (u - 1/2) du/dc = 4 s (u - 1/2) M d.
-inline void accumulateStretched(const StretchTerm& t, float dx, float dy, float dz, float s, float& value, float& gx,
+[[gnu::always_inline]] inline void accumulateStretched(const StretchTerm& t, float dx, float dy, float dz, float s, float& value, float& gx,
                                 float& gy, float& gz) {
   const float u = stretchedU(t, dx, dy, dz);
   if (!(u < 0.5f)) return;
