@@ -143,11 +143,11 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
     ImGui::Text("sprites: %u live / %u budget (%ux%u texels), active range %u, free %zu", a.live_count, s.capacity,
                 s.gpu.desc.width, s.gpu.desc.height, a.active_range, a.free_heap.size());
     ImGui::Text(
-        "  born: mist %llu, spray %llu (%u this step), blasts %llu (%llu shock rings on the water), "
-        "dropped (budget full) %llu",
+        "  born: mist %llu, spray %llu (%u this step), blasts %llu (%llu shock rings on the water, %llu not born "
+        "inside a collider), dropped (budget full) %llu",
         static_cast<unsigned long long>(s.born_mist), static_cast<unsigned long long>(s.born_spray), s.spray_last_step,
         static_cast<unsigned long long>(s.born_blast), static_cast<unsigned long long>(s.shock_rings),
-        static_cast<unsigned long long>(s.dropped));
+        static_cast<unsigned long long>(s.buried_blast), static_cast<unsigned long long>(s.dropped));
     ImGui::Text("  foam/bubbles (Ihmsen 2012): %llu born, last step %u spray / %u foam / %u bubbles at birth",
                 static_cast<unsigned long long>(s.born_diffuse), s.diffuse_last_step[0], s.diffuse_last_step[1],
                 s.diffuse_last_step[2]);

@@ -147,9 +147,52 @@ void emitShockRing(SpriteParticles& s, const SphFluid& sph, const fluid::Blast& 
   engine::emit(ring, s.births);
 }
 
+// Keeps the births from `first` on whose place every level collider's lookup calls outside
+// (distance >= 0, or no opinion), in order; returns how many it removed. The lookup is the
+// fluid/collide query the update shader decodes decision for decision (collide.glsl), so a place
+// called inside here is one the shader would react to.
+//
+// Why a blast's sprites are not born inside a solid: §3.3.2's caught-particle rule pushes a
+// particle that is already inside "in direction of the shortest way out of the collider", one
+// collider at a time. Deep inside a solid that way can lead out through the far side of a wall, or,
+// where two solids overlap (a building front sunk into the street slab), into the other one, whose
+// own push-out leads back: such a sprite ends every step inside one of them. Smoke and fire born in
+// stone are not seen anyway; the part of the burst in the air is born as before.
+std::size_t keepBirthsOutside(engine::BirthBatch& b, std::size_t first, const LevelColliders& colliders) {
+  std::size_t kept = first;
+  for (std::size_t i = first; i < b.positions.size(); ++i) {
+    bool inside = false;
+    for (const fluid::CachedCollider& part : colliders.parts) {
+      const fluid::ColliderSample sample = part.collider.sample(b.positions[i]);  // collider space = world
+      if (sample.valid && sample.distance < 0.0f) {
+        inside = true;
+        break;
+      }
+    }
+    if (inside) continue;
+    if (kept != i) {
+      b.positions[kept] = b.positions[i];
+      b.velocities[kept] = b.velocities[i];
+      b.lifetimes[kept] = b.lifetimes[i];
+      b.types[kept] = b.types[i];
+      b.spins[kept] = b.spins[i];
+    }
+    ++kept;
+  }
+  const std::size_t removed = b.positions.size() - kept;
+  b.positions.resize(kept);
+  b.velocities.resize(kept);
+  b.lifetimes.resize(kept);
+  b.types.resize(kept);
+  b.spins.resize(kept);
+  return removed;
+}
+
 // Debris, a fireball and smoke at each blast's centre, and a shock ring where it meets the water,
-// seeded by the step and the blast.
+// seeded by the step and the blast; only the ones born outside the level's colliders are kept
+// (keepBirthsOutside).
 void emitBlastSprites(SpriteParticles& s, const SphFluid* sph, std::span<const fluid::Blast> blasts) {
+  const std::size_t first = s.births.size();
   for (std::size_t k = 0; k < blasts.size(); ++k) {
     const std::uint64_t seed = s.seed ^ (0x9e3779b97f4a7c15ull * (s.steps + 1)) ^ (k + 1);
     if (sph != nullptr && sph->error.empty()) emitShockRing(s, *sph, blasts[k], seed);
@@ -167,6 +210,7 @@ void emitBlastSprites(SpriteParticles& s, const SphFluid* sph, std::span<const f
       engine::emit(desc, s.births);
     }
   }
+  if (s.level_colliders) s.buried_blast += keepBirthsOutside(s.births, first, *s.level_colliders);
 }
 
 engine::GpuStepParams stepParams(const SpriteParticleParams& p) {
@@ -406,7 +450,7 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
   const std::size_t born = engine::spawn(s.gpu, s.births);
   // spawn takes the batch in order until the budget is full: mist, then spray, then blast sprites.
   // A blast's own sprites, born in its step, do not take its push (update.frag): they start as a
-  // ball at the centre, and the step's collision check puts any born under a surface outside it.
+  // ball at the centre, the part of it in the air (emitBlastSprites).
   const std::size_t mist_born = std::min(born, mist);
   const std::size_t spray_born = std::min(born, before_diffuse) - mist_born;
   const std::size_t diffuse_born = std::min(born, before_blasts) - mist_born - spray_born;

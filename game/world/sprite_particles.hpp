@@ -127,6 +127,7 @@ struct SpriteParticles {
   std::array<std::uint32_t, 3> diffuse_last_step{};  // births of the last step by class at birth
   std::uint64_t shock_rings = 0;                     // blasts that met the water and threw a ring of foam
   std::uint64_t dropped = 0;                         // births refused because the budget was full
+  std::uint64_t buried_blast = 0;                    // blast sprites not born: inside a level collider
   std::uint32_t spray_last_step = 0;
   // Read-back for checks (soak, tests): every `readback_every` GPU steps (0 = never) the step asks
   // for the live sprites' positions and velocities after it (engine::requestReadback); the frame's
