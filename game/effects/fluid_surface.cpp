@@ -81,7 +81,10 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   bool prepareFrame(const FrameContext& frame, std::string& error) override {
     const PhaseScope phase(frame.profiler, engine::Phase::meshing);
     updateAnisotropy();
-    if (!meshFluidSurface(state, fluid_, frame.eye, frame.view_dir, anisotropy_valid_ ? &anisotropy_ : nullptr)) {
+    const FluidSurfaceParams& p = state.params;
+    const fluid::AnisotropyParams mesh_kernels = anisotropyParams();
+    const bool stretch_mesh = p.kernel == SurfaceKernel::anisotropic && p.visible;
+    if (!meshFluidSurface(state, fluid_, frame.eye, frame.view_dir, stretch_mesh ? &mesh_kernels : nullptr)) {
       error = state.error;
       return false;
     }
@@ -135,6 +138,8 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
     if (anisotropy_valid_)
       ImGui::Text("  anisotropic kernels: %zu of %zu stretched, %.2f ms", anisotropy_.stretched,
                   anisotropy_.g.size(), anisotropy_ms_);
+    else if (state.kernel_ms > 0.0)  // the mesher's, made with the mesh (asynchronous: on the worker)
+      ImGui::Text("  anisotropic kernels (mesh): %zu stretched, %.2f ms", state.kernels_stretched, state.kernel_ms);
     if (state.raycast.pool > 0) {
       ImGui::Text("  raycast fragments: %llu, dropped (pool full) %llu, pool %.1f MiB",
                   static_cast<unsigned long long>(state.raycast.records),
@@ -149,24 +154,33 @@ class FluidSurfaceEffect final : public EffectOf<FluidSurface> {
   }
 
  private:
-  // Once per frame, with kernel = anisotropic: g and the smoothed centres of every particle
-  // (fluid/sph/anisotropy.hpp) from the store's positions in place, for the mesher's field or the
-  // particle renderers. Rendering only: nothing here enters the state hash.
-  void updateAnisotropy() {
+  // The kernels' parameters from the table: the neighbourhood radius in particle spacings.
+  fluid::AnisotropyParams anisotropyParams() const {
     const FluidSurfaceParams& p = state.params;
-    anisotropy_valid_ = p.kernel == SurfaceKernel::anisotropic && p.visible &&
-                        engine::findWaterBackend(p.method) != nullptr;
-    if (!anisotropy_valid_) return;
-    const auto t0 = std::chrono::steady_clock::now();
     fluid::AnisotropyParams a;
     a.radius = kAnisotropyRadiusSpacings * fluid::sphSpacing(fluid_.world.params);
     a.k_r = p.k_r;
     a.k_s = p.k_s;
     a.k_n = p.k_n;
     a.lambda = p.lambda;
+    return a;
+  }
+
+  // Once per frame, for a particle renderer with kernel = anisotropic: g and the smoothed centres
+  // of every particle (fluid/sph/anisotropy.hpp) from the store's positions in place (the mesher
+  // makes its own with the mesh, meshFluidSurface). Rendering only: nothing here enters the state
+  // hash.
+  void updateAnisotropy() {
+    const FluidSurfaceParams& p = state.params;
+    const engine::WaterBackendDesc* backend = engine::findWaterBackend(p.method);
+    anisotropy_valid_ =
+        p.kernel == SurfaceKernel::anisotropic && p.visible && backend != nullptr && !backend->needs_mesh;
+    if (!anisotropy_valid_) return;
+    const auto t0 = std::chrono::steady_clock::now();
     // False for a non-finite position: the batch then carries the particles alone and the
     // renderer refuses them with its own message.
-    anisotropy_valid_ = fluid::computeAnisotropy(fluid_.world.particles.position, a, anisotropy_scratch_, anisotropy_);
+    anisotropy_valid_ =
+        fluid::computeAnisotropy(fluid_.world.particles.position, anisotropyParams(), anisotropy_scratch_, anisotropy_);
     anisotropy_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 

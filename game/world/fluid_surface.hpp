@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -66,11 +67,29 @@ bool surfaceParamsFrom(const SectionConfig& section, FluidSurfaceParams& out, st
 // benchmarks mesh with exactly the game's settings.
 fluid::SurfaceParams surfaceParamsFor(const FluidSurfaceParams& p, float spacing, glm::vec3 eye, glm::vec3 view_dir);
 
+// The mesher's anisotropic kernels (Yu & Turk 2013, fluid/sph/anisotropy.hpp), made with the mesh:
+// on the caller's thread when meshing is synchronous, inside the worker's job when asynchronous
+// (from the job's own copy of the positions), so an asynchronous frame's main thread pays only the
+// copy. Held by pointer: the worker's job reads it at a fixed address.
+struct SurfaceKernelJob {
+  std::vector<glm::vec3> positions;  // the asynchronous job's copy
+  fluid::AnisotropyParams params;
+  fluid::SurfaceParams surface;
+  fluid::AnisotropyScratch scratch;
+  fluid::Anisotropy kernels;
+  double ms = 0.0;  // the kernels' time in the job last run (written by the job)
+};
+
 struct FluidSurface {
   FluidSurfaceParams params;
+  // Made at the first anisotropic mesh; declared before `job`, so a worker job reading it is
+  // finished (the job's worker stops) before it goes.
+  std::unique_ptr<SurfaceKernelJob> kernel_job;
   SurfaceJob job;            // the mesh drawn this frame and the worker's time on it (game/world/surface_job.hpp)
   std::uint64_t meshes = 0;  // frames meshed
   std::string error;         // last extraction error (mesh cleared then)
+  std::size_t kernels_stretched = 0;             // the mesh's kernels: stretched particles and CPU ms
+  double kernel_ms = 0.0;                        // (0 for spheres)
   // Method raycast, last frame (engine::lastWaterStats, read after the frame): fragment-list
   // records asked for and records dropped because the pool was full, and the pool's size in
   // records after the frame (it grows with the demand up to pool_bound).
@@ -83,9 +102,9 @@ struct FluidSurface {
 // call and the current ones start meshing on the worker; the first call (nothing handed over yet)
 // waits for its own job, so the first frame has water. Returns false with surface.error set when
 // extraction refuses the input (async: the input of the job collected).
-// `kernels` (this frame's anisotropic kernels of every particle, or null for spheres): the mesh is
-// the field of their ellipsoids at the smoothed centres (fluid::SurfaceInput::stretch).
+// `anisotropy` (null for spheres): the mesh is the field of the particles' anisotropic kernels, their
+// ellipsoids at the smoothed centres (fluid::SurfaceInput::stretch), made as SurfaceKernelJob says.
 bool meshFluidSurface(FluidSurface& surface, const SphFluid& fluid, glm::vec3 eye, glm::vec3 view_dir,
-                      const fluid::Anisotropy* kernels = nullptr);
+                      const fluid::AnisotropyParams* anisotropy = nullptr);
 
 }  // namespace game
