@@ -60,6 +60,9 @@ void applyGraphics(const GraphicsSettings& settings, const SceneConfig& original
   set("fluid_surface", "refraction", [&](double refraction) { return settings.refraction ? refraction : 0.0; });
   set("sprite_particles", "rate", [&](double rate) { return rate * settings.sprite_rate_scale; });
   set("sprite_particles", "spray_rate", [&](double rate) { return rate * settings.sprite_rate_scale; });
+  // Foam and bubbles (Ihmsen et al. 2012's diffuse sprites) are sprites born too.
+  set("sprite_particles", "foam_trapped_air_rate", [&](double rate) { return rate * settings.sprite_rate_scale; });
+  set("sprite_particles", "foam_wave_crest_rate", [&](double rate) { return rate * settings.sprite_rate_scale; });
 }
 
 }  // namespace game

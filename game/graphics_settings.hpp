@@ -33,7 +33,7 @@ bool softwareRenderer(std::string_view gl_renderer);
 GraphicsSettings resolveGraphics(const SectionConfig& graphics, std::string_view gl_renderer);
 
 // Sets the preset's values into the scene's render-only keys (fluid_surface.cube and refraction,
-// sprite_particles.rate and spray_rate) of the sections it lists. Idempotent: applying it twice
+// sprite_particles.rate, spray_rate and the two foam rates) of the sections it lists. Idempotent: applying it twice
 // (a restart) changes nothing more.
 void applyGraphics(const GraphicsSettings& settings, const SceneConfig& original, SceneConfig& scene);
 

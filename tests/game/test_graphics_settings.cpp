@@ -40,7 +40,7 @@ TEST(GraphicsSettings, AnExplicitPresetAndScaleWin) {
   EXPECT_NE(bad.error.find("ultra"), std::string::npos) << bad.error;
 }
 
-// Low coarsens the lattice to a spacing, turns refraction off and halves the sprites born; it
+// Low coarsens the lattice to a spacing, turns refraction off and halves the sprites born (foam too); it
 // touches nothing else, and a second application (a restart) gives the same scene.
 TEST(GraphicsSettings, APresetSetsOnlyRenderOnlyKeysFromTheLoadedScene) {
   const game::SceneConfig loaded = fountain();
@@ -55,12 +55,17 @@ TEST(GraphicsSettings, APresetSetsOnlyRenderOnlyKeysFromTheLoadedScene) {
   EXPECT_DOUBLE_EQ(surface.number("refraction"), 0.0);
   EXPECT_DOUBLE_EQ(sprites.number("rate"), 0.5 * loaded.effect("sprite_particles")->number("rate"));
   EXPECT_DOUBLE_EQ(sprites.number("spray_rate"), 0.5 * loaded.effect("sprite_particles")->number("spray_rate"));
-  // Everything outside those four keys is the loaded scene's, value for value.
+  for (const char* foam : {"foam_trapped_air_rate", "foam_wave_crest_rate"}) {
+    EXPECT_GT(loaded.effect("sprite_particles")->number(foam), 0.0) << foam;
+    EXPECT_DOUBLE_EQ(sprites.number(foam), 0.5 * loaded.effect("sprite_particles")->number(foam)) << foam;
+  }
+  // Everything outside those six keys is the loaded scene's, value for value.
   for (std::size_t e = 0; e < loaded.effects.size(); ++e) {
     for (const auto& [key, value] : loaded.effects[e].params) {
       const std::string path = loaded.effects[e].name + "." + key;
       if (path == "fluid_surface.cube" || path == "fluid_surface.refraction" || path == "sprite_particles.rate" ||
-          path == "sprite_particles.spray_rate")
+          path == "sprite_particles.spray_rate" || path == "sprite_particles.foam_trapped_air_rate" ||
+          path == "sprite_particles.foam_wave_crest_rate")
         continue;
       const game::ParamValue& now = scene.effects[e].params.at(key);
       EXPECT_TRUE(now.number == value.number && now.boolean == value.boolean && now.text == value.text &&
