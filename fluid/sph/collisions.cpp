@@ -44,6 +44,27 @@ glm::vec3 wedgePosition(glm::vec3 p, glm::vec3 ns, float need, glm::vec4 plane, 
   return glm::length(x - p) <= reach ? x : still_only;
 }
 
+// Where a particle's step [from, to] entered a still collider, to `halvings` bisections of the
+// field's sign: on return `from` is the last point of the step the collider calls outside (or not
+// valid: no opinion, far outside) and `from_sample` its sample. The depth maps classify a point to
+// within half a texel (docs/collide.md) but measure its distance along an axis or a cube's ray, so
+// the sign locates the entry better than the distance does.
+constexpr int kEntryHalvings = 8;  // a 6 cm step (a fast drop's) to 0.25 mm
+
+void stepEntry(const ColliderQuery& query, glm::vec3 to, int halvings, glm::vec3& from, ColliderSample& from_sample) {
+  glm::vec3 inside = to;
+  for (int k = 0; k < halvings; ++k) {
+    const glm::vec3 mid = 0.5f * (from + inside);
+    const ColliderSample sample = query.at(mid);
+    if (!sample.valid || sample.distance >= 0.0f) {
+      from = mid;
+      from_sample = sample;
+    } else {
+      inside = mid;
+    }
+  }
+}
+
 struct Hits {
   std::size_t count = 0;      // reactions
   std::size_t particles = 0;  // particles reacting for the first time this step
@@ -129,26 +150,45 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             ++acc.particles;
           }
           CollisionResult res;
+          // The penetration the reaction resolves: the sample's depth, bounded by the step below, or
+          // the step of a held-back particle (resolveCollision).
+          float depth = 0.0f;
           if (crossed) {
             const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
             res.position = scratch.old_position[i] + vc * dt + s0.normal * skin;
             res.velocity = collisionResponse(velocities[i] - vc, s0.normal, collider.material) + vc;
           } else {
-            res = resolveCollision(scratch.old_position[i], s0, positions[i], velocities[i], s,
+            // A still collider (its pose the same at both ends of the step, so the step's points are
+            // where the particle passed) is entered where its field's sign flips along the step.
+            const bool entered = still && !(s0.valid && s0.distance < 0.0f);
+            glm::vec3 from = scratch.old_position[i];
+            ColliderSample from_sample = s0;
+            if (entered) stepEntry(query, positions[i], kEntryHalvings, from, from_sample);
+            res = resolveCollision(from, from_sample, positions[i], velocities[i], s,
                                    colliderVelocityAt(pose, positions[i]), dt, skin, collider.material, depth_slack);
+            // A vote measures along its map's axis or its cube's ray (Kolb §4.1, §4.3), so where that
+            // meets the face at an angle θ to its normal it reads 1 / cos θ times the depth: the
+            // steep foot of the statue's spire seen by the y maps about 4x, the basin floor seen by
+            // the cavity cube's 44-degree rays 1.4x. A particle that entered the face the sample
+            // names (moved into it, along -n) from outside its plane is at most as deep as it moved
+            // into it since the entry: projecting by more throws it past where it came in, away from
+            // the wall. Where it did not move into that face, the face is not where it came in and
+            // the step bounds nothing.
+            depth = res.held_back ? glm::length(positions[i] - from) : -s.distance;
+            const float into = glm::dot(from - positions[i], s.normal);
+            if (entered && !res.held_back && into > 0.0f && into < depth) {
+              res.position = positions[i] + s.normal * (skin + into);
+              depth = into;
+            }
           }
-          // A held-back particle went in at most as far as it moved (resolveCollision); otherwise the
-          // sample's depth is the penetration.
-          if (!crossed)
-            acc.depth =
-                std::max(acc.depth, res.held_back ? glm::length(positions[i] - scratch.old_position[i]) : -s.distance);
+          acc.depth = std::max(acc.depth, depth);
           if (!still) {
             // The moving face the particle now rests on: n . x >= n . x_now (it sits skin outside).
             const glm::vec3 nm = crossed || res.held_back ? s0.normal : s.normal;
             scratch.push_plane[i] = glm::vec4(nm, glm::dot(nm, res.position));
           } else if (!crossed && !res.held_back && scratch.push_plane[i] != glm::vec4(0.0f)) {
             res.position =
-                wedgePosition(positions[i], s.normal, skin - s.distance, scratch.push_plane[i], spacing, res.position);
+                wedgePosition(positions[i], s.normal, skin + depth, scratch.push_plane[i], spacing, res.position);
           }
           const glm::vec3 reaction = -mass * (res.velocity - velocities[i]) / dt;  // on the collider
           positions[i] = res.position;

@@ -271,6 +271,64 @@ TEST(FountainColliders, BasinFloorBesideItsWallReadsNearItsTrueDistance) {
   FAIL() << "no basin in content/colliders/fountain.colliders";
 }
 
+// The statue's dish (issue 33 item 6): its floor meets the spire's steep foot and the rim's sloped
+// inner face in two concave corners. The y maps see both faces at a grazing angle (the spire's foot
+// is 76 degrees from level, so a vertical distance into it is about 4x its depth) or not at all (the
+// rim's top covers the floor's texels beside it), and the x and z maps see the points between the
+// rim's outer walls: just inside either corner every axis vote is several times the true depth, the
+// depth the water was pushed out by. The shipped recipe adds LESS depth cubes round the dish above
+// its floor (Kolb §4.1: views placed for a concavity), whose rays meet the floor and both faces
+// steeply. Within each corner's ring, every point inside the statue within a particle radius of its
+// surface must read no more than half a particle radius deeper than it is, and the cubes must not give
+// any point of the rings the wrong sign beyond a texel of the surface (a texel's ray passing beside
+// the spire's silhouette reads the floor behind it: points within a texel inside the spire's foot
+// may read outside, as the conservative ortho maps' points within a texel outside may read inside).
+TEST(FountainColliders, DishCornersReadNearTheirTrueDepth) {
+  const float radius = fountainSupport() / 4.0f;
+  ASSERT_GT(radius, 0.0f);
+  for (const Part& part : fountainModels()) {
+    if (part.entry.name != "statue") continue;
+    const game::FountainGeometry g;
+    std::vector<glm::vec3> points =
+        ringPoints(g.spire_radius - 0.06f, g.spire_radius + 0.04f, g.dish_floor - 0.04f, g.dish_floor + 0.06f, 30000);
+    const std::vector<glm::vec3> rim = ringPoints(g.dish_inner_radius - 0.04f, g.dish_inner_radius + 0.06f,
+                                                  g.dish_floor - 0.04f, g.dish_floor + 0.06f, 30000);
+    points.insert(points.end(), rim.begin(), rim.end());
+    std::vector<fluid::ColliderSample> exact(points.size()), got(points.size());
+    fluid::queryParallel(fluid::MeshDistance(part.view()), points, exact);
+    struct Reading {
+      std::size_t inside = 0, wrong_sign = 0;
+      float deepest_over = 0.0f;  // how much deeper than it is a point inside within a radius reads, at most
+    };
+    auto read = [&](const fluid::BakeRecipe& recipe) {
+      fluid::queryParallel(bake(part, recipe), points, got);
+      Reading r;
+      const float texel = 2.1f * 1.1f / static_cast<float>(recipe.resolution);  // the statue's y maps
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        const float d = exact[k].distance;
+        const bool inside = got[k].valid && got[k].distance < 0.0f;
+        if (std::fabs(d) > texel && inside != (d < 0.0f)) ++r.wrong_sign;
+        if (!(d < 0.0f && d > -radius)) continue;
+        ++r.inside;
+        if (got[k].valid) r.deepest_over = std::max(r.deepest_over, d - got[k].distance);
+      }
+      return r;
+    };
+    fluid::BakeRecipe axes = part.entry.recipe;
+    axes.maps = "axes";
+    const Reading shipped = read(part.entry.recipe), six = read(axes);
+    std::printf("dish corners: %zu points inside within %.3f m read at most %.4f m deeper than they are "
+                "(six axis maps: %.4f m); wrong sign beyond a texel: %zu (%zu)\n",
+                shipped.inside, radius, shipped.deepest_over, six.deepest_over, shipped.wrong_sign, six.wrong_sign);
+    ASSERT_GT(shipped.inside, 5000u);
+    EXPECT_LT(shipped.deepest_over, 0.5f * radius);
+    EXPECT_EQ(shipped.wrong_sign, 0u);
+    EXPECT_GT(six.deepest_over, radius);  // the check can fail: the axis maps alone
+    return;
+  }
+  FAIL() << "no statue in content/colliders/fountain.colliders";
+}
+
 // Water resting on the basin floor beside the wall, stepped by the game's SPH with the game's
 // colliders (issue 18): a floor read as deep inside there threw such particles up by that depth in one
 // step, the energy the pool then spent jumping at its rim. No step may push a particle out deeper than
@@ -319,6 +377,59 @@ TEST(FountainColliders, WaterRestingBesideTheBasinWallIsNotThrownUp) {
               worst_push);
   EXPECT_LT(worst_push, game::sphDeepPush(f));
   EXPECT_LT(worst_rise, game::sphDeepPush(f));
+}
+
+// Water on the dish floor running into its two concave corners (issue 33 item 6), stepped by the
+// game's SPH with the game's colliders: beside the spire's foot and beside the rim, moving towards
+// them at 0.5 m/s, as the jet's water spreading over the dish does. A corner read several times
+// deeper than it is pushed such particles out by up to 55 mm in the tour (a particle radius is the
+// warning depth, game::sphDeepPush); none may be pushed out that deep, nor reach the speed cap.
+TEST(FountainColliders, WaterRunningIntoTheDishCornersIsNotThrown) {
+  game::SceneConfig scene;
+  ASSERT_TRUE(game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), scene).ok());
+  game::SphFluidParams params;
+  std::string error;
+  ASSERT_TRUE(game::sphParamsFrom(*scene.effect("sph_fluid"), params, error)) << error;
+  params.pump = false;  // only the particles placed below
+  std::shared_ptr<const game::LevelColliders> level;
+  ASSERT_TRUE(game::ensureFountainColliders(kContent, level, error)) << error;
+  game::SphFluid f;
+  const game::FountainGeometry g;
+  ASSERT_TRUE(game::initSphFluid(f, params, g, level, glm::vec3(0.0f, -9.81f, 0.0f), error)) << error;
+  f.world.emitters.clear();
+  f.world.sinks.clear();
+  ASSERT_EQ(level->parts[2].name, "statue");
+  const fluid::DepthMapCollider& statue = level->parts[2].collider;
+  // More than the SPH support apart round each corner, so each runs in alone: 8 round the spire, 2 to
+  // 16 mm from its foot, heading in; 34 round the rim, 2 to 16 mm from it, heading out. Starts the
+  // collider itself calls inside are skipped (the end-of-step check never leaves a particle there).
+  const float skin = 0.01f * params.particle_radius;
+  auto ring = [&](int count, float corner_radius, float towards) {
+    for (int k = 0; k < count; ++k) {
+      const float angle = 6.2831853f * (static_cast<float>(k) + 0.37f) / static_cast<float>(count);
+      const float r = corner_radius - towards * (0.002f + 0.002f * static_cast<float>(k % 8));
+      const glm::vec3 p{r * std::cos(angle), g.dish_floor + skin, r * std::sin(angle)};
+      if (statue.sample(p).distance < 0.0f) continue;
+      fluid::addSphParticle(f.world, p, towards * 0.5f * glm::normalize(glm::vec3(p.x, 0.0f, p.z)));
+    }
+  };
+  ring(8, g.spire_radius, -1.0f);
+  ring(34, g.dish_inner_radius, 1.0f);
+  ASSERT_GT(f.world.particles.size(), 25u);
+  float worst_push = 0.0f;
+  std::size_t clamps = 0;
+  for (int step = 0; step < 60; ++step) {  // 1 s of game steps
+    const std::size_t count = f.world.particles.size();
+    ASSERT_TRUE(game::stepSphFluid(f, 1.0 / 60.0, [&](const fluid::SphStepStats& s) {
+      worst_push = std::max(worst_push, s.max_push_depth);
+      clamps += s.speed_clamps;
+    }));
+    ASSERT_EQ(f.world.particles.size(), count);
+  }
+  std::printf("%zu particles in the dish's corners: deepest push %.4f m, speed clamps %zu\n", f.world.particles.size(),
+              worst_push, clamps);
+  EXPECT_LT(worst_push, game::sphDeepPush(f));
+  EXPECT_EQ(clamps, 0u);
 }
 
 }  // namespace
