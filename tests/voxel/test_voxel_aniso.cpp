@@ -13,6 +13,7 @@
 #include "fluid/sph/anisotropy.hpp"
 #include "fluid/surface/voxel_reference.hpp"
 #include "tests/gpu/gl_test_context.hpp"
+#include "tests/voxel/voxel_reference_checks.hpp"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -181,53 +182,19 @@ TEST_F(VoxelAnisoTest, EllipsoidBitsAndSpansEqualTheCpuReference) {
   EXPECT_TRUE(r.stats.ellipsoids);
   ASSERT_TRUE(voxelBeginFrame(r, camera, params, tiles));
   EXPECT_GT(r.layers.words, 1);
-  std::uint64_t set_bits = 0;
-  for (const fluid::VoxelTile& tile : tiles) {
-    voxelSplatTile(r, params, tile);
-    std::vector<std::uint32_t> gpu, cpu;
-    readVoxelTileBits(r, tile, gpu);
-    fluid::voxelizeReference(centres, g, params.radius, r.view, r.layers, tile, cpu);
-    ASSERT_EQ(gpu.size(), cpu.size());
-    std::size_t differ = 0;
-    for (std::size_t i = 0; i < gpu.size(); ++i) {
-      differ += gpu[i] != cpu[i];
-      set_bits += static_cast<std::uint64_t>(__builtin_popcount(cpu[i]));
-    }
-    EXPECT_EQ(differ, 0u) << "tile " << tile.x << "," << tile.y;
-    voxelCompressTile(r, params, tile);
-  }
+  const std::uint64_t set_bits = voxel_test::splatTilesLikeTheReference(
+      r, params, tiles, [&](const fluid::VoxelTile& tile, std::vector<std::uint32_t>& bits) {
+        fluid::voxelizeReference(centres, g, params.radius, r.view, r.layers, tile, bits);
+      });
   EXPECT_GT(set_bits, 1000u);
-  std::vector<fluid::VoxelSpan> spans;
-  std::vector<fluid::VoxelColumn> columns;
-  readVoxelSpans(r, spans, columns);
   std::vector<std::uint32_t> all;
   fluid::voxelizeReference(centres, g, params.radius, r.view, r.layers, {0, 0, kW, kH}, all);
-  std::size_t overflowing = 0, near_cut = 0, covered = 0;
-  for (int y = 0; y < kH; ++y) {
-    for (int x = 0; x < kW; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * kW + x;
-      const glm::vec3 ray = fluid::voxelPixelRay(r.view, x, y);
-      const float ray_length = std::sqrt(ray.x * ray.x + ray.y * ray.y + ray.z * ray.z);
-      fluid::VoxelSpan ref[7];
-      fluid::VoxelColumn ref_column;
-      fluid::compressColumnReference(std::span(all).subspan(i * r.layers.words, r.layers.words), r.layers,
-                                     params.min_gap, ray_length, desc.max_spans, ref, ref_column);
-      const fluid::VoxelColumn& got = columns[i];
-      ASSERT_EQ(got.stored, ref_column.stored) << "pixel " << x << "," << y;
-      ASSERT_EQ(got.total, ref_column.total) << "pixel " << x << "," << y;
-      EXPECT_EQ(got.hidden_gap, ref_column.hidden_gap) << "pixel " << x << "," << y;
-      for (std::uint32_t s = 0; s < got.stored; ++s) {
-        EXPECT_EQ(spans[i * desc.max_spans + s].entry, ref[s].entry) << "pixel " << x << "," << y << " span " << s;
-        EXPECT_EQ(spans[i * desc.max_spans + s].exit, ref[s].exit) << "pixel " << x << "," << y << " span " << s;
-      }
-      overflowing += got.total > got.stored;
-      near_cut += got.stored > 0 && ref[0].entry == 0;
-      covered += got.stored > 0;
-    }
-  }
-  EXPECT_GT(overflowing, 0u) << "no column overflowed its spans: the hidden gap went untested";
-  EXPECT_GT(near_cut, 0u) << "no ellipsoid was cut by the near plane";
-  EXPECT_GT(covered, 200u);
+  voxel_test::SpanCounts counts;
+  voxel_test::expectSpansLikeTheReference(r, desc, params, kW, kH, all, counts);
+  if (HasFatalFailure()) return;
+  EXPECT_GT(counts.overflowing, 0u) << "no column overflowed its spans: the hidden gap went untested";
+  EXPECT_GT(counts.near_cut, 0u) << "no ellipsoid was cut by the near plane";
+  EXPECT_GT(counts.covered, 200u);
   destroyVoxelRenderer(r);
 }
 
