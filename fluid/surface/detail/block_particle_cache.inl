@@ -98,36 +98,37 @@
           addRow(y, x0, x1);
         }
       }
-    }
-    for (const Particle& p : isAnisotropic<Policy>() ? std::span<const Particle>() : particles) {
-      int y0, y1;
-      discRows(p, inv, y0, y1);
-      int y = y0;
+    } else {
+      for (const Particle& p : particles) {
+        int y0, y1;
+        discRows(p, inv, y0, y1);
+        int y = y0;
 #if defined(__SSE2__)
-      // Two rows at once: discRow()'s double expressions lane by lane, and its iceil / ifloor as
-      // truncation plus the same one-step correction, so the spans come out identical.
-      const __m128d vpx = _mm_set1_pd(p.x), vpy = _mm_set1_pd(p.y), vrc2 = _mm_set1_pd(p.rc2);
-      const __m128d vinv = _mm_set1_pd(inv), vg0 = _mm_set1_pd(double(g0_[0])), eps = _mm_set1_pd(1e-6);
-      for (; y + 1 <= y1; y += 2) {
-        const __m128d dy = _mm_sub_pd(_mm_loadu_pd(cyRow + y), vpy);
-        const __m128d hx = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, _mm_mul_pd(dy, dy)), _mm_setzero_pd()));
-        const __m128d a = _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(_mm_sub_pd(vpx, hx), vinv), vg0), eps);
-        const __m128d b = _mm_add_pd(_mm_sub_pd(_mm_mul_pd(_mm_add_pd(vpx, hx), vinv), vg0), eps);
-        const __m128i ta = _mm_cvttpd_epi32(a), tb = _mm_cvttpd_epi32(b);
-        // Lane masks (all ones = -1) of a > trunc(a) and b < trunc(b), low 32 bits of each lane.
-        const __m128i up =
-            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
-        const __m128i down =
-            _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(b, _mm_cvtepi32_pd(tb))), _MM_SHUFFLE(2, 0, 2, 0));
-        const __m128i c = _mm_sub_epi32(ta, up), f = _mm_add_epi32(tb, down);  // iceil(a), ifloor(b)
-        addRow(y, std::max(1, _mm_cvtsi128_si32(c)), std::min(nx_ - 1, _mm_cvtsi128_si32(f)));
-        addRow(y + 1, std::max(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 1))),
-               std::min(nx_ - 1, _mm_cvtsi128_si32(_mm_shuffle_epi32(f, 1))));
-      }
+        // Two rows at once: discRow()'s double expressions lane by lane, and its iceil / ifloor as
+        // truncation plus the same one-step correction, so the spans come out identical.
+        const __m128d vpx = _mm_set1_pd(p.x), vpy = _mm_set1_pd(p.y), vrc2 = _mm_set1_pd(p.rc2);
+        const __m128d vinv = _mm_set1_pd(inv), vg0 = _mm_set1_pd(double(g0_[0])), eps = _mm_set1_pd(1e-6);
+        for (; y + 1 <= y1; y += 2) {
+          const __m128d dy = _mm_sub_pd(_mm_loadu_pd(cyRow + y), vpy);
+          const __m128d hx = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(vrc2, _mm_mul_pd(dy, dy)), _mm_setzero_pd()));
+          const __m128d a = _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(_mm_sub_pd(vpx, hx), vinv), vg0), eps);
+          const __m128d b = _mm_add_pd(_mm_sub_pd(_mm_mul_pd(_mm_add_pd(vpx, hx), vinv), vg0), eps);
+          const __m128i ta = _mm_cvttpd_epi32(a), tb = _mm_cvttpd_epi32(b);
+          // Lane masks (all ones = -1) of a > trunc(a) and b < trunc(b), low 32 bits of each lane.
+          const __m128i up =
+              _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmpgt_pd(a, _mm_cvtepi32_pd(ta))), _MM_SHUFFLE(2, 0, 2, 0));
+          const __m128i down =
+              _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(b, _mm_cvtepi32_pd(tb))), _MM_SHUFFLE(2, 0, 2, 0));
+          const __m128i c = _mm_sub_epi32(ta, up), f = _mm_add_epi32(tb, down);  // iceil(a), ifloor(b)
+          addRow(y, std::max(1, _mm_cvtsi128_si32(c)), std::min(nx_ - 1, _mm_cvtsi128_si32(f)));
+          addRow(y + 1, std::max(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 1))),
+                 std::min(nx_ - 1, _mm_cvtsi128_si32(_mm_shuffle_epi32(f, 1))));
+        }
 #endif
-      for (; y <= y1; ++y) {
-        const DiscRow r = discRow(p, y, inv);
-        addRow(y, r.x0, r.x1);
+        for (; y <= y1; ++y) {
+          const DiscRow r = discRow(p, y, inv);
+          addRow(y, r.x0, r.x1);
+        }
       }
     }
     // Difference array -> per-column counts -> CSR starts, as two running sums in one pass (the
@@ -294,8 +295,8 @@
     storeEntry(entries, rowCursor, rowRun, x, lo > -32000 ? columnKey(lo, hi) : 0u, hi, li);
   }
 
-  // An anisotropic particle's elements: the rows and spans of its bounding sphere's disc (as the
-  // count pass made them), each column's z range the ellipsoid's chord instead of the sphere's.
+  // An anisotropic particle's elements: the rows and spans of its shadow (as the count pass made
+  // them, stretchedRows / stretchedRow), each column's z range the ellipsoid's chord.
   // Along a column, u(dz) = A dz^2 + 2 B dz + C (field.hpp's stretchedU in exact arithmetic), so
   // u < L holds on [(-B - r) / A, (-B + r) / A], r = sqrt(B^2 - A (C - L)). L = 1/2 (1 + 2^-9)
   // widens the chord past every corner whose float u comes out below 1/2 (a superset, like the
@@ -306,7 +307,6 @@
     const int zmax = nz_ - 1;
     const float* m = w_.localStretch[li].m;
     const double mxx = m[0], mxy = m[1], mxz = m[2], myy = m[3], myz = m[4], mzz = m[5];
-    const double limit = 0.5 * (1.0 + 1.0 / 512.0);
     const double reach = std::sqrt(p.rc2) * inv;
     const int sphereLo = iceil(fz - reach), sphereHi = ifloor(fz + reach);
     std::int16_t* runMax = w_.runMax.data();
@@ -320,7 +320,7 @@
       for (int x = (*span)[0]; x <= (*span)[1]; ++x) {
         const double dx = w_.cx[x] - p.x;
         const double b = mxz * dx + myz * dy;
-        const double c = mxx * dx * dx + 2.0 * mxy * dx * dy + myy * dy * dy - limit;
+        const double c = mxx * dx * dx + 2.0 * mxy * dx * dy + myy * dy * dy - kStretchLimit;
         const double disc = b * b - mzz * c;
         int lo = -32000, hi = -32000;
         if (disc >= 0.0) {
