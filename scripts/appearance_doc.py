@@ -210,6 +210,26 @@ def rms_angle_from_vertical_deg(normals):
     return float(np.sqrt(np.mean(angle ** 2))) if len(angle) else float("nan")
 
 
+def read_surface_csv(path):
+    """`fluiddemo render --surface-out` CSV -> (points (n,3), normals (n,3)), world space."""
+    lines = pathlib.Path(path).read_text().splitlines()[1:]
+    if not lines:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    rows = np.loadtxt(lines, delimiter=",", ndmin=2)
+    return rows[:, 2:5], rows[:, 5:8]
+
+
+def pool_top_normal_rms(points, normals, pool, margin):
+    """RMS angle from vertical (degrees) of the normals whose world point lies on the pool's upper
+    half and at least `margin` inside its x/z sides (the mesh's vertex rule, for the image
+    renderers' first surface) -> (rms, count)."""
+    lo, hi = pool.min(0), pool.max(0)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    top = (p[:, 1] > 0.5 * (lo[1] + hi[1])) & (p[:, 0] > lo[0] + margin) & (p[:, 0] < hi[0] - margin) \
+        & (p[:, 2] > lo[2] + margin) & (p[:, 2] < hi[2] - margin)
+    return rms_angle_from_vertical_deg(np.asarray(normals).reshape(-1, 3)[top]), int(top.sum())
+
+
 def label_mask(mask, diagonal):
     """Connected components of a boolean image (4-neighbours, or 8 with `diagonal`) ->
     (labels int array, 0 = outside the mask; count). Breadth-first, pure Python."""
@@ -532,6 +552,33 @@ def silhouette_mask(image, backdrop, valid):
     return (np.abs(image - backdrop).sum(axis=2) > 6.0 / 255.0) & valid
 
 
+def pool_camera(points):
+    """The flat pool seen from 40° above its middle, the whole top in view."""
+    lo, hi = points.min(0), points.max(0)
+    look = np.array([0.5 * (lo[0] + hi[0]), hi[1], 0.5 * (lo[2] + hi[2])])
+    eye = look + np.array([0.0, 20.0 * D, 24.0 * D])
+    return eye, look
+
+
+def pool_surface_figures(fluiddemo, method, cfg, flags, pool, path, tmp):
+    """The renderer's own first-surface normals over the pool's top (`fluiddemo render
+    --surface-out`): dict(normal_rms, pixels, png), or None when the binary refuses."""
+    eye, look = pool_camera(pool)
+    png = tmp / f"pool_{method}_{cfg.key}.png"
+    csv = tmp / f"pool_{method}_{cfg.key}.csv"
+    done = run([fluiddemo, "render", "--in", path, "--method", method, "--out", png, "--surface-out", csv,
+                "--force", "--width", MASK_SIZE, "--height", MASK_SIZE, "--radius", 0.65 * D,
+                "--camera", ",".join(f"{x:.6g}" for x in eye), "--look-at", ",".join(f"{x:.6g}" for x in look),
+                *flags], check=False)
+    if done.returncode != 0:
+        return None
+    points, normals = read_surface_csv(csv)
+    rms, pixels = pool_top_normal_rms(points, normals, pool, 3.0 * D)
+    m = STRETCHED.search(done.stdout)
+    return dict(normal_rms=rms, pixels=pixels, png=png, dropped=0,
+                stretched=(int(m.group(1)), int(m.group(2))) if m else None)
+
+
 def image_figures(fluiddemo, render_options, sets, paths, tmp, configs_by_method):
     """method -> config key -> set name -> dict (or None: the binary refuses or ignores the
     combination)."""
@@ -576,6 +623,10 @@ def image_figures(fluiddemo, render_options, sets, paths, tmp, configs_by_method
                 if name == "ball":
                     fig["radius"] = sphere_radius_from_mask_area(mask.sum(), dist, MASK_SIZE)
                 res[name] = fig
+            if res is not None:
+                res["pool"] = pool_surface_figures(fluiddemo, method, cfg, flags, sets["pool"], paths["pool"], tmp)
+                if res["pool"] is None:
+                    res = None
             out[method][cfg.key] = res
     # A kernel the renderer ignores: no "stretched" note and the very same masks as isotropic.
     for method in out:
@@ -851,7 +902,8 @@ def summary_table(ctx):
     """The page's first table: isotropic → anisotropic (defaults) per renderer, from the tables below."""
     L = ["## In short", "",
          "Isotropic → anisotropic kernels (k_r 4, λ 0.9), each renderer, from the tables below (d: particle "
-         "spacing; the flat pool's normals of the image renderers only where a test reads them back).", "",
+         "spacing; the flat pool's normals: the mesh's vertex normals, the image renderers' own per-pixel normals "
+         "read back by `fluiddemo render --surface-out`).", "",
          "| renderer | flat pool normals RMS | ball radius error | sheet holes | pieces of jet 1 wide / 2 × 2 | volume (mesh) / area (images) of the ball "
          f"| ms per frame at {ctx['counts'][1]:,} particles |",
          "|---|---|---|---|---|---|---|"]
@@ -876,16 +928,13 @@ def summary_table(ctx):
                   an and f"{an['jet1']['topology']['components']} / {an['jet2']['topology']['components']}", str),
             (f"{pct_change(an['ball']['volume'], iso['ball']['volume']):+.1f} %" if an else "not available"),
             arrow(ms("mesh", "iso"), ms("mesh", "aniso"), lambda x: "–" if x is None else f"{x:.1f}")]) + " |")
-    gl_pool = ctx["gl"][1] or {}
     for method in IMAGE_METHODS:
         figs = ctx["images"][method]
         i, a = figs.get("iso"), figs.get("aniso")
         if not isinstance(i, dict):
             continue
         a = a if isinstance(a, dict) else None
-        normals = "not measured"
-        if method == "screen_space" and 3 in gl_pool:
-            normals = f"{gl_pool[3][0]:.2f}° → {gl_pool[3][1]:.2f}° (GL test, 3 bilateral rounds)"
+        normals = arrow(i["pool"]["normal_rms"], a and a["pool"]["normal_rms"], lambda x: f"{x:.2f}°")
         L.append(f"| {method} | {normals} | " + " | ".join([
             arrow(i["ball"]["radius"] - d_rvol, a and a["ball"]["radius"] - d_rvol, lambda x: f"{x:+.2f} d"),
             arrow(i["sheet"]["holes"], a and a["sheet"]["holes"], str),
@@ -923,8 +972,8 @@ def write_page(args, ctx):
     if ctx["mesh_kernel_help"]:
         L.append(f"`fluiddemo mesh --help` on `--kernel-radius`: \"{ctx['mesh_kernel_help']}\" (here --rc 2: r = 3 d).")
         L.append("")
-    L.append(f"Command per set and row: `fluiddemo mesh --in SET.xyz --out X.ply --rc 2 --cube 0.5 --threshold 0.2 --stats "
-             f"[--kernel anisotropic --kr K --ks 1 --kn 25 --lambda L]`; figures from the .ply (scripts/appearance_doc.py).")
+    L.append("Command per set and row: `fluiddemo mesh --in SET.xyz --out X.ply --rc 2 --cube 0.5 --threshold 0.2 --stats "
+             "[--kernel anisotropic --kr K --ks 1 --kn 25 --lambda L]`; figures from the .ply (scripts/appearance_doc.py).")
     L.append("")
     L.append("| configuration | pool: top normals RMS from vertical | ball: radius error (mean / RMS about the mean) "
              "| sheet: components / holes | jet 1 wide | jet 2 × 2 | volume vs isotropic: pool / ball / sheet "
@@ -956,13 +1005,19 @@ def write_page(args, ctx):
     L.append("")
     L.append((TEMPLATES / "appearance_docs_images.md").read_text().rstrip("\n"))
     L.append("")
+    pool_eye, pool_look = (",".join(f"{x:.6g}" for x in v) for v in pool_camera(figure_sets()["pool"]))
     L.append(f"Command per set and row: `fluiddemo render --in SET.xyz --method M --silhouette --width {MASK_SIZE} "
              f"--height {MASK_SIZE} --radius 0.65 --camera E --look-at C [--kernel anisotropic --kr K --ks 1 --kn 25 "
-             f"--lambda L] [--ss-filter narrow_range]`, and `--method none` (the backdrop alone) for the mask.")
+             f"--lambda L] [--ss-filter narrow_range]`, and `--method none` (the backdrop alone) for the mask. The pool: "
+             f"`fluiddemo render --in pool.xyz --method M --surface-out pool.csv --width {MASK_SIZE} --height {MASK_SIZE} "
+             f"--radius 0.65 --camera {pool_eye} --look-at {pool_look} [kernel flags]` (seen from 40° above), the RMS angle "
+             f"from vertical of the per-pixel normals the renderer shades with, over the pixels whose surface point lies "
+             f"on the pool's upper half and 3 d inside its sides (the mesh's rule).")
     L.append("")
-    L.append("| renderer | configuration | ball: radius error | sheet: components / holes | jet 1 wide | jet 2 × 2 "
+    L.append("| renderer | configuration | pool: top normals RMS from vertical | ball: radius error "
+             "| sheet: components / holes | jet 1 wide | jet 2 × 2 "
              "| area vs isotropic: ball / sheet / jet 2 × 2 | stretched (ball, sheet, jet 1, jet 2) |")
-    L.append("|---|---|---|---|---|---|---|---|")
+    L.append("|---|---|---|---|---|---|---|---|---|")
     imf = ctx["images"]
     for method in IMAGE_METHODS:
         iso = imf[method].get("iso")
@@ -971,7 +1026,7 @@ def write_page(args, ctx):
             if r is None or r == "ignored":
                 why = "refused by this fluiddemo render" if r is None else \
                     "this fluiddemo render ignores --kernel for it: same masks, no kernels computed"
-                L.append(f"| {method} | {cfg.label} | {na(why)} | – | – | – | – | – |")
+                L.append(f"| {method} | {cfg.label} | {na(why)} | – | – | – | – | – | – |")
                 continue
             areas = " / ".join(
                 (fmt(pct_change(r[s]["area"], iso[s]["area"]), 1, True) + " %") if isinstance(iso, dict) else "–"
@@ -980,7 +1035,8 @@ def write_page(args, ctx):
             dropped = [f"{s} {r[s]['dropped']:,}" for s in ("ball", "sheet", "jet1", "jet2") if r[s]["dropped"]]
             if dropped:
                 st += "; records dropped: " + ", ".join(dropped)
-            L.append(f"| {method} | {cfg.label} | {fmt(r['ball']['radius'] - d_rvol, 3, True)} d "
+            L.append(f"| {method} | {cfg.label} | {fmt(r['pool']['normal_rms'])}° ({r['pool']['pixels']:,} px) "
+                     f"| {fmt(r['ball']['radius'] - d_rvol, 3, True)} d "
                      f"| {r['sheet']['components']} / {r['sheet']['holes']} "
                      f"| {r['jet1']['components']} / {r['jet1']['holes']} | {r['jet2']['components']} / {r['jet2']['holes']} "
                      f"| {areas} | {st} |")
@@ -1025,7 +1081,15 @@ def write_page(args, ctx):
                 b = mesh["aniso"]["pool"]["normal_rms"] if mesh.get("aniso") else None
                 L.append(f"| mesh (the table above) | {a:.2f}° | {fmt(b)}{'°' if b is not None else ''} "
                          f"| {fmt(b / a if b is not None else None)} |")
-            L.append("| raycast, voxel | not measured: no normal output in `fluiddemo render` or the GL tests | | |")
+            imf = ctx["images"]
+            for method in IMAGE_METHODS:
+                i, a = imf[method].get("iso"), imf[method].get("aniso")
+                if not isinstance(i, dict):
+                    continue
+                b = a["pool"]["normal_rms"] if isinstance(a, dict) else None
+                c = i["pool"]["normal_rms"]
+                L.append(f"| {method}, `fluiddemo render --surface-out` (the table above) | {c:.2f}° "
+                         f"| {fmt(b)}{'°' if b is not None else ''} | {fmt(b / c if b is not None else None)} |")
     L.append("")
 
     # ---------------- timing

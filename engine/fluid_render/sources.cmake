@@ -8,4 +8,5 @@ target_sources(engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/water_backends.cpp
   ${CMAKE_CURRENT_LIST_DIR}/backdrop.cpp
   ${CMAKE_CURRENT_LIST_DIR}/voxel.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/first_surface.cpp
 )

@@ -5,7 +5,10 @@
 //                    [--width W --height H] [--camera x,y,z --look-at x,y,z] [--radius R]
 //                    [--frames N] [--silhouette] [--drop-inner-cells] [--force]
 //                    [--kernel isotropic|anisotropic --kr K --ks K --kn N --lambda L] [--ss-filter bilateral|narrow_range]
+//                    [--surface-out FILE.csv]
 // Prints the milliseconds of each stage (each ended by glFinish) and the renderer's GPU memory.
+// --surface-out (screen_space, raycast, voxel): the first surface each pixel shows, as the
+// renderer shades it (engine/fluid_render/first_surface.hpp), one CSV row per water pixel.
 // The renderers are called directly (engine/fluid_render), not through the game's frame.
 // `none` draws the backdrop alone: the reference for water masks (tests/bench/render_sets_docs.sh).
 #include "game/commands.hpp"
@@ -14,6 +17,7 @@
 #include "game/paths.hpp"
 
 #include "engine/fluid_render/backdrop.hpp"
+#include "engine/fluid_render/first_surface.hpp"
 #include "engine/fluid_render/fluid_render.hpp"
 #include "engine/fluid_render/raycast.hpp"
 #include "engine/fluid_render/screen_space.hpp"
@@ -32,9 +36,11 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -44,6 +50,7 @@ namespace game {
 namespace {
 
 constexpr double kMiB = 1024.0 * 1024.0;
+constexpr float kFountainSpacing = 0.08f;  // content/scenes/fountain.json: particle_radius 0.04
 
 double nowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -117,6 +124,9 @@ struct RenderJob {
   bool anisotropic = false;
   fluid::AnisotropyParams anisotropy;
   engine::DepthFilter filter = engine::DepthFilter::bilateral;
+  // --surface-out: read back after the last frame when asked for
+  bool want_surface = false;
+  engine::FirstSurface surface;
 };
 
 struct Timing {
@@ -261,6 +271,7 @@ bool renderVoxel(RenderJob& job, const engine::FluidRenderDesc& base, Timing& t,
         const double ms[6] = {s.splat_ms, s.compress_ms, s.connect_ms, s.filter_ms, s.normals_ms, s.shade_ms};
         for (int i = 0; i < 6; ++i) stage_ms[i] += ms[i];
       });
+  if (ok && job.want_surface) engine::readVoxelFirstSurface(r, job.camera, job.surface);
   const engine::VoxelStats& s = r.stats;
   const char* names[6] = {"splat", "compress", "connect", "filter", "normals", "shade"};
   for (int i = 0; i < 6; ++i) t.add(std::string("  ") + names[i], stage_ms[i]);
@@ -314,9 +325,13 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
       error = r.error;
       return false;
     }
-    engine::ScreenSpaceParams p;
+    using engine::ScreenSpaceParams;
+    ScreenSpaceParams p;
     p.radius = job.radius;
     p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
+    // The bilateral range in the game's proportion: its 0.05 m at the fountain's 0.08 m spacing
+    // (a fixed metre figure would turn the filter off for a file in other units).
+    p.depth_falloff = ScreenSpaceParams{}.depth_falloff * (job.spacing / kFountainSpacing);
     p.filter = job.filter;
     fluid::Anisotropy kernels;
     jobKernels(job, t, kernels);
@@ -328,12 +343,16 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
                           : engine::uploadScreenSpaceParticles(r, job.particles, error));
         },
         [&](bool) { engine::drawScreenSpaceFluid(r, job.target.fbo, job.camera, job.water, p); });
+    if (ok && job.want_surface) engine::readScreenSpaceFirstSurface(r, job.camera, job.surface);
     t.gpu_bytes = px * (4 + 4 + 4 * 4 + 4) + static_cast<double>(r.particles.capacity_bytes);
     engine::destroyScreenSpaceRenderer(r);
     return ok;
   }
   engine::RaycastDesc rdesc;
   rdesc.base = desc;
+  // A still image, not a frame budget: let the pool grow to the bound's top, so that deep water
+  // seen at a slant (a pool's four layers: about 50 records per pixel) drops nothing.
+  rdesc.max_pool_per_pixel = 64.0f;
   engine::RaycastRenderer r;
   engine::createRaycastRenderer(rdesc, r);
   if (!r.ready) {
@@ -353,6 +372,7 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
                               : engine::uploadRaycastParticles(r, job.particles, error));
       },
       [&](bool) { engine::drawRaycastFluid(r, job.target.fbo, job.camera, job.water, p); });
+  if (ok && job.want_surface) engine::readRaycastFirstSurface(r, job.camera, job.surface);
   t.gpu_bytes = px * (4 + 4 + 4 + 16 + 4) + 16.0 * r.pool_records + static_cast<double>(r.particles.capacity_bytes);
   t.notes.push_back("raycast pool " + std::to_string(r.pool_records) + " records, asked for " + std::to_string(r.used) +
                     ", dropped " + std::to_string(r.dropped));
@@ -384,11 +404,37 @@ bool writeTarget(const RenderJob& job, const std::string& out, std::string& erro
   return engine::writePngBottomUp(out, job.width, job.height, pixels, error);
 }
 
+// --surface-out: one row per pixel that shows water (bottom-up pixel rows, as GL reads them).
+bool writeSurfaceCsv(const engine::FirstSurface& surface, const std::string& path, std::string& error) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (file == nullptr) {
+    error = "--surface-out " + path + ": cannot write: " + std::strerror(errno);
+    return false;
+  }
+  std::fprintf(file, "x,y,px,py,pz,nx,ny,nz\n");
+  for (int y = 0; y < surface.height; ++y)
+    for (int x = 0; x < surface.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(surface.width) +
+                            static_cast<std::size_t>(x);
+      if (!surface.hit[i]) continue;
+      const glm::vec3 p = surface.point[i], n = surface.normal[i];
+      std::fprintf(file, "%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", x, y, static_cast<double>(p.x),
+                   static_cast<double>(p.y), static_cast<double>(p.z), static_cast<double>(n.x),
+                   static_cast<double>(n.y), static_cast<double>(n.z));
+    }
+  const bool written = std::ferror(file) == 0;
+  if (std::fclose(file) != 0 || !written) {
+    error = "--surface-out " + path + ": write failed: " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int renderCommand(const Args& args) {
   CLI::App app{"Draw a static particle set with one water renderer, headless, and time its stages", "fluiddemo render"};
-  std::string in, out, method = "voxel", camera_text, look_text;
+  std::string in, out, method = "voxel", camera_text, look_text, surface_out;
   int width = 640, height = 360, frames = 1;
   float radius = 0.0f;
   bool force = false, silhouette = false, drop_inner = false;
@@ -413,7 +459,10 @@ int renderCommand(const Args& args) {
   std::string tile_text;
   app.add_option("--tile-size", tile_text, "voxel: tile WxH instead of the 64 MiB budget's (paper Table 1)");
   app.add_flag("--drop-inner-cells", drop_inner, "voxel: leave full inner cells out of the splat (paper §4.3)");
-  app.add_flag("--force", force, "replace --out if it exists");
+  app.add_option("--surface-out", surface_out,
+                 "screen_space, raycast, voxel: CSV of the first surface each water pixel shows (x,y,px,py,pz,nx,ny,nz: "
+                 "pixel from the bottom-left, world point, world normal facing the eye)");
+  app.add_flag("--force", force, "replace --out (and --surface-out) if it exists");
   std::string kernel = "isotropic", ss_filter = "bilateral";
   fluid::AnisotropyParams aniso;
   app.add_option("--kernel", kernel,
@@ -451,6 +500,11 @@ int renderCommand(const Args& args) {
       return usageError("render", "--tile-size " + tile_text + ": expected WxH, each 1..8192");
   }
   if (const int code = checkPngOutput("render", "--out", out, force); code >= 0) return code;
+  if (!surface_out.empty()) {
+    if (method != "screen_space" && method != "raycast" && method != "voxel")
+      return usageError("render", "--surface-out: only for --method screen_space, raycast or voxel (not " + method + ")");
+    if (const int code = checkOutputFile("render", "--surface-out", surface_out, force); code >= 0) return code;
+  }
 
   fluid::ParticlePositions read;
   if (const fluid::IoStatus st = fluid::readParticleFile(in, read); !st.ok()) {
@@ -467,6 +521,7 @@ int renderCommand(const Args& args) {
   job.height = height;
   job.frames = frames;
   job.drop_inner = drop_inner;
+  job.want_surface = !surface_out.empty();
   job.tile_width = tile_w;
   job.tile_height = tile_h;
   job.particles.resize(read.size());
@@ -530,6 +585,10 @@ int renderCommand(const Args& args) {
     std::fprintf(stderr, "fluiddemo render: %s\n", error.c_str());
     code = 1;
   }
+  if (code == 0 && job.want_surface && !writeSurfaceCsv(job.surface, surface_out, error)) {
+    std::fprintf(stderr, "fluiddemo render: %s\n", error.c_str());
+    code = 1;
+  }
   if (code == 0) {
     std::printf("render %s: %zu particles from %s, %dx%d, radius %.4g m (spacing %.4g m%s), GL %s / %s\n",
                 method.c_str(), job.particles.size(), in.c_str(), width, height, static_cast<double>(job.radius),
@@ -545,6 +604,7 @@ int renderCommand(const Args& args) {
     std::printf("  peak memory (process) %.0f MiB (resident: particles, mesh, driver)\n",
                 static_cast<double>(usage.ru_maxrss) / 1024.0);
     std::printf("wrote %s\n", out.c_str());
+    if (job.want_surface) std::printf("wrote %s\n", surface_out.c_str());
   }
   engine::destroyColourTarget(job.target);
   engine::destroyBackdrop(job.backdrop);

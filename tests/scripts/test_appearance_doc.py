@@ -122,6 +122,29 @@ class MeshPieces(unittest.TestCase):
         self.assertGreater(np.einsum("ij,ij->i", n, out).min(), 0.99)
 
 
+class SurfacePieces(unittest.TestCase):
+    def test_surface_csv_and_pool_top(self):
+        pool = np.array([[0.0, 0.0, 0.0], [10.0, 3.0, 10.0]])
+        rows = [
+            (0, 0, 5.0, 3.4, 5.0, 0.0, 1.0, 0.0),                # top, middle: counted, 0 deg
+            (1, 0, 5.0, 3.4, 6.0, math.sin(0.3), math.cos(0.3), 0.0),  # top, middle: counted
+            (2, 0, 1.0, 3.4, 5.0, 1.0, 0.0, 0.0),                # within the margin of x = 0
+            (3, 0, 5.0, 1.0, 5.0, 1.0, 0.0, 0.0),                # the lower half (a side)
+        ]
+        with tempfile.TemporaryDirectory() as d:
+            path = pathlib.Path(d) / "surface.csv"
+            path.write_text("x,y,px,py,pz,nx,ny,nz\n" + "".join(",".join(str(v) for v in r) + "\n" for r in rows))
+            points, normals = ad.read_surface_csv(path)
+            self.assertEqual(points.shape, (4, 3))
+            rms, count = ad.pool_top_normal_rms(points, normals, pool, margin=3.0)
+            self.assertEqual(count, 2)
+            self.assertAlmostEqual(rms, math.degrees(0.3) / math.sqrt(2.0), places=4)
+            path.write_text("x,y,px,py,pz,nx,ny,nz\n")
+            points, normals = ad.read_surface_csv(path)
+            self.assertEqual(len(points), 0)
+            self.assertEqual(ad.pool_top_normal_rms(points, normals, pool, 3.0)[1], 0)
+
+
 class ImagePieces(unittest.TestCase):
     def test_ring_is_one_component_with_one_hole(self):
         y, x = np.mgrid[0:40, 0:40]

@@ -47,7 +47,24 @@ if [ "$size" -le 100000 ]; then
   row 2 "same point" --in "$set_file" --out a.png --camera 1,1,1 --look-at 1,1,1
   row 2 "--radius: must be a positive number, got 0" --in "$set_file" --out a.png --radius 0
   row 2 "--width: Value 5 not in range" --in "$set_file" --out a.png --width 5
+  row 2 "--surface-out: only for --method screen_space, raycast or voxel \(not mesh\)" --in "$set_file" --out a.png \
+    --method mesh --surface-out s.csv
+  touch exists.csv
+  row 2 "--surface-out exists.csv: exists \(pass --force" --in "$set_file" --out a.png --method raycast \
+    --surface-out exists.csv
   [ -e a.png ] && { echo "FAIL: a refused run wrote a.png"; failures=$((failures + 1)); }
+  # --surface-out: a header and one row per water pixel, each a unit normal facing the camera.
+  for m in screen_space raycast voxel; do
+    row 0 "wrote surface_$m.csv" --in "$set_file" --method "$m" --out "surface_$m.png" --surface-out "surface_$m.csv" \
+      --width 96 --height 64 --camera 1,7,8 --look-at 0,0.5,0
+    if ! awk -F, -v cx=1 -v cy=7 -v cz=8 'NR == 1 { ok = ($0 == "x,y,px,py,pz,nx,ny,nz"); next }
+        { n = sqrt($6 * $6 + $7 * $7 + $8 * $8); facing = $6 * (cx - $3) + $7 * (cy - $4) + $8 * (cz - $5)
+          if (n < 0.999 || n > 1.001 || facing < 0 || $1 < 0 || $1 >= 96 || $2 < 0 || $2 >= 64) bad++; rows++ }
+        END { exit !(ok && rows > 100 && bad == 0) }' "surface_$m.csv"; then
+      echo "FAIL: surface_$m.csv: header, more than 100 rows, unit normals facing the camera"
+      failures=$((failures + 1))
+    fi
+  done
   for m in none mesh screen_space raycast voxel; do
     row 0 "wrote $m.png" --in "$set_file" --method "$m" --out "$m.png" --width 96 --height 64
   done
