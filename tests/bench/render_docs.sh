@@ -42,7 +42,7 @@ renderer=$(sed -n 's/^renderer: //p' "$tmp/640x360.mesh.txt")
   cat tests/bench/render_docs_head.md
   echo
   echo "Command: \`tests/bench/render_docs.sh $build $frames $replay_frames\`; GL: $renderer; the first"
-  echo "$replay_frames steps of the tour (of 1200; the jet fills the fountain until step 300, crates are thrown on the way),"
+  echo "$replay_frames steps of the tour (of 1200; the pool starts full, crates are thrown from step 120, the first explosive at step 420),"
   echo "one step per frame, every frame rendered; PSNR and IoU on the frames after steps $(echo "$steps" | sed 's/ / \/ /g')."
   echo
   "$PYTHON" tests/bench/render_replay_table.py "$tmp" "$sizes" "$steps"

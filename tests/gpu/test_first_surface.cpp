@@ -80,6 +80,22 @@ class FirstSurfaceTest : public ::testing::Test {
     destroySceneTargets(target_);
     gputest::destroyContext(ctx_);
   }
+  // The ray caster's first surface of `centres` as spherical metaballs.
+  FirstSurface castFirstSurface(const std::vector<glm::vec3>& centres, const RaycastParams& params) {
+    RaycastDesc desc;
+    desc.base = {kW, kH, shaderDir()};
+    RaycastRenderer r;
+    createRaycastRenderer(desc, r);
+    EXPECT_TRUE(r.ready) << r.error;
+    beginRaycastOpaquePass(r, glm::vec4(0.1f, 0.1f, 0.1f, 1.0f));
+    std::string error;
+    EXPECT_TRUE(uploadRaycastParticles(r, centres, error)) << error;
+    drawRaycastFluid(r, target_.fbo, camera(), WaterParams{}, params);
+    FirstSurface s;
+    readRaycastFirstSurface(r, camera(), s);
+    destroyRaycastRenderer(r);
+    return s;
+  }
   gputest::GlContext ctx_;
   SceneTargets target_;
 };
@@ -87,23 +103,11 @@ class FirstSurfaceTest : public ::testing::Test {
 // A lone metaball's iso surface is the sphere of radius Rc sqrt(1 - 2 sqrt(T)); the cast bisects
 // each crossing and takes the field's gradient as the normal, so both are close to exact.
 TEST_F(FirstSurfaceTest, RaycastPointsAndNormalsLieOnTheLoneMetaballsSphere) {
-  RaycastDesc desc;
-  desc.base = {kW, kH, shaderDir()};
-  RaycastRenderer r;
-  createRaycastRenderer(desc, r);
-  ASSERT_TRUE(r.ready) << r.error;
-  beginRaycastOpaquePass(r, glm::vec4(0.1f, 0.1f, 0.1f, 1.0f));
-  const std::vector<glm::vec3> centres{kCentre};
-  std::string error;
-  ASSERT_TRUE(uploadRaycastParticles(r, centres, error)) << error;
   RaycastParams p;
   p.rc = 0.9f;
   p.threshold = 0.2f;
   const FluidCamera cam = camera();
-  drawRaycastFluid(r, target_.fbo, cam, WaterParams{}, p);
-  FirstSurface s;
-  readRaycastFirstSurface(r, cam, s);
-  destroyRaycastRenderer(r);
+  const FirstSurface s = castFirstSurface({kCentre}, p);
   ASSERT_EQ(s.hit.size(), static_cast<std::size_t>(kW) * kH);
   const SphereFit fit = fitSphere(s, cam, p.rc * std::sqrt(1.0f - 2.0f * std::sqrt(p.threshold)));
   print("raycast", fit);
@@ -173,20 +177,7 @@ TEST_F(FirstSurfaceTest, VoxelPointsAndNormalsFollowTheVoxelisedSphere) {
 
 // Nothing drawn: no pixel reads as water.
 TEST_F(FirstSurfaceTest, EmptyFrameHasNoSurface) {
-  RaycastDesc desc;
-  desc.base = {kW, kH, shaderDir()};
-  RaycastRenderer r;
-  createRaycastRenderer(desc, r);
-  ASSERT_TRUE(r.ready) << r.error;
-  beginRaycastOpaquePass(r, glm::vec4(0.1f, 0.1f, 0.1f, 1.0f));
-  const std::vector<glm::vec3> far_away{glm::vec3(40.0f, 0.0f, 0.0f)};
-  std::string error;
-  ASSERT_TRUE(uploadRaycastParticles(r, far_away, error)) << error;
-  const FluidCamera cam = camera();
-  drawRaycastFluid(r, target_.fbo, cam, WaterParams{}, RaycastParams{});
-  FirstSurface s;
-  readRaycastFirstSurface(r, cam, s);
-  destroyRaycastRenderer(r);
+  const FirstSurface s = castFirstSurface({glm::vec3(40.0f, 0.0f, 0.0f)}, RaycastParams{});
   EXPECT_EQ(std::count(s.hit.begin(), s.hit.end(), std::uint8_t{1}), 0);
 }
 
