@@ -219,14 +219,19 @@ def read_surface_csv(path):
     return rows[:, 2:5], rows[:, 5:8]
 
 
-def pool_top_normal_rms(points, normals, pool, margin):
-    """RMS angle from vertical (degrees) of the normals whose world point lies on the pool's upper
-    half and at least `margin` inside its x/z sides (the mesh's vertex rule, for the image
-    renderers' first surface) -> (rms, count)."""
+def pool_top_mask(points, pool, margin):
+    """The points on the pool's upper half and at least `margin` inside its x/z sides: its top,
+    for the mesh's vertices and the image renderers' first surface alike."""
     lo, hi = pool.min(0), pool.max(0)
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    top = (p[:, 1] > 0.5 * (lo[1] + hi[1])) & (p[:, 0] > lo[0] + margin) & (p[:, 0] < hi[0] - margin) \
+    return (p[:, 1] > 0.5 * (lo[1] + hi[1])) & (p[:, 0] > lo[0] + margin) & (p[:, 0] < hi[0] - margin) \
         & (p[:, 2] > lo[2] + margin) & (p[:, 2] < hi[2] - margin)
+
+
+def pool_top_normal_rms(points, normals, pool, margin):
+    """RMS angle from vertical (degrees) of the normals over the pool's top (pool_top_mask) ->
+    (rms, count)."""
+    top = pool_top_mask(points, pool, margin)
     return rms_angle_from_vertical_deg(np.asarray(normals).reshape(-1, 3)[top]), int(top.sum())
 
 
@@ -475,7 +480,6 @@ def mesh_figures(fluiddemo, mesh_options, sets, paths, tmp, configs):
     ball = sets["ball"]
     centre = ball.mean(0)
     pool = sets["pool"]
-    lo, hi = pool.min(0), pool.max(0)
     for cfg in configs:
         flags = cfg.flags(mesh_options)
         out[cfg.key] = None if flags is None else {}
@@ -495,11 +499,7 @@ def mesh_figures(fluiddemo, mesh_options, sets, paths, tmp, configs):
                 n = vertex_normals(wv, wt)
                 v = wv
             if name == "pool":
-                margin = 3.0 * D
-                top = (v[:, 1] > 0.5 * (lo[1] + hi[1])) & (v[:, 0] > lo[0] + margin) & (v[:, 0] < hi[0] - margin) \
-                    & (v[:, 2] > lo[2] + margin) & (v[:, 2] < hi[2] - margin)
-                fig["normal_rms"] = rms_angle_from_vertical_deg(n[top])
-                fig["top_vertices"] = int(top.sum())
+                fig["normal_rms"], fig["top_vertices"] = pool_top_normal_rms(v, n, pool, 3.0 * D)
             if name == "ball":
                 r = np.linalg.norm(v - centre, axis=1)
                 fig["radius_mean"] = float(r.mean())

@@ -1,5 +1,7 @@
 #include "engine/fluid_render/first_surface.hpp"
 
+#include "fluid/collide/collide.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -42,21 +44,14 @@ std::vector<T> readBuffer(GLuint buffer, std::size_t count) {
   return values;
 }
 
-// voxel_common.glsl's decodeNormal: octahedron (Meyer et al. 2010) in two snorm16s.
+// voxel_common.glsl's decodeNormal: the two snorm16s of its octahedron code are the L1
+// parametrization of the colliders' normal index (fluid::l1Decode, Kolb et al. §4.2 eq. (3)) on [-1, 1]².
 glm::vec3 decodeOctahedron(std::uint32_t code) {
   auto snorm = [](std::uint32_t bits) {
     const auto v = static_cast<std::int16_t>(static_cast<std::uint16_t>(bits & 0xffffu));
     return std::clamp(static_cast<float>(v) / 32767.0f, -1.0f, 1.0f);
   };
-  glm::vec3 n(snorm(code), snorm(code >> 16), 0.0f);
-  n.z = 1.0f - std::abs(n.x) - std::abs(n.y);
-  if (n.z < 0.0f) {
-    const glm::vec2 folded = (1.0f - glm::abs(glm::vec2(n.y, n.x))) *
-                             glm::vec2(n.x >= 0.0f ? 1.0f : -1.0f, n.y >= 0.0f ? 1.0f : -1.0f);
-    n.x = folded.x;
-    n.y = folded.y;
-  }
-  return glm::normalize(n);
+  return fluid::l1Decode(glm::vec2(snorm(code), snorm(code >> 16)) * 0.5f + 0.5f);
 }
 
 }  // namespace

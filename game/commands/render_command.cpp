@@ -325,13 +325,12 @@ bool renderMethod(RenderJob& job, Timing& t, std::string& error) {
       error = r.error;
       return false;
     }
-    using engine::ScreenSpaceParams;
-    ScreenSpaceParams p;
+    engine::ScreenSpaceParams p;
     p.radius = job.radius;
     p.filter_radius = job.radius / 0.65f;  // the game's 0.5 Rc
     // The bilateral range in the game's proportion: its 0.05 m at the fountain's 0.08 m spacing
     // (a fixed metre figure would turn the filter off for a file in other units).
-    p.depth_falloff = ScreenSpaceParams{}.depth_falloff * (job.spacing / kFountainSpacing);
+    p.depth_falloff = engine::ScreenSpaceParams{}.depth_falloff * (job.spacing / kFountainSpacing);
     p.filter = job.filter;
     fluid::Anisotropy kernels;
     jobKernels(job, t, kernels);
