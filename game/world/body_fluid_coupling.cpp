@@ -2,6 +2,8 @@
 
 #include "fluid/sph/analytic_colliders.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace game {
@@ -35,6 +37,7 @@ void initBodyFluidCoupling(BodyFluidCoupling& coupling, const fluid::SphWorld& s
   coupling.region_min = region_min;
   coupling.region_max = region_max;
   coupling.first_collider = sph.colliders.size();
+  coupling.half_extents = half_extents;
   const float volume = 8.0f * half_extents.x * half_extents.y * half_extents.z;
   coupling.cap.max_force = coupling.force_limit * sph.params.rest_density * glm::length(sph.params.gravity) * volume;
   coupling.reach = glm::length(half_extents);
@@ -64,12 +67,101 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
   }
 }
 
+FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& sph, const fluid::ColliderPose& pose,
+                     FilmScratch& scratch) {
+  FilmWrench out;
+  const float d = fluid::sphSpacing(sph.params);
+  // The film's pressure is the surrounding water's, so it is read from the particles around the
+  // face's rim: within twice the kernel support, which reaches the middle of a face up to about
+  // 8 d wide (the game's 0.6 m crate at d = 8 cm) from the water beside it.
+  const float H = fluid::sphSupport(sph.params), R = 2.0f * H;
+  const float rho_g = sph.params.rest_density * glm::length(sph.params.gravity);
+  const glm::vec3 down = glm::length(sph.params.gravity) > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f);
+  // The water that can reach a face point: particles within the box's half diagonal plus R.
+  const std::size_t water = sph.particles.sphCount();
+  const float reach = coupling.reach + R;
+  std::vector<std::size_t>& nearby = scratch.nearby;
+  nearby.clear();
+  for (std::size_t i = 0; i < water; ++i)
+    if (glm::dot(sph.particles.position[i] - pose.translation, sph.particles.position[i] - pose.translation) <
+        reach * reach)
+      nearby.push_back(i);
+  if (nearby.empty()) return out;
+  const glm::vec3 half = coupling.half_extents;
+  std::vector<glm::vec3>&points = scratch.points, &local = scratch.local;
+  std::vector<fluid::ColliderSample>& samples = scratch.samples;
+  std::vector<float>& gap = scratch.gap;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const float side : {-1.0f, 1.0f}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const int nu = std::max(1, static_cast<int>(std::ceil(2.0f * half[u] / d)));
+      const int nv = std::max(1, static_cast<int>(std::ceil(2.0f * half[v] / d)));
+      const float area = 4.0f * half[u] * half[v] / static_cast<float>(nu * nv);
+      glm::vec3 normal_local(0.0f);
+      normal_local[axis] = side;
+      const glm::vec3 normal = pose.rotation * normal_local;
+      points.clear();
+      for (int a = 0; a < nu; ++a)
+        for (int b = 0; b < nv; ++b) {
+          glm::vec3 q(0.0f);
+          q[axis] = side * half[axis];
+          q[u] = half[u] * (2.0f * (static_cast<float>(a) + 0.5f) / static_cast<float>(nu) - 1.0f);
+          q[v] = half[v] * (2.0f * (static_cast<float>(b) + 0.5f) / static_cast<float>(nv) - 1.0f);
+          points.push_back(pose.rotation * q + pose.translation);
+        }
+      // Gap to the scene's colliders: the film exists only where it is thinner than d.
+      gap.assign(points.size(), std::numeric_limits<float>::max());
+      for (std::size_t c = 0; c < coupling.first_collider && c < sph.colliders.size(); ++c) {
+        const fluid::SphCollider& collider = sph.colliders[c];
+        local.resize(points.size());
+        samples.assign(points.size(), fluid::ColliderSample{});
+        for (std::size_t k = 0; k < points.size(); ++k) local[k] = fluid::toColliderSpace(collider.pose, points[k]);
+        collider.shape->query(local, samples);
+        for (std::size_t k = 0; k < points.size(); ++k)
+          if (samples[k].valid) gap[k] = std::min(gap[k], samples[k].distance);
+      }
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        if (!(gap[k] < d)) continue;
+        const glm::vec3 x = points[k];
+        bool wetted = false;
+        double weight = 0.0, weighted = 0.0;
+        for (const std::size_t i : nearby) {
+          const glm::vec3 rel = sph.particles.position[i] - x;
+          const float dist2 = glm::dot(rel, rel);
+          if (dist2 >= R * R) continue;
+          if (dist2 < d * d && glm::dot(rel, normal) > 0.0f) {
+            wetted = true;  // the SPH presses this point itself
+            break;
+          }
+          const float dist = std::sqrt(dist2), q = 1.0f - dist / R;
+          const float w = q * q;  // a smooth weight that falls to 0 at R
+          // Hydrostatic shift from the particle's height to the point's (down = gravity's direction).
+          const float p = sph.particles.pressure[i] + rho_g * glm::dot(x - sph.particles.position[i], down);
+          weight += w;
+          weighted += w * p;
+        }
+        if (wetted || !(weight > 0.0)) continue;
+        const float pressure = std::max(0.0f, static_cast<float>(weighted / weight));
+        if (!(pressure > 0.0f) || !std::isfinite(pressure)) continue;
+        const glm::vec3 f = -pressure * area * normal;
+        out.force += f;
+        out.torque += glm::cross(x - pose.translation, f);
+        ++out.points;
+      }
+    }
+  return out;
+}
+
 std::string forcesToBodies(BodyFluidCoupling& coupling, const fluid::SphWorld& sph, engine::PhysicsWorld& physics) {
   std::string bad;
   for (std::size_t k = 0; k < coupling.coupled.size(); ++k) {
     const fluid::SphCollider& collider = sph.colliders[coupling.first_collider + k];
     // fluid/sph reports the torque about pose.translation, the box centre: Bullet's centre of mass.
     glm::vec3 force = collider.force, torque = collider.torque;
+    const FilmWrench film = filmForce(coupling, sph, collider.pose, coupling.film_scratch);
+    force += film.force;
+    torque += film.torque;
+    coupling.film_points += static_cast<std::uint64_t>(film.points);
     const bool capped = capWrench(coupling.cap, force, torque);
     if (!engine::setExternalForce(physics, coupling.coupled[k], force, torque)) {
       if (bad.empty()) bad = "fluid force on body " + std::to_string(coupling.coupled[k]) + " is not finite";

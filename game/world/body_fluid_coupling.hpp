@@ -16,6 +16,16 @@
 // box, which Bullet fires away at 50 m/s). The force handed to Bullet is therefore capped at
 // `force_limit` times the buoyancy of the fully submerged box (rho_0 |g| V), and the torque at
 // that force times the box's half diagonal; `clamped` counts how often the cap acted.
+//
+// Film under a box (sub-particle closure): where a box face lies closer to one of the scene's
+// colliders than one particle spacing d, no particle fits between them, so the SPH puts no
+// pressure on that part of the face, while real water in the film carries the pressure of the
+// water around it. Without it a crate lighter than water that touches the pool floor (the
+// fountain's pool is about three particle layers deep, so a 500 kg/m^3 crate dropped in reaches
+// it) stays there: its bottom face is dry and only the sides and top are pressed. filmForce
+// extrapolates the pressure to such a dry face point from the particles within twice the kernel
+// support around it, as boundary samples take the fluid's pressure (Akinci et al. 2012's mirroring, here
+// with the hydrostatic shift rho_0 |g| (y_j - y) from each particle's height to the point's).
 
 #include "engine/physics/physics_world.hpp"
 #include "fluid/sph/sph.hpp"
@@ -41,6 +51,14 @@ bool capWrench(const WrenchCap& cap, glm::vec3& force, glm::vec3& torque);
 // touch them this step and is left out of the coupling. Empty points give an empty box (lo > hi).
 void grownBounds(std::span<const glm::vec3> points, glm::vec3 grow, glm::vec3& lo, glm::vec3& hi);
 
+// Caller-owned scratch of filmForce, kept between calls.
+struct FilmScratch {
+  std::vector<std::size_t> nearby;  // particles within reach of the box
+  std::vector<glm::vec3> points, local;
+  std::vector<float> gap;
+  std::vector<fluid::ColliderSample> samples;
+};
+
 struct BodyFluidCoupling {
   std::shared_ptr<const fluid::SignedDistanceShape> box_shape;  // one shape, shared by every box
   fluid::CollisionMaterial material;
@@ -52,7 +70,21 @@ struct BodyFluidCoupling {
   std::vector<engine::BodyId> coupled;           // body of collider first_collider + k, last SPH step
   std::uint64_t forces_applied = 0;              // body forces handed to Bullet so far
   std::uint64_t clamped = 0;                     // of those, shortened by the cap
+  glm::vec3 half_extents{0.0f};                  // of every box (m)
+  std::uint64_t film_points = 0;                 // dry face points in a film that got its pressure, so far
+  FilmScratch film_scratch;
 };
+
+// The film's pressure on one box (see the header comment): face points on a regular grid of
+// about d, each that lies within d of a scene collider (sph.colliders before first_collider)
+// with no particle within d in front of it gets the extrapolated pressure. Force (N) and torque
+// (N m, about the box centre) on the box at `pose`; `points` counts the face points that got it.
+struct FilmWrench {
+  glm::vec3 force{0.0f}, torque{0.0f};
+  int points = 0;
+};
+FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& sph, const fluid::ColliderPose& pose,
+                     FilmScratch& scratch);
 
 // `half_extents` of the boxes (all equal, m); the SPH world's current colliders stay in front.
 // Reads rest density and gravity from sph.params for the force cap.

@@ -122,3 +122,89 @@ TEST(BodyFluidCoupling, ArchimedesFractionsAtThreeDensities) {
   EXPECT_GT(neutral.fraction, 0.95f) << "nor float up like a lighter crate";
   EXPECT_LT(heavy.lowest, 0.01f) << "a 2000 crate sinks to the floor";
 }
+
+namespace {
+
+// The film closure alone (game::filmForce), on hand-made water: a 0.3 m box on a floor plane in
+// still water of level `level` (particles on a lattice of spacing d around it, each with its
+// hydrostatic pressure rho_0 |g| (level - y)), optionally raised by `lift` or with a layer of
+// water under it too.
+struct FilmCase {
+  fluid::SphWorld sph;
+  game::BodyFluidCoupling coupling;
+  fluid::ColliderPose pose;
+};
+
+constexpr float kFilmHalf = 0.15f;
+
+void buildFilmCase(FilmCase& c, float level, float lift, bool water_under) {
+  c.sph.params.particle_radius = 0.04f;
+  fluid::SphCollider floor;
+  floor.shape = std::make_shared<fluid::PlaneShape>(glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
+  floor.integrate_pose = false;
+  c.sph.colliders.push_back(floor);
+  game::initBodyFluidCoupling(c.coupling, c.sph, glm::vec3(kFilmHalf), glm::vec3(-10.0f), glm::vec3(10.0f));
+  c.pose.translation = glm::vec3(0.0f, kFilmHalf + lift, 0.0f);
+  const float d = fluid::sphSpacing(c.sph.params), r = c.sph.params.particle_radius;
+  const float rho_g = c.sph.params.rest_density * 9.81f;
+  for (float y = r; y < level; y += d)
+    for (float x = -1.0f + r; x < 1.0f; x += d)
+      for (float z = -1.0f + r; z < 1.0f; z += d) {
+        const bool beside = std::max(std::abs(x), std::abs(z)) > kFilmHalf + 0.5f * r;
+        const bool under = y < lift - 0.5f * r;
+        if (!beside && !(water_under && under)) continue;
+        ASSERT_TRUE(fluid::addSphParticle(c.sph, glm::vec3(x, y, z)));
+        c.sph.particles.pressure.back() = rho_g * (level - y);
+      }
+}
+
+TEST(BodyFluidFilm, ABoxOnTheFloorGetsTheSurroundingPressureOnItsDryBottom) {
+  FilmCase c;
+  const float level = 0.24f;
+  buildFilmCase(c, level, 0.0f, false);
+  const game::FilmWrench film = game::filmForce(c.coupling, c.sph, c.pose, c.coupling.film_scratch);
+  const float expected = 1000.0f * 9.81f * level * (2.0f * kFilmHalf) * (2.0f * kFilmHalf);  // p(floor) x area
+  std::printf("[ metric ] film on a dry 0.3 m bottom at depth %.2f m: %.1f N up (p A = %.1f N), %d points\n", level,
+              film.force.y, expected, film.points);
+  EXPECT_NEAR(film.force.y, expected, 0.15f * expected);
+  EXPECT_LT(std::abs(film.force.x) + std::abs(film.force.z), 0.02f * expected) << "symmetric water: no sideways push";
+  EXPECT_LT(glm::length(film.torque), 0.02f * expected * kFilmHalf);
+  EXPECT_GE(film.points, 16) << "every point of the bottom face (4 x 4 at d = 8 cm)";
+}
+
+TEST(BodyFluidFilm, NoFilmWhereParticlesFitOrPressTheFace) {
+  const float level = 0.3f;
+  FilmCase raised, wet, dry_air;
+  buildFilmCase(raised, level, 0.1f, false);  // a gap wider than d: the SPH resolves it
+  buildFilmCase(wet, level, 0.07f, true);     // a gap under d, but water under the face presses it
+  buildFilmCase(dry_air, 0.0f, 0.0f, false);  // on the floor with no water anywhere
+  EXPECT_EQ(game::filmForce(raised.coupling, raised.sph, raised.pose, raised.coupling.film_scratch).points, 0);
+  EXPECT_EQ(game::filmForce(wet.coupling, wet.sph, wet.pose, wet.coupling.film_scratch).points, 0);
+  const game::FilmWrench none =
+      game::filmForce(dry_air.coupling, dry_air.sph, dry_air.pose, dry_air.coupling.film_scratch);
+  EXPECT_EQ(none.points, 0);
+  EXPECT_EQ(none.force, glm::vec3(0.0f));
+}
+
+// Tilted onto one edge, only the strip of the faces near that edge is in the film: the push is up
+// and smaller than on the flat box.
+TEST(BodyFluidFilm, ATiltedBoxIsPushedOnlyWhereItsFacesAreInTheFilm) {
+  FilmCase flat, tilted;
+  buildFilmCase(flat, 0.24f, 0.0f, false);
+  buildFilmCase(tilted, 0.24f, 0.0f, false);
+  tilted.pose.rotation = glm::angleAxis(0.6f, glm::vec3(0.0f, 0.0f, 1.0f));  // 34 degrees
+  // Rest the lowest edge (the -x edge of the bottom face) on the floor.
+  const glm::vec3 lowest = tilted.pose.rotation * glm::vec3(-kFilmHalf, -kFilmHalf, 0.0f);
+  tilted.pose.translation = glm::vec3(0.0f, -lowest.y, 0.0f);
+  const game::FilmWrench on_face = game::filmForce(flat.coupling, flat.sph, flat.pose, flat.coupling.film_scratch);
+  const game::FilmWrench on_edge =
+      game::filmForce(tilted.coupling, tilted.sph, tilted.pose, tilted.coupling.film_scratch);
+  std::printf("[ metric ] film: flat %.1f N on %d points, on an edge %.1f N on %d points\n", on_face.force.y,
+              on_face.points, on_edge.force.y, on_edge.points);
+  EXPECT_GT(on_edge.points, 0);
+  EXPECT_LT(on_edge.points, on_face.points);
+  EXPECT_GT(on_edge.force.y, 0.0f);
+  EXPECT_LT(on_edge.force.y, 0.75f * on_face.force.y);
+}
+
+}  // namespace
