@@ -49,17 +49,17 @@ inline float farFieldLevel(const fluid::SphWorld& sph, glm::vec3 box_centre, flo
   return tops[tops.size() / 2];
 }
 
-// Fraction of the box's volume below the plane y = level: 20^3 cell centres in its own frame.
-inline float submergedFraction(const engine::BodyState& box, float level) {
-  constexpr int kCells = 20;
+// Fraction of a cube's volume (half edge `half`) below the plane y = level: cells^3 cell centres
+// in its own frame.
+inline float submergedFraction(const engine::BodyState& box, float level, float half = kBoxHalf, int cells = 20) {
   int below = 0;
-  for (int i = 0; i < kCells; ++i)
-    for (int j = 0; j < kCells; ++j)
-      for (int k = 0; k < kCells; ++k) {
-        const glm::vec3 local = kBoxHalf * (2.0f * (glm::vec3(i, j, k) + 0.5f) / float(kCells) - 1.0f);
+  for (int i = 0; i < cells; ++i)
+    for (int j = 0; j < cells; ++j)
+      for (int k = 0; k < cells; ++k) {
+        const glm::vec3 local = half * (2.0f * (glm::vec3(i, j, k) + 0.5f) / float(cells) - 1.0f);
         below += (box.rotation * local + box.position).y < level;
       }
-  return float(below) / float(kCells * kCells * kCells);
+  return float(below) / float(cells * cells * cells);
 }
 
 // Water level by volume: the level still water at the rest density would have in the tank with

@@ -5,6 +5,7 @@
 // the gutter and the pump, a crate on the intake, a crate on the nozzle. Every game step checks no
 // NaN, the speed cap and the constant count of water (the store plus the pump); each case checks
 // that the ids are the ones the pool was made with.
+#include "archimedes_tank.hpp"
 #include "engine/physics/physics_world.hpp"
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/sph/blast.hpp"
@@ -270,18 +271,9 @@ struct Floating {
   int samples = 0;
 };
 
-// Share of a 0.3 m crate's volume below the plane y = level: 16^3 cell centres in its own frame.
+// Share of a 0.3 m crate's volume below the plane y = level (16^3 cell centres).
 float shareBelow(const engine::BodyState& crate, float level) {
-  constexpr int kCells = 16;
-  const float half = 0.15f;
-  int below = 0;
-  for (int i = 0; i < kCells; ++i)
-    for (int j = 0; j < kCells; ++j)
-      for (int k = 0; k < kCells; ++k) {
-        const glm::vec3 local = half * (2.0f * (glm::vec3(i, j, k) + 0.5f) / float(kCells) - 1.0f);
-        below += (crate.rotation * local + crate.position).y < level;
-      }
-  return static_cast<float>(below) / static_cast<float>(kCells * kCells * kCells);
+  return archimedes_tank::submergedFraction(crate, level, 0.15f, 16);
 }
 
 float poolLevelAround(const fluid::SphWorld& sph, glm::vec3 centre, float basin_wall_top) {
