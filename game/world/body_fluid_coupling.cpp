@@ -77,16 +77,19 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
   const float H = fluid::sphSupport(sph.params), R = 2.0f * H;
   const float rho_g = sph.params.rest_density * glm::length(sph.params.gravity);
   const glm::vec3 down = glm::length(sph.params.gravity) > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f);
-  // The water that can reach a face point: particles within the box's half diagonal plus R.
-  const std::size_t water = sph.particles.sphCount();
-  const float reach = coupling.reach + R;
+  // The water that can reach a face point: particles within the box's half diagonal plus R,
+  // gathered at the first face point in a film (most boxes have none, and skip the scan).
   std::vector<std::size_t>& nearby = scratch.nearby;
-  nearby.clear();
-  for (std::size_t i = 0; i < water; ++i)
-    if (glm::dot(sph.particles.position[i] - pose.translation, sph.particles.position[i] - pose.translation) <
-        reach * reach)
-      nearby.push_back(i);
-  if (nearby.empty()) return out;
+  bool gathered = false;
+  const auto gatherNearby = [&] {
+    const float reach = coupling.reach + R;
+    nearby.clear();
+    for (std::size_t i = 0; i < sph.particles.sphCount(); ++i)
+      if (glm::dot(sph.particles.position[i] - pose.translation, sph.particles.position[i] - pose.translation) <
+          reach * reach)
+        nearby.push_back(i);
+    gathered = true;
+  };
   const glm::vec3 half = coupling.half_extents;
   std::vector<glm::vec3>&points = scratch.points, &local = scratch.local;
   std::vector<fluid::ColliderSample>& samples = scratch.samples;
@@ -122,6 +125,7 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
       }
       for (std::size_t k = 0; k < points.size(); ++k) {
         if (!(gap[k] < d)) continue;
+        if (!gathered) gatherNearby();
         const glm::vec3 x = points[k];
         bool wetted = false;
         double weight = 0.0, weighted = 0.0;

@@ -169,9 +169,12 @@ WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry&
   out.pump = w.pump.size();
   out.spray = w.particles.spray_count;
   const float d = fluid::sphSpacing(w.params);
-  const float area = 3.14159265f * (g.basin_inner_radius * g.basin_inner_radius - g.plinth_radius * g.plinth_radius);
-  out.pool_level = static_cast<float>(out.pool) * d * d * d / area;
+  out.pool_level = static_cast<float>(out.pool) * d * d * d / basinFloorArea(g);
   return out;
+}
+
+float basinFloorArea(const FountainGeometry& g) {
+  return 3.14159265f * (g.basin_inner_radius * g.basin_inner_radius - g.plinth_radius * g.plinth_radius);
 }
 
 bool stepSphFluid(SphFluid& f, double dt, const std::function<void(const fluid::SphStepStats&)>& on_step) {

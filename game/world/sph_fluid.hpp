@@ -96,6 +96,8 @@ struct WaterWhereabouts {
   float pool_level = 0.0f;  // m above the basin floor: the pool's volume over the basin's floor area
 };
 WaterWhereabouts waterWhereabouts(const SphFluid& fluid, const FountainGeometry& geometry);
+// The basin's floor area between its wall and the statue's plinth (m^2): pool_level's divisor.
+float basinFloorArea(const FountainGeometry& geometry);
 
 // Advances the fluid by exactly `dt` seconds (adaptive SPH sub-steps, each <= params.max_time_step),
 // calling `on_step` (when given) with each sub-step's statistics. Returns false and sets

@@ -316,11 +316,12 @@ Floating crateInThePool(float density, double seconds, double settle_from) {
     const float visible = poolLevelAround(sph, crate.position, g.basin_wall_top);
     EXPECT_TRUE(std::isfinite(visible)) << "water around the crate";
     if (!std::isfinite(visible)) return out;
-    const float area = 3.14159265f * (g.basin_inner_radius * g.basin_inner_radius - g.plinth_radius * g.plinth_radius);
-    const float water = game::waterWhereabouts(*game::findState<game::SphFluid>(world), g).pool_level * area;
+    const float area = game::basinFloorArea(g);
+    const float water_level = game::waterWhereabouts(*game::findState<game::SphFluid>(world), g).pool_level;
     const float crate_volume = 0.3f * 0.3f * 0.3f;
-    float level = g.basin_floor + water / area;
-    for (int it = 0; it < 20; ++it) level = g.basin_floor + (water + crate_volume * shareBelow(crate, level)) / area;
+    float level = g.basin_floor + water_level;
+    for (int it = 0; it < 20; ++it)
+      level = g.basin_floor + water_level + crate_volume * shareBelow(crate, level) / area;
     float lowest = 1e30f;
     for (int k = 0; k < 8; ++k)
       lowest = std::min(
@@ -380,9 +381,6 @@ TEST(FountainFloating, ADenseCrateSinksToTheBasinFloor) {
   EXPECT_LT(f.bottom_above_floor, 0.03f);
   EXPECT_LT(f.centre_above_floor, 0.17f) << "lying on the floor";
 }
-
-}  // namespace
-namespace {
 
 // The figures of docs/engine.md's pool table (about 2 min; run with --gtest_also_run_disabled_tests):
 // crates of 250, 350, 500 and 700 kg/m^3 dropped into the pool, means over 4-8 s. Asserts only
