@@ -18,7 +18,7 @@ for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 nvidia_egl=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
 [ -f $nvidia_egl ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$nvidia_egl
-export LD_LIBRARY_PATH=$PWD/.gpurun/lib SDL_VIDEODRIVER=offscreen
+export LD_LIBRARY_PATH=$PWD/.gpurun/lib SDL_VIDEODRIVER=offscreen SDL_AUDIODRIVER=dummy
 # The test binaries find content/ and shaders/ through the source path they were built in.
 src=$(cat .gpurun/source_dir)
 [ -n "$src" ] && [ ! -e "$src" ] && mkdir -p "$(dirname "$src")" && ln -sfn "$PWD" "$src"

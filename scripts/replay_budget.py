@@ -41,7 +41,7 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
                 out = os.path.join(tmp, f"{mode}{round_}.csv")
                 cmd = base + extra + ["--csv", out]
                 run = subprocess.run(cmd, capture_output=True, text=True,
-                                     env=dict(os.environ, SDL_VIDEODRIVER="offscreen"))
+                                     env=dict(os.environ, SDL_VIDEODRIVER="offscreen", SDL_AUDIODRIVER="dummy"))
                 if run.returncode != 0:
                     sys.exit(f"replay_budget: {' '.join(cmd)} failed (exit {run.returncode}):\n{run.stderr[-2000:]}")
                 frames[mode] += list(csv.DictReader(open(out)))

@@ -14,6 +14,8 @@ cmake --build "$build_dir" -j "${JOBS:-$(nproc)}" --target fluiddemo
 
 if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
   export SDL_VIDEODRIVER="${SDL_VIDEODRIVER:-offscreen}"
+  # Nobody is listening to a run without a display: SDL's dummy audio driver, no sound card needed.
+  export SDL_AUDIODRIVER="${SDL_AUDIODRIVER:-dummy}"
   if [ $# -eq 0 ]; then
     mkdir -p out
     echo "run.sh: no display; running the fountain headless (screenshot in out/fountain.png)"

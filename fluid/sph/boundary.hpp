@@ -160,17 +160,38 @@ struct ColliderQuery {
 // context.collider_speed.
 void sampleBoundary(StepContext& context);
 
+// surface_pressure_force: the pair's pressure terms (p_i + p_b) / rho_i^2 take
+// p_b = p_i + rho_i g . (x_b - x_i) at the mirror point x_b = x_i - 2 s n (Adami et al. 2012
+// eq. 27), which adds -2 s (g . n) / rho_i to the mirror's 2 p_i / rho_i^2: less under a body's
+// bottom, more on its top, nothing on its sides.
+inline float surfacePressureShift(const StepContext& context, const ColliderSample& sample, std::size_t i) {
+  const float s = std::clamp(sample.distance, 0.0f, context.support);
+  return -2.0f * s * glm::dot(context.params.gravity, sample.normal) / context.particles.density[i];
+}
+
 // Boundary-pressure coupling of collider c (one with boundary_pressure) with particle i,
 // F_c = -m dv_ic / dt where the boundary term changed i's velocity by dv_ic = -2 kappa_i rho_0
 // grad V_ic over the step (scratch.kappa holds the impulse kappa_i; old_position the step-start
-// positions; boundary_share the grad V_ic that sampleBoundary found there).
+// positions; boundary_share the grad V_ic that sampleBoundary found there). With
+// surface_pressure_force the body instead feels the pressure at its surface (the sum kept >= 0:
+// it never pulls), and only the body: extrapolating in the water's own boundary term too (Newton's
+// third law pair by pair) leaves the body where the mirror puts it, since the density solve raises
+// p_i by what the boundary stops pushing. The two forces differ by O(rho g r A) per face, which
+// vanishes with the particle radius.
 inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size_t i, ForceTorque& acc) {
   const SphScratch& scratch = context.scratch;
   const ColliderSample& sample = scratch.start_samples[c][i];
   if (!withinSupport(sample, context.support)) return;
   const SphCollider& collider = context.world.colliders[c];
   const glm::vec3 grad = scratch.boundary_share[c][i];
-  const glm::vec3 f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
+  glm::vec3 f;
+  if (collider.surface_pressure_force) {
+    // (p_i + p_b) / rho_i^2: the mirror's 2 kappa_i / dt and the shift to the surface.
+    const float terms = std::max(0.0f, kMirror * scratch.kappa[i] / context.dt + surfacePressureShift(context, sample, i));
+    f = (context.mass * context.rest_density * terms) * grad;
+  } else {
+    f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
+  }
   acc.force += f;
   acc.torque += glm::cross(scratch.old_position[i] - collider.pose.translation, f);
 }

@@ -140,7 +140,15 @@ struct SphCollider {
   ColliderPose pose;                                 // world placement at the start of the next step
   CollisionMaterial material;
   bool boundary_pressure = true;  // also act as SPH boundary (density/pressure), not only as collision
-  bool integrate_pose = true;     // advance pose by its velocities during each step
+  // The coupling force (below) reads the water's pressure at the collider's surface: each
+  // particle's pressure extrapolated hydrostatically to its mirror point behind the surface
+  // (Adami, Hu & Adams 2012, "A generalized wall boundary condition for SPH", eq. 27, without the
+  // wall's acceleration) instead of mirrored (p_b = p_i), so that the pair's mean is the pressure
+  // at the surface, not at the particle about r deeper. A floating body then sinks to its
+  // Archimedes draft instead of riding about r above it. The water's own boundary term keeps the
+  // mirror (boundary.hpp, addCouplingTerm, says why).
+  bool surface_pressure_force = false;
+  bool integrate_pose = true;  // advance pose by its velocities during each step
   // The shape's signed distance is 1-Lipschitz (|d(a) - d(b)| <= |a - b|: an exact SDF, or min/max
   // of exact ones as in CSG). Only then, and only while the collider does not move during a step
   // (integrate_pose off or zero velocities), the end-of-step collision check skips the query of a

@@ -61,7 +61,8 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
     collider.shape = coupling.box_shape;
     collider.pose = engine::colliderPoseOf(state);  // box centre = centre of mass
     collider.material = coupling.material;
-    collider.integrate_pose = true;  // moves with its velocities through the SPH sub-steps
+    collider.integrate_pose = true;          // moves with its velocities through the SPH sub-steps
+    collider.surface_pressure_force = true;  // the water's pressure at its faces: it floats at its draft
     sph.colliders.push_back(collider);
     coupling.coupled.push_back(id);
   }
