@@ -187,9 +187,10 @@ inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size
   glm::vec3 f;
   if (collider.surface_pressure_force) {
     // (p_i + p_b) / rho_i^2: the mirror's 2 kappa_i / dt and the shift to the surface.
-    const float terms = std::max(0.0f, kMirror * scratch.kappa[i] / context.dt + surfacePressureShift(context, sample, i));
+    const float terms =
+        std::max(0.0f, kMirror * scratch.kappa[i] / context.dt + surfacePressureShift(context, sample, i));
     f = (context.mass * context.rest_density * terms) * grad;
-  } else {
+  } else {  // the mirror alone, in its own float order (the committed replays' hashes)
     f = (kMirror * context.mass * scratch.kappa[i] * context.rest_density / context.dt) * grad;
   }
   acc.force += f;

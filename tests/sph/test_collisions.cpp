@@ -3,6 +3,7 @@
 // particle between them, as where a thrown crate presses water into a basin wall. Still colliders win: the particle ends on the floor, inside the box only where the box
 // overlaps the floor, and the box feels the push it gave the particle. Where a free position is
 // near (a narrow wedge between the two faces) the particle ends there.
+#include "collider_distance.hpp"
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/sph/sph.hpp"
 
@@ -18,6 +19,7 @@
 namespace {
 
 using namespace fluid;
+using sph_test::distanceTo;
 
 constexpr float kStep = 0.001f;  // s
 
@@ -57,13 +59,6 @@ Squeeze makeSqueeze(bool box_first) {
   }
   addSphParticle(w, glm::vec3(0.0f, 0.002f, 0.0f));
   return s;
-}
-
-float distanceTo(const SphCollider& c, glm::vec3 x) {
-  ColliderSample sample;
-  const glm::vec3 local = toColliderSpace(c.pose, x);
-  c.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
-  return sample.distance;
 }
 
 TEST(SphCollisions, StillColliderWinsWhereAMovingOneOverlapsIt) {

@@ -2,6 +2,7 @@
 // ballistic outside the SPH solve and rejoin it where they land. A pool 0.2 m deep in a 1 m box
 // (3,125 particles), blasted from just above its surface. Every case checks the count, the ids,
 // no NaN and that no particle leaves the box below its rim.
+#include "collider_distance.hpp"
 #include "fluid/sph/analytic_colliders.hpp"
 #include "fluid/sph/blast.hpp"
 #include "fluid/sph/sph_scenes.hpp"
@@ -227,11 +228,11 @@ TEST(SphSpray, ParticlesAddedWhileThereIsSprayAreWater) {
 // (-cos, -sin) of the tilt), and a 0.6 m crate reaching `overlap` into it, moving slowly (a moving
 // collider: resolved first). The drop flies free for one step (so it is spray), then the colliders
 // appear around it. Returns its signed distances to the crate and the wall after that step.
-struct Squeeze {
+struct SqueezedDrop {
   float crate = 0.0f, wall = 0.0f;
   std::size_t spray = 0;
 };
-Squeeze squeezeDrop(glm::vec3 at, float tilt_degrees, float anchor, float overlap) {
+SqueezedDrop squeezeDrop(glm::vec3 at, float tilt_degrees, float anchor, float overlap) {
   SphWorld w;
   w.params.particle_radius = 0.04f;
   w.params.spray_speed = 0.5f;
@@ -252,16 +253,10 @@ Squeeze squeezeDrop(glm::vec3 at, float tilt_degrees, float anchor, float overla
   crate.pose.translation = glm::vec3(1.0f + overlap - 0.3f, 0.5f, 0.0f);
   crate.pose.linear_velocity = glm::vec3(0.01f, 0.0f, 0.0f);
   w.colliders = {wall, crate};
-  Squeeze out;
+  SqueezedDrop out;
   EXPECT_TRUE(advanceSph(w, 0.002, [&](const SphStepStats& s) { out.spray = s.spray; }).ok());
-  auto distance = [&](const SphCollider& c) {
-    const glm::vec3 local = toColliderSpace(c.pose, w.particles.position[0]);
-    ColliderSample sample;
-    c.shape->query(std::span<const glm::vec3>(&local, 1), std::span<ColliderSample>(&sample, 1));
-    return sample.distance;
-  };
-  out.wall = distance(w.colliders[0]);
-  out.crate = distance(w.colliders[1]);
+  out.wall = sph_test::distanceTo(w.colliders[0], w.particles.position[0]);
+  out.crate = sph_test::distanceTo(w.colliders[1], w.particles.position[0]);
   return out;
 }
 
@@ -270,11 +265,11 @@ Squeeze squeezeDrop(glm::vec3 at, float tilt_degrees, float anchor, float overla
 // (without that it ended 6 mm inside the crate). Where no exit is free, the wall wins: the drop
 // ends outside it, inside the crate.
 TEST(SphSpray, ADropSqueezedBetweenACrateAndAWallLeavesByAFreeExit) {
-  const Squeeze free_exit = squeezeDrop(glm::vec3(1.03f, 0.23f, 0.0f), 25.0f, 0.3f, 0.05f);
+  const SqueezedDrop free_exit = squeezeDrop(glm::vec3(1.03f, 0.23f, 0.0f), 25.0f, 0.3f, 0.05f);
   EXPECT_EQ(free_exit.spray, 1u);
   EXPECT_GE(free_exit.crate, 0.0f) << "left the crate";
   EXPECT_GE(free_exit.wall, 0.0f) << "and stayed out of the wall";
-  const Squeeze caught = squeezeDrop(glm::vec3(1.02f, 0.28f, 0.0f), 15.0f, 0.35f, 0.05f);
+  const SqueezedDrop caught = squeezeDrop(glm::vec3(1.02f, 0.28f, 0.0f), 15.0f, 0.35f, 0.05f);
   EXPECT_EQ(caught.spray, 1u);
   EXPECT_GE(caught.wall, 0.0f) << "the still wall wins";
   EXPECT_LT(caught.crate, -0.01f) << "no free exit: left inside the crate";
