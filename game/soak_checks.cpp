@@ -213,6 +213,15 @@ void SoakProbe::bodySpeed(float speed) {
   max_body_speed = std::max(max_body_speed, speed);
 }
 
+void SoakProbe::gauge(std::string_view name, double value, std::string_view unit) {
+  for (Gauge& g : gauges)
+    if (g.name == name) {
+      g.value = value;
+      return;
+    }
+  gauges.push_back({std::string(name), std::string(unit), value});
+}
+
 const SoakProbe::Range* SoakProbe::range(std::string_view name) const {
   for (const Range& r : ranges)
     if (r.name == name) return &r;

@@ -150,6 +150,12 @@ struct SoakProbe {
   // see worstFreePenetration): the most in one frame, and the frames with any.
   std::size_t squeezed_max = 0;
   std::uint64_t squeezed_frames = 0;
+  struct Gauge {  // a quantity that should hold steady over a long run (the pool's level), as of this frame
+    std::string name;
+    std::string unit;
+    double value = 0.0;
+  };
+  std::vector<Gauge> gauges;  // in the order first reported
 
   void fail(const std::string& what);
   void count(std::string_view name, std::size_t value);
@@ -157,6 +163,9 @@ struct SoakProbe {
   void penetration(std::string_view name, const Penetration& p, float tolerance, const std::string& what);
   void particleSpeed(float speed);
   void bodySpeed(float speed);
+  // Sets gauge `name` to this frame's value; the monitor samples it after warm-up and judges its drift
+  // (SoakDesc::gauge_drift).
+  void gauge(std::string_view name, double value, std::string_view unit);
   const Range* range(std::string_view name) const;  // null when never counted
 };
 

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <span>
+#include <vector>
 
 namespace game {
 namespace {
@@ -35,6 +37,28 @@ bool throwAt(World& world, const PlayerThrow& t) {
   else
     playerThrow(world);
   return explosive;
+}
+
+// Median of a copy (the samples keep their order).
+double medianOf(std::span<const double> values) {
+  std::vector<double> sorted(values.begin(), values.end());
+  std::sort(sorted.begin(), sorted.end());
+  return sorted[sorted.size() / 2];
+}
+
+// Each gauge's drift so far: the medians of the first and last thirds of its samples, as the
+// memory's trend (fewer than 3 samples: none yet).
+std::vector<SoakStats::GaugeDrift> gaugeDrifts(const SoakMonitor& m) {
+  std::vector<SoakStats::GaugeDrift> out;
+  const double span_s = static_cast<double>(m.stats.steps - m.gauge_first_step) * m.desc.throws.step_seconds;
+  for (std::size_t g = 0; g < m.gauge_samples.size(); ++g) {
+    const std::vector<double>& samples = m.gauge_samples[g];
+    if (samples.size() < 3) continue;
+    const std::size_t third = samples.size() / 3;
+    out.push_back({m.probe.gauges[g].name, m.probe.gauges[g].unit, medianOf(std::span(samples).first(third)),
+                   medianOf(std::span(samples).last(third)), span_s >= m.desc.gauge_min_seconds});
+  }
+  return out;
 }
 
 }  // namespace
@@ -90,6 +114,13 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
   }
   m.detonations_seen = detonated;
   if (world.steps >= m.warmup_steps && (world.steps % std::max<std::uint64_t>(m.desc.memory_every, 1) == 0 || !go_on)) {
+    // The gauges' samples are not started again at the first blast: they are no memory figure.
+    if (m.gauge_samples.size() < probe.gauges.size()) {
+      m.gauge_samples.resize(probe.gauges.size());
+      for (std::vector<double>& g : m.gauge_samples) g.reserve(m.rss_samples.capacity());
+    }
+    if (!m.gauge_samples.empty() && m.gauge_samples.front().empty()) m.gauge_first_step = world.steps;
+    for (std::size_t g = 0; g < probe.gauges.size(); ++g) m.gauge_samples[g].push_back(probe.gauges[g].value);
     releaseFreeMemory();
     const std::uint64_t rss = residentBytes(), heap = heapInUseBytes();
     if (m.rss_samples.empty()) s.rss_warmup = rss, s.heap_warmup = heap;
@@ -102,6 +133,16 @@ bool soakAfterFrame(SoakMonitor& m, const World& world) {
 }
 
 void finishSoak(SoakMonitor& m) {
+  m.stats.gauges = gaugeDrifts(m);
+  for (const SoakStats::GaugeDrift& d : m.stats.gauges) {
+    if (!d.judged || !m.failure.empty() || std::abs(d.last - d.first) <= m.desc.gauge_drift * std::abs(d.first))
+      continue;
+    char text[200];
+    std::snprintf(text, sizeof(text), "step %llu: %s drifts from %.4g to %.4g %s (%+.2f %%, allowed %.2f %%)",
+                  static_cast<unsigned long long>(m.stats.steps), d.name.c_str(), d.first, d.last, d.unit.c_str(),
+                  100.0 * (d.last - d.first) / d.first, 100.0 * m.desc.gauge_drift);
+    m.failure = text;
+  }
   // The resident set on its trend, the heap in use on its trend and final level (checkMemoryGrowth
   // says why); no heap figure (not glibc): the resident set on both.
   const bool have_heap = !m.heap_samples.empty() && m.heap_samples.front() > 0;
@@ -145,6 +186,10 @@ std::string soakSummary(const SoakMonitor& m) {
       add(line, " (heap in use %.1f -> %.1f)", static_cast<double>(s.heap_warmup) / mib,
           static_cast<double>(s.heap_end) / mib);
   }
+  // Before finishSoak (the progress lines of a long run): the drift so far.
+  for (const SoakStats::GaugeDrift& g : s.gauges.empty() ? gaugeDrifts(m) : s.gauges)
+    add(line, ", %s %.4g -> %.4g %s (%+.2f %%, %s)", g.name.c_str(), g.first, g.last, g.unit.c_str(),
+        100.0 * (g.last - g.first) / g.first, g.judged ? "judged" : "not judged: samples span under gauge_min_seconds");
   if (!worst.empty()) line += ", worst penetration/radius:" + worst;
   return line;
 }

@@ -1,7 +1,8 @@
 // `fluiddemo soak`: every scene (or the named ones) for a long stretch of game time at a tiny
 // headless viewport, one fixed step per frame and every frame rendered, with seeded throws of
 // crates and explosives; fails on an abort, a NaN/inf or solver/mesher error, a particle or crate
-// inside a collider, or memory that grows after warm-up (game/soak_monitor.hpp, game/soak_checks.hpp).
+// inside a collider, memory that grows after warm-up, or a pool level that drifts (game/soak_monitor.hpp,
+// game/soak_checks.hpp). --no-render: the same steps, throws and checks without GL, meshing or rendering.
 //
 // Each scene runs in a child process (this executable again, `soak --scene S --in-process`): an
 // assertion or a crash kills only that child, and the parent still names the scene and the step it
@@ -21,7 +22,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -40,6 +43,7 @@ struct SoakOptions {
   double explosive_share = 0.25;
   std::vector<std::string> overrides;
   bool no_memory_check = false;
+  bool no_render = false;  // simulation only: no GL, meshing or rendering
   int progress_fd = -1;
   std::uint64_t abort_at_step = 0;  // testing aid: abort() before this step (0 = never)
   std::size_t leak_per_step = 0;    // testing aid: bytes allocated, touched and kept every step
@@ -54,6 +58,55 @@ bool loadSoakScene(const std::string& name, const std::vector<std::string>& over
   for (std::size_t i = 0; status.ok() && i < overrides.size(); ++i) status = applyOverride(out, overrides[i]);
   error = status.error;
   return status.ok();
+}
+
+// The scene's line: passed or failed, with the monitor's summary. Returns 0 (passed) or 1.
+int reportSoak(const std::string& name, SoakMonitor& monitor) {
+  finishSoak(monitor);
+  if (monitor.failure.empty() && monitor.stats.steps < monitor.desc.steps) {
+    monitor.failure =
+        "ran " + std::to_string(monitor.stats.steps) + " of " + std::to_string(monitor.desc.steps) + " steps";
+  }
+  const bool passed = monitor.failure.empty();
+  std::printf("soak %-12s %s  %s\n", name.c_str(), passed ? "ok  " : "FAIL", soakSummary(monitor).c_str());
+  if (!passed) std::printf("soak %-12s FAIL  %s\n", name.c_str(), monitor.failure.c_str());
+  std::fflush(stdout);
+  return passed ? 0 : 1;
+}
+
+// --no-render: the same steps, throws and checks as the rendered soak without GL, meshing or the
+// render (as `replay --no-render`), for runs of an hour of game time and more, which rendering every
+// frame on a machine without a GPU would stretch to several hours.
+int soakSimulationOnly(const std::string& name, const SceneConfig& scene, const SoakOptions& o, SoakMonitor& monitor,
+                       std::uint64_t report_every) {
+  World world;
+  std::string error;
+  if (!buildWorld(scene, contentDir(), world, error)) {
+    std::printf("soak %-12s FAIL  %s\n", name.c_str(), error.c_str());
+    return 1;
+  }
+  using Clock = std::chrono::steady_clock;
+  Clock::duration stepping{}, checking{};
+  for (bool go_on = true; go_on;) {
+    const std::uint64_t step = world.steps;
+    soakBeforeStep(monitor, world, step);
+    if (step + 1 == o.abort_at_step) std::abort();
+    const Clock::time_point start = Clock::now();
+    stepWorld(world, nullptr);
+    const Clock::time_point stepped = Clock::now();
+    go_on = soakAfterFrame(monitor, world);
+    stepping += stepped - start;
+    checking += Clock::now() - stepped;
+    if (report_every > 0 && world.steps % report_every == 0) {
+      std::printf("soak %-12s ...   %s\n", name.c_str(), soakSummary(monitor).c_str());
+      std::fflush(stdout);
+    }
+  }
+  const double frames = static_cast<double>(std::max<std::uint64_t>(world.steps, 1));
+  std::printf("soak %-12s time  simulation %.2f ms per step, checks %.2f ms per step (mean, wall clock)\n",
+              name.c_str(), std::chrono::duration<double, std::milli>(stepping).count() / frames,
+              std::chrono::duration<double, std::milli>(checking).count() / frames);
+  return reportSoak(name, monitor);
 }
 
 // One scene in this process. Returns 0 (passed) or 1 (failed), after printing the scene's line.
@@ -75,6 +128,8 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   SoakMonitor monitor = makeSoakMonitor(desc, step_seconds);
   // Long runs (10 min of play and more) say how far they are every tenth of the way.
   const std::uint64_t report_every = desc.steps >= 36000 ? desc.steps / 10 : 0;
+
+  if (o.no_render) return soakSimulationOnly(name, scene, o, monitor, report_every);
 
   RunOptions options;
   options.headless = true;
@@ -111,15 +166,7 @@ int soakInProcess(const std::string& name, const SoakOptions& o) {
   }
   if (report.gl_errors > 0 && monitor.failure.empty())
     monitor.failure = std::to_string(report.gl_errors) + " GL errors";
-  finishSoak(monitor);
-  if (monitor.failure.empty() && monitor.stats.steps < desc.steps) {
-    monitor.failure = "ran " + std::to_string(monitor.stats.steps) + " of " + std::to_string(desc.steps) + " steps";
-  }
-  const bool passed = monitor.failure.empty();
-  std::printf("soak %-12s %s  %s\n", name.c_str(), passed ? "ok  " : "FAIL", soakSummary(monitor).c_str());
-  if (!passed) std::printf("soak %-12s FAIL  %s\n", name.c_str(), monitor.failure.c_str());
-  std::fflush(stdout);
-  return passed ? 0 : 1;
+  return reportSoak(name, monitor);
 }
 
 // Runs `soak --scene NAME --in-process --progress-fd N ...` as a child and waits for it. Returns
@@ -154,6 +201,7 @@ int soakInChild(const std::string& name, const SoakOptions& o) {
                                     std::to_string(fds[1])};
   for (const std::string& assignment : o.overrides) words.insert(words.end(), {"--set", assignment});
   if (o.no_memory_check) words.emplace_back("--no-memory-check");
+  if (o.no_render) words.emplace_back("--no-render");
   if (o.abort_at_step > 0) words.insert(words.end(), {"--abort-at-step", std::to_string(o.abort_at_step)});
   if (o.leak_per_step > 0) words.insert(words.end(), {"--leak-per-step", std::to_string(o.leak_per_step)});
   std::vector<char*> argv;
@@ -242,6 +290,9 @@ int soakCommand(const Args& args) {
   app.add_flag("--in-process", in_process, "run the scenes in this process (no child per scene)");
   app.add_flag("--no-memory-check", o.no_memory_check,
                "print the resident set but do not judge it (sanitizer builds, whose allocators keep freed memory)");
+  app.add_flag("--no-render", o.no_render,
+               "simulation only: the same steps, throws and checks without GL, meshing or rendering (runs of an "
+               "hour of game time and more)");
   app.add_option("--progress-fd", o.progress_fd, "(internal) write each step's number to this fd")->group("");
   app.add_option("--abort-at-step", o.abort_at_step, "(testing) abort before step N, to check the crash report")
       ->group("");

@@ -269,6 +269,8 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     }
     probe.squeezed_frames += squeezed_now > 0 ? 1u : 0u;
     probe.squeezed_max = std::max(probe.squeezed_max, squeezed_now);
+    // The water circulates through the pump (issue 33): over a long run the pool holds its level.
+    if (sph.pump.feeds_emitters) probe.gauge("pool level", waterWhereabouts(state, level_).pool_level, "m");
   }
 
   std::string findNonFinite() const override {

@@ -107,6 +107,8 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
     if (state.attached && state.readback_every > 0 && sample.step != state.steps)
       probe.fail("sprite read-back is stale (step " + std::to_string(sample.step) + " of " +
                  std::to_string(state.steps) + ")");
+    // Nothing read back (no GL context: soak --no-render simulates no sprite) leaves nothing to check.
+    if (sample.positions.empty()) return;
     probe.points.clear();
     for (const glm::vec4& p : sample.positions) probe.points.emplace_back(p);
     const std::size_t parts = state.level_colliders ? state.level_colliders->parts.size() : 0;

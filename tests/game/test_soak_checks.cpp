@@ -106,6 +106,51 @@ TEST(SoakMemory, ResidentSetIsReadAndSeesAnAllocation) {
   EXPECT_EQ(block[12345], 1);
 }
 
+// A gauge (the pool's level) judged over a run's samples: `first` for the first half of 300 samples,
+// `last` for the rest, +-1 % of alternating noise (the thirds' medians take the upper of their
+// middle pair: 1.01 x the level), spanning `seconds` of game time.
+game::SoakMonitor gaugeRun(double first, double last, double seconds) {
+  game::SoakDesc desc;
+  desc.steps = static_cast<std::uint64_t>(seconds * 60.0);
+  game::SoakMonitor m = game::makeSoakMonitor(desc, 1.0 / 60.0);
+  m.probe.gauges = {{"pool level", "m", 0.0}};
+  m.gauge_samples.resize(1);
+  for (int i = 0; i < 300; ++i) m.gauge_samples[0].push_back((i < 150 ? first : last) * (i % 2 == 0 ? 1.01 : 0.99));
+  m.gauge_first_step = 0;
+  m.stats.steps = desc.steps;
+  return m;
+}
+
+TEST(SoakGauge, ALevelThatHoldsOverALongRunPasses) {
+  game::SoakMonitor m = gaugeRun(0.24, 0.24 * 0.99, 3600.0);  // -1 %
+  game::finishSoak(m);
+  EXPECT_TRUE(m.failure.empty()) << m.failure;
+  ASSERT_EQ(m.stats.gauges.size(), 1u);
+  EXPECT_TRUE(m.stats.gauges[0].judged);
+  EXPECT_NEAR(m.stats.gauges[0].last / m.stats.gauges[0].first, 0.99, 1e-9);
+  EXPECT_NE(game::soakSummary(m).find("pool level 0.2424 -> 0.24 m (-1.00 %, judged)"), std::string::npos)
+      << game::soakSummary(m);
+}
+
+TEST(SoakGauge, ALevelThatSinksOverALongRunFails) {
+  game::SoakMonitor m = gaugeRun(0.24, 0.24 * 0.97, 3600.0);  // -3 %
+  game::finishSoak(m);
+  EXPECT_NE(m.failure.find("pool level drifts from 0.2424 to 0.2351 m (-3.00 %, allowed 2.00 %)"), std::string::npos)
+      << m.failure;
+  game::SoakMonitor rising = gaugeRun(0.24, 0.24 * 1.03, 3600.0);  // +3 %
+  game::finishSoak(rising);
+  EXPECT_NE(rising.failure.find("pool level drifts"), std::string::npos) << rising.failure;
+}
+
+TEST(SoakGauge, ARunShorterThanTheJudgedSpanIsNotJudged) {
+  game::SoakMonitor m = gaugeRun(0.24, 0.24 * 0.9, 60.0);  // a blast's dip over a minute's run
+  game::finishSoak(m);
+  EXPECT_TRUE(m.failure.empty()) << m.failure;
+  ASSERT_EQ(m.stats.gauges.size(), 1u);
+  EXPECT_FALSE(m.stats.gauges[0].judged);
+  EXPECT_NE(game::soakSummary(m).find("not judged"), std::string::npos) << game::soakSummary(m);
+}
+
 TEST(SoakPenetration, PointsOutsideTheFountainAreNotInside) {
   const fountainref::FountainShape shape;
   game::PenetrationScratch scratch;
@@ -394,6 +439,30 @@ TEST_F(SoakMonitorOnFountain, AMesherFailureIsCountedTheGameGoesOnAndTheSoakFail
   EXPECT_FALSE(game::soakAfterFrame(monitor, world));
   EXPECT_NE(monitor.failure.find("run-time failure: fluid_surface: surface params"), std::string::npos)
       << monitor.failure;
+}
+
+// The fountain's water circulates through the pump: its effect reports the pool's level as a gauge,
+// and the monitor samples it after warm-up with the memory.
+TEST_F(SoakMonitorOnFountain, TheFountainReportsItsPoolLevelAndTheMonitorSamplesIt) {
+  game::SoakDesc desc;
+  desc.steps = 1000;
+  desc.warmup_fraction = 0.0;
+  desc.min_warmup_seconds = 0.0;
+  desc.memory_every = 1;
+  desc.throws.mean_interval_s = 0.0;
+  game::SoakMonitor m = game::makeSoakMonitor(desc, world.step_seconds);
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
+    game::stepWorld(world, nullptr);
+  }
+  ASSERT_EQ(m.probe.gauges.size(), 1u);
+  EXPECT_EQ(m.probe.gauges[0].name, "pool level");
+  const float expected = game::waterWhereabouts(*game::findState<game::SphFluid>(world), world.links.level).pool_level;
+  ASSERT_EQ(m.gauge_samples.size(), 1u);
+  ASSERT_EQ(m.gauge_samples[0].size(), 3u);
+  EXPECT_GE(m.gauge_samples[0][0], 0.15);  // issue 33: at least 15 cm of water in the basin
+  EXPECT_NEAR(m.gauge_samples[0][2], expected, 0.02);
+  EXPECT_NE(game::soakSummary(m).find("pool level "), std::string::npos) << game::soakSummary(m);
 }
 
 TEST_F(SoakMonitorOnFountain, TheRunStopsAfterItsSteps) {
