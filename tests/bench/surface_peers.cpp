@@ -334,10 +334,13 @@ int countMode(const std::string& set, const std::string& route) {
   Ours ours;
   DensePeer peer;
   benchpeers::setThreads(1);
-  // ours = default SurfaceParams; cache / splat = that field route (SurfaceFieldRoute).
+  // ours = default SurfaceParams; cache / splat = that field route (SurfaceFieldRoute); ours-one-block =
+  // the default route with blocks as large as the set (the automatic plan halves a set that fits one
+  // block for two threads' sake, and each block sums its margins again).
   fluid::SurfaceParams params;
   if (route == "cache") params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
   if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
+  if (route == "ours-one-block") params.blockCubes = 1024;
   peer.scalar = route == "peer-scalar";
   auto run = [&] { return route.rfind("peer", 0) == 0 ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
@@ -547,7 +550,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|cache|splat|peer|peer-scalar\n");
+                   "       bench_surface_peers --count SET ours|ours-one-block|cache|splat|peer|peer-scalar\n");
       return 2;
     }
   }

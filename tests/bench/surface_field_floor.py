@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""What any change to the slice splat's field sums alone can win against the dense peer (issue 34).
+
+Issue 34 asks the mesher for at most 0.8x the dense splat + Flying Edges peer's time on every set. On
+the sets where the automatic route sums the field by slice splat (fountain, explosion) the splat is
+one function, `splatSlice`; everything else (block plan, seeding, the sweep, vertices, output) does
+not depend on how the field is summed. Ours without the splat's instructions is therefore a floor for
+any change to the field sums (a value-only splat with exact gradients at crossed edges included),
+reached only by a splat that costs nothing. The table prints that floor against the peer, with the
+automatic block plan and with one block (`ours-one-block`: no second block's margins, which the plan
+takes for two threads' sake).
+
+Each figure is one warm mesh on one thread counted by callgrind between client requests
+(`bench_surface_peers --count SET ROUTE`), split by `callgrind_annotate --inclusive=yes`.
+
+Usage, from the repository root after a Release build with VTK 9 (bench_surface_peers):
+  python3 tests/bench/surface_field_floor.py [--bench build/test/tests/bench/bench_surface_peers]
+"""
+import argparse
+import re
+import subprocess
+import tempfile
+
+SETS = ["fountain", "explosion"]
+TOTAL = re.compile(r"^([0-9,]+) \(100\.0+%\)\s+PROGRAM TOTALS", re.M)
+SPLAT = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*BlockMesher<[^>]*>::splatSlice<(true|false)>")
+
+
+def count(bench, set_name, route, work):
+    out = f"{work}/{set_name}.{route}.callgrind"
+    subprocess.run(["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}", bench,
+                    "--count", set_name, route], check=True, capture_output=True)
+    text = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out], check=True,
+                          capture_output=True, text=True).stdout
+    total = int(TOTAL.search(text).group(1).replace(",", ""))
+    # The function itself, not the lambdas inside it (their lines name it too, and its inclusive count has them).
+    splat = sum(int(m.group(1).replace(",", "")) for line in text.splitlines()
+                if "{lambda" not in line and (m := SPLAT.match(line)))
+    return total, splat
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--bench", default="build/test/tests/bench/bench_surface_peers")
+    args = ap.parse_args()
+    print("| set | blocks | ours Ir | of it, the slice splat | ours without the splat | peer Ir "
+          "| ours / peer | floor: without the splat / peer |")
+    print("|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as work:
+        for set_name in SETS:
+            peer, _ = count(args.bench, set_name, "peer", work)
+            for route, label in (("ours", "automatic plan"), ("ours-one-block", "one block")):
+                total, splat = count(args.bench, set_name, route, work)
+                if splat == 0:
+                    raise SystemExit(f"{set_name} {route}: no splatSlice in the profile (not the slice-splat route?)")
+                print(f"| {set_name} | {label} | {total:,} | {splat:,} | {total - splat:,} | {peer:,} "
+                      f"| {total / peer:.2f} | {(total - splat) / peer:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
