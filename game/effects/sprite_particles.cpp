@@ -84,8 +84,7 @@ class SpriteParticlesEffect final : public EffectOf<SpriteParticles> {
   StepOutcome step(const StepContext& ctx) override {
     if (!state.attached) return {};
     const PhaseScope phase(ctx.profiler, engine::Phase::fluid);
-    stepSpriteParticles(state, fluid_, static_cast<float>(ctx.step_seconds), ctx.links.blasts);
-    return {};
+    return {stepSpriteParticles(state, fluid_, static_cast<float>(ctx.step_seconds), ctx.links.blasts)};
   }
 
   std::string findNonFinite() const override { return findNonFiniteSprite(state); }

@@ -62,7 +62,7 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
     collider.pose = engine::colliderPoseOf(state);  // box centre = centre of mass
     collider.material = coupling.material;
     collider.integrate_pose = true;          // moves with its velocities through the SPH sub-steps
-    collider.surface_pressure_force = true;  // the water's pressure at its faces: it floats at its draft
+    collider.surface_pressure_force = coupling.surface_pressure_force;
     sph.colliders.push_back(collider);
     coupling.coupled.push_back(id);
   }

@@ -71,6 +71,11 @@ struct BodyFluidCoupling {
   std::uint64_t forces_applied = 0;              // body forces handed to Bullet so far
   std::uint64_t clamped = 0;                     // of those, shortened by the cap
   glm::vec3 half_extents{0.0f};                  // of every box (m)
+  // The boxes' force reads the water's pressure at their faces (fluid::SphCollider::
+  // surface_pressure_force, Adami et al. 2012 eq. 27), so they float at their draft; false: the
+  // mirrored boundary pressure of the water's own term, about r too deep (`bench_archimedes
+  // --mirrored` compares the two).
+  bool surface_pressure_force = true;
   std::uint64_t film_points = 0;                 // dry face points in a film that got its pressure, so far
   FilmScratch film_scratch;
 };

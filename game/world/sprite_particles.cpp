@@ -412,8 +412,10 @@ std::size_t emitDiffuseFromSph(const SphFluid& sph, const SpriteParticleParams& 
   return scratch.births.size();
 }
 
-void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts) {
-  if (!s.attached || !s.gpu.ready) return;
+std::string stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt,
+                                std::span<const fluid::Blast> blasts) {
+  if (!s.attached || !s.gpu.ready) return {};
+  std::string failure;
   s.births.clear();
   emitMist(s, dt);
   const std::size_t mist = s.births.size();
@@ -443,7 +445,8 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
       grid.neighbour_scale = s.fluid_grid.neighbour_scale;
       grid.cells = s.fluid_grid.cells;
     }
-    engine::setFluidGrid(s.gpu, grid, error);
+    // A refused grid leaves the last one in place; the world counts the refusal.
+    if (!engine::setFluidGrid(s.gpu, grid, error)) failure = "sprite_particles: " + error;
   }
   const std::size_t before_blasts = s.births.size();
   emitBlastSprites(s, sph, blasts);
@@ -467,6 +470,7 @@ void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std:
   ++s.steps;
   if (s.readback_every > 0 && s.steps % static_cast<std::uint64_t>(s.readback_every) == 0)
     engine::requestReadback(s.gpu);
+  return failure;
 }
 
 std::uint32_t liveSprites(const SpriteParticles& s) {

@@ -155,7 +155,10 @@ void detachSpriteGpu(SpriteParticles& s);
 // work and the frame runs it.
 // `blasts`: this step's explosions (EffectLinks::blasts): each throws debris and smoke sprites at
 // its centre, and every live sprite is pushed by it (fluid/core/blast.hpp, in the update shader).
-void stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt, std::span<const fluid::Blast> blasts = {});
+// Returns what the engine refused (the foam's fluid grid), for the world's run-time failures; empty when
+// all went through.
+std::string stepSpriteParticles(SpriteParticles& s, const SphFluid* sph, float dt,
+                                std::span<const fluid::Blast> blasts = {});
 
 // The GPU half of each step (births, the update pass, read-backs) is recorded by the engine and run
 // by the frame: the effect submits `gpu` to the frame (engine::FrameBatches::sprites), whose sprite

@@ -3,7 +3,9 @@
 // game/world/body_fluid_coupling) at each particle radius given, one table row per crate. The
 // unit test runs the first row set (r = 12.5 mm); finer radii take minutes (8x the particles per
 // halving), so they live here.
-//   bench_archimedes [--radius 0.0125,0.00625]
+// --mirrored: the crates' force from the mirrored boundary pressure (BodyFluidCoupling::
+// surface_pressure_force off), the "mirrored" columns of docs/engine.md's tank table.
+//   bench_archimedes [--radius 0.0125,0.00625] [--mirrored]
 #include "tests/game/archimedes_tank.hpp"
 
 #include <cstdio>
@@ -14,8 +16,11 @@
 
 int main(int argc, char** argv) {
   std::vector<float> radii{0.0125f, 0.00625f};
+  bool mirrored = false;
   for (int a = 1; a < argc; ++a) {
-    if (std::strcmp(argv[a], "--radius") == 0 && a + 1 < argc) {
+    if (std::strcmp(argv[a], "--mirrored") == 0) {
+      mirrored = true;
+    } else if (std::strcmp(argv[a], "--radius") == 0 && a + 1 < argc) {
       radii.clear();
       std::string list = argv[++a];
       for (std::size_t b = 0; b < list.size();) {
@@ -30,7 +35,7 @@ int main(int argc, char** argv) {
         b = e + 1;
       }
     } else {
-      std::fprintf(stderr, "usage: bench_archimedes [--radius r1,r2,...]  (m; default 0.0125,0.00625)\n");
+      std::fprintf(stderr, "usage: bench_archimedes [--radius r1,r2,...] [--mirrored]  (m; default 0.0125,0.00625)\n");
       return 2;
     }
   }
@@ -51,7 +56,7 @@ int main(int argc, char** argv) {
                           {1000.0f, deep, 0.125f, 2.0},
                           {2000.0f, shallow, shallow * d + kBoxHalf, 1.0}};
     for (const Case& c : cases) {
-      const Floating f = floatBox(c.density, c.layers, c.box_y, c.seconds, r);
+      const Floating f = floatBox(c.density, c.layers, c.box_y, c.seconds, r, mirrored);
       if (!f.error.empty()) {
         std::fprintf(stderr, "bench_archimedes: r %.4f, crate %.0f: %s\n", r, c.density, f.error.c_str());
         return 1;

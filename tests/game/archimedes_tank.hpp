@@ -144,13 +144,17 @@ inline bool buildDeepTank(Tank& t, float density, int layers, float box_y, float
 }
 
 // Steps a deep tank `seconds` coupled and measures the last 0.5 s (and extremes over the run).
-inline Floating floatBox(float density, int layers, float box_y, double seconds, float particle_radius = 0.0125f) {
+// `mirrored`: the box's force from the mirrored boundary pressure instead of the pressure at its
+// faces (BodyFluidCoupling::surface_pressure_force off), for the comparison in docs/engine.md.
+inline Floating floatBox(float density, int layers, float box_y, double seconds, float particle_radius = 0.0125f,
+                         bool mirrored = false) {
   Tank t;
   Floating out;
   if (!buildDeepTank(t, density, layers, box_y, particle_radius)) {
     out.error = "tank parameters refused";
     return out;
   }
+  t.coupling.surface_pressure_force = !mirrored;
   const double dt = 1.0 / 60.0;
   const int steps = static_cast<int>(std::lround(seconds / dt)), tail = static_cast<int>(std::lround(0.5 / dt));
   const engine::BodyId bodies[] = {t.box};
