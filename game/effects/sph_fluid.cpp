@@ -111,6 +111,7 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
       if (!pushed.ok() && outcome.failure.empty()) outcome.failure = "sph_fluid: blast refused: " + pushed.error;
       state.blasted_particles += blast_stats.particles;
     }
+    step_seconds_ = ctx.step_seconds;
     if (!stepSphFluid(state, ctx.step_seconds) && was_running)
       outcome.failure = "sph_fluid: " + state.error + " (the fluid stops stepping)";
     if (coupling) coupling_error_ = forcesToBodies(*coupling, state.world, *bodies_->physics);
@@ -218,6 +219,7 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     row.set("water_spray", static_cast<double>(where.spray));
     const fluid::SphStepTotals& t = state.last_totals;
     row.set("sph_steps", static_cast<double>(t.steps));
+    row.set("sph_fast", static_cast<double>(fastParticles()));
     row.set("density_err_mean", t.meanDensityError());
     row.set("density_err_p99", t.p99_density_error);
     row.set("density_err_max", t.max_density_error);
@@ -279,8 +281,23 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
   }
 
  private:
+  // The SPH particles (spray left out: it flies outside the solve) faster than the speed at which
+  // one CFL-bound sub-step spans the whole game step, cfl d / step: each of them alone makes the
+  // solver take more than one sub-step per frame.
+  std::size_t fastParticles() const {
+    const fluid::SphWorld& w = state.world;
+    if (!(step_seconds_ > 0.0)) return 0;
+    const double one_step = w.params.cfl * fluid::sphSpacing(w.params) / step_seconds_;
+    const std::size_t n = std::min(w.particles.sphCount(), w.particles.velocity.size());
+    std::size_t fast = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      fast += static_cast<double>(glm::dot(w.particles.velocity[i], w.particles.velocity[i])) > one_step * one_step;
+    return fast;
+  }
+
   RigidBodies* bodies_;
   FountainGeometry level_;
+  double step_seconds_ = 0.0;  // the last game step's length (s)
   std::string coupling_error_;  // a non-finite force of the last step's coupling
 };
 
@@ -321,6 +338,7 @@ constexpr ColumnSpec kColumns[] = {
     {"water_pump", count, "inside the pump's pipe"},
     {"water_spray", count, "of the water above, flying ballistic (fluid::SphParams::spray_speed)"},
     {"sph_steps", count, "the solver's sub-steps in the frame's game step"},
+    {"sph_fast", count, "SPH particles (not spray) faster than cfl d / game step: each needs a second sub-step"},
     {"density_err_mean", ratio, "mean over the sub-steps of the mean max(0, rho/rho_0 - 1)"},
     {"density_err_p99", ratio, "largest over the sub-steps of the 99th percentile over particles"},
     {"density_err_max", ratio, "largest density error of any particle"},
