@@ -318,6 +318,16 @@ class SoakMonitorOnFountain : public ::testing::Test {
     ASSERT_TRUE(game::loadSpriteColliders(*game::findState<game::SpriteParticles>(world), game::contentDir(), error))
         << error;
   }
+  // A monitor without warm-up or throws that samples memory and gauges after every frame.
+  game::SoakMonitor sampledEveryFrame() const {
+    game::SoakDesc desc;
+    desc.steps = 1000;
+    desc.warmup_fraction = 0.0;
+    desc.min_warmup_seconds = 0.0;
+    desc.memory_every = 1;
+    desc.throws.mean_interval_s = 0.0;
+    return game::makeSoakMonitor(desc, world.step_seconds);
+  }
   game::World world;
   game::SoakMonitor monitor;
 };
@@ -370,13 +380,7 @@ TEST_F(SoakMonitorOnFountain, InsideTwoOverlappingCratesIsSqueezedButInsideOneFr
 
 // The first blast's allocations are warm-up: the memory samples start again at it, once.
 TEST_F(SoakMonitorOnFountain, MemorySamplesStartAgainAtTheFirstBlast) {
-  game::SoakDesc desc;
-  desc.steps = 1000;
-  desc.warmup_fraction = 0.0;
-  desc.min_warmup_seconds = 0.0;
-  desc.memory_every = 1;
-  desc.throws.mean_interval_s = 0.0;
-  game::SoakMonitor m = game::makeSoakMonitor(desc, world.step_seconds);
+  game::SoakMonitor m = sampledEveryFrame();
   ASSERT_NE(world.links.explosives, nullptr);
   ASSERT_EQ(world.links.explosives->detonated, 0u);
   ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
@@ -444,13 +448,7 @@ TEST_F(SoakMonitorOnFountain, AMesherFailureIsCountedTheGameGoesOnAndTheSoakFail
 // The fountain's water circulates through the pump: its effect reports the pool's level as a gauge,
 // and the monitor samples it after warm-up with the memory.
 TEST_F(SoakMonitorOnFountain, TheFountainReportsItsPoolLevelAndTheMonitorSamplesIt) {
-  game::SoakDesc desc;
-  desc.steps = 1000;
-  desc.warmup_fraction = 0.0;
-  desc.min_warmup_seconds = 0.0;
-  desc.memory_every = 1;
-  desc.throws.mean_interval_s = 0.0;
-  game::SoakMonitor m = game::makeSoakMonitor(desc, world.step_seconds);
+  game::SoakMonitor m = sampledEveryFrame();
   for (int i = 0; i < 3; ++i) {
     ASSERT_TRUE(game::soakAfterFrame(m, world)) << m.failure;
     game::stepWorld(world, nullptr);
