@@ -22,6 +22,10 @@ ColliderPose advancedPose(const ColliderPose& pose, float dt) {
 
 namespace {
 
+constexpr int kPasses = 4;  // collision passes per sub-step (resolveCollisions)
+// scratch.pushed bits: moved by a pass of this step (stats.pushed_out), moved by its last pass.
+constexpr std::uint8_t kPushedThisStep = 1, kPushedInLastPass = 2;
+
 // Where a still collider pushes a particle out (outward normal ns, by `need` along it) that a
 // moving collider pushed out earlier in the same step (its face as the plane
 // dot(plane.xyz, x) >= plane.w), the position nearest to p outside both tangent planes: the two
@@ -145,10 +149,11 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
                                s.distance < support && s0.distance < support && glm::dot(s.normal, s0.normal) < 0.0f;
           if (!crossed && (!s.valid || s.distance >= 0.0f)) continue;
           ++acc.count;
-          if (!scratch.pushed[i]) {
-            scratch.pushed[i] = 1;
+          if (!(scratch.pushed[i] & kPushedThisStep)) {
+            scratch.pushed[i] |= kPushedThisStep;
             ++acc.particles;
           }
+          if (pass == kPasses - 1) scratch.pushed[i] |= kPushedInLastPass;
           CollisionResult res;
           // The penetration the reaction resolves: the sample's depth, bounded by the step below, or
           // the step of a held-back particle (resolveCollision).
@@ -220,6 +225,7 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             acc.depth = std::max(acc.depth, -s.distance);
             acc.reaction.force += reaction;
             acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+            if (pass == kPasses - 1) scratch.pushed[i] |= kPushedInLastPass;
             which[still_inside++] = static_cast<std::uint32_t>(i);
           }
           again = still_inside;
@@ -233,6 +239,22 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
         a.reaction.torque += b.reaction.torque;
         return a;
       });
+}
+
+// After passes that did not settle: every particle the last pass still moved takes a free exit of
+// the moving collider it is in, if there is one (escapeSqueeze), keeping the velocity and the
+// reactions the passes gave it. Its samples are then out of date (collide_stale).
+void escapeSqueezes(StepContext& context) {
+  SphScratch& scratch = context.scratch;
+  const std::size_t n = context.count, collider_count = context.collider_count;
+  const float skin =
+      context.params.collision_skin > 0.0f ? context.params.collision_skin : 0.01f * context.params.particle_radius;
+  const std::uint32_t all_colliders = collider_count >= 32 ? ~0u : (1u << collider_count) - 1u;
+  std::vector<glm::vec3>& positions = context.particles.position;
+  forEach(n, [&](std::size_t i) {
+    if ((scratch.pushed[i] & kPushedInLastPass) && escapeSqueeze(context, scratch.carry.pose, skin, positions[i]))
+      scratch.collide_stale[i] = all_colliders;
+  });
 }
 
 }  // namespace
@@ -274,7 +296,8 @@ void resolveCollisions(StepContext& context) {
   }
   scratch.end_samples.resize(collider_count);
   scratch.collide_stale.resize(n);
-  for (int pass = 0; pass < 4 && collider_count > 0; ++pass) {
+  bool settled = true;
+  for (int pass = 0; pass < kPasses && collider_count > 0; ++pass) {
     std::size_t inside_total = 0;
     for (std::size_t k = 0; k < collider_count; ++k) {
       const std::size_t c = scratch.collide_order[k];
@@ -289,7 +312,8 @@ void resolveCollisions(StepContext& context) {
         collider.torque += hits.reaction.torque;
       }
     }
-    if (inside_total == 0) break;
+    settled = inside_total == 0;
+    if (settled) break;
   }
   // What the next step's boundary sampling may reuse (SphScratch::SampleCarry): end_samples[c]
   // where collide_stale bit c is clear were queried at the particle's final position, except for
@@ -305,6 +329,29 @@ void resolveCollisions(StepContext& context) {
     const bool skipped_far = !sphColliderMoves(collider) && collider.lipschitz_distance;
     carry.usable[c] = collider_count <= 32 && !skipped_far ? 1 : 0;
   }
+  if (!settled) escapeSqueezes(context);
+}
+
+bool escapeSqueeze(const StepContext& context, const std::vector<ColliderPose>& poses, float skin, glm::vec3& x) {
+  const SphScratch& scratch = context.scratch;
+  const std::size_t colliders = context.collider_count;
+  for (std::size_t slot = 0; slot < colliders; ++slot) {
+    const std::size_t c = scratch.collide_order[slot];
+    const SphCollider& collider = context.world.colliders[c];
+    if (!sphColliderMoves(collider)) continue;
+    const ColliderSample inside = ColliderQuery(collider, poses[c]).at(x);
+    if (!inside.valid || inside.distance >= 0.0f) continue;
+    const glm::vec3 exit = x + inside.normal * (skin - inside.distance);
+    bool free = true;
+    for (std::size_t o = 0; o < colliders && free; ++o) {
+      const ColliderSample s = ColliderQuery(context.world.colliders[o], poses[o]).at(exit);
+      free = !s.valid || s.distance >= 0.0f;
+    }
+    if (!free) continue;
+    x = exit;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace fluid::sph_step

@@ -52,35 +52,6 @@ std::uint32_t countCalmSphNeighbours(const StepContext& context, glm::vec3 p, in
 
 constexpr int kCollisionPasses = 4;  // per sub-step, as the water's (resolveCollisions)
 
-// A drop still moved by the last collision pass is caught between faces whose pushes undo each
-// other: a crate's side pressed against the basin rim, each projection along the face it met
-// handing the drop back to the other. The moving collider's nearest exit at the drop's position
-// (a face the passes did not follow, such as the crate's bottom near its edge) can still be free:
-// the drop takes the first such exit that lies outside every collider, keeping the velocity (and
-// the reactions) the passes gave it. Otherwise it stays where the still collider put it (still
-// colliders win).
-void escapeSqueeze(const StepContext& context, const std::vector<ColliderPose>& poses, float skin, glm::vec3& x) {
-  const SphScratch& scratch = context.scratch;
-  const std::size_t colliders = context.collider_count;
-  for (std::size_t slot = 0; slot < colliders; ++slot) {
-    const std::size_t c = scratch.collide_order[slot];
-    const SphCollider& collider = context.world.colliders[c];
-    if (!sphColliderMoves(collider)) continue;
-    const ColliderQuery query(collider, poses[c]);
-    const ColliderSample inside = query.at(x);
-    if (!inside.valid || inside.distance >= 0.0f) continue;
-    const glm::vec3 exit = x + inside.normal * (skin - inside.distance);
-    bool free = true;
-    for (std::size_t o = 0; o < colliders && free; ++o) {
-      const ColliderSample s = ColliderQuery(context.world.colliders[o], poses[o]).at(exit);
-      free = !s.valid || s.distance >= 0.0f;
-    }
-    if (!free) continue;
-    x = exit;
-    return;
-  }
-}
-
 }  // namespace
 
 bool applySprayTransitions(SphWorld& world, SphStepStats& stats) {
