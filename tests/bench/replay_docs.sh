@@ -104,4 +104,6 @@ PY
   echo
   cat "$tmp/measured.md"
 } > "$OUT"
+# The columns block from the effects' own lists, whatever the head's copy says.
+"$PYTHON" scripts/generated_docs.py "$EXE"
 echo "wrote $OUT"
