@@ -28,6 +28,15 @@ struct Squeeze {
   std::size_t floor = 0, box = 0;
 };
 
+// A still floor at y = 0 (an exact distance: 1-Lipschitz).
+SphCollider stillFloor() {
+  SphCollider floor;
+  floor.shape = std::make_shared<PlaneShape>(glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
+  floor.integrate_pose = false;
+  floor.lipschitz_distance = true;
+  return floor;
+}
+
 // One particle 2 mm above a floor (y = 0), a 0.6 m box whose bottom face is 4 mm above it and
 // moves down at 10 m/s: within a step of 1 ms (asked for; the solver's own bounds are longer) the
 // box bottom passes 6 mm below the floor. `box_first` puts the box before the floor in the
@@ -36,10 +45,7 @@ Squeeze makeSqueeze(bool box_first) {
   Squeeze s;
   SphWorld& w = s.world;
   w.params.solver = SphSolverKind::dfsph;
-  SphCollider floor;
-  floor.shape = std::make_shared<PlaneShape>(glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
-  floor.integrate_pose = false;
-  floor.lipschitz_distance = true;
+  SphCollider floor = stillFloor();
   SphCollider box;
   box.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
   box.pose.translation = glm::vec3(0.0f, 0.304f, 0.0f);
@@ -262,10 +268,7 @@ TEST(SphCollisions, WaterSqueezedBetweenACrateAndAWallLeavesByAFreeExit) {
   w.params.max_time_step = 0.004f;
   w.params.domain_min = glm::vec3(-3.0f);
   w.params.domain_max = glm::vec3(3.0f);
-  SphCollider floor;
-  floor.shape = std::make_shared<PlaneShape>(glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
-  floor.integrate_pose = false;
-  floor.lipschitz_distance = true;
+  SphCollider floor = stillFloor();
   SphCollider crate;
   crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
   crate.pose.rotation = glm::angleAxis(0.03f, glm::vec3(0.0f, 0.0f, 1.0f));
