@@ -13,12 +13,6 @@
 namespace game {
 namespace {
 
-std::uint64_t medianOf(std::span<const std::uint64_t> values) {
-  std::vector<std::uint64_t> sorted(values.begin(), values.end());
-  std::sort(sorted.begin(), sorted.end());
-  return sorted[sorted.size() / 2];
-}
-
 std::string mebibytes(std::uint64_t bytes) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));

@@ -39,13 +39,6 @@ bool throwAt(World& world, const PlayerThrow& t) {
   return explosive;
 }
 
-// Median of a copy (the samples keep their order).
-double medianOf(std::span<const double> values) {
-  std::vector<double> sorted(values.begin(), values.end());
-  std::sort(sorted.begin(), sorted.end());
-  return sorted[sorted.size() / 2];
-}
-
 // Each gauge's drift so far: the medians of the first and last thirds of its samples, as the
 // memory's trend (fewer than 3 samples: none yet).
 std::vector<SoakStats::GaugeDrift> gaugeDrifts(const SoakMonitor& m) {
