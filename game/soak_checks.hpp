@@ -37,6 +37,15 @@ std::uint64_t heapInUseBytes();
 // of MiB that start-up freed but the heap kept resident, and stays invisible until they are used up.
 void releaseFreeMemory();
 
+// The upper median of a copy of `values` (non-empty; the samples keep their order): the memory
+// trend's and the gauges' thirds (checkMemoryGrowth below, gaugeDrifts in game/soak_monitor.cpp).
+template <class T>
+T medianOf(std::span<const T> values) {
+  std::vector<T> sorted(values.begin(), values.end());
+  std::sort(sorted.begin(), sorted.end());
+  return sorted[sorted.size() / 2];
+}
+
 // Bound on the growth of the resident set after warm-up (sampled after releaseFreeMemory). A soak
 // fails when it grows by more than max(min_growth_bytes, max_growth_fraction * level), level being
 // the median of the first third of the samples. Why this bound: without a leak the sampled RSS
@@ -47,15 +56,6 @@ void releaseFreeMemory();
 // L x 0.53 x steps (after a 20 % warm-up the thirds' medians are 0.53 of the run apart) and the
 // last sample by L x 0.67 x steps, so the 3,600-step ctest run catches about 3.5 KiB/step and up,
 // the 216,000-step nightly run about 60 B/step (8 MiB over 144,000 steps).
-// The upper median of a copy of `values` (non-empty; the samples keep their order): the memory
-// trend's and the gauges' thirds (game/soak_monitor.hpp).
-template <class T>
-T medianOf(std::span<const T> values) {
-  std::vector<T> sorted(values.begin(), values.end());
-  std::sort(sorted.begin(), sorted.end());
-  return sorted[sorted.size() / 2];
-}
-
 struct MemoryGrowthDesc {
   std::uint64_t min_growth_bytes = 8ull << 20;  // 8 MiB
   double max_growth_fraction = 0.05;
