@@ -277,7 +277,7 @@ void sampleBoundary(StepContext& context) {
   }
   const std::uint32_t reuse = carriedColliders(world);
   const SphScratch::SampleCarry& carry = scratch.carry;
-  context.collider_speed = reduceChunks(
+  context.wall_approach_speed = reduceChunks(
       n, 0.0f,
       [&](std::size_t b, std::size_t e, float& acc) {
         std::uint32_t which[kGrain];
@@ -337,12 +337,14 @@ void sampleBoundary(StepContext& context) {
               gradient += grad;
               if (moving) flux += glm::dot(colliderVelocityAt(collider.pose, positions[i]), grad);
             }
-            // Fastest collider material that could reach a particle within one maximal step: the
-            // step is limited so a moving wall advances at most cfl * d per step and cannot jump
-            // over a particle.
+            // Fastest approach of collider material that could reach a particle within one maximal
+            // step: the step is limited so a moving wall advances at most half a spacing towards a
+            // particle per step and cannot jump over it (chooseTimeStep). Only the velocity along
+            // the wall's outward normal closes on the particle: a charge spinning, or a crate
+            // sliding past, moves its surface along itself.
             if (moving && sample.valid) {
-              const float speed = glm::length(colliderVelocityAt(collider.pose, positions[i]));
-              if (sample.distance < support + speed * max_time_step) acc = std::max(acc, speed);
+              const float approach = glm::dot(colliderVelocityAt(collider.pose, positions[i]), sample.normal);
+              if (approach > 0.0f && sample.distance < support + approach * max_time_step) acc = std::max(acc, approach);
             }
           }
           scratch.boundary_gradient[i] = gradient;

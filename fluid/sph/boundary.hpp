@@ -157,7 +157,7 @@ struct ColliderQuery {
 
 // Collider samples at the step-start positions; per particle the boundary volume, its gradient
 // (and each collider's share of it), its flux (wall velocity . grad V) and prod_c (1 - V_c); sets
-// context.collider_speed.
+// context.wall_approach_speed.
 void sampleBoundary(StepContext& context);
 
 // surface_pressure_force: the pair's pressure terms (p_i + p_b) / rho_i^2 take

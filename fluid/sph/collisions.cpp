@@ -241,6 +241,50 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
       });
 }
 
+// SphParams::speculative_contacts, before the passes: against each collider (moving ones first),
+// a particle that started the step outside it, d0 from its surface along the step-start sample's
+// normal n, and approaches it at a = -(v - v_c) . n (v_c the collider's velocity there) loses the
+// part of the approach that would take it nearer than the standoff s within the step:
+// excess = a dt - max(d0 - s, 0), removed from the velocity (excess / dt along n) and from the
+// advected position (excess along n). Only approach is removed, never added: a particle already
+// nearer than s keeps its velocity where it does not approach. The collider takes the reaction.
+void speculativeContacts(StepContext& context) {
+  SphScratch& scratch = context.scratch;
+  std::vector<glm::vec3>& positions = context.particles.position;
+  std::vector<glm::vec3>& velocities = context.particles.velocity;
+  const std::size_t n = context.count;
+  const float dt = context.dt, mass = context.mass, support = context.support;
+  const float standoff = context.params.contact_standoff * context.params.particle_radius;
+  for (std::size_t k = 0; k < context.collider_count; ++k) {
+    const std::size_t c = scratch.collide_order[k];
+    SphCollider& collider = context.world.colliders[c];
+    const std::vector<ColliderSample>& start_samples = scratch.start_samples[c];
+    const ForceTorque sum = reduce(
+        n, ForceTorque{},
+        [&](std::size_t i, ForceTorque& acc) {
+          const ColliderSample& s0 = start_samples[i];
+          if (!s0.valid || s0.distance < 0.0f || s0.distance > support) return;
+          const glm::vec3 vc = colliderVelocityAt(collider.pose, scratch.old_position[i]);
+          const float approach = -glm::dot(velocities[i] - vc, s0.normal);
+          const float excess = approach * dt - std::max(s0.distance - standoff, 0.0f);
+          if (!(approach > 0.0f) || !(excess > 0.0f)) return;
+          const glm::vec3 change = s0.normal * (excess / dt);
+          velocities[i] += change;
+          positions[i] += s0.normal * excess;
+          const glm::vec3 reaction = -mass * change / dt;  // on the collider
+          acc.force += reaction;
+          acc.torque += glm::cross(positions[i] - collider.pose.translation, reaction);
+        },
+        [](ForceTorque a, const ForceTorque& b) {
+          a.force += b.force;
+          a.torque += b.torque;
+          return a;
+        });
+    collider.force += sum.force;
+    collider.torque += sum.torque;
+  }
+}
+
 // After passes that did not settle: every particle the last pass still moved takes a free exit of
 // the moving collider it is in, if there is one (escapeSqueeze), keeping the velocity and the
 // reactions the passes gave it. Its samples are then out of date (collide_stale).
@@ -294,6 +338,7 @@ void resolveCollisions(StepContext& context) {
         if (sphColliderMoves(context.world.colliders[c]) == moving_first)
           scratch.collide_order[k++] = static_cast<std::uint32_t>(c);
   }
+  if (context.params.speculative_contacts) speculativeContacts(context);
   scratch.end_samples.resize(collider_count);
   scratch.collide_stale.resize(n);
   bool settled = true;

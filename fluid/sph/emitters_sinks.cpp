@@ -4,6 +4,9 @@
 
 #include "fluid/sph/boundary.hpp"
 
+#include <glm/gtc/constants.hpp>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -232,6 +235,23 @@ bool crowded(std::span<const glm::vec3> crowd, glm::vec3 p, float room2) {
   return false;
 }
 
+// `dir` (unit) tilted by an angle in [0, spread] within the cone around it, uniform over the cone's
+// solid angle, at an azimuth, both from a hash of `id` (SphEmitter::spread).
+glm::vec3 scatteredDirection(glm::vec3 dir, float spread, std::uint32_t id) {
+  if (!(spread > 0.0f)) return dir;
+  std::uint64_t z = static_cast<std::uint64_t>(id) + 0x9e3779b97f4a7c15ull;  // splitmix64
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  const float u1 = static_cast<float>(z >> 40) / 16777216.0f, u2 = static_cast<float>(z & 0xffffffu) / 16777216.0f;
+  const float cos_tilt = 1.0f - u1 * (1.0f - std::cos(std::min(spread, glm::half_pi<float>())));
+  const float sin_tilt = std::sqrt(std::max(0.0f, 1.0f - cos_tilt * cos_tilt));
+  const glm::vec3 helper = std::fabs(dir.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
+  const glm::vec3 e1 = glm::normalize(glm::cross(helper, dir)), e2 = glm::cross(dir, e1);
+  const float azimuth = glm::two_pi<float>() * u2;
+  return cos_tilt * dir + sin_tilt * (std::cos(azimuth) * e1 + std::sin(azimuth) * e2);
+}
+
 }  // namespace
 
 std::size_t applyEmitters(SphWorld& world) {
@@ -295,13 +315,14 @@ std::size_t applyEmitters(SphWorld& world) {
         if (world.pump.feeds_emitters) {
           SphPump& pump = world.pump;
           if (pump.size() == 0 || pump.held[pump.head].ready_time > world.time) return;  // the pipe is empty
-          if (!addSphParticleWithId(world, pump.held[pump.head].id, p, dir * e.speed)) return;
+          const std::uint32_t id = pump.held[pump.head].id;
+          if (!addSphParticleWithId(world, id, p, scatteredDirection(dir, e.spread, id) * e.speed)) return;
           ++pump.head;
           if (pump.head * 2 >= pump.held.size()) {  // drop the given-back front (amortised, no allocation)
             pump.held.erase(pump.held.begin(), pump.held.begin() + static_cast<std::ptrdiff_t>(pump.head));
             pump.head = 0;
           }
-        } else if (!addSphParticle(world, p, dir * e.speed)) {
+        } else if (!addSphParticle(world, p, scatteredDirection(dir, e.spread, world.next_id) * e.speed)) {
           return;
         }
         ++emitted;

@@ -68,18 +68,24 @@ struct SphParams {
 
   // Spray (after Ihmsen et al. 2012, "Unified spray, foam and bubbles for particle-based fluids",
   // §4: a particle with fewer than 6 fluid neighbours is spray, advected with gravity and drag
-  // and no pressure). Here the neighbours that count are the calm ones (no faster than
-  // spray_speed): a particle faster than spray_speed with fewer than spray_neighbours calm
-  // neighbours in the last step has left the water, alone or in a sheet or lump thrown with it,
-  // and flies ballistic outside the SPH solve (gravity, quadratic air drag, the colliders' Kolb
-  // 2004 §3.3.2 reaction); it rejoins once it is among spray_neighbours calm SPH particles, or
-  // touches a collider no faster than spray_speed. The SPH's CFL step is then set by the bulk of
-  // the water, not by the fastest drop of a blast. Ids and mass are kept; the spray stays in the
-  // store (its last ParticleStore::spray_count entries).
+  // and no pressure). Here speed alone decides who leaves: an SPH particle faster than
+  // spray_speed leaves the solve, so the SPH's CFL step (dt <= cfl d / v_max) follows the bulk of
+  // the water, never a few fast particles (the jet, a blast's drops, a splash). Outside the water
+  // a drop flies ballistic (gravity, quadratic air drag, the colliders' Kolb 2004 §3.3.2
+  // reaction); inside it, it is a submerged drop: buoyant, and slowed by the water's drag
+  // (spray_water_drag), whose momentum the water takes. A drop no faster than spray_speed rejoins
+  // once it is among spray_neighbours calm SPH particles, or touches a collider, as long as the
+  // density it would have as water stays under (1 + kSprayRejoinCrowd) rho_0 (the drops let in
+  // before it counted): bunched drops rejoin one after the other, not in one step that starts at
+  // twice the rest density. Ids and mass are kept; the spray stays in the store (its last
+  // ParticleStore::spray_count entries).
   float spray_speed = 0.0f;  // m/s; 0 = off (every particle stays in the SPH solve)
   int spray_neighbours = 6;  // >= 1
-  // Speed at which the drag balances gravity (drag acceleration |g| |v| v / v_t^2, opposite v);
-  // 0 = no drag. A blast tears water into drops of millimetres, whose terminal speed is 6-9 m/s.
+  // Drag coefficient C_d of a submerged drop moving at u relative to the water around it:
+  // F = 1/2 rho_0 C_d pi r^2 |u| u on a particle of mass rho_0 (2r)^3, scaled by the water's
+  // share phi = min(rho_water / rho_0, 1) at the drop. 2 (a bluff body's) stops a 5 m/s drop
+  // within a frame. 0 = none (the drop passes through the water).
+  float spray_water_drag = 2.0f;
   float spray_terminal_speed = 0.0f;
 
   // WCSPH (Becker & Teschner 2007)
@@ -115,6 +121,15 @@ struct SphParams {
   glm::vec3 domain_min{-1e30f};
   glm::vec3 domain_max{1e30f};
   float collision_skin = 0.0f;  // m pushed beyond a collider surface; 0 = 0.01 r
+  // Speculative contacts (as rigid-body engines use them: a contact is applied before the bodies
+  // touch, only to the part of the approach that would close the gap within the step). At a long
+  // step water meets a wall at metres per second and travels further than its radius in one step,
+  // so the end-of-step push-out (Kolb et al. 2004 §3.3.2) fixes it only after it went that deep.
+  // With this on, before the push-out, a particle loses the part of its approach to each collider
+  // (along the step-start sample's normal, relative to the collider's velocity there) that would
+  // bring it nearer than contact_standoff x particle_radius; the collider takes the reaction.
+  bool speculative_contacts = false;
+  float contact_standoff = 0.5f;  // x particle_radius, in [0, 4]
 };
 
 // SoA particle store. Index order may change at every step (particles are re-sorted by grid cell
@@ -189,6 +204,10 @@ struct SphEmitter {
       1000.0f;  // particles per second >= 0; clamped to speed * (particles per layer) / d so layers never overlap
   float start_time = 0.0f;
   float end_time = 1e30f;
+  // Half-angle (radians, in [0, pi/2]) of the cone each particle's direction is scattered in, by
+  // a hash of its id (the same for any thread count): a jet that breaks into drops fans out
+  // instead of falling back on its own nozzle as one column. 0 = every particle along direction.
+  float spread = 0.0f;
   double accumulator = 0.0;  // internal: seconds since the last layer
 };
 
@@ -247,6 +266,9 @@ struct SphStepStats {
   std::size_t spray = 0;         // particles flying ballistic after the step (SphParams::spray_speed)
   std::size_t spray_left = 0;    // particles that left the SPH solve as spray at the step's start
   std::size_t spray_joined = 0;  // spray that rejoined the SPH solve at the step's start
+  // Slow drops among water kept out of it at the step's end because they would have crowded it
+  // (SphParams::spray_speed): they try again the next step.
+  std::size_t rejoins_crowded = 0;
   std::size_t collisions = 0;          // particle-collider reactions (Kolb 2004 §3.3.2) in this step, every pass
   bool dt_limited_by_request = false;  // the caller's max_dt was the binding bound
   // Health counters (they observe the step, never change it). The overlay, the replay CSV and
@@ -339,12 +361,17 @@ struct SphScratch {
   std::vector<std::uint32_t> u32_tmp;
   std::vector<std::uint32_t> sorted_keys;     // the grid's cell keys in re-sorted order (swapped into the grid)
   std::vector<std::uint32_t> keep;            // per particle: 0 when inside a sink at the start of the step
-  // Per particle, from the end of the last step (SphParams::spray_speed): a fast SPH particle's
-  // count of calm neighbours in that step, a spray particle's count of calm SPH particles within H
-  // of its end position (kJoinNeighbours: it touched a collider slowly); kUnknownNeighbours for
-  // slow SPH particles and those added since. The spray transitions read it.
+  // Per particle, from the end of the last step (SphParams::spray_speed): kJoinNeighbours for a
+  // drop that rejoins the water at the next step's start, kUnknownNeighbours for SPH particles and
+  // those added since, a count below spray_neighbours for a drop that stays spray. The spray
+  // transitions read it.
   static constexpr std::uint32_t kUnknownNeighbours = ~0u, kJoinNeighbours = ~0u - 1u;
   std::vector<std::uint32_t> last_neighbours;
+  std::vector<float> spray_water_density;     // advanceSpray: per drop, the SPH water's density at its end (kg/m^3)
+  std::vector<glm::vec3> rejoined;            // advanceSpray: the drops let back in this step, in order
+  std::vector<float> spray_water_share;       // advanceSpray: per drop, the water's share phi around it
+  std::vector<std::uint32_t> spray_near;      // advanceSpray: one drop's SPH neighbours
+  std::vector<float> spray_near_weight;       // advanceSpray: their kernel weights
   std::vector<std::uint32_t> spray_order;     // the spray transitions' permutation (new index -> old)
   std::vector<glm::vec3> emitter_crowd;       // applyEmitters: the particles near the layer being placed
   std::vector<float> emitter_crowd_density;   // applyEmitters: their SPH density (kg/m^3) with the layer so far

@@ -31,7 +31,8 @@ SphStatus validateStepInput(const SphWorld& world) {
   for (std::size_t e = 0; e < world.emitters.size(); ++e) {
     const SphEmitter& emitter = world.emitters[e];
     if (!isFinite(emitter.position) || !isFinite(emitter.direction) || !std::isfinite(emitter.speed) ||
-        !std::isfinite(emitter.radius) || !std::isfinite(emitter.rate) || std::isnan(emitter.start_time) ||
+        !std::isfinite(emitter.radius) || !std::isfinite(emitter.rate) || !std::isfinite(emitter.spread) ||
+        std::isnan(emitter.start_time) ||
         std::isnan(emitter.end_time))
       return {"sph emitter " + std::to_string(e) + " has a non-finite field; step refused"};
   }

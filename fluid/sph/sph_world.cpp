@@ -75,6 +75,8 @@ SphStatus validateSphParams(const SphParams& p) {
       {"collision_skin", p.collision_skin, 0.0f, 10.0f, "0 .. 10 m"},
       {"spray_speed", p.spray_speed, 0.0f, 1e6f, "0 (off) .. 1e6 m/s"},
       {"spray_terminal_speed", p.spray_terminal_speed, 0.0f, 1e6f, "0 (no drag) .. 1e6 m/s"},
+      {"contact_standoff", p.contact_standoff, 0.0f, 4.0f, "0 .. 4 (x particle_radius)"},
+      {"spray_water_drag", p.spray_water_drag, 0.0f, 1e3f, "0 (none) .. 1000"},
       {"spray_neighbours", static_cast<float>(p.spray_neighbours), 1.0f, 1000.0f, "1 .. 1000"},
       {"warm_start_share", p.warm_start_share, 0.0f, 1.0f, "0 .. 1"},
   };

@@ -10,20 +10,22 @@
 
 namespace fluid::sph_step {
 
-// At the step's start, after the sinks and emitters: an SPH particle that had fewer than
-// spray_neighbours calm neighbours (no faster than spray_speed) in the last step and is faster
-// than spray_speed now becomes spray; spray that ended the last step among spray_neighbours calm
-// SPH particles, or touched a collider no faster than spray_speed, rejoins (all of it when spray
-// is off). A
-// stable partition of every per-particle array: the SPH water first, the spray last, each in its
+// At the step's start, after the sinks and emitters: an SPH particle faster than spray_speed
+// becomes spray if it had fewer than spray_neighbours calm neighbours (no faster than
+// spray_speed) in the last step, or is faster than a full step's CFL speed (cfl d /
+// max_time_step) whatever its neighbours; spray that the last step's advanceSpray let back in rejoins (all of it when
+// spray is off). A stable partition of every per-particle array: the SPH water first, the spray last, each in its
 // old order, so the result is the same for any thread count. Counts the moves in `stats`; returns
 // whether any particle moved.
 bool applySprayTransitions(SphWorld& world, SphStepStats& stats);
 
-// After the SPH collisions: moves the spray dt ballistic (gravity and quadratic drag, in sub-steps
-// of at most half a spacing), with the Kolb et al. 2004 §3.3.2 reaction against every collider at
-// its end-of-step pose (the reactions add to the colliders' force and torque, like the water's),
-// then counts each drop's calm SPH neighbours at the end positions for the next step's transitions.
+// After the SPH collisions: slows the drops inside the water by its drag (the water takes the
+// momentum; SphParams::spray_water_drag), moves the spray dt ballistic (gravity less the water's
+// buoyancy, quadratic air drag, in sub-steps of at most half a spacing) with the Kolb et al. 2004
+// §3.3.2 reaction against every collider at its end-of-step pose (the reactions add to the
+// colliders' force and torque, like the water's), then picks the drops that rejoin at the next
+// step's start: slow, on a collider or among calm water, and not crowding it (counted in
+// SphStepStats::rejoins_crowded when they must wait).
 // Writes old_position for the spray (sphPositionsAt) and zero density and pressure.
 void advanceSpray(StepContext& context);
 

@@ -108,9 +108,9 @@ struct StepContext {
   const std::uint32_t* verlet_candidates = nullptr;
   const std::uint32_t* candidate_end = nullptr;
   bool filter_verlet = false;  // WCSPH: the density pass filters the Verlet list to |x_ij| < H
-  // Boundary sampling (boundary.cpp): fastest collider material that could reach a particle
-  // within one maximal step.
-  float collider_speed = 0.0f;
+  // Boundary sampling (boundary.cpp): the fastest approach (collider velocity along its outward
+  // normal) of collider material that could reach a particle within one maximal step.
+  float wall_approach_speed = 0.0f;
   // Solver (wcsph.cpp / dfsph.cpp) outputs.
   float dt = 0.0f;
   bool dt_held_at_min = false;  // chooseTimeStep raised dt to min_time_step

@@ -12,8 +12,12 @@ float chooseTimeStep(const StepContext& context, float max_speed, float max_acce
   const float d = context.spacing;
   const float max_dt = context.max_dt;
   float t = max_dt;
-  const float v = std::max(max_speed, context.collider_speed);
-  if (v > 0.0f) t = std::min(t, params.cfl * d / v);
+  if (max_speed > 0.0f) t = std::min(t, params.cfl * d / max_speed);
+  // A wall closing on the water advances at most half a spacing per step (at most cfl d): the
+  // end-of-step push-out and the speculative contacts follow each particle's nearest face, which a
+  // crate's edge sweeping past further does not stay.
+  if (context.wall_approach_speed > 0.0f)
+    t = std::min(t, std::min(params.cfl, 0.5f) * d / context.wall_approach_speed);
   // Force condition: a step may compress the fluid by at most ~0.1 % of d (at cfl = 0.4) from the
   // non-pressure acceleration alone (|a| dt^2 <= 0.0025 cfl d). The pressure solvers stop at a
   // mean density error tolerance, so a larger per-step compression (a resting column under

@@ -4,8 +4,8 @@
 
 namespace fluid::sph_step {
 
-// The step length for a fastest particle speed `max_speed` (m/s; colliders' speeds near the fluid
-// are added from context.collider_speed) and the largest total acceleration `max_acceleration`
+// The step length for a fastest particle speed `max_speed` (m/s; the colliders' approach near the
+// fluid is bounded from context.wall_approach_speed) and the largest total acceleration `max_acceleration`
 // (m/s^2, read only with wcsph_bounds): the minimum of context.max_dt, the CFL condition, the
 // force condition, the viscosity condition and (wcsph_bounds) Becker & Teschner 2007 §4; never
 // below min_time_step unless the caller asked for less. `spread`: stepSphWithin's equal split of

@@ -41,10 +41,15 @@ const ParamTable<SphFluidParams>& table() {
                             "gives the same particles back; false = the nozzle makes water")),
       param<&P::pump_delay>("pump_delay", 0.0, 10.0, "seconds a particle spends in the pump's pipe"),
       param<&P::spray_speed>("spray_speed", 0.0, 1000.0,
-                             "water faster than this (m/s) with fewer than 6 calm neighbours flies ballistic outside "
-                             "the SPH solve until it lands among water (Ihmsen et al. 2012 spray); 0 = off"),
+                             "water faster than this (m/s) with few calm neighbours, or faster than cfl 2r / "
+                             "max_time_step, flies ballistic outside the SPH solve, slowed by the water where it is "
+                             "in it, until it rejoins slow among water (Ihmsen et al. 2012 spray); 0 = off"),
       param<&P::spray_terminal_speed>("spray_terminal_speed", 0.0, 1000.0,
                                       "the spray's air drag as the speed at which it balances gravity (m/s); 0 = none"),
+      param<&P::speculative_contacts>(
+          "speculative_contacts",
+          "before the push-out, water loses the approach that would take it within half a radius of a collider in "
+          "the step (fluid::SphParams::speculative_contacts); false = the push-out alone"),
       param<&P::cfl>("cfl", 0.05, 1.0, "CFL number: a step moves no particle more than cfl * 2r"),
       param<&P::max_time_step>("max_time_step", 0.0005, 0.05, "upper bound of one adaptive SPH step (s)"),
       param<&P::density_error>("density_error", 0.00001, 0.05,

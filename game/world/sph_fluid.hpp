@@ -31,11 +31,15 @@ struct SphFluidParams {
   float viscosity = 0.02f;        // m^2/s (SphParams::viscosity)
   bool pump = true;         // circulate the water (intake, gutter, nozzle); fixed at construction
   float pump_delay = 0.5f;  // s a particle spends in the pump's pipe
-  // Spray (fluid::SphParams::spray_speed): water faster than this with few calm neighbours flies
-  // ballistic outside the SPH solve until it lands among water; 0 = off. Above the jet's speed, so
-  // the jet stays water.
+  // Spray (fluid::SphParams::spray_speed): water faster than this with few calm neighbours, or
+  // faster than a full step's CFL speed (cfl 2r / max_time_step) whatever its neighbours, flies
+  // ballistic outside the SPH solve (slowed by the water where it is in it) until it rejoins, slow,
+  // among water; 0 = off. The fountain's scene lowers it under its one-step CFL speed.
   float spray_speed = 6.0f;            // m/s
   float spray_terminal_speed = 8.0f;   // m/s: the drops' air drag (millimetre drops fall at 6-9 m/s)
+  // fluid::SphParams::speculative_contacts: at one 1/60 s step water meets the walls at metres per
+  // second; without them it goes that deep before the push-out.
+  bool speculative_contacts = true;
   // Solver quality knobs (fluid::SphParams): accuracy against time, see docs/sph.md.
   float cfl = 0.4f;
   float max_time_step = 0.005f;   // s

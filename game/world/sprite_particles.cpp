@@ -327,7 +327,8 @@ std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& p,
   // Subset used here: I_k with the specific energy ½|v|² (so the thresholds do not depend on the
   // particle size), and instead of the wave-crest potential I_wc (curvature from colour-field
   // normals, which needs a neighbour pass) a free-surface indicator I_s = 1 when ρ_i/ρ0 ≤
-  // spray_surface_density (a particle missing neighbours sits at the surface), else 0; the
+  // spray_surface_density (a particle missing neighbours sits at the surface) or the particle is
+  // one of the SPH's ballistic drops, else 0; the
   // trapped-air term is left out. n_d = I_k · k · I_s · Δt, the fractions carried over in `debt`.
   const fluid::SphWorld& w = sph.world;
   const fluid::ParticleStore& store = w.particles;
@@ -342,8 +343,11 @@ std::size_t emitSprayFromSph(const SphFluid& sph, const SpriteParticleParams& p,
   for (std::size_t i = 0; i < n && added < cap; ++i) {
     const glm::vec3 v = store.velocity[i], x = store.position[i];
     if (!fluid::isFinite(v) || !fluid::isFinite(x)) continue;
+    // The SPH's ballistic drops (fluid::SphParams::spray_speed: the jet, a blast's spray) have left
+    // the water and carry no density: I_s = 1.
+    const bool drop = i >= store.sphCount();
     const float density = i < store.density.size() ? store.density[i] : rest;
-    if (!(density > 0.0f) || density / rest > p.spray_surface_density) continue;
+    if (!drop && (!(density > 0.0f) || density / rest > p.spray_surface_density)) continue;
     const float energy = 0.5f * glm::dot(v, v);
     const float ik = clampPotential(energy, p.spray_energy_min, p.spray_energy_max);
     if (ik <= 0.0f) continue;

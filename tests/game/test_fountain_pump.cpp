@@ -212,8 +212,11 @@ TEST(FountainPump, ThePoolThrownOutReturnsThroughTheGutterAndThePump) {
   Watch back;
   stepAndWatch(f, 6.0, back);
   const game::WaterWhereabouts later = game::waterWhereabouts(f, g);
-  std::printf("[ metric ] pool %zu at load, %zu after the blasts (pump %zu), %zu six seconds later (pump %zu)\n", pool0,
-              after.pool, after.pump, later.pool, later.pump);
+  std::printf(
+      "[ metric ] pool %zu at load, %zu after the blasts (pump %zu, jet and air %zu, ground %zu), %zu six seconds "
+      "later (pump %zu, jet and air %zu, ground %zu, spray %zu)\n",
+      pool0, after.pool, after.pump, after.jet_and_air, after.ground, later.pool, later.pump, later.jet_and_air,
+      later.ground, later.spray);
   EXPECT_LT(after.pool + 1000, pool0);           // the blasts threw a good part of it out
   EXPECT_GT(after.pump, f.world.pump.capacity);  // the gutter took it past the intake's share
   EXPECT_GT(later.pool, after.pool + 500);       // and the jet brought it back (a few hundred a second)

@@ -291,4 +291,67 @@ TEST(SphCollisions, WaterSqueezedBetweenACrateAndAWallLeavesByAFreeExit) {
   EXPECT_GE(distanceTo(w.colliders[2], x), 0.0f) << "and the wall";
 }
 
+// SphParams::speculative_contacts: one particle (r = 4 cm) 5 cm above a still floor falling at
+// 4 m/s, one step of 1/60 s (67 mm of travel). Without them it ends 17 mm inside the floor and the
+// push-out lifts it; with them it ends half a radius off the floor, having lost only the approach
+// that would have taken it nearer, and nothing is pushed out.
+TEST(SphCollisions, ASpeculativeContactStopsFastWaterHalfARadiusOffAStillFloor) {
+  for (const bool speculative : {false, true}) {
+    SCOPED_TRACE(speculative ? "speculative contacts" : "push-out alone");
+    SphWorld w;
+    w.params.particle_radius = 0.04f;
+    w.params.gravity = glm::vec3(0.0f);
+    w.params.max_time_step = 1.0f / 60.0f;
+    w.params.cfl = 1.0f;  // the CFL bound (20 ms) is above the step asked for
+    w.params.speculative_contacts = speculative;
+    SphCollider floor = stillFloor();
+    floor.boundary_pressure = false;  // the contact alone
+    floor.material.resilience = 0.0f;
+    w.colliders = {floor};
+    ASSERT_TRUE(addSphParticle(w, glm::vec3(0.0f, 0.05f, 0.0f), glm::vec3(0.0f, -4.0f, 0.0f)));
+    SphStepStats stats;
+    ASSERT_TRUE(stepSph(w, 1.0f / 60.0f, &stats).ok());
+    ASSERT_FLOAT_EQ(stats.dt, 1.0f / 60.0f);
+    const float y = w.particles.position[0].y;
+    if (speculative) {
+      EXPECT_NEAR(y, 0.02f, 1e-4f) << "half a radius off the floor";
+      EXPECT_NEAR(w.particles.velocity[0].y, -0.03f * 60.0f, 1e-3f) << "what is left of the approach";
+      EXPECT_EQ(stats.pushed_out, 0u);
+    } else {
+      EXPECT_EQ(stats.pushed_out, 1u);
+      EXPECT_GT(stats.max_push_depth, 0.015f);
+      EXPECT_GE(y, 0.0f);
+    }
+  }
+}
+
+// A crate's bottom closing at 2 m/s on still water 3 cm below it: the speculative contact pushes the
+// water ahead of the crate (half a radius below its end-of-step bottom) instead of letting the crate
+// pass over it and pushing it out after, and the crate feels the push back.
+TEST(SphCollisions, ASpeculativeContactPushesStillWaterAheadOfAClosingCrate) {
+  SphWorld w;
+  w.params.particle_radius = 0.04f;
+  w.params.gravity = glm::vec3(0.0f);
+  w.params.max_time_step = 1.0f / 60.0f;
+  w.params.cfl = 1.0f;
+  w.params.speculative_contacts = true;
+  SphCollider crate;
+  crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
+  // Bottom at y = 0.03; at 2 m/s the wall's approach bound (half a spacing a step) is 20 ms, over the step.
+  crate.pose.translation = glm::vec3(0.0f, 0.33f, 0.0f);
+  crate.pose.linear_velocity = glm::vec3(0.0f, -2.0f, 0.0f);
+  crate.material.resilience = 0.0f;
+  crate.boundary_pressure = false;
+  w.colliders = {crate};
+  ASSERT_TRUE(addSphParticle(w, glm::vec3(0.0f, 0.0f, 0.0f)));
+  SphStepStats stats;
+  ASSERT_TRUE(stepSph(w, 1.0f / 60.0f, &stats).ok());
+  ASSERT_FLOAT_EQ(stats.dt, 1.0f / 60.0f);
+  const float bottom = w.colliders[0].pose.translation.y - 0.3f;  // end of step: 0.03 - 2 / 60
+  EXPECT_NEAR(bottom - w.particles.position[0].y, 0.02f, 1e-4f) << "half a radius ahead of the crate";
+  EXPECT_LT(w.particles.velocity[0].y, -1.0f) << "moving away with the crate";
+  EXPECT_EQ(stats.pushed_out, 0u);
+  EXPECT_GT(w.colliders[0].force.y, 0.0f) << "the water pushes back on the crate";
+}
+
 }  // namespace

@@ -275,4 +275,96 @@ TEST(SphSpray, ADropSqueezedBetweenACrateAndAWallLeavesByAFreeExit) {
   EXPECT_LT(caught.crate, -0.01f) << "no free exit: left inside the crate";
 }
 
+// Water faster than spray_speed leaves the solve even deep inside calm water (a splash the bulk
+// would otherwise have to step at the splash's speed): there it is a submerged drop that the
+// water's drag slows within a few frames, the water taking the momentum it loses, and it rejoins.
+// A cube of water floating without gravity or walls, its centre particle kicked at 6 m/s.
+TEST(SphSpray, FastWaterInsideCalmWaterLeavesTheSolveAndTheWaterSlowsIt) {
+  SphWorld w;
+  SphParams& p = w.params;
+  p.particle_radius = 0.02f;
+  p.gravity = glm::vec3(0.0f);
+  p.cfl = 0.9f;
+  p.max_time_step = static_cast<float>(kFrame);
+  p.spray_speed = 3.0f;
+  p.domain_min = glm::vec3(-2.0f);
+  p.domain_max = glm::vec3(2.0f);
+  addSphBlock(w, glm::vec3(0.0f), glm::vec3(0.4f));  // 10 x 10 x 10
+  const glm::vec3 centre(0.22f);
+  std::size_t kicked = 0;
+  for (std::size_t i = 1; i < w.particles.size(); ++i)
+    if (glm::length(w.particles.position[i] - centre) < glm::length(w.particles.position[kicked] - centre)) kicked = i;
+  const std::uint32_t id = w.particles.id[kicked];
+  // Off the lattice's rows: along a row the drop would pass within half a spacing of each particle
+  // of it and could rejoin nowhere (gateCrowdedRejoins), which a real pool's disorder never keeps up.
+  const glm::vec3 kick = 6.0f * glm::normalize(glm::vec3(1.0f, 0.37f, 0.23f));
+  w.particles.velocity[kicked] = kick;
+  const auto momentum = [&] {
+    glm::dvec3 sum(0.0);
+    for (const glm::vec3& v : w.particles.velocity) sum += glm::dvec3(v);
+    return sum;
+  };
+  const auto kickedIndex = [&] {
+    return static_cast<std::size_t>(std::find(w.particles.id.begin(), w.particles.id.end(), id) - w.particles.id.begin());
+  };
+  std::size_t left = 0, steps = 0, spray_steps = 0;
+  for (int f = 0; f < 30; ++f) {
+    ASSERT_TRUE(advanceSph(w, kFrame, [&](const SphStepStats& s) {
+                  left += s.spray_left;
+                  ++steps;
+                  spray_steps += s.spray > 0 ? 1 : 0;
+                  EXPECT_EQ(s.nonfinite, 0u);
+                }).ok());
+    if (f == 0) {
+      // The water around was at rest, so its solve moved nothing: the momentum the drop lost is in
+      // the water (the solve's own drift, later, is a few per cent of it per frame).
+      const glm::dvec3 total = momentum();
+      EXPECT_EQ(w.particles.spray_count, 1u);
+      EXPECT_LT(glm::length(w.particles.velocity[kickedIndex()]), 4.0f) << "slowed by the water within the frame";
+      EXPECT_NEAR(total.x, kick.x, 1e-3) << "the water took the momentum the drop lost";
+      EXPECT_NEAR(total.y, kick.y, 1e-3);
+      EXPECT_NEAR(total.z, kick.z, 1e-3);
+    }
+  }
+  EXPECT_EQ(left, 1u) << "the kicked particle left the solve among its calm neighbours, and only it";
+  EXPECT_LT(steps, 35u) << "the bulk sets the step, not the kicked particle";
+  EXPECT_LE(spray_steps, 10u) << "it rejoined within 10 frames";
+  EXPECT_EQ(w.particles.spray_count, 0u);
+  const glm::vec3 end = w.particles.position[kickedIndex()];
+  EXPECT_TRUE(glm::all(glm::lessThan(end, glm::vec3(0.4f)))) << "stopped inside the cube, not flown through";
+}
+
+// Drops that fall together (the jet's crown slowing at its apex, a blast's sheet) pass through one
+// another as spray and can end a step bunched within a millimetre, all slow among water. Let in at
+// once they would start the next step at 1.6 times the rest density; the rejoin gate lets them in
+// a few at a time, each where it does not crowd the water, so no step starts far above rho_0.
+TEST(SphSpray, DropsBunchedInTheWaterRejoinOneAtATime) {
+  SphScene scene = sprayPool(3.0f);
+  SphWorld& w = scene.world;
+  for (int f = 0; f < 30; ++f) ASSERT_TRUE(advanceSph(w, kFrame, [](const SphStepStats&) {}).ok());
+  // Eight drops within a millimetre, moving down fast into the pool's middle just under its surface.
+  for (int k = 0; k < 8; ++k) {
+    const glm::vec3 offset(0.0003f * static_cast<float>(k % 2), 0.0003f * static_cast<float>((k / 2) % 2),
+                           0.0003f * static_cast<float>(k / 4));
+    ASSERT_TRUE(addSphParticle(w, glm::vec3(0.51f, 0.16f, 0.51f) + offset, glm::vec3(0.0f, -4.0f, 0.0f)));
+  }
+  std::size_t most_joined = 0, crowded = 0, joined = 0;
+  float worst = 0.0f;
+  for (int f = 0; f < 120; ++f)
+    ASSERT_TRUE(advanceSph(w, kFrame, [&](const SphStepStats& s) {
+                  most_joined = std::max(most_joined, s.spray_joined);
+                  joined += s.spray_joined;
+                  crowded += s.rejoins_crowded;
+                  worst = std::max(worst, s.max_density_error);
+                  EXPECT_EQ(s.nonfinite, 0u);
+                }).ok());
+  std::printf("bunched drops: %zu rejoined, at most %zu in a step, %zu waits, worst density error %.1f %%\n", joined,
+              most_joined, crowded, 100.0 * worst);
+  EXPECT_GE(joined, 8u);
+  EXPECT_LE(most_joined, 2u) << "bunched drops rejoin one or two a step";
+  EXPECT_GT(crowded, 0u) << "the gate held some back";
+  EXPECT_LT(worst, 0.45f) << "no step starts with a particle far above the rest density";
+  EXPECT_EQ(w.particles.spray_count, 0u) << "all of them are water in the end";
+}
+
 }  // namespace
