@@ -4,6 +4,7 @@
 
 #include "fluid/core/finite.hpp"
 #include "fluid/core/parallel.hpp"
+#include "fluid/core/splitmix.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -18,18 +19,9 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr std::size_t kGrain = 256;
 
-// SplitMix64 (Steele, Lea & Flood 2014): a counter-based hash, so a particle's random numbers do
-// not depend on the order anything is evaluated in.
-std::uint64_t splitmix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-float unitFloat(std::uint64_t bits) { return static_cast<float>(bits >> 40) * (1.0f / 16777216.0f); }
 glm::vec3 randomDirection(std::uint64_t seed, std::uint64_t key) {
-  const float z = 2.0f * unitFloat(splitmix(seed ^ (key * 2 + 1))) - 1.0f;
-  const float a = 2.0f * kPi * unitFloat(splitmix(seed ^ (key * 2 + 2)));
+  const float z = 2.0f * unitFloat(splitmix64(seed ^ (key * 2 + 1))) - 1.0f;
+  const float a = 2.0f * kPi * unitFloat(splitmix64(seed ^ (key * 2 + 2)));
   const float s = std::sqrt(std::max(0.0f, 1.0f - z * z));
   return {s * std::cos(a), s * std::sin(a), z};
 }

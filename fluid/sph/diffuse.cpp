@@ -2,6 +2,7 @@
 
 #include "fluid/core/finite.hpp"
 #include "fluid/core/parallel.hpp"
+#include "fluid/core/splitmix.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,15 +18,9 @@ constexpr float kHalfCell = 0.501f;  // cells just over h / 2: reach 2 (fewer ca
 // Eq. 4's radially symmetric weight.
 inline float weight(float distance, float h) { return distance < h ? 1.0f - distance / h : 0.0f; }
 
-std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 float unit(std::uint64_t& state) {
-  state = mix(state);
-  return static_cast<float>(state >> 40) * (1.0f / 16777216.0f);
+  state = splitmix64(state);
+  return unitFloat(state);
 }
 
 // Calls f(j) for every sorted entry j within h of x (i itself included), in the grid's fixed order.
@@ -208,7 +203,7 @@ std::size_t generateDiffuse(std::span<const glm::vec3> positions, std::span<cons
                       p.k_wc * clampPotential(pot.wave_crest[i], p.wc_min, p.wc_max)) *
                      dt;
     if (!(nd > 0.0f)) continue;
-    std::uint64_t state = mix(seed ^ mix(static_cast<std::uint64_t>(i) + 1));
+    std::uint64_t state = splitmix64(seed ^ splitmix64(static_cast<std::uint64_t>(i) + 1));
     const auto count = static_cast<std::size_t>(nd + unit(state));  // unbiased rounding
     if (count == 0) continue;
     const glm::vec3 x = positions[i], v = velocities[i];

@@ -2,6 +2,7 @@
 // (emitters_sinks.hpp).
 #include "fluid/sph/emitters_sinks.hpp"
 
+#include "fluid/core/splitmix.hpp"
 #include "fluid/sph/boundary.hpp"
 
 #include <glm/gtc/constants.hpp>
@@ -239,11 +240,8 @@ bool crowded(std::span<const glm::vec3> crowd, glm::vec3 p, float room2) {
 // solid angle, at an azimuth, both from a hash of `id` (SphEmitter::spread).
 glm::vec3 scatteredDirection(glm::vec3 dir, float spread, std::uint32_t id) {
   if (!(spread > 0.0f)) return dir;
-  std::uint64_t z = static_cast<std::uint64_t>(id) + 0x9e3779b97f4a7c15ull;  // splitmix64
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  z ^= z >> 31;
-  const float u1 = static_cast<float>(z >> 40) / 16777216.0f, u2 = static_cast<float>(z & 0xffffffu) / 16777216.0f;
+  const std::uint64_t z = splitmix64(id);
+  const float u1 = unitFloat(z), u2 = static_cast<float>(z & 0xffffffu) / 16777216.0f;  // top and bottom 24 bits
   const float cos_tilt = 1.0f - u1 * (1.0f - std::cos(std::min(spread, glm::half_pi<float>())));
   const float sin_tilt = std::sqrt(std::max(0.0f, 1.0f - cos_tilt * cos_tilt));
   const glm::vec3 helper = std::fabs(dir.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);

@@ -68,17 +68,18 @@ struct SphParams {
 
   // Spray (after Ihmsen et al. 2012, "Unified spray, foam and bubbles for particle-based fluids",
   // §4: a particle with fewer than 6 fluid neighbours is spray, advected with gravity and drag
-  // and no pressure). Here speed alone decides who leaves: an SPH particle faster than
-  // spray_speed leaves the solve, so the SPH's CFL step (dt <= cfl d / v_max) follows the bulk of
-  // the water, never a few fast particles (the jet, a blast's drops, a splash). Outside the water
+  // and no pressure). Here an SPH particle faster than spray_speed leaves the solve if it had
+  // fewer than spray_neighbours calm neighbours (no faster than spray_speed) in the last step, or
+  // whatever its neighbours if it is faster than a full step's CFL speed (cfl d / max_time_step),
+  // so the SPH's CFL step follows the bulk of the water, never a few fast particles (the jet, a
+  // blast's drops, a splash). Outside the water
   // a drop flies ballistic (gravity, quadratic air drag, the colliders' Kolb 2004 §3.3.2
   // reaction); inside it, it is a submerged drop: buoyant, and slowed by the water's drag
-  // (spray_water_drag), whose momentum the water takes. A drop no faster than spray_speed rejoins
-  // once it is among spray_neighbours calm SPH particles, or touches a collider, as long as the
-  // density it would have as water stays under (1 + kSprayRejoinCrowd) rho_0 (the drops let in
-  // before it counted): bunched drops rejoin one after the other, not in one step that starts at
-  // twice the rest density. Ids and mass are kept; the spray stays in the store (its last
-  // ParticleStore::spray_count entries).
+  // (spray_water_drag), whose momentum the water takes. A drop no faster than half spray_speed
+  // rejoins once it is among spray_neighbours calm SPH particles, or touches a collider, unless it
+  // would crowd the water (spray.cpp, gateCrowdedRejoins): bunched drops rejoin one after the
+  // other, not in one step that starts at over twice the rest density. Ids and mass are kept; the
+  // spray stays in the store (its last ParticleStore::spray_count entries).
   float spray_speed = 0.0f;  // m/s; 0 = off (every particle stays in the SPH solve)
   int spray_neighbours = 6;  // >= 1
   // Drag coefficient C_d of a submerged drop moving at u relative to the water around it:
@@ -86,6 +87,8 @@ struct SphParams {
   // share phi = min(rho_water / rho_0, 1) at the drop. 2 (a bluff body's) stops a 5 m/s drop
   // within a frame. 0 = none (the drop passes through the water).
   float spray_water_drag = 2.0f;
+  // Speed at which the drag balances gravity (drag acceleration |g| |v| v / v_t^2, opposite v);
+  // 0 = no drag. A blast tears water into drops of millimetres, whose terminal speed is 6-9 m/s.
   float spray_terminal_speed = 0.0f;
 
   // WCSPH (Becker & Teschner 2007)

@@ -180,10 +180,10 @@ void shareWithTheWater(StepContext& context, int reach) {
 // Lets back into the water, in store order, the drops advanceSpray found ready (kJoinNeighbours: slow
 // on a collider; a count >= spray_neighbours: slow among calm water) while the density each would
 // have as water, the SPH water's (scratch.spray_water_density), its own m W(0) and the drops let in
-// before it, stays within (1 + kSprayRejoinCrowd) rho_0, and it keeps half a spacing from the water
-// and from the drops let in (nearer, it would add most of its m W(0) to that one particle: two
-// drops that fell together would be one particle's place). The density counts no wall, so the
-// distance rule is what holds a drop off a particle resting on the floor.
+// before it, stays within (1 + kSprayRejoinCrowd) rho_0 (less at short steps, below), and it keeps
+// half a spacing from the water and from the drops let in (nearer, it would add most of its m W(0)
+// to that one particle: two drops that fell together would be one particle's place). The density
+// counts no wall, so the distance rule is what holds a drop off a particle resting on the floor.
 // The others stay spray (a count of 0) and try again the next step: drops bunched in the water
 // (the jet's crown slowing at its apex together, a blast's sheet landing) rejoin over a few steps
 // instead of starting one step at twice the rest density.
@@ -196,8 +196,8 @@ void gateCrowdedRejoins(StepContext& context) {
   const float self = mass * scratch.kernel.value(0.0f);
   // The next step's pressure solve removes a compression e within its step, as a velocity of about
   // e d / dt (Bender & Koschier 2015 §4.2: kappa ~ (rho* - rho_0) / dt^2): a rejoin may add no more
-  // than turns into half of spray_speed, or the drop it let in is thrown out again as spray (at the
-  // library's default 5 ms steps that is 12 % of rho_0, at the fountain's one step a frame 42 %).
+  // than turns into half of spray_speed, or the drop it let in is thrown out again as spray (at
+  // spray_speed 4 m/s and d = 0.08 m: 12 % of rho_0 at 5 ms steps, 42 % at one step a frame).
   const float kick_bound = 0.5f * context.params.spray_speed * context.dt / context.spacing;
   const float limit = (1.0f + std::min(kSprayRejoinCrowd, kick_bound)) * context.rest_density;
   const float apart2 = 0.25f * context.spacing * context.spacing;

@@ -13,9 +13,9 @@ namespace fluid::sph_step {
 // At the step's start, after the sinks and emitters: an SPH particle faster than spray_speed
 // becomes spray if it had fewer than spray_neighbours calm neighbours (no faster than
 // spray_speed) in the last step, or is faster than a full step's CFL speed (cfl d /
-// max_time_step) whatever its neighbours; spray that the last step's advanceSpray let back in rejoins (all of it when
-// spray is off). A stable partition of every per-particle array: the SPH water first, the spray last, each in its
-// old order, so the result is the same for any thread count. Counts the moves in `stats`; returns
+// max_time_step) whatever its neighbours; spray that the last step's advanceSpray let back in
+// rejoins (all of it when spray is off). A stable partition of every per-particle array: the SPH
+// water first, the spray last, each in its old order, so the result is the same for any thread count. Counts the moves in `stats`; returns
 // whether any particle moved.
 bool applySprayTransitions(SphWorld& world, SphStepStats& stats);
 

@@ -336,7 +336,7 @@ TEST(SphSpray, FastWaterInsideCalmWaterLeavesTheSolveAndTheWaterSlowsIt) {
 
 // Drops that fall together (the jet's crown slowing at its apex, a blast's sheet) pass through one
 // another as spray and can end a step bunched within a millimetre, all slow among water. Let in at
-// once they would start the next step at 1.6 times the rest density; the rejoin gate lets them in
+// once they would start the next step at over three times the rest density (245 % error); the rejoin gate lets them in
 // a few at a time, each where it does not crowd the water, so no step starts far above rho_0.
 TEST(SphSpray, DropsBunchedInTheWaterRejoinOneAtATime) {
   SphScene scene = sprayPool(3.0f);
