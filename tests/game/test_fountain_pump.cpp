@@ -272,6 +272,9 @@ struct Floating {
   float bottom_above_floor = 0.0f;           // m, the crate's lowest corner above the basin floor
   float centre_above_floor = 0.0f;           // m
   float level = 0.0f, visible_level = 0.0f;  // m above the basin floor
+  // What holds the crate up (N, means over the samples): the SPH's coupling force on it, and the
+  // film closure's push on its dry face points (game::filmForce, as forcesToBodies adds it).
+  float sph_force = 0.0f, film_force = 0.0f;
   int samples = 0;
 };
 
@@ -297,14 +300,19 @@ float poolLevelAround(const fluid::SphWorld& sph, glm::vec3 centre, float basin_
   return levels[levels.size() / 2];
 }
 
-// The crate is dropped at (x, z), 0.6 m above the floor.
-Floating crateInThePool(float density, double seconds, double settle_from, float x = 2.0f, float z = 0.0f) {
+// The crate is dropped at (x, z), 0.6 m above the floor. The water is `sph_fluid: {}` (the game's
+// defaults), or `water` (a scene's own sph_fluid section) where given.
+Floating crateInThePool(float density, double seconds, double settle_from, float x = 2.0f, float z = 0.0f,
+                        const game::SectionConfig* water = nullptr) {
   Floating out;
   game::SceneConfig scene;
   const std::string text =
       R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.3, "density": )" +
       std::to_string(density) + R"(}, "sph_fluid": {}}})";
   EXPECT_TRUE(game::parseSceneText(text, "float.json", scene).ok());
+  if (water != nullptr)
+    for (game::SectionConfig& effect : scene.effects)
+      if (effect.name == "sph_fluid") effect = *water;
   game::World world;
   std::string error;
   EXPECT_TRUE(game::buildWorld(scene, kContent, world, error)) << error;
@@ -314,9 +322,19 @@ Floating crateInThePool(float density, double seconds, double settle_from, float
   game::throwCrate(bodies, glm::vec3(x, g.basin_floor + 0.6f + 0.9f, z), glm::vec3(0.0f, -1.0f, 0.0f));
   const fluid::SphWorld& sph = game::findState<game::SphFluid>(world)->world;
   const int frames = static_cast<int>(seconds * 60.0), first = static_cast<int>(settle_from * 60.0);
+  int force_frames = 0;
   for (int frame = 1; frame <= frames; ++frame) {
     game::stepWorld(world, nullptr);
-    if (frame < first || frame % 15 != 0) continue;
+    if (frame < first) continue;
+    // Every frame's push on the crate (the last SPH collider, when it takes part in the coupling).
+    const game::SphFluid& fluid = *game::findState<game::SphFluid>(world);
+    if (fluid.coupling && !fluid.coupling->coupled.empty()) {
+      out.sph_force += sph.colliders.back().force.y;
+      out.film_force +=
+          game::filmForce(*fluid.coupling, sph, sph.colliders.back().pose, fluid.coupling->film_scratch).force.y;
+      ++force_frames;
+    }
+    if (frame % 15 != 0) continue;
     const engine::BodyState crate = engine::bodyState(*bodies.physics, bodies.crates.back());
     const float visible = poolLevelAround(sph, crate.position, g.basin_wall_top);
     EXPECT_TRUE(std::isfinite(visible)) << "water around the crate";
@@ -346,6 +364,8 @@ Floating crateInThePool(float density, double seconds, double settle_from, float
   if (out.samples == 0) return out;
   const float n = static_cast<float>(out.samples);
   out.submerged /= n;
+  out.sph_force /= static_cast<float>(std::max(force_frames, 1));
+  out.film_force /= static_cast<float>(std::max(force_frames, 1));
   out.submerged_visible /= n;
   out.visible_level /= n;
   out.bottom_above_floor /= n;
@@ -358,9 +378,9 @@ void printFloating(float density, const Floating& f) {
   std::printf(
       "[ metric ] %.0f kg/m^3 crate in the pool (means over %d samples): %.3f submerged below the volume level "
       "%.3f m (%.3f below the visible %.3f m; Archimedes %.3f), centre %.3f m and lowest corner %.3f m above "
-      "the floor\n",
+      "the floor; held up by the SPH %.1f N and the film %.1f N (weight %.1f N)\n",
       density, f.samples, f.submerged, f.level, f.submerged_visible, f.visible_level, std::min(1.0f, density / 1000.0f),
-      f.centre_above_floor, f.bottom_above_floor);
+      f.centre_above_floor, f.bottom_above_floor, f.sph_force, f.film_force, density * 0.027f * 9.81f);
 }
 
 // The pool is about three particle layers deep (level ~0.24 m at d = 8 cm), so the dropped 500
@@ -368,10 +388,11 @@ void printFloating(float density, const Floating& f) {
 // be unstable), its lowest edge rides a few centimetres above it. The film closure of
 // game/world/body_fluid_coupling lifts it off the floor; without it the crate stayed there,
 // lying flat (centre 0.15 m, 0.81 submerged). It bobs and tilts, and where it lands moves its
-// draft by up to 0.06 (a rounding-level change in the forces moved one drop by 0.04), so issue
-// 33's bar, half submerged within 15 % (0.425-0.575), is asserted on the mean of drops at five
-// spots chosen around the basin, each a mean over 4-8 s, below the pool's volume level and below
-// the visible level around the crate. The body reads the water's pressure at its faces
+// draft by up to 0.1, so issue 33's bar, half submerged within 15 % (0.425-0.575), is asserted
+// on the mean of drops at five spots chosen around the basin, each a mean over 4-8 s, below the
+// pool's volume level and below the visible level around the crate. The water is the game's
+// default (steps of at most 5 ms); in the fountain scene's own (one step a frame) the bar is not
+// met, DISABLED_AtTheFountainScenesOwnSolverKnobs below. The body reads the water's pressure at its faces
 // (fluid::SphCollider::surface_pressure_force); with the mirrored pressure of the particles
 // about r below its bottom it rode about r high.
 TEST(FountainFloating, AHalfDensityCrateFloatsHalfSubmerged) {
@@ -401,6 +422,27 @@ TEST(FountainFloating, ADenseCrateSinksToTheBasinFloor) {
   printFloating(2000.0f, f);
   EXPECT_LT(f.bottom_above_floor, 0.03f);
   EXPECT_LT(f.centre_above_floor, 0.17f) << "lying on the floor";
+}
+
+// The same drops in the water of content/scenes/fountain.json (its own sph_fluid section: one
+// 16.7 ms DFSPH step a frame at cfl 0.9, tolerance 0.005, spray_speed 4), the figures of
+// docs/engine.md's second pool table (about 1 min; run with --gtest_also_run_disabled_tests). The
+// tests above run the game's default water (5 ms steps): issue 33's bar is not met here (the
+// crates float about 0.63 submerged), so this one asserts only that each crate floats, off the
+// floor it lies on at 0.15 m, and prints what holds it up.
+TEST(FountainFloating, DISABLED_AtTheFountainScenesOwnSolverKnobs) {
+  game::SceneConfig fountain;
+  ASSERT_TRUE(game::loadSceneFile((kContent / "scenes" / "fountain.json").string(), fountain).ok());
+  const game::SectionConfig* water = fountain.effect("sph_fluid");
+  ASSERT_NE(water, nullptr);
+  const glm::vec2 spots[] = {{2.0f, 0.0f}, {1.8f, 0.0f}, {2.2f, 0.0f}, {0.0f, 2.0f}, {-1.4f, -1.4f}};
+  for (const glm::vec2 spot : spots) {
+    const Floating f = crateInThePool(500.0f, 8.0, 4.0, spot.x, spot.y, water);
+    std::printf("[ metric ] fountain scene's water, dropped at x %.1f z %.1f: ", spot.x, spot.y);
+    printFloating(500.0f, f);
+    EXPECT_GT(f.centre_above_floor, 0.17f) << "floating, dropped at " << spot.x << ", " << spot.y;
+    EXPECT_LT(f.submerged, 0.9f);
+  }
 }
 
 // The figures of docs/engine.md's pool table (about 2 min; run with --gtest_also_run_disabled_tests):

@@ -354,4 +354,35 @@ TEST(SphCollisions, ASpeculativeContactPushesStillWaterAheadOfAClosingCrate) {
   EXPECT_GT(w.colliders[0].force.y, 0.0f) << "the water pushes back on the crate";
 }
 
+// A moving collider bounds the step by how fast its surface closes on the water (its velocity
+// along the outward normal at the particle), half a spacing per step at most (time_step.cpp): a
+// crate sliding past the water or lifting off it leaves the step alone, the same crate coming down
+// on the water at the same speed cuts it to 0.5 d / v.
+TEST(SphCollisions, AMovingWallBoundsTheStepByItsApproachNotItsSpeed) {
+  const auto stepUnder = [](glm::vec3 crate_velocity) {
+    SphWorld w;
+    w.params.particle_radius = 0.04f;
+    w.params.gravity = glm::vec3(0.0f);
+    w.params.max_time_step = 1.0f / 60.0f;
+    w.params.cfl = 1.0f;
+    SphCollider crate;
+    crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
+    crate.pose.translation = glm::vec3(0.0f, 0.36f, 0.0f);  // bottom 6 cm over the particle
+    crate.pose.linear_velocity = crate_velocity;
+    crate.material.resilience = 0.0f;
+    crate.boundary_pressure = false;
+    w.colliders = {crate};
+    EXPECT_TRUE(addSphParticle(w, glm::vec3(0.0f)));
+    SphStepStats stats;
+    EXPECT_TRUE(stepSph(w, 1.0f / 60.0f, &stats).ok());
+    return stats.dt;
+  };
+  const float full = 1.0f / 60.0f, d = 0.08f, speed = 10.0f;
+  EXPECT_FLOAT_EQ(stepUnder(glm::vec3(speed, 0.0f, 0.0f)), full) << "sliding past";
+  EXPECT_FLOAT_EQ(stepUnder(glm::vec3(0.0f, speed, 0.0f)), full) << "lifting off";
+  const float closing = stepUnder(glm::vec3(0.0f, -speed, 0.0f));
+  EXPECT_LE(closing, 0.5f * d / speed * 1.0001f) << "coming down";
+  EXPECT_GT(closing, 0.5f * 0.5f * d / speed);
+}
+
 }  // namespace
