@@ -278,9 +278,12 @@ struct Floating {
   int samples = 0;
 };
 
-// Share of a 0.3 m crate's volume below the plane y = level (16^3 cell centres).
+// The dropped crate's edge (m): its scene's crate_size, its half extent and its volume.
+constexpr float kCrateSize = 0.3f, kCrateHalf = 0.5f * kCrateSize, kCrateVolume = kCrateSize * kCrateSize * kCrateSize;
+
+// Share of the dropped crate's volume below the plane y = level (16^3 cell centres).
 float shareBelow(const engine::BodyState& crate, float level) {
-  return archimedes_tank::submergedFraction(crate, level, 0.15f, 16);
+  return archimedes_tank::submergedFraction(crate, level, kCrateHalf, 16);
 }
 
 float poolLevelAround(const fluid::SphWorld& sph, glm::vec3 centre, float basin_wall_top) {
@@ -307,8 +310,8 @@ Floating crateInThePool(float density, double seconds, double settle_from, float
   Floating out;
   game::SceneConfig scene;
   const std::string text =
-      R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": 0.3, "density": )" +
-      std::to_string(density) + R"(}, "sph_fluid": {}}})";
+      R"({"effects": {"rigid_bodies": {"crates": 0, "throw_speed": 0.5, "crate_size": )" + std::to_string(kCrateSize) +
+      R"(, "density": )" + std::to_string(density) + R"(}, "sph_fluid": {}}})";
   EXPECT_TRUE(game::parseSceneText(text, "float.json", scene).ok());
   if (water != nullptr)
     for (game::SectionConfig& effect : scene.effects)
@@ -341,14 +344,14 @@ Floating crateInThePool(float density, double seconds, double settle_from, float
     if (!std::isfinite(visible)) return out;
     const float area = game::basinFloorArea(g);
     const float water_level = game::waterWhereabouts(*game::findState<game::SphFluid>(world), g).pool_level;
-    const float crate_volume = 0.3f * 0.3f * 0.3f;
     float level = g.basin_floor + water_level;
     for (int it = 0; it < 20; ++it)
-      level = g.basin_floor + water_level + crate_volume * shareBelow(crate, level) / area;
+      level = g.basin_floor + water_level + kCrateVolume * shareBelow(crate, level) / area;
     float lowest = 1e30f;
     for (int k = 0; k < 8; ++k)
       lowest = std::min(
-          lowest, (crate.rotation * glm::vec3(k & 1 ? 0.15f : -0.15f, k & 2 ? 0.15f : -0.15f, k & 4 ? 0.15f : -0.15f) +
+          lowest, (crate.rotation * glm::vec3(k & 1 ? kCrateHalf : -kCrateHalf, k & 2 ? kCrateHalf : -kCrateHalf,
+                                             k & 4 ? kCrateHalf : -kCrateHalf) +
                    crate.position)
                       .y);
     out.submerged += shareBelow(crate, level);
@@ -380,7 +383,7 @@ void printFloating(float density, const Floating& f) {
       "%.3f m (%.3f below the visible %.3f m; Archimedes %.3f), centre %.3f m and lowest corner %.3f m above "
       "the floor; held up by the SPH %.1f N and the film %.1f N (weight %.1f N)\n",
       density, f.samples, f.submerged, f.level, f.submerged_visible, f.visible_level, std::min(1.0f, density / 1000.0f),
-      f.centre_above_floor, f.bottom_above_floor, f.sph_force, f.film_force, density * 0.027f * 9.81f);
+      f.centre_above_floor, f.bottom_above_floor, f.sph_force, f.film_force, density * kCrateVolume * 9.81f);
 }
 
 // The pool is about three particle layers deep (level ~0.24 m at d = 8 cm), so the dropped 500
