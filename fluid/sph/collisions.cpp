@@ -25,12 +25,12 @@ namespace {
 constexpr int kPasses = 4;  // collision passes per sub-step (resolveCollisions)
 // A step whose start and end samples are outside but name faces more than 120 degrees apart is
 // taken for a crossing of a thin part (collidePass). The two sides of a plate face away from each
-// other, 180 degrees less what it turned in the step: 120 leaves a part 30 degrees of turn per
-// step, 31 rad/s at the fountain's one 16.7 ms step a frame (the test
-// SphCollisions.AThinPlateThatTurnsAsItPassesAParticleLeavesItOnItsSide). Two faces that meet at
-// a crate's edge are square to each other, and the crate's turn in the step (4 degrees at 13 rad/s
-// over 5.6 ms) can take their normals at the step's two poses a little past square: a particle
-// that only moved from beside one face to beside its neighbour is no crossing (the test
+// other, 180 degrees less what it turned in the step: a plate that turns up to 60 degrees in a
+// step is caught (the test SphCollisions.AThinPlateThatTurnsAsItPassesAParticleLeavesItOnItsSide
+// turns one 30). Two faces that meet at a crate's edge are square to each other, 90 degrees plus
+// what the crate turned in the step: a particle that only moved from beside one face to beside its
+// neighbour is no crossing while the crate turns less than 30 degrees a step, 31 rad/s at the
+// fountain's one 16.7 ms step a frame (the soak's traced crate spun at 13 rad/s; the test
 // SphCollisions.WaterAtACrateEdgeIsNotTakenForWaterTheCrateCrossed). The price: a fin whose edge
 // is blunter than 60 degrees is not told from a corner, and a particle through it is not caught.
 constexpr float kOppositeSides = -0.5f;  // cos 120 degrees

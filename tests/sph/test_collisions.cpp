@@ -67,6 +67,17 @@ Squeeze makeSqueeze(bool box_first) {
   return s;
 }
 
+// content/scenes/fountain.json's water: DFSPH, r = 4 cm, steps up to 1/60 s, no force bound.
+SphParams fountainWater() {
+  SphParams p;
+  p.solver = SphSolverKind::dfsph;
+  p.particle_radius = 0.04f;
+  p.cfl = 0.9f;
+  p.max_time_step = 0.0167f;
+  p.force_bound = 0.0f;
+  return p;
+}
+
 TEST(SphCollisions, StillColliderWinsWhereAMovingOneOverlapsIt) {
   for (const bool box_first : {false, true}) {
     SCOPED_TRACE(box_first ? "box listed first" : "floor listed first");
@@ -163,12 +174,7 @@ TEST(SphCollisions, WaterACrateDrivesIntoAWallStaysOutsideOnItsSide) {
       SCOPED_TRACE(std::string(box_first ? "box listed first" : "wall listed first") + ", " +
                    std::to_string(extra) + " far colliders more");
       SphWorld w;
-      w.params.solver = SphSolverKind::dfsph;
-      // content/scenes/fountain.json: steps up to 1/60 s, no force bound.
-      w.params.particle_radius = 0.04f;
-      w.params.cfl = 0.9f;
-      w.params.max_time_step = 0.0167f;
-      w.params.force_bound = 0.0f;
+      w.params = fountainWater();
       SphCollider wall;
       wall.shape = std::make_shared<BoxShape>(glm::vec3(0.15f, 2.0f, 2.0f));
       wall.pose.translation = glm::vec3(-0.15f, 0.0f, 0.0f);
@@ -399,13 +405,8 @@ TEST(SphCollisions, AMovingWallBoundsTheStepByItsApproachNotItsSpeed) {
 // traced.
 TEST(SphCollisions, WaterAtACrateEdgeIsNotTakenForWaterTheCrateCrossed) {
   SphWorld w;
-  w.params.solver = SphSolverKind::dfsph;
-  // content/scenes/fountain.json's water, and the game's speculative contacts.
-  w.params.particle_radius = 0.04f;
-  w.params.cfl = 0.9f;
-  w.params.max_time_step = 0.0167f;
-  w.params.force_bound = 0.0f;
-  w.params.speculative_contacts = true;
+  w.params = fountainWater();
+  w.params.speculative_contacts = true;  // as in the game
   w.params.domain_min = glm::vec3(-6.0f);
   w.params.domain_max = glm::vec3(6.0f);
   const glm::vec3 start(-1.82516f, 0.50606f, -2.25279f);
