@@ -350,10 +350,10 @@ Floating crateInThePool(float density, double seconds, double settle_from, float
     float lowest = 1e30f;
     for (int k = 0; k < 8; ++k)
       lowest = std::min(
-          lowest, (crate.rotation * glm::vec3(k & 1 ? kCrateHalf : -kCrateHalf, k & 2 ? kCrateHalf : -kCrateHalf,
-                                             k & 4 ? kCrateHalf : -kCrateHalf) +
-                   crate.position)
-                      .y);
+          lowest,
+          (crate.rotation * (kCrateHalf * glm::vec3(k & 1 ? 1.0f : -1.0f, k & 2 ? 1.0f : -1.0f, k & 4 ? 1.0f : -1.0f)) +
+           crate.position)
+              .y);
     out.submerged += shareBelow(crate, level);
     out.submerged_visible += shareBelow(crate, visible);
     out.bottom_above_floor += lowest - g.basin_floor;
