@@ -160,6 +160,23 @@ struct ColliderQuery {
 // context.wall_approach_speed.
 void sampleBoundary(StepContext& context);
 
+// Whether particle i lies in a film of collider c (SphCollider::film_gap): its step-start
+// distances to c and to one of c's film partners add up to less than film_gap.
+inline bool inFilmOf(const StepContext& context, std::size_t c, std::size_t i) {
+  const SphCollider& collider = context.world.colliders[c];
+  if (!(collider.film_gap > 0.0f)) return false;
+  const ColliderSample& own = context.scratch.start_samples[c][i];
+  if (!own.valid) return false;
+  const float room = collider.film_gap - std::max(own.distance, 0.0f);
+  if (!(room > 0.0f)) return false;
+  const std::size_t partners = std::min(collider.film_partners, context.collider_count);
+  for (std::size_t p = 0; p < partners; ++p) {
+    const ColliderSample& other = context.scratch.start_samples[p][i];
+    if (p != c && other.valid && std::max(other.distance, 0.0f) < room) return true;
+  }
+  return false;
+}
+
 // surface_pressure_force: the pair's pressure terms (p_i + p_b) / rho_i^2 take
 // p_b = p_i + rho_i g . (x_b - x_i) at the mirror point x_b = x_i - 2 s n (Adami et al. 2012
 // eq. 27), which adds -2 s (g . n) / rho_i to the mirror's 2 p_i / rho_i^2: less under a body's
@@ -181,7 +198,7 @@ inline float surfacePressureShift(const StepContext& context, const ColliderSamp
 inline void addCouplingTerm(const StepContext& context, std::size_t c, std::size_t i, ForceTorque& acc) {
   const SphScratch& scratch = context.scratch;
   const ColliderSample& sample = scratch.start_samples[c][i];
-  if (!withinSupport(sample, context.support)) return;
+  if (!withinSupport(sample, context.support) || inFilmOf(context, c, i)) return;
   const SphCollider& collider = context.world.colliders[c];
   const glm::vec3 grad = scratch.boundary_share[c][i];
   glm::vec3 f;

@@ -214,8 +214,10 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
           scratch.collide_stale[i] = all_colliders;  // moved: every collider's sample is out of date
           // Particles without a reaction add exact zeros in a separate sum (an accumulator
           // starting at +0 never becomes -0), so skipping them gives the same sums.
-          acc.reaction.force += reaction;
-          acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+          if (!inFilmOf(context, c, i)) {
+            acc.reaction.force += reaction;
+            acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+          }
           if (still && !crossed && !res.held_back) which[again++] = static_cast<std::uint32_t>(i);
         }
         // A still collider's projection is checked where it landed: a depth map measures distance
@@ -236,8 +238,10 @@ Hits collidePass(StepContext& context, int pass, std::size_t k, std::size_t c) {
             positions[i] += s.normal * (skin - s.distance);
             velocities[i] = velocity;
             acc.depth = std::max(acc.depth, -s.distance);
-            acc.reaction.force += reaction;
-            acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+            if (!inFilmOf(context, c, i)) {
+              acc.reaction.force += reaction;
+              acc.reaction.torque += glm::cross(positions[i] - pose.translation, reaction);
+            }
             if (pass == kPasses - 1) scratch.pushed[i] |= kPushedInLastPass;
             which[still_inside++] = static_cast<std::uint32_t>(i);
           }
@@ -284,6 +288,7 @@ void speculativeContacts(StepContext& context) {
           const glm::vec3 change = s0.normal * (excess / dt);
           velocities[i] += change;
           positions[i] += s0.normal * excess;
+          if (inFilmOf(context, c, i)) return;             // the caller's film closure carries it
           const glm::vec3 reaction = -mass * change / dt;  // on the collider
           acc.force += reaction;
           acc.torque += glm::cross(positions[i] - collider.pose.translation, reaction);

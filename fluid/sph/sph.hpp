@@ -167,6 +167,15 @@ struct SphCollider {
   // mirror (boundary.hpp, addCouplingTerm, says why).
   bool surface_pressure_force = false;
   bool integrate_pose = true;  // advance pose by its velocities during each step
+  // Films (a sub-particle closure for a coupled body): water squeezed between this collider and
+  // one of the world's first `film_partners` colliders (the scene's own, in the game) nearer the
+  // two together than `film_gap` (m; 0 = off) is a film no particle resolves: a layer of particles
+  // fits only where the gap is at least a spacing. Such a particle's boundary-pressure term and
+  // collision reactions are left out of force/torque below (the water still feels the wall); the
+  // caller gives the body the film's pressure instead (game/world/body_fluid_coupling's
+  // filmForce), so the film is counted once, not by both.
+  float film_gap = 0.0f;
+  std::size_t film_partners = 0;
   // The shape's signed distance is 1-Lipschitz (|d(a) - d(b)| <= |a - b|: an exact SDF, or min/max
   // of exact ones as in CSG). Only then, and only while the collider does not move during a step
   // (integrate_pose off or zero velocities), the end-of-step collision check skips the query of a

@@ -63,6 +63,9 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
     collider.material = coupling.material;
     collider.integrate_pose = true;          // moves with its velocities through the SPH sub-steps
     collider.surface_pressure_force = coupling.surface_pressure_force;
+    // Water in a film between the box and the scene's colliders pushes the box through filmForce.
+    collider.film_gap = fluid::sphSpacing(sph.params);
+    collider.film_partners = coupling.first_collider;
     sph.colliders.push_back(collider);
     coupling.coupled.push_back(id);
   }
@@ -81,14 +84,19 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
   // The water that can reach a face point: particles within the box's half diagonal plus R,
   // gathered at the first face point in a film (most boxes have none, and skip the scan).
   std::vector<std::size_t>& nearby = scratch.nearby;
+  std::vector<glm::vec3>& nearby_in_box = scratch.nearby_in_box;
+  const glm::quat inverse_rotation = glm::inverse(pose.rotation);
   bool gathered = false;
   const auto gatherNearby = [&] {
     const float reach = coupling.reach + R;
     nearby.clear();
+    nearby_in_box.clear();
     for (std::size_t i = 0; i < sph.particles.sphCount(); ++i)
       if (glm::dot(sph.particles.position[i] - pose.translation, sph.particles.position[i] - pose.translation) <
-          reach * reach)
+          reach * reach) {
         nearby.push_back(i);
+        nearby_in_box.push_back(inverse_rotation * (sph.particles.position[i] - pose.translation));
+      }
     gathered = true;
   };
   const glm::vec3 half = coupling.half_extents;
@@ -128,16 +136,17 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
         if (!(gap[k] < d)) continue;
         if (!gathered) gatherNearby();
         const glm::vec3 x = points[k];
-        bool wetted = false;
         double weight = 0.0, weighted = 0.0;
-        for (const std::size_t i : nearby) {
+        for (std::size_t n = 0; n < nearby.size(); ++n) {
+          const std::size_t i = nearby[n];
           const glm::vec3 rel = sph.particles.position[i] - x;
           const float dist2 = glm::dot(rel, rel);
           if (dist2 >= R * R) continue;
-          if (dist2 < d * d && glm::dot(rel, normal) > 0.0f) {
-            wetted = true;  // the SPH presses this point itself
-            break;
-          }
+          // Water in the film itself is left out: squeezed, its pressure is the SPH's reading of a
+          // gap it does not resolve, not the surrounding water's.
+          const glm::vec3 in_box = nearby_in_box[n];
+          if (side * in_box[axis] - half[axis] < d && std::abs(in_box[u]) < half[u] && std::abs(in_box[v]) < half[v])
+            continue;
           const float dist = std::sqrt(dist2), q = 1.0f - dist / R;
           const float w = q * q;  // a smooth weight that falls to 0 at R
           // Hydrostatic shift from the particle's height to the point's (down = gravity's direction).
@@ -145,7 +154,7 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
           weight += w;
           weighted += w * p;
         }
-        if (wetted || !(weight > 0.0)) continue;
+        if (!(weight > 0.0)) continue;
         const float pressure = std::max(0.0f, static_cast<float>(weighted / weight));
         if (!(pressure > 0.0f) || !std::isfinite(pressure)) continue;
         const glm::vec3 f = -pressure * area * normal;

@@ -18,14 +18,18 @@
 // that force times the box's half diagonal; `clamped` counts how often the cap acted.
 //
 // Film under a box (sub-particle closure): where a box face lies closer to one of the scene's
-// colliders than one particle spacing d, no particle fits between them, so the SPH puts no
-// pressure on that part of the face, while real water in the film carries the pressure of the
-// water around it. Without it a crate lighter than water that touches the pool floor (the
-// fountain's pool is about three particle layers deep, so a 500 kg/m^3 crate dropped in reaches
-// it) stays there: its bottom face is dry and only the sides and top are pressed. filmForce
-// extrapolates the pressure to such a dry face point from the particles within twice the kernel
-// support around it, as boundary samples take the fluid's pressure (Akinci et al. 2012's mirroring, here
-// with the hydrostatic shift rho_0 |g| (y_j - y) from each particle's height to the point's).
+// colliders than one particle spacing d, no layer of particles fits between them, so the SPH
+// cannot resolve the water there: it either leaves the face dry or squeezes a particle into the
+// gap, whose push reads the squeeze, not the water. Real water in the film carries the pressure of
+// the water around it. Without a closure a crate lighter than water that reaches the floor of the
+// fountain's pool (about three particle layers deep: a 500 kg/m^3 crate at its Archimedes draft
+// leaves 8.6 cm, about d, under it) stays on it or floats too deep. So every face point within d
+// of a scene collider gets the pressure filmForce extrapolates from the water around it (the
+// particles within twice the kernel support, each shifted hydrostatically by rho_0 |g| (y_j - y)
+// from its height to the point's, as Akinci et al. 2012's boundary samples take the fluid's
+// pressure), leaving out the particles in the film itself; and the SPH leaves the push of water
+// squeezed between the box and a scene collider out of the box's force (fluid::SphCollider::
+// film_gap = d, film_partners = the scene's colliders), so the film is counted once.
 
 #include "engine/physics/physics_world.hpp"
 #include "fluid/sph/sph.hpp"
@@ -53,7 +57,8 @@ void grownBounds(std::span<const glm::vec3> points, glm::vec3 grow, glm::vec3& l
 
 // Caller-owned scratch of filmForce, kept between calls.
 struct FilmScratch {
-  std::vector<std::size_t> nearby;  // particles within reach of the box
+  std::vector<std::size_t> nearby;     // particles within reach of the box
+  std::vector<glm::vec3> nearby_in_box;  // their positions in the box's frame
   std::vector<glm::vec3> points, local;
   std::vector<float> gap;
   std::vector<fluid::ColliderSample> samples;
@@ -76,13 +81,14 @@ struct BodyFluidCoupling {
   // mirrored boundary pressure of the water's own term, about r too deep (`bench_archimedes
   // --mirrored` compares the two).
   bool surface_pressure_force = true;
-  std::uint64_t film_points = 0;                 // dry face points in a film that got its pressure, so far
+  std::uint64_t film_points = 0;                 // face points in a film that got its pressure, so far
   FilmScratch film_scratch;
 };
 
 // The film's pressure on one box (see the header comment): face points on a regular grid of
-// about d, each that lies within d of a scene collider (sph.colliders before first_collider)
-// with no particle within d in front of it gets the extrapolated pressure. Force (N) and torque
+// about d, each that lies within d of a scene collider (sph.colliders before first_collider),
+// get the extrapolated pressure of the water around them; particles within d in front of the face
+// and inside its outline (the film's own) are left out of the extrapolation. Force (N) and torque
 // (N m, about the box centre) on the box at `pose`; `points` counts the face points that got it.
 struct FilmWrench {
   glm::vec3 force{0.0f}, torque{0.0f};

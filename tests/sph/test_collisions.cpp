@@ -481,3 +481,41 @@ TEST(SphCollisions, AThinPlateThatTurnsAsItPassesAParticleLeavesItOnItsSide) {
 }
 
 }  // namespace
+
+// SphCollider::film_gap: water squeezed between a crate and its film partner (a still floor) into a
+// gap thinner than film_gap is a film no particle resolves. The crate takes none of its reaction
+// (the caller's film closure presses the crate there), the water moves exactly as without the
+// film rule, and water beside the crate, out of the film, still pushes it as before.
+TEST(SphCollisions, WaterInAFilmUnderACrateLeavesTheCratesPushToTheCaller) {
+  struct Outcome {
+    glm::vec3 force, position;
+  };
+  const auto step = [](float film_gap, glm::vec3 particle) {
+    SphWorld w;
+    w.params = fountainWater();
+    w.params.speculative_contacts = true;
+    SphCollider crate;
+    crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
+    crate.pose.translation = glm::vec3(0.0f, 0.36f, 0.0f);  // bottom 6 cm above the floor: under d = 8 cm
+    crate.pose.linear_velocity = glm::vec3(0.0f, -0.5f, 0.0f);
+    crate.material.resilience = 0.0f;
+    crate.surface_pressure_force = true;
+    crate.film_gap = film_gap;
+    crate.film_partners = 1;
+    w.colliders = {stillFloor(), crate};
+    EXPECT_TRUE(addSphParticle(w, particle));
+    SphStepStats stats;
+    EXPECT_TRUE(stepSph(w, 1.0f / 60.0f, &stats).ok());
+    return Outcome{w.colliders[1].force, w.particles.position[0]};
+  };
+  const float d = sphSpacing(fountainWater());
+  const glm::vec3 under(0.05f, 0.03f, 0.0f), beside(0.31f, 0.2f, 0.0f);
+  const Outcome under_resolved = step(0.0f, under), under_film = step(d, under);
+  EXPECT_GT(under_resolved.force.y, 1.0f) << "without the rule the squeezed water pushes the crate up";
+  EXPECT_EQ(under_film.force, glm::vec3(0.0f)) << "in the film, the crate takes none of it";
+  EXPECT_EQ(under_film.position, under_resolved.position) << "the water moves as without the rule";
+  const Outcome beside_resolved = step(0.0f, beside), beside_film = step(d, beside);
+  EXPECT_GT(glm::length(beside_film.force), 0.0f) << "water beside the crate pushes it";
+  EXPECT_EQ(beside_film.force, beside_resolved.force);
+  EXPECT_EQ(beside_film.position, beside_resolved.position);
+}
