@@ -161,7 +161,7 @@ struct ColliderQuery {
 void sampleBoundary(StepContext& context);
 
 // Whether particle i lies in a film of collider c (SphCollider::film_gap): its step-start
-// distances to c and to one of c's film partners add up to less than film_gap.
+// distances to c and to one of c's film partners that faces c there add up to less than film_gap.
 inline bool inFilmOf(const StepContext& context, std::size_t c, std::size_t i) {
   const SphCollider& collider = context.world.colliders[c];
   if (!(collider.film_gap > 0.0f)) return false;
@@ -169,10 +169,11 @@ inline bool inFilmOf(const StepContext& context, std::size_t c, std::size_t i) {
   if (!own.valid) return false;
   const float room = collider.film_gap - std::max(own.distance, 0.0f);
   if (!(room > 0.0f)) return false;
-  const std::size_t partners = std::min(collider.film_partners, context.collider_count);
+  const std::size_t partners = std::min(collider.film_partner_count, context.collider_count);
   for (std::size_t p = 0; p < partners; ++p) {
     const ColliderSample& other = context.scratch.start_samples[p][i];
-    if (p != c && other.valid && std::max(other.distance, 0.0f) < room) return true;
+    if (p != c && other.valid && std::max(other.distance, 0.0f) < room && facesAcrossAFilm(own.normal, other.normal))
+      return true;
   }
   return false;
 }

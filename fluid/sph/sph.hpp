@@ -168,14 +168,16 @@ struct SphCollider {
   bool surface_pressure_force = false;
   bool integrate_pose = true;  // advance pose by its velocities during each step
   // Films (a sub-particle closure for a coupled body): water squeezed between this collider and
-  // one of the world's first `film_partners` colliders (the scene's own, in the game) nearer the
-  // two together than `film_gap` (m; 0 = off) is a film no particle resolves: a layer of particles
+  // one of the world's first `film_partner_count` colliders (the scene's own, in the game), where
+  // the two surfaces face each other (facesAcrossAFilm) and the particle is nearer the two
+  // together than `film_gap` (m; 0 = off), is a film no particle resolves: a layer of particles
   // fits only where the gap is at least a spacing. Such a particle's boundary-pressure term and
-  // collision reactions are left out of force/torque below (the water still feels the wall); the
-  // caller gives the body the film's pressure instead (game/world/body_fluid_coupling's
-  // filmForce), so the film is counted once, not by both.
+  // collision reactions (of the end-of-step passes and the speculative contacts; a spray drop's
+  // collisions are not films and keep theirs) are left out of force/torque below, while the water
+  // itself still feels the wall; the caller gives the body the film's pressure instead
+  // (game/world/body_fluid_coupling's filmForce), so the film is counted once.
   float film_gap = 0.0f;
-  std::size_t film_partners = 0;
+  std::size_t film_partner_count = 0;
   // The shape's signed distance is 1-Lipschitz (|d(a) - d(b)| <= |a - b|: an exact SDF, or min/max
   // of exact ones as in CSG). Only then, and only while the collider does not move during a step
   // (integrate_pose off or zero velocities), the end-of-step collision check skips the query of a
@@ -189,6 +191,13 @@ struct SphCollider {
   glm::vec3 force{0.0f};
   glm::vec3 torque{0.0f};
 };
+
+// Two surfaces face each other across a film when their outward normals are within 60 degrees of
+// opposite: a box's bottom over a floor, or its lower face where it tilts onto an edge; a box's
+// side stands beside the floor, not across a film from it.
+inline bool facesAcrossAFilm(glm::vec3 normal, glm::vec3 other_normal) {
+  return glm::dot(normal, other_normal) < -0.5f;
+}
 
 // Whether the collider moves during a step (integrate_pose with a non-zero velocity). The
 // end-of-step collision passes project particles out of moving colliders first and out of still

@@ -65,11 +65,61 @@ void collidersFromBodies(BodyFluidCoupling& coupling, const engine::PhysicsWorld
     collider.surface_pressure_force = coupling.surface_pressure_force;
     // Water in a film between the box and the scene's colliders pushes the box through filmForce.
     collider.film_gap = fluid::sphSpacing(sph.params);
-    collider.film_partners = coupling.first_collider;
+    collider.film_partner_count = coupling.first_collider;
     sph.colliders.push_back(collider);
     coupling.coupled.push_back(id);
   }
 }
+
+namespace {
+
+// One face of the box in its own frame: the axis it is normal to, the side (+1/-1) and the two
+// axes u, v that span it.
+struct BoxFace {
+  int axis = 0, u = 1, v = 2;
+  float side = 1.0f;
+};
+
+// Whether a point given in the box's frame lies in the film in front of `face`: within d of the
+// face's plane (either side: water pushed a little into the box is still the film's) and inside
+// its outline.
+bool inFaceFilm(glm::vec3 in_box, const BoxFace& face, glm::vec3 half, float d) {
+  const float ahead = face.side * in_box[face.axis] - half[face.axis];
+  return std::abs(ahead) < d && std::abs(in_box[face.u]) < half[face.u] && std::abs(in_box[face.v]) < half[face.v];
+}
+
+// The water near a box: particles within reach of its centre, with their positions in its frame.
+struct NearbyWater {
+  const std::vector<std::size_t>& index;
+  const std::vector<glm::vec3>& in_box;
+};
+
+// The film's pressure at face point x: the surrounding water's, from the particles within R
+// outside the film (squeezed, a film particle's pressure is the SPH's reading of a gap it does
+// not resolve), each shifted hydrostatically by rho_0 |g| (y_j - y) to the point's height, a
+// smooth-weighted mean; 0 where no such water is within R.
+float filmPressureAt(glm::vec3 x, const BoxFace& face, const fluid::SphWorld& sph, const NearbyWater& water,
+                     glm::vec3 half, float d, float R) {
+  const float rho_g = sph.params.rest_density * glm::length(sph.params.gravity);
+  const glm::vec3 down = glm::length(sph.params.gravity) > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f);
+  double weight = 0.0, weighted = 0.0;
+  for (std::size_t n = 0; n < water.index.size(); ++n) {
+    const std::size_t i = water.index[n];
+    const glm::vec3 rel = sph.particles.position[i] - x;
+    const float dist2 = glm::dot(rel, rel);
+    if (dist2 >= R * R || inFaceFilm(water.in_box[n], face, half, d)) continue;
+    const float q = 1.0f - std::sqrt(dist2) / R;
+    const float w = q * q;  // a smooth weight that falls to 0 at R
+    const float p = sph.particles.pressure[i] + rho_g * glm::dot(x - sph.particles.position[i], down);
+    weight += w;
+    weighted += w * p;
+  }
+  if (!(weight > 0.0)) return 0.0f;
+  const float pressure = static_cast<float>(weighted / weight);
+  return std::isfinite(pressure) ? std::max(0.0f, pressure) : 0.0f;
+}
+
+}  // namespace
 
 FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& sph, const fluid::ColliderPose& pose,
                      FilmScratch& scratch) {
@@ -78,37 +128,34 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
   // The film's pressure is the surrounding water's, so it is read from the particles around the
   // face's rim: within twice the kernel support, which reaches the middle of a face up to about
   // 8 d wide (the game's 0.6 m crate at d = 8 cm) from the water beside it.
-  const float H = fluid::sphSupport(sph.params), R = 2.0f * H;
-  const float rho_g = sph.params.rest_density * glm::length(sph.params.gravity);
-  const glm::vec3 down = glm::length(sph.params.gravity) > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f);
+  const float R = 2.0f * fluid::sphSupport(sph.params);
   // The water that can reach a face point: particles within the box's half diagonal plus R,
   // gathered at the first face point in a film (most boxes have none, and skip the scan).
-  std::vector<std::size_t>& nearby = scratch.nearby;
-  std::vector<glm::vec3>& nearby_in_box = scratch.nearby_in_box;
   const glm::quat inverse_rotation = glm::inverse(pose.rotation);
   bool gathered = false;
   const auto gatherNearby = [&] {
     const float reach = coupling.reach + R;
-    nearby.clear();
-    nearby_in_box.clear();
-    for (std::size_t i = 0; i < sph.particles.sphCount(); ++i)
-      if (glm::dot(sph.particles.position[i] - pose.translation, sph.particles.position[i] - pose.translation) <
-          reach * reach) {
-        nearby.push_back(i);
-        nearby_in_box.push_back(inverse_rotation * (sph.particles.position[i] - pose.translation));
-      }
+    scratch.nearby.clear();
+    scratch.nearby_in_box.clear();
+    for (std::size_t i = 0; i < sph.particles.sphCount(); ++i) {
+      const glm::vec3 from_centre = sph.particles.position[i] - pose.translation;
+      if (glm::dot(from_centre, from_centre) >= reach * reach) continue;
+      scratch.nearby.push_back(i);
+      scratch.nearby_in_box.push_back(inverse_rotation * from_centre);
+    }
     gathered = true;
   };
+  const NearbyWater water{scratch.nearby, scratch.nearby_in_box};
   const glm::vec3 half = coupling.half_extents;
   std::vector<glm::vec3>&points = scratch.points, &local = scratch.local;
   std::vector<fluid::ColliderSample>& samples = scratch.samples;
   std::vector<float>& gap = scratch.gap;
   for (int axis = 0; axis < 3; ++axis)
     for (const float side : {-1.0f, 1.0f}) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      const int nu = std::max(1, static_cast<int>(std::ceil(2.0f * half[u] / d)));
-      const int nv = std::max(1, static_cast<int>(std::ceil(2.0f * half[v] / d)));
-      const float area = 4.0f * half[u] * half[v] / static_cast<float>(nu * nv);
+      const BoxFace face{axis, (axis + 1) % 3, (axis + 2) % 3, side};
+      const int nu = std::max(1, static_cast<int>(std::ceil(2.0f * half[face.u] / d)));
+      const int nv = std::max(1, static_cast<int>(std::ceil(2.0f * half[face.v] / d)));
+      const float area = 4.0f * half[face.u] * half[face.v] / static_cast<float>(nu * nv);
       glm::vec3 normal_local(0.0f);
       normal_local[axis] = side;
       const glm::vec3 normal = pose.rotation * normal_local;
@@ -117,11 +164,12 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
         for (int b = 0; b < nv; ++b) {
           glm::vec3 q(0.0f);
           q[axis] = side * half[axis];
-          q[u] = half[u] * (2.0f * (static_cast<float>(a) + 0.5f) / static_cast<float>(nu) - 1.0f);
-          q[v] = half[v] * (2.0f * (static_cast<float>(b) + 0.5f) / static_cast<float>(nv) - 1.0f);
+          q[face.u] = half[face.u] * (2.0f * (static_cast<float>(a) + 0.5f) / static_cast<float>(nu) - 1.0f);
+          q[face.v] = half[face.v] * (2.0f * (static_cast<float>(b) + 0.5f) / static_cast<float>(nv) - 1.0f);
           points.push_back(pose.rotation * q + pose.translation);
         }
-      // Gap to the scene's colliders: the film exists only where it is thinner than d.
+      // Gap to the scene's colliders that face this face (fluid::facesAcrossAFilm): the film
+      // exists only where it is thinner than d.
       gap.assign(points.size(), std::numeric_limits<float>::max());
       for (std::size_t c = 0; c < coupling.first_collider && c < sph.colliders.size(); ++c) {
         const fluid::SphCollider& collider = sph.colliders[c];
@@ -129,37 +177,20 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
         samples.assign(points.size(), fluid::ColliderSample{});
         for (std::size_t k = 0; k < points.size(); ++k) local[k] = fluid::toColliderSpace(collider.pose, points[k]);
         collider.shape->query(local, samples);
-        for (std::size_t k = 0; k < points.size(); ++k)
-          if (samples[k].valid) gap[k] = std::min(gap[k], samples[k].distance);
+        for (std::size_t k = 0; k < points.size(); ++k) {
+          const glm::vec3 collider_normal = collider.pose.rotation * samples[k].normal;
+          if (samples[k].valid && fluid::facesAcrossAFilm(normal, collider_normal))
+            gap[k] = std::min(gap[k], samples[k].distance);
+        }
       }
       for (std::size_t k = 0; k < points.size(); ++k) {
         if (!(gap[k] < d)) continue;
         if (!gathered) gatherNearby();
-        const glm::vec3 x = points[k];
-        double weight = 0.0, weighted = 0.0;
-        for (std::size_t n = 0; n < nearby.size(); ++n) {
-          const std::size_t i = nearby[n];
-          const glm::vec3 rel = sph.particles.position[i] - x;
-          const float dist2 = glm::dot(rel, rel);
-          if (dist2 >= R * R) continue;
-          // Water in the film itself is left out: squeezed, its pressure is the SPH's reading of a
-          // gap it does not resolve, not the surrounding water's.
-          const glm::vec3 in_box = nearby_in_box[n];
-          if (side * in_box[axis] - half[axis] < d && std::abs(in_box[u]) < half[u] && std::abs(in_box[v]) < half[v])
-            continue;
-          const float dist = std::sqrt(dist2), q = 1.0f - dist / R;
-          const float w = q * q;  // a smooth weight that falls to 0 at R
-          // Hydrostatic shift from the particle's height to the point's (down = gravity's direction).
-          const float p = sph.particles.pressure[i] + rho_g * glm::dot(x - sph.particles.position[i], down);
-          weight += w;
-          weighted += w * p;
-        }
-        if (!(weight > 0.0)) continue;
-        const float pressure = std::max(0.0f, static_cast<float>(weighted / weight));
-        if (!(pressure > 0.0f) || !std::isfinite(pressure)) continue;
+        const float pressure = filmPressureAt(points[k], face, sph, water, half, d, R);
+        if (!(pressure > 0.0f)) continue;
         const glm::vec3 f = -pressure * area * normal;
         out.force += f;
-        out.torque += glm::cross(x - pose.translation, f);
+        out.torque += glm::cross(points[k] - pose.translation, f);
         ++out.points;
       }
     }

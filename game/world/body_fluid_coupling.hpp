@@ -24,12 +24,13 @@
 // the water around it. Without a closure a crate lighter than water that reaches the floor of the
 // fountain's pool (about three particle layers deep: a 500 kg/m^3 crate at its Archimedes draft
 // leaves 8.6 cm, about d, under it) stays on it or floats too deep. So every face point within d
-// of a scene collider gets the pressure filmForce extrapolates from the water around it (the
-// particles within twice the kernel support, each shifted hydrostatically by rho_0 |g| (y_j - y)
-// from its height to the point's, as Akinci et al. 2012's boundary samples take the fluid's
-// pressure), leaving out the particles in the film itself; and the SPH leaves the push of water
-// squeezed between the box and a scene collider out of the box's force (fluid::SphCollider::
-// film_gap = d, film_partners = the scene's colliders), so the film is counted once.
+// of a scene collider that faces it across the film (fluid::facesAcrossAFilm) gets the pressure
+// filmForce extrapolates from the water around it (the particles within twice the kernel support,
+// each shifted hydrostatically by rho_0 |g| (y_j - y) from its height to the point's, as Akinci et
+// al. 2012's boundary samples take the fluid's pressure), leaving out the particles in the film
+// itself; and the SPH leaves the push of water squeezed between the box and such a collider out
+// of the box's force (fluid::SphCollider::film_gap = d, film_partner_count = the scene's
+// colliders), so the film is counted once.
 
 #include "engine/physics/physics_world.hpp"
 #include "fluid/sph/sph.hpp"
@@ -86,9 +87,9 @@ struct BodyFluidCoupling {
 };
 
 // The film's pressure on one box (see the header comment): face points on a regular grid of
-// about d, each that lies within d of a scene collider (sph.colliders before first_collider),
-// get the extrapolated pressure of the water around them; particles within d in front of the face
-// and inside its outline (the film's own) are left out of the extrapolation. Force (N) and torque
+// about d; each that lies within d of a scene collider (sph.colliders before first_collider)
+// facing it gets the extrapolated pressure of the water around it, with the particles within d
+// of the face and inside its outline (the film's own) left out of the extrapolation. Force (N) and torque
 // (N m, about the box centre) on the box at `pose`; `points` counts the face points that got it.
 struct FilmWrench {
   glm::vec3 force{0.0f}, torque{0.0f};

@@ -273,7 +273,7 @@ struct Floating {
   float centre_above_floor = 0.0f;           // m
   float level = 0.0f, visible_level = 0.0f;  // m above the basin floor
   // What holds the crate up (N, means over the samples): the SPH's coupling force on it, and the
-  // film closure's push on its dry face points (game::filmForce, as forcesToBodies adds it).
+  // film closure's push on its face points in the film (game::filmForce, as forcesToBodies adds it).
   float sph_force = 0.0f, film_force = 0.0f;
   int samples = 0;
 };
@@ -426,11 +426,9 @@ DropMeans dropHalfDensityCrates(const game::SectionConfig* water, const char* la
 // crate reaches the floor on landing, and at its Archimedes draft its bottom lies 8.6 cm, about
 // one spacing, above the floor: the water under it is a film the SPH does not resolve (one layer
 // at most, squeezed out at one step a frame). The film closure of game/world/body_fluid_coupling
-// presses every face point within d of the floor with the surrounding water's pressure, and the
-// SPH leaves the squeezed particles' push out of the crate's force (SphCollider::film_gap), so the
-// film is counted once. Without the closure the crate lay on the floor (0.81 submerged); with the
-// closure pressing only points no particle was near, it floated about 0.64 submerged here.
-// Issue 33's bar, half submerged within 15 % (0.425-0.575), is asserted on the mean of the drops,
+// presses every face point within d of the floor, facing it, with the surrounding water's
+// pressure, and the SPH leaves the squeezed particles' push out of the crate's force
+// (SphCollider::film_gap), so the film is counted once. Issue 33's bar, half submerged within 15 % (0.425-0.575), is asserted on the mean of the drops,
 // below the pool's volume level and below the visible level around the crate.
 TEST(FountainFloating, AHalfDensityCrateFloatsHalfSubmerged) {
   const game::SectionConfig water = fountainSceneWater();
@@ -452,13 +450,16 @@ TEST(FountainFloating, ADenseCrateSinksToTheBasinFloor) {
 // The same drops in the game's default water (`sph_fluid: {}`: DFSPH steps of at most 5 ms, cfl
 // 0.4). That water stands looser at its top than the fountain's (the top layer about 5 % under
 // the rest density), so near +x, where the jet's water comes down, its visible surface lies 2-3 cm
-// above the volume level the particle count gives: the crate floats in the surface it meets, and
-// the bar is asserted below the visible level (both figures are printed, docs/engine.md's third
-// pool table).
-TEST(FountainFloating, InTheGameDefaultWaterTooBelowItsVisibleLevel) {
+// above the volume level the particle count gives: the crate floats in the surface it meets. Issue
+// 33's bar is asserted below the visible level; below the volume level the crates float higher
+// than the bar allows (docs/engine.md's third pool table), and only a looser bound, within 25 %,
+// is asserted there, to catch drift.
+TEST(FountainFloating, InTheGameDefaultWaterAgainstItsVisibleSurface) {
   const DropMeans means = dropHalfDensityCrates(nullptr, "default water");
   EXPECT_GT(means.below_visible_level, 0.425f) << "half submerged, within 15 %";
   EXPECT_LT(means.below_visible_level, 0.575f);
+  EXPECT_GT(means.below_volume_level, 0.375f) << "below the volume level, within 25 %";
+  EXPECT_LT(means.below_volume_level, 0.625f);
 }
 
 // The figures of docs/engine.md's second pool table (about 15 s; run with --gtest_also_run_disabled_tests):

@@ -480,42 +480,60 @@ TEST(SphCollisions, AThinPlateThatTurnsAsItPassesAParticleLeavesItOnItsSide) {
   EXPECT_LT(left_alone.x, -0.002f);
 }
 
-}  // namespace
-
 // SphCollider::film_gap: water squeezed between a crate and its film partner (a still floor) into a
-// gap thinner than film_gap is a film no particle resolves. The crate takes none of its reaction
-// (the caller's film closure presses the crate there), the water moves exactly as without the
-// film rule, and water beside the crate, out of the film, still pushes it as before.
-TEST(SphCollisions, WaterInAFilmUnderACrateLeavesTheCratesPushToTheCaller) {
-  struct Outcome {
-    glm::vec3 force, position;
-  };
-  const auto step = [](float film_gap, glm::vec3 particle) {
-    SphWorld w;
-    w.params = fountainWater();
-    w.params.speculative_contacts = true;
-    SphCollider crate;
-    crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
-    crate.pose.translation = glm::vec3(0.0f, 0.36f, 0.0f);  // bottom 6 cm above the floor: under d = 8 cm
-    crate.pose.linear_velocity = glm::vec3(0.0f, -0.5f, 0.0f);
-    crate.material.resilience = 0.0f;
-    crate.surface_pressure_force = true;
-    crate.film_gap = film_gap;
-    crate.film_partners = 1;
-    w.colliders = {stillFloor(), crate};
-    EXPECT_TRUE(addSphParticle(w, particle));
-    SphStepStats stats;
-    EXPECT_TRUE(stepSph(w, 1.0f / 60.0f, &stats).ok());
-    return Outcome{w.colliders[1].force, w.particles.position[0]};
-  };
-  const float d = sphSpacing(fountainWater());
-  const glm::vec3 under(0.05f, 0.03f, 0.0f), beside(0.31f, 0.2f, 0.0f);
-  const Outcome under_resolved = step(0.0f, under), under_film = step(d, under);
-  EXPECT_GT(under_resolved.force.y, 1.0f) << "without the rule the squeezed water pushes the crate up";
-  EXPECT_EQ(under_film.force, glm::vec3(0.0f)) << "in the film, the crate takes none of it";
-  EXPECT_EQ(under_film.position, under_resolved.position) << "the water moves as without the rule";
-  const Outcome beside_resolved = step(0.0f, beside), beside_film = step(d, beside);
-  EXPECT_GT(glm::length(beside_film.force), 0.0f) << "water beside the crate pushes it";
-  EXPECT_EQ(beside_film.force, beside_resolved.force);
-  EXPECT_EQ(beside_film.position, beside_resolved.position);
+// gap thinner than film_gap is a film no particle resolves. The crate takes none of its push (the
+// caller's film closure presses the crate there) by any of the three routes, each run alone here:
+// the boundary-pressure term, the speculative contact and the end-of-step collision pass. The
+// water moves exactly as without the film rule, and water beside the crate, out of the film, still
+// pushes it as before.
+struct FilmRoute {
+  const char* name;
+  bool boundary_pressure, speculative_contacts;
+  float crate_speed;  // m/s, down
+};
+
+struct FilmOutcome {
+  glm::vec3 force, position;
+};
+
+FilmOutcome stepBesideACrate(const FilmRoute& route, float film_gap, glm::vec3 particle) {
+  SphWorld w;
+  w.params = fountainWater();
+  w.params.speculative_contacts = route.speculative_contacts;
+  SphCollider crate;
+  crate.shape = std::make_shared<BoxShape>(glm::vec3(0.3f));
+  crate.pose.translation = glm::vec3(0.0f, 0.36f, 0.0f);  // bottom 6 cm above the floor: under d = 8 cm
+  crate.pose.linear_velocity = glm::vec3(0.0f, -route.crate_speed, 0.0f);
+  crate.material.resilience = 0.0f;
+  crate.boundary_pressure = route.boundary_pressure;
+  crate.surface_pressure_force = true;
+  crate.film_gap = film_gap;
+  crate.film_partner_count = 1;
+  w.colliders = {stillFloor(), crate};
+  EXPECT_TRUE(addSphParticle(w, particle));
+  EXPECT_TRUE(stepSph(w, 1.0f / 60.0f).ok());
+  return FilmOutcome{w.colliders[1].force, w.particles.position[0]};
 }
+
+TEST(SphCollisions, WaterInAFilmUnderACrateLeavesTheCratesPushToTheCaller) {
+  const float d = sphSpacing(fountainWater());
+  const glm::vec3 under(0.05f, 0.03f, 0.0f);
+  // At 2.5 m/s the crate's bottom ends the step 1.2 cm under the particle's start: without
+  // speculative contacts the collision pass pushes it out, with them the contact holds it ahead.
+  const FilmRoute routes[] = {{"boundary pressure", true, false, 0.5f},
+                              {"speculative contact", false, true, 2.5f},
+                              {"collision pass", false, false, 2.5f}};
+  for (const FilmRoute& route : routes) {
+    const FilmOutcome resolved = stepBesideACrate(route, 0.0f, under), film = stepBesideACrate(route, d, under);
+    EXPECT_GT(resolved.force.y, 1.0f) << route.name << ": without the rule the squeezed water pushes the crate up";
+    EXPECT_EQ(film.force, glm::vec3(0.0f)) << route.name << ": in the film, the crate takes none of it";
+    EXPECT_EQ(film.position, resolved.position) << route.name << ": the water moves as without the rule";
+  }
+  const glm::vec3 beside(0.31f, 0.2f, 0.0f);
+  const FilmOutcome resolved = stepBesideACrate(routes[0], 0.0f, beside), film = stepBesideACrate(routes[0], d, beside);
+  EXPECT_GT(glm::length(film.force), 0.0f) << "water beside the crate pushes it";
+  EXPECT_EQ(film.force, resolved.force);
+  EXPECT_EQ(film.position, resolved.position);
+}
+
+}  // namespace
