@@ -94,23 +94,30 @@ struct NearbyWater {
   const std::vector<glm::vec3>& in_box;
 };
 
+// What filmPressureAt reads, fixed for one box and step: its half extents, the spacing d, the
+// reach R of the extrapolation and the hydrostatic gradient rho_0 |g| along `down`.
+struct FilmReading {
+  glm::vec3 half{0.0f};
+  float d = 0.0f, R = 0.0f, rho_g = 0.0f;
+  glm::vec3 down{0.0f};
+};
+
 // The film's pressure at face point x: the surrounding water's, from the particles within R
 // outside the film (squeezed, a film particle's pressure is the SPH's reading of a gap it does
 // not resolve), each shifted hydrostatically by rho_0 |g| (y_j - y) to the point's height, a
 // smooth-weighted mean; 0 where no such water is within R.
 float filmPressureAt(glm::vec3 x, const BoxFace& face, const fluid::SphWorld& sph, const NearbyWater& water,
-                     glm::vec3 half, float d, float R) {
-  const float rho_g = sph.params.rest_density * glm::length(sph.params.gravity);
-  const glm::vec3 down = glm::length(sph.params.gravity) > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f);
+                     const FilmReading& reading) {
+  const float R = reading.R;
   double weight = 0.0, weighted = 0.0;
   for (std::size_t n = 0; n < water.index.size(); ++n) {
     const std::size_t i = water.index[n];
     const glm::vec3 rel = sph.particles.position[i] - x;
     const float dist2 = glm::dot(rel, rel);
-    if (dist2 >= R * R || inFaceFilm(water.in_box[n], face, half, d)) continue;
+    if (dist2 >= R * R || inFaceFilm(water.in_box[n], face, reading.half, reading.d)) continue;
     const float q = 1.0f - std::sqrt(dist2) / R;
     const float w = q * q;  // a smooth weight that falls to 0 at R
-    const float p = sph.particles.pressure[i] + rho_g * glm::dot(x - sph.particles.position[i], down);
+    const float p = sph.particles.pressure[i] + reading.rho_g * glm::dot(x - sph.particles.position[i], reading.down);
     weight += w;
     weighted += w * p;
   }
@@ -147,6 +154,9 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
   };
   const NearbyWater water{scratch.nearby, scratch.nearby_in_box};
   const glm::vec3 half = coupling.half_extents;
+  const float g = glm::length(sph.params.gravity);
+  const FilmReading reading{half, d, R, sph.params.rest_density * g,
+                            g > 0.0f ? glm::normalize(sph.params.gravity) : glm::vec3(0.0f)};
   std::vector<glm::vec3>&points = scratch.points, &local = scratch.local;
   std::vector<fluid::ColliderSample>& samples = scratch.samples;
   std::vector<float>& gap = scratch.gap;
@@ -186,7 +196,7 @@ FilmWrench filmForce(const BodyFluidCoupling& coupling, const fluid::SphWorld& s
       for (std::size_t k = 0; k < points.size(); ++k) {
         if (!(gap[k] < d)) continue;
         if (!gathered) gatherNearby();
-        const float pressure = filmPressureAt(points[k], face, sph, water, half, d, R);
+        const float pressure = filmPressureAt(points[k], face, sph, water, reading);
         if (!(pressure > 0.0f)) continue;
         const glm::vec3 f = -pressure * area * normal;
         out.force += f;

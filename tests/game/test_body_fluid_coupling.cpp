@@ -203,8 +203,8 @@ TEST(BodyFluidFilm, WaterSqueezedIntoTheFilmDoesNotSetItsPressure) {
   ASSERT_GT(squeezed, 0);
   const game::FilmWrench film = game::filmForce(wet.coupling, wet.sph, wet.pose, wet.coupling.film_scratch);
   const float expected = 1000.0f * 9.81f * (level - lift) * (2.0f * kFilmHalf) * (2.0f * kFilmHalf);
-  std::printf("[ metric ] film on a bottom 7 cm over the floor, %d particles squeezed under it: %.1f N up (p A = %.1f N), "
-              "%d points\n",
+  std::printf("[ metric ] film on a bottom 7 cm over the floor, %d particles squeezed under it: %.1f N up "
+              "(p A = %.1f N), %d points\n",
               squeezed, film.force.y, expected, film.points);
   EXPECT_EQ(film.points, 16) << "the bottom face's 4 x 4 points; the sides start above the film";
   EXPECT_NEAR(film.force.y, expected, 0.15f * expected);

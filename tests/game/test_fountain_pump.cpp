@@ -428,8 +428,9 @@ DropMeans dropHalfDensityCrates(const game::SectionConfig* water, const char* la
 // at most, squeezed out at one step a frame). The film closure of game/world/body_fluid_coupling
 // presses every face point within d of the floor, facing it, with the surrounding water's
 // pressure, and the SPH leaves the squeezed particles' push out of the crate's force
-// (SphCollider::film_gap), so the film is counted once. Issue 33's bar, half submerged within 15 % (0.425-0.575), is asserted on the mean of the drops,
-// below the pool's volume level and below the visible level around the crate.
+// (SphCollider::film_gap), so the film is counted once. Issue 33's bar, half submerged within
+// 15 % (0.425-0.575), is asserted on the mean of the drops, below the pool's volume level and
+// below the visible level around the crate.
 TEST(FountainFloating, AHalfDensityCrateFloatsHalfSubmerged) {
   const game::SectionConfig water = fountainSceneWater();
   const DropMeans means = dropHalfDensityCrates(&water, "fountain scene's water");
