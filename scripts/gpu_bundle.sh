@@ -7,8 +7,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build/dev}
-bins=(game/fluiddemo tests/engine/gl_engine tests/gpu/gl_gpu_particles tests/gpu/gl_fluid_render
-      tests/gpu/gl_goo_texture tests/gpu/gl_fluid_methods
+# Every GL test binary the build made (tests/*/gl_*): a test left out is a GL path never run on a GPU.
+mapfile -t gl_tests < <(cd "$build" && find tests -name 'gl_*' -type f -executable | sort)
+bins=(game/fluiddemo "${gl_tests[@]}"
       tests/bench/bench_gpu_particles tests/bench/bench_fluid_render tests/bench/bench_game_fountain)
 rm -rf .gpurun
 mkdir -p .gpurun/bin .gpurun/lib .gpurun/data .gl
@@ -25,7 +26,7 @@ for b in .gpurun/bin/*; do ldd "$b"; done | awk '$3 ~ /^\// {print $1, $3}' | so
     strip --strip-unneeded -o ".gpurun/lib/$name" "$path"
   done
 # One compressed payload: the working tree that travels to the device machine is capped at 64 MiB.
-tar -C .gpurun -czf .gpurun/payload.tar.gz bin lib && rm -rf .gpurun/bin .gpurun/lib
+tar -C .gpurun -cJf .gpurun/payload.tar.xz bin lib && rm -rf .gpurun/bin .gpurun/lib
 cp scripts/gpu_check.sh .gpurun/run.sh
 # The source path compiled into the test binaries (FLUIDDEMO_SOURCE_DIR): gpu_check.sh links it.
 sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt" > .gpurun/source_dir

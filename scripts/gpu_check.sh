@@ -9,11 +9,12 @@
 # Sections, all by default, in this order: tests (the gl_* test binaries), tours (rendered on all
 # cores), pinned (two pinned cores: the fountain tours and the fountain's frame budget against its
 # particle count), mesher (two pinned cores: one and two threads per block size, MESHER_ROUNDS rounds
-# over MESHER_BLOCKS), benches (bench_gpu_particles, bench_fluid_render).
+# over MESHER_BLOCKS), render (the voxel method's Table 1 and each method on a million particles at
+# 1920x1080), benches (bench_gpu_particles, bench_fluid_render).
 cd "$(dirname "$0")/.." || exit 1  # the repository root
 OUT=${OUT:-/tmp/gpu_check}
 mkdir -p "$OUT"
-tar -C .gpurun -xzf .gpurun/payload.tar.gz
+tar -C .gpurun -xJf .gpurun/payload.tar.xz
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 nvidia_egl=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
@@ -45,7 +46,8 @@ sweep_configs() {
 }
 section_tests() {
   : >"$OUT/gl_tests.txt"
-  for t in gl_engine gl_gpu_particles gl_fluid_render gl_goo_texture gl_fluid_methods; do
+  local t
+  for t in $(cd $B && ls gl_*); do
     echo "=== $t"
     # Every line to the log; failures and the summary to the screen.
     timeout 120 $B/$t --gtest_brief=1 >/tmp/gl_test.txt 2>&1
@@ -74,6 +76,9 @@ section_pinned() {
     timeout 150 $pin $B/fluiddemo replay content/replays/$tour.replay --threads 2 \
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12
   done
+  echo "=== $tour's frame budget on 2 pinned cores (scripts/replay_budget.py, as the README's on this project's VM)"
+  PYTHONUNBUFFERED=1 timeout 200 $pin python3 scripts/replay_budget.py $B/fluiddemo \
+    content/replays/fountain_tour.replay fluid_surface.async | tee "$OUT/budget_2cores.md"
   echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
   # shellcheck disable=SC2046
   timeout 300 $pin $B/bench_game_fountain --threads 2 --frames 300 --mesh 1 \
@@ -99,13 +104,37 @@ section_mesher() {
     done
   done
 }
+# Zirr & Dachsbacher Table 1 on the GPU: the voxel method on a million-particle pool at 1920x1080 per
+# tile size (the paper's 128² to 1024x512, and the whole screen), §4.3's inner cells left out, and each
+# water method on the same set (scripts/make_render_sets.py; stage times are the mean of the timed frames).
+section_render() {
+  local set=/tmp/render_sets/pool_1000000.xyz tile method
+  local keep='render |draw|splat|compress|connect|filter|normals|shade|extract|upload|tiles|splatted|memory'
+  python3 scripts/make_render_sets.py /tmp/render_sets --sizes 1000000 | grep pool
+  for tile in 128x128 256x256 512x512 1024x512 1920x1080; do
+    echo "=== voxel, tile $tile"
+    timeout 40 $B/fluiddemo render --in $set --method voxel --width 1920 --height 1080 --tile-size $tile \
+      --frames 5 --out /tmp/render.png --force 2>&1 | grep -E "$keep"
+  done
+  echo "=== voxel, the budget's tiles, full inner cells left out"
+  timeout 40 $B/fluiddemo render --in $set --method voxel --width 1920 --height 1080 --drop-inner-cells \
+    --frames 5 --out /tmp/render.png --force 2>&1 | grep -E "$keep"
+  for method in voxel screen_space raycast mesh; do
+    echo "=== method $method"
+    # At most 8 files come back: the pictures of two methods.
+    local picture=/tmp/render.png
+    [[ $method == voxel || $method == mesh ]] && picture="$OUT/pool1m_$method.png"
+    timeout 60 $B/fluiddemo render --in $set --method $method --width 1920 --height 1080 --frames 3 \
+      --out "$picture" --force 2>&1 | grep -E "$keep"
+  done
+}
 section_benches() {
   echo "=== bench_gpu_particles"
   timeout 60 $B/bench_gpu_particles --reps 9 2>&1 | tail -14
   echo "=== bench_fluid_render"
   timeout 120 $B/bench_fluid_render --frames 20 --sizes 1280x720 --counts 2500,13000,50000 2>&1 | tail -14
 }
-sections=${*:-tests tours pinned mesher benches}
+sections=${*:-tests tours pinned mesher render benches}
 {
   nvidia-smi -L
   echo "cores: $(nproc); $(ldd --version | head -1); sections: $sections"

@@ -15,19 +15,37 @@ layout(std430, binding = 1) readonly buffer Layers { float layer_depth[]; };  //
 const uint kOwnAdjacent = 0xfeu;
 const uint kOwnOther = 0xffu;
 
+// a / b and sqrt(x) rounded as the CPU reference's IEEE float operations round them. `precise`
+// stops fusing and reordering but not a driver's approximate divide and square root (NVIDIA's
+// divide through a reciprocal and are off by an ulp or two), which moves a depth across a layer
+// boundary now and then; one fma correction step from the exact residual (Markstein 1990) gives
+// the correctly rounded result, and leaves an already correctly rounded one as it is.
+float quotient(float a, float b) {
+  precise float q = a / b;
+  precise float residual = fma(-q, b, a);  // a − q b, exact
+  precise float corrected = fma(residual, 1.0 / b, q);
+  return corrected;
+}
+float squareRoot(float x) {
+  precise float s = sqrt(x);
+  if (!(s > 0.0) || isinf(s)) return s;
+  precise float residual = fma(-s, s, x);  // x − s², exact
+  precise float corrected = fma(residual, quotient(0.5, s), s);
+  return corrected;
+}
+
 // View-space ray through pixel p's centre, z = −1: the point at view depth d is d * ray.
 vec3 columnRay(ivec2 p) {
-  precise float ndc_x = (float(p.x) + 0.5) / float(u_size.x) * 2.0 - 1.0;
-  precise float ndc_y = (float(p.y) + 0.5) / float(u_size.y) * 2.0 - 1.0;
-  precise float rx = (ndc_x + u_proj.z) / u_proj.x;
-  precise float ry = (ndc_y + u_proj.w) / u_proj.y;
+  precise float ndc_x = quotient(float(p.x) + 0.5, float(u_size.x)) * 2.0 - 1.0;
+  precise float ndc_y = quotient(float(p.y) + 0.5, float(u_size.y)) * 2.0 - 1.0;
+  precise float rx = quotient(ndc_x + u_proj.z, u_proj.x);
+  precise float ry = quotient(ndc_y + u_proj.w, u_proj.y);
   return vec3(rx, ry, -1.0);
 }
 
 float rayLength(vec3 r) {
   precise float s = r.x * r.x + r.y * r.y + r.z * r.z;
-  precise float l = sqrt(s);
-  return l;
+  return squareRoot(s);
 }
 
 // The layer holding view depth d (binary search in the boundary table, as voxelLayerOf).
@@ -52,9 +70,9 @@ bool sphereLayers(vec3 ray, vec3 c, float radius, out int first, out int last) {
   first = 0;
   last = -1;
   if (!(disc > 0.0)) return false;
-  precise float s = sqrt(disc);
-  precise float z0 = (rc - s) / rr;
-  precise float z1 = (rc + s) / rr;
+  precise float s = squareRoot(disc);
+  precise float z0 = quotient(rc - s, rr);
+  precise float z1 = quotient(rc + s, rr);
   first = layerOf(z0);
   last = layerOf(z1);
   if (last < 0 || first >= u_layer_count) return false;

@@ -30,16 +30,7 @@ enum Binding : GLuint {
 bool drawsEllipsoids(const VoxelRenderer& r) { return r.shapes.count > 0 && r.shapes.count == r.particles.count; }
 
 GLuint buildVoxelProgram(std::vector<ShaderStageFiles> stages, std::string& error) {
-  // GLSL 3.30 (so the shared shading files compile unchanged) plus what the passes use: compute,
-  // SSBOs, image/atomic ops, findLSB and `precise` (gpu_shader5), packSnorm2x16.
-  const std::string prelude =
-      "#extension GL_ARB_compute_shader : enable\n"
-      "#extension GL_ARB_shader_storage_buffer_object : require\n"
-      "#extension GL_ARB_shader_image_load_store : require\n"
-      "#extension GL_ARB_shading_language_420pack : require\n"
-      "#extension GL_ARB_gpu_shader5 : require\n"
-      "#extension GL_ARB_shading_language_packing : require\n";
-  return buildProgram(stages, prelude, error);
+  return buildProgram(stages, voxelShaderPrelude(stages), error);
 }
 
 void resizeBuffer(GLuint buffer, std::size_t bytes) {
@@ -82,6 +73,21 @@ struct StageTimer {
 };
 
 }  // namespace
+
+std::string voxelShaderPrelude(std::span<const ShaderStageFiles> stages) {
+  // GLSL 3.30 (so the shared shading files compile unchanged) plus what the passes use: compute,
+  // SSBOs, image/atomic ops, findLSB and `precise` (gpu_shader5), packSnorm2x16. The compute
+  // extension goes only into compute programs: NVIDIA's compiler takes a vertex or fragment shader
+  // that enables it for a compute shader and refuses its user-defined outputs.
+  const bool compute = std::any_of(stages.begin(), stages.end(),
+                                   [](const ShaderStageFiles& s) { return s.stage == GL_COMPUTE_SHADER; });
+  return std::string(compute ? "#extension GL_ARB_compute_shader : enable\n" : "") +
+         "#extension GL_ARB_shader_storage_buffer_object : require\n"
+         "#extension GL_ARB_shader_image_load_store : require\n"
+         "#extension GL_ARB_shading_language_420pack : require\n"
+         "#extension GL_ARB_gpu_shader5 : require\n"
+         "#extension GL_ARB_shading_language_packing : require\n";
+}
 
 void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out) {
   destroyVoxelRenderer(out);

@@ -30,6 +30,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
+#include <string>
 
 namespace engine {
 
@@ -100,6 +102,8 @@ struct VoxelRenderer {
   VoxelStats stats;
 };
 
+// The extension lines every voxel program's stages start with (compute only where a stage is one).
+std::string voxelShaderPrelude(std::span<const ShaderStageFiles> stages);
 void createVoxelRenderer(const VoxelDesc& desc, VoxelRenderer& out);
 void destroyVoxelRenderer(VoxelRenderer& renderer);
 GlObjectNames glNames(const VoxelRenderer& renderer);

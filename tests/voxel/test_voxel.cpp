@@ -265,4 +265,18 @@ TEST_F(VoxelTest, BadInputIsRefusedWithAMessage) {
   destroyVoxelRenderer(r);
 }
 
+// NVIDIA's compiler reads a vertex or fragment shader that enables GL_ARB_compute_shader as a
+// compute shader and refuses its outputs (the shade program failed to build on an H200 while
+// llvmpipe took it), so only programs with a compute stage may get that line.
+TEST(VoxelShaderPrelude, OnlyComputeProgramsEnableTheComputeExtension) {
+  const std::string compute_line = "#extension GL_ARB_compute_shader";
+  const std::vector<ShaderStageFiles> compute = {{GL_COMPUTE_SHADER, {"voxel_splat.comp"}}};
+  const std::vector<ShaderStageFiles> shade = {{GL_VERTEX_SHADER, {"blit.vert"}},
+                                               {GL_FRAGMENT_SHADER, {"voxel_shade.frag"}}};
+  EXPECT_NE(voxelShaderPrelude(compute).find(compute_line), std::string::npos);
+  const std::string shade_prelude = voxelShaderPrelude(shade);
+  EXPECT_EQ(shade_prelude.find(compute_line), std::string::npos) << shade_prelude;
+  EXPECT_NE(shade_prelude.find("GL_ARB_shader_storage_buffer_object"), std::string::npos) << shade_prelude;
+}
+
 }  // namespace
