@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """Per-frame budget of a replay with its surfaces meshed asynchronously and synchronously.
 
-Runs `fluiddemo replay REPLAY --headless` ROUNDS times per meshing mode, the modes interleaved (so
-both see the same load), and prints a markdown table over all frames of each mode: simulation
-(physics_ms + fluid_ms) + meshing on the main thread (meshing_ms: with async meshing only the
-hand-over and the wait), the meshing worker's own time (mesh_worker_ms), and the whole frame
-(llvmpipe rendering included, which measures Mesa rather than this project).
+Runs `fluiddemo replay REPLAY --headless` ROUNDS times per mode, the modes interleaved (so all see
+the same load): asynchronous meshing (the default), asynchronous meshing with no renderer at all
+(`--no-render --mesh`: without a GPU, llvmpipe's rasteriser threads otherwise share the cores with
+the simulation and the mesher), the same held to 60 frames a second as vsync holds the game's loop
+(`--pace 60`), and synchronous meshing. Prints a markdown table over all frames of
+each mode: simulation (physics_ms + fluid_ms) + meshing on the main thread (meshing_ms: with async
+meshing only the hand-over and the wait), the meshing worker's own time (mesh_worker_ms), the render
+phase and the whole frame (llvmpipe rendering included, which measures Mesa rather than this project).
 
     python3 scripts/replay_budget.py build/dev/game/fluiddemo content/replays/fountain_tour.replay \\
         fluid_surface.async [README.md]
@@ -33,7 +36,12 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
     # The scene's own rendering (graphics high): the budget is the scene's lattice, not llvmpipe's preset.
     base = [fluiddemo, "replay", replay, "--headless", "--no-ui", "--set", "graphics.preset=high"] + SIZE + [
         "--threads", str(threads)]
-    modes = {"async": [], "sync": ["--set", f"{async_key}=false"]}
+    # "bare": asynchronous meshing with no renderer at all (--no-render --mesh), so llvmpipe's
+    # rasteriser threads do not take the 2 cores from the simulation and the mesher.
+    # "paced": the same, each frame started no sooner than 1/60 s after the last, as vsync holds the
+    # game's loop on a machine with a GPU (the worker then meshes in the frame's idle time).
+    modes = {"async": [], "bare": ["--no-render", "--mesh"], "paced": ["--no-render", "--mesh", "--pace", "60"],
+             "sync": ["--set", f"{async_key}=false"]}
     frames = {mode: [] for mode in modes}
     with tempfile.TemporaryDirectory() as tmp:
         for round_ in range(rounds):
@@ -53,20 +61,29 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
     lines = [f"`{' '.join(command)}`, {rounds} runs per mode interleaved, {len(frames['async'])} frames each; "
              "simulation = physics_ms + fluid_ms, meshing = meshing_ms (main thread), worker = mesh_worker_ms:", "",
              "| meshing | most SPH particles | simulation + meshing p50 ms | simulation + meshing p95 ms | "
-             "simulation p95 | meshing (main thread) p95 | worker p95 ms | frame p95 ms |",
-             "|---|---|---|---|---|---|---|---|"]
-    labels = {"async": f"async (`{async_key}`, the default)", "sync": f"synchronous (`--set {async_key}=false`)"}
-    for mode in ("async", "sync"):
+             "simulation p95 | meshing (main thread) p95 | worker p95 ms | render p95 ms | frame p95 ms |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for mode in MODES:
         rows = frames[mode]
         col = lambda name: [float(f[name]) for f in rows]
         sim = [float(f["physics_ms"]) + float(f["fluid_ms"]) for f in rows]
         both = [s + float(f["meshing_ms"]) for s, f in zip(sim, rows)]
         most = max(int(f["particles"]) for f in rows)
-        lines.append(f"| {labels[mode]} | {f'{most:,}' if most else '-'} | {percentile(both, 0.5):.2f} | "
+        lines.append(f"| {mode_label(mode, async_key)} | {f'{most:,}' if most else '-'} | {percentile(both, 0.5):.2f} | "
                      f"**{percentile(both, 0.95):.2f}** | {percentile(sim, 0.95):.2f} | "
                      f"{percentile(col('meshing_ms'), 0.95):.2f} | {percentile(col('mesh_worker_ms'), 0.95):.2f} | "
-                     f"{percentile(col('frame_ms'), 0.95):.2f} |")
+                     f"{percentile(col('render_ms'), 0.95):.2f} | {percentile(col('frame_ms'), 0.95):.2f} |")
     return lines
+
+
+MODES = ("async", "bare", "paced", "sync")
+
+
+def mode_label(mode, async_key):
+    return {"async": f"async (`{async_key}`, the default)",
+            "bare": "async, no renderer (`--no-render --mesh`)",
+            "paced": "async, no renderer, 60 frames a second (`--no-render --mesh --pace 60`)",
+            "sync": f"synchronous (`--set {async_key}=false`)"}[mode]
 
 
 AFTER_BLAST = 120  # frames (2 s at 60 Hz) counted as "after a blast"
@@ -95,7 +112,7 @@ def blast_table(frames):
     lines = ["| meshing | blasts | frames calm / after a blast | SPH steps per frame, calm | after a blast | "
              "steps ratio | simulation ms per frame, calm (mean) | after a blast (mean) | time ratio |",
              "|---|---|---|---|---|---|---|---|---|"]
-    for mode in ("async", "sync"):
+    for mode in MODES:
         rows = frames[mode]
         calm, after = blast_windows(rows)
         if not calm or not after:

@@ -314,10 +314,21 @@ int replayCommand(const Args& args) {
   bool no_render = false;
   app.add_flag("--no-render", no_render,
                "simulation only: the same steps, inputs and checkpoints without GL, meshing or rendering");
+  bool mesh = false;
+  app.add_flag("--mesh", mesh,
+               "with --no-render: mesh the surfaces every frame as a rendered run does (asynchronous where the "
+               "scene says so), still without GL or drawing: simulation + meshing with no renderer on the cores");
+  double pace = 0.0;
+  app.add_option("--pace", pace,
+                 "with --no-render: start frames no faster than HZ per second, as vsync holds the game's loop "
+                 "(work left to other threads then runs in each frame's idle time)")
+      ->check(CLI::Range(1.0, 1000.0));
   if (const int code = parseCommandLine(app, "replay", args); code >= 0) return code;
   if (const int code = checkArgs(a); code >= 0) return code;
   if (!a.compare.empty()) return compareCommand(a);
   if (!a.wav.empty()) no_render = true;  // the offline render is the simulation-only run
+  if (mesh && !no_render) return usageError("--mesh goes with --no-render (a rendered run meshes anyway)");
+  if (pace > 0.0 && !no_render) return usageError("--pace goes with --no-render");
   if (no_render && !a.run.screenshots.empty())
     return usageError("--screenshot-at needs rendering: drop --no-render (and --wav)");
   if (a.wav_mono && a.wav.empty()) return usageError("--wav-mono needs --wav");
@@ -336,6 +347,8 @@ int replayCommand(const Args& args) {
   a.run.run.show_ui = !a.no_ui;
   a.run.update_hashes = a.update_hashes;
   a.run.render = !no_render;
+  a.run.mesh_without_render = mesh;
+  a.run.pace_hz = pace;
   a.run.audio = !a.wav.empty();
   std::optional<tbb::global_control> limit;
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(a.threads));

@@ -7,9 +7,11 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <thread>
 
 namespace game {
 namespace {
@@ -63,7 +65,9 @@ int finish(ReplayResult& result, std::string& error) {
 
 // The replay without GL: build the world, then per frame inputs, one step, checkpoints. The rows
 // carry the simulation phases (physics, fluid) from a profiler of their own.
-int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& result, std::string& error) {
+int simulateReplay(ReplayPlayer& player, int frames, const ReplayRunOptions& options, ReplayResult& result,
+                   std::string& error) {
+  const bool audio = options.audio;
   World world;
   if (!buildWorld(result.scene, contentDir(), world, error)) return 1;
   engine::audio::Mixer* mixer = audio ? world.links.audio : nullptr;
@@ -75,9 +79,17 @@ int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& r
                           static_cast<std::size_t>(frames + 1));
   }
   result.report.systems_constructed = world.systems;
-  result.report.gl_renderer = "none (simulation only)";
+  result.report.gl_renderer = options.mesh_without_render ? "none (simulation and meshing only)" : "none (simulation only)";
   engine::Profiler profiler;
+  using Clock = std::chrono::steady_clock;
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(options.pace_hz > 0.0 ? 1.0 / options.pace_hz : 0.0));
+  Clock::time_point next_frame = Clock::now();
   for (int frame = 0; frame < frames; ++frame) {
+    if (options.pace_hz > 0.0) {
+      std::this_thread::sleep_until(next_frame);
+      next_frame = std::max(next_frame + period, Clock::now());
+    }
     engine::beginFrame(profiler);
     {
       engine::ScopedPhase phase(profiler, engine::Phase::input);
@@ -88,6 +100,7 @@ int simulateReplay(ReplayPlayer& player, int frames, bool audio, ReplayResult& r
     if (mixer != nullptr)
       engine::audio::setListener(*mixer, {world.camera.position, engine::cameraForward(world.camera)});
     stepWorld(world, &profiler);
+    if (options.mesh_without_render) meshWorld(world, &profiler);
     if (mixer != nullptr) {
       const std::size_t n = audioStepFrames(world.steps - 1, world.step_seconds, sound.sample_rate);
       const std::size_t at = sound.samples.size();
@@ -257,7 +270,7 @@ int runReplay(const ReplayFile& replay, const ReplayRunOptions& options, ReplayR
   ReplayPlayer player;
   player.replay = &replay;
   player.update_hashes = options.update_hashes;
-  if (!options.render) return simulateReplay(player, frames, options.audio, result, error);
+  if (!options.render) return simulateReplay(player, frames, options, result, error);
 
   RunOptions run = options.run;
   run.frames = frames;

@@ -34,6 +34,14 @@ struct ReplayRunOptions {
   // false: the same steps, inputs and checkpoints with no window, GL, meshing or rendering (the
   // state hash never depends on them); the rows then time the simulation phases only.
   bool render = true;
+  // With render false: each frame's surfaces are meshed as a rendered run meshes them (the effects'
+  // prepareFrame, asynchronous where the scene says so), still with no GL or drawing, so the rows
+  // time simulation + meshing with no renderer on the cores.
+  bool mesh_without_render = false;
+  // With render false and > 0: each frame starts no sooner than 1/pace_hz s after the one before (a
+  // loop held to the display's rate, as vsync holds the game's), so work left to other threads (the
+  // asynchronous mesher) runs in the frame's idle time as it would in the game.
+  double pace_hz = 0.0;
   bool allow_scene_change = false;
   bool update_hashes = false;  // record the hashes at checkpoints instead of checking them
   // Applied after the header's set records: `fluiddemo replay --set` passes render-only keys

@@ -6,6 +6,8 @@
 #  - outputs are never replaced without --force (exit 2), and are with it;
 #  - --compare of a CSV with itself gives ratios of 1;
 #  - a wrong checkpoint hash exits 1 naming the step and the subsystem;
+#  - --no-render --mesh meshes every frame without GL, --pace holds the frame rate, and both need
+#    --no-render;
 #  - play --record writes a replay that replays to its recorded checkpoints, and refuses to overwrite.
 set -euo pipefail
 exe="$1"; src="$2"; work="$3"
@@ -69,6 +71,36 @@ set -e
 [ "$code" -eq 1 ] || fail "wrong hash exit $code"
 grep -q "bad.replay:[0-9]*: checkpoint at step 150 failed: first differing subsystem 'rigid_bodies'" "$work/bad.txt" \
   || fail "wrong hash message: $(cat "$work/bad.txt")"
+
+# --no-render --mesh: the fountain's surface meshed every frame without GL (triangles and the worker's
+# time in the rows, the checkpoints as in a rendered run); --mesh alone is refused.
+fountain="$src/content/replays/fountain_tour.replay"
+"$exe" replay "$fountain" --no-render --mesh --frames 160 --csv "$work/m.csv" > "$work/m.txt"
+grep -q "checkpoints: 1 matched of 5" "$work/m.txt" || fail "--no-render --mesh: $(tail -1 "$work/m.txt")"
+/usr/bin/env python3 - "$work/m.csv" <<'PY' || fail "--no-render --mesh rows"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+assert len(rows) == 160, len(rows)
+assert all(float(r["triangles"]) > 1000 for r in rows[1:]), [r["triangles"] for r in rows[:5]]
+assert sum(float(r["mesh_worker_ms"]) for r in rows) > 0 and sum(float(r["meshing_ms"]) for r in rows) > 0
+assert all(float(r["render_ms"]) == 0 for r in rows)
+PY
+set +e
+"$exe" replay "$fountain" --mesh --frames 1 > "$work/m2.txt" 2>&1
+code=$?
+set -e
+[ "$code" -eq 2 ] && grep -q -- "--mesh goes with --no-render" "$work/m2.txt" || fail "--mesh without --no-render ($code)"
+# --pace 5: 12 frames take at least 11 frame periods (2.2 s; unpaced they and the load take under 1 s
+# here); --pace alone is refused.
+start=$(date +%s%N)
+"$exe" replay "$fountain" --no-render --mesh --pace 5 --frames 12 > /dev/null
+elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+[ "$elapsed_ms" -ge 2200 ] || fail "--pace 5 ran 12 frames in $elapsed_ms ms"
+set +e
+"$exe" replay "$fountain" --pace 60 --frames 1 > "$work/m3.txt" 2>&1
+code=$?
+set -e
+[ "$code" -eq 2 ] && grep -q -- "--pace goes with --no-render" "$work/m3.txt" || fail "--pace without --no-render ($code)"
 
 # play --record -> replay.
 "$exe" play crate_yard --headless --no-ui --width 160 --height 90 --frames 130 --record "$work/r.replay" > /dev/null
