@@ -79,8 +79,8 @@ std::string voxelShaderPrelude(std::span<const ShaderStageFiles> stages) {
   // SSBOs, image/atomic ops, findLSB and `precise` (gpu_shader5), packSnorm2x16. The compute
   // extension goes only into compute programs: NVIDIA's compiler takes a vertex or fragment shader
   // that enables it for a compute shader and refuses its user-defined outputs.
-  const bool compute = std::any_of(stages.begin(), stages.end(),
-                                   [](const ShaderStageFiles& s) { return s.stage == GL_COMPUTE_SHADER; });
+  const bool compute =
+      std::any_of(stages.begin(), stages.end(), [](const ShaderStageFiles& s) { return s.stage == GL_COMPUTE_SHADER; });
   return std::string(compute ? "#extension GL_ARB_compute_shader : enable\n" : "") +
          "#extension GL_ARB_shader_storage_buffer_object : require\n"
          "#extension GL_ARB_shader_image_load_store : require\n"

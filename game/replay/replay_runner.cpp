@@ -79,7 +79,8 @@ int simulateReplay(ReplayPlayer& player, int frames, const ReplayRunOptions& opt
                           static_cast<std::size_t>(frames + 1));
   }
   result.report.systems_constructed = world.systems;
-  result.report.gl_renderer = options.mesh_without_render ? "none (simulation and meshing only)" : "none (simulation only)";
+  result.report.gl_renderer =
+      options.mesh_without_render ? "none (simulation and meshing only)" : "none (simulation only)";
   engine::Profiler profiler;
   using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::duration_cast<Clock::duration>(
