@@ -77,7 +77,7 @@ section_pinned() {
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12
   done
   echo "=== $tour's frame budget on 2 pinned cores (scripts/replay_budget.py, as the README's on this project's VM)"
-  PYTHONUNBUFFERED=1 timeout 200 $pin python3 scripts/replay_budget.py $B/fluiddemo \
+  REPLAY_BUDGET_ROUNDS=1 PYTHONUNBUFFERED=1 timeout 300 $pin python3 scripts/replay_budget.py $B/fluiddemo \
     content/replays/fountain_tour.replay fluid_surface.async | tee "$OUT/budget_2cores.md"
   echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
   # shellcheck disable=SC2046
