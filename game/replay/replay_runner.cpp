@@ -88,8 +88,13 @@ int simulateReplay(ReplayPlayer& player, int frames, const ReplayRunOptions& opt
   Clock::time_point next_frame = Clock::now();
   for (int frame = 0; frame < frames; ++frame) {
     if (options.pace_hz > 0.0) {
+      // As vsync: a frame starts on a tick of the display's clock; a frame that ran past its tick
+      // waits for the next one instead of starting at once (the display shows the late frame a tick
+      // later), so work left to other threads gets the idle time it would get in the game.
       std::this_thread::sleep_until(next_frame);
-      next_frame = std::max(next_frame + period, Clock::now());
+      next_frame += period;
+      const Clock::time_point now = Clock::now();
+      if (now > next_frame) next_frame += period * ((now - next_frame) / period + 1);
     }
     engine::beginFrame(profiler);
     {

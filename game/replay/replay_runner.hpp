@@ -38,9 +38,9 @@ struct ReplayRunOptions {
   // prepareFrame, asynchronous where the scene says so), still with no GL or drawing, so the rows
   // time simulation + meshing with no renderer on the cores.
   bool mesh_without_render = false;
-  // With render false and > 0: each frame starts no sooner than 1/pace_hz s after the one before (a
-  // loop held to the display's rate, as vsync holds the game's), so work left to other threads (the
-  // asynchronous mesher) runs in the frame's idle time as it would in the game.
+  // With render false and > 0: frames start on the ticks of a 1/pace_hz s clock, as vsync holds the
+  // game's loop (a frame that ran past its tick waits for the next one), so work left to other
+  // threads (the asynchronous mesher) runs in the frame's idle time as it would in the game.
   double pace_hz = 0.0;
   bool allow_scene_change = false;
   bool update_hashes = false;  // record the hashes at checkpoints instead of checking them
