@@ -76,7 +76,7 @@ section_pinned() {
     timeout 150 $pin $B/fluiddemo replay content/replays/$tour.replay --threads 2 \
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12
   done
-  echo "=== $tour's frame budget on 2 pinned cores (scripts/replay_budget.py, as the README's on this project's VM)"
+  echo "=== fountain_tour's frame budget on 2 pinned cores (scripts/replay_budget.py, as the README's on this project's VM)"
   REPLAY_BUDGET_ROUNDS=1 PYTHONUNBUFFERED=1 timeout 300 $pin python3 scripts/replay_budget.py $B/fluiddemo \
     content/replays/fountain_tour.replay fluid_surface.async | tee "$OUT/budget_2cores.md"
   echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"

@@ -38,8 +38,9 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
         "--threads", str(threads)]
     # "bare": asynchronous meshing with no renderer at all (--no-render --mesh), so llvmpipe's
     # rasteriser threads do not take the 2 cores from the simulation and the mesher.
-    # "paced": the same, each frame started no sooner than 1/60 s after the last, as vsync holds the
-    # game's loop on a machine with a GPU (the worker then meshes in the frame's idle time).
+    # "paced": the same, frames started on the ticks of a 60 Hz clock as vsync holds the game's loop
+    # on a machine with a GPU (the worker then meshes in the frame's idle time). The table rows
+    # follow this order.
     modes = {"async": [], "bare": ["--no-render", "--mesh"], "paced": ["--no-render", "--mesh", "--pace", "60"],
              "sync": ["--set", f"{async_key}=false"]}
     frames = {mode: [] for mode in modes}
@@ -64,8 +65,7 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
              "the same per run | simulation p95 | meshing (main thread) p95 | worker p95 ms | render p95 ms | "
              "frame p95 ms |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    for mode in MODES:
-        rows = frames[mode]
+    for mode, rows in frames.items():
         col = lambda name: [float(f[name]) for f in rows]
         sim = [float(f["physics_ms"]) + float(f["fluid_ms"]) for f in rows]
         both = [s + float(f["meshing_ms"]) for s, f in zip(sim, rows)]
@@ -78,9 +78,6 @@ def budget_table(command, frames, async_key, rounds=ROUNDS):
                      f"{percentile(col('meshing_ms'), 0.95):.2f} | {percentile(col('mesh_worker_ms'), 0.95):.2f} | "
                      f"{percentile(col('render_ms'), 0.95):.2f} | {percentile(col('frame_ms'), 0.95):.2f} |")
     return lines
-
-
-MODES = ("async", "bare", "paced", "sync")
 
 
 def mode_label(mode, async_key):
@@ -116,8 +113,7 @@ def blast_table(frames):
     lines = ["| meshing | blasts | frames calm / after a blast | SPH steps per frame, calm | after a blast | "
              "steps ratio | simulation ms per frame, calm (mean) | after a blast (mean) | time ratio |",
              "|---|---|---|---|---|---|---|---|---|"]
-    for mode in MODES:
-        rows = frames[mode]
+    for mode, rows in frames.items():
         calm, after = blast_windows(rows)
         if not calm or not after:
             continue
