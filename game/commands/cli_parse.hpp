@@ -58,4 +58,23 @@ inline CLI::Validator positiveNumber() {
       "POSITIVE");
 }
 
+// A finite number in [lo, hi]. CLI::Range lets NaN through (every comparison with it is false), so a
+// "nan" given for a double reached the command; this refuses it as out of range.
+inline CLI::Validator numberIn(double lo, double hi) {
+  auto text_of = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return std::string(buf);
+  };
+  return CLI::Validator(
+      [lo, hi, text_of](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!(std::isfinite(value) && value >= lo && value <= hi))
+          return "Value " + text + " not in range " + text_of(lo) + " to " + text_of(hi);
+        return {};
+      },
+      "FLOAT in [" + text_of(lo) + " - " + text_of(hi) + "]");
+}
+
 }  // namespace game

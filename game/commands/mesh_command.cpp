@@ -255,7 +255,7 @@ int meshCommand(const Args& args) {
   double idle_ms = 0.0;
   app.add_option("--idle-ms", idle_ms, "with --reps: sleep this long before each timed extraction (a frame's idle)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(numberIn(0.0, 1000.0));
   int frame_jobs = 0;
   app.add_option("--frame-jobs", frame_jobs,
                  "sequences: frames meshed at once, each on --threads / N threads; 0 = one frame per thread "
@@ -271,16 +271,16 @@ int meshCommand(const Args& args) {
       ->check(CLI::IsMember({"isotropic", "anisotropic"}));
   app.add_option("--kr", kernel.params.k_r, "anisotropic: largest ratio of a kernel's longest axis to its shortest")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 16.0));
+      ->check(numberIn(1.0, 16.0));
   app.add_option("--ks", kernel.params.k_s, "anisotropic: scale of a stretched kernel's axes (1: the sphere's volume)")
       ->capture_default_str()
-      ->check(CLI::Range(0.25, 4.0));
+      ->check(numberIn(0.25, 4.0));
   app.add_option("--kn", kernel.params.k_n, "anisotropic: a particle with this many neighbours or fewer stays a sphere")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
   app.add_option("--lambda", kernel.params.lambda, "anisotropic: kernel centre smoothing towards the neighbours' mean")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(numberIn(0.0, 1.0));
   app.add_option("--kernel-radius", kernel.params.radius,
                  "anisotropic: neighbourhood radius r of each particle's PCA (world units); default 1.5 x --rc "
                  "(3 particle spacings at the game's Rc = 2 spacings)")

@@ -471,16 +471,16 @@ int renderCommand(const Args& args) {
       ->check(CLI::IsMember({"isotropic", "anisotropic"}));
   app.add_option("--kr", aniso.k_r, "anisotropic: largest axis ratio")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 16.0));
+      ->check(numberIn(1.0, 16.0));
   app.add_option("--ks", aniso.k_s, "anisotropic: axis scale (1: the sphere's volume)")
       ->capture_default_str()
-      ->check(CLI::Range(0.25, 4.0));
+      ->check(numberIn(0.25, 4.0));
   app.add_option("--kn", aniso.k_n, "anisotropic: neighbours needed to stretch (more than this)")
       ->capture_default_str()
       ->check(CLI::Range(0, 200));
   app.add_option("--lambda", aniso.lambda, "anisotropic: kernel centre smoothing")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(numberIn(0.0, 1.0));
   app.add_option("--ss-filter", ss_filter,
                  "screen_space depth filter: bilateral or narrow_range (Truong & Yuksel 2018)")
       ->capture_default_str()

@@ -322,7 +322,7 @@ int replayCommand(const Args& args) {
   app.add_option("--pace", pace,
                  "with --no-render: start frames no faster than HZ per second, as vsync holds the game's loop "
                  "(work left to other threads then runs in each frame's idle time)")
-      ->check(CLI::Range(1.0, 1000.0));
+      ->check(numberIn(1.0, 1000.0));
   if (const int code = parseCommandLine(app, "replay", args); code >= 0) return code;
   if (const int code = checkArgs(a); code >= 0) return code;
   if (!a.compare.empty()) return compareCommand(a);

@@ -274,17 +274,17 @@ int soakCommand(const Args& args) {
   auto* scene_option = app.add_option("--scene", scene_names, "scene name or path (repeatable)");
   app.add_flag("--all", all, "every scene in content/scenes (the default)")->excludes(scene_option);
   app.add_option("--seconds", o.seconds, "game time per scene, s (60 = 3,600 steps at 60 Hz)")
-      ->check(CLI::Range(0.1, 1e6))
+      ->check(numberIn(0.1, 1e6))
       ->capture_default_str();
   app.add_option("--seed", o.seed, "seed of the throws")->capture_default_str();
   app.add_option("--width", o.width, "framebuffer width")->check(CLI::Range(64, 4096))->capture_default_str();
   app.add_option("--height", o.height, "framebuffer height")->check(CLI::Range(64, 4096))->capture_default_str();
   app.add_option("--throw-every", o.throw_every, "mean seconds between throws (uniform in 0.5x..1.5x; 0 = none)")
-      ->check(CLI::Range(0.0, 1e6))
+      ->check(numberIn(0.0, 1e6))
       ->capture_default_str();
   app.add_option("--explosive-share", o.explosive_share,
                  "chance that a throw is a fused explosive instead of a crate (0 = crates only)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(numberIn(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--set", o.overrides, "override a scene parameter: section.key=value (repeatable)");
   app.add_flag("--in-process", in_process, "run the scenes in this process (no child per scene)");
