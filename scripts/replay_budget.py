@@ -31,8 +31,9 @@ def percentile(values, p):
     return values[min(len(values) - 1, int(len(values) * p))]
 
 
-def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
-    """Frames per mode ("async": the scene's default, "sync": --set ASYNC_KEY=false), interleaved."""
+def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2, only=None):
+    """Frames per mode ("async": the scene's default, "sync": --set ASYNC_KEY=false), interleaved;
+    `only`: the names of the modes to run (all when None)."""
     # The scene's own rendering (graphics high): the budget is the scene's lattice, not llvmpipe's preset.
     base = [fluiddemo, "replay", replay, "--headless", "--no-ui", "--set", "graphics.preset=high"] + SIZE + [
         "--threads", str(threads)]
@@ -43,6 +44,7 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2):
     # follow this order.
     modes = {"async": [], "bare": ["--no-render", "--mesh"], "paced": ["--no-render", "--mesh", "--pace", "60"],
              "sync": ["--set", f"{async_key}=false"]}
+    modes = {mode: extra for mode, extra in modes.items() if only is None or mode in only}
     frames = {mode: [] for mode in modes}
     with tempfile.TemporaryDirectory() as tmp:
         for round_ in range(rounds):

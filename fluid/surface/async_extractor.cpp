@@ -1,5 +1,6 @@
 #include "fluid/surface/async_extractor.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 
@@ -14,7 +15,7 @@ void copyInto(std::vector<T>& to, std::span<const T> from) {
 
 }  // namespace
 
-AsyncSurfaceExtractor::AsyncSurfaceExtractor() : worker_([this] { work(); }) {}
+AsyncSurfaceExtractor::AsyncSurfaceExtractor(int threads) : arena_(std::max(1, threads)), worker_([this] { work(); }) {}
 
 AsyncSurfaceExtractor::~AsyncSurfaceExtractor() {
   {
@@ -88,7 +89,7 @@ void AsyncSurfaceExtractor::work() {
       job_ready_ = false;
     }
     const auto begin = std::chrono::steady_clock::now();
-    status_ = job_(extractor_, mesh_);
+    arena_.execute([this] { status_ = job_(extractor_, mesh_); });
     job_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
     {
       const std::lock_guard lock(mutex_);

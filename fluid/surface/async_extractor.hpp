@@ -9,9 +9,19 @@
 // (no allocation once both meshes have grown). The mesh is what SurfaceExtractor::extract gives
 // for the copied input: deterministic and thread-count invariant like it.
 //
+// The worker's jobs run inside a oneTBB task arena of `threads` slots (default 1: the worker alone).
+// An extraction with SurfaceParams::threads = 0 and any parallel loop in a job then use that many
+// threads. One is the default because the caller's own loops (the SPH's steps) are what the frame
+// waits for: oneTBB keeps one worker thread per core beyond the first, and a two-slot mesher arena
+// takes the worker the caller's loops were using whenever both run, so the steps fall back to the
+// caller's thread alone (fountain_tour on 2 cores, rendered: simulation + meshing p95 13.9 -> 11.1 ms
+// with one; README, "The fountain's frame budget"). The mesh is the same for every thread count.
+//
 // startJob() runs any extraction on the worker (a marching_slices_policy.hpp policy and a pass over
 // the finished mesh, as the blob's tentacle texturing does); the job owns the copy it reads.
 #include "fluid/surface/marching_slices.hpp"
+
+#include <tbb/task_arena.h>
 
 #include <condition_variable>
 #include <functional>
@@ -23,8 +33,8 @@ namespace fluid {
 
 class AsyncSurfaceExtractor {
  public:
-  AsyncSurfaceExtractor();
-  ~AsyncSurfaceExtractor();  // waits for a running job, then stops the worker
+  explicit AsyncSurfaceExtractor(int threads = 1);  // threads: the jobs' arena slots, >= 1
+  ~AsyncSurfaceExtractor();                         // waits for a running job, then stops the worker
   AsyncSurfaceExtractor(const AsyncSurfaceExtractor&) = delete;
   AsyncSurfaceExtractor& operator=(const AsyncSurfaceExtractor&) = delete;
 
@@ -55,6 +65,7 @@ class AsyncSurfaceExtractor {
   void waitForPending();  // drops the mesh of a job not yet collected
   void launch(Job job);
 
+  tbb::task_arena arena_;  // the jobs run in it (threads slots)
   SurfaceExtractor extractor_;
   // The job: a copy of the particles (packed vec3 positions, the one layout), its params and its result.
   std::vector<glm::vec3> positions_;
@@ -73,8 +84,8 @@ class AsyncSurfaceExtractor {
   bool job_ready_ = false;  // set by start(), cleared by the worker when it begins
   bool job_done_ = false;   // set by the worker, cleared by collect()
   bool quit_ = false;
-  bool pending_ = false;    // caller thread only
-  std::thread worker_;      // last: starts after the members it uses exist
+  bool pending_ = false;  // caller thread only
+  std::thread worker_;    // last: starts after the members it uses exist
 };
 
 }  // namespace fluid

@@ -110,7 +110,9 @@ struct SurfaceParams {
   // particles' lattice extent is cut into equal blocks no larger than this. Never depends on
   // `threads`, so the output does not either.
   int blockCubes = 0;
-  int threads = 0;  // 0 = all hardware threads, else 1..256
+  // 0 = as many as the calling thread's oneTBB task arena has slots (all hardware threads outside
+  // one, as tbb::parallel_for would use), else 1..256
+  int threads = 0;
   SurfaceOrder order = SurfaceOrder::none;
   glm::vec3 eye{0.0f};                   // for ordering: eye position (blocks sorted by distance)
   glm::vec3 viewDir{0.0f, 0.0f, -1.0f};  // for ordering: view direction (need not be unit)

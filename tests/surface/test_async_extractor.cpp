@@ -6,9 +6,11 @@
 #include "tests/support/mesh_bits.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 #include <glm/vec4.hpp>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -84,6 +86,24 @@ TEST(AsyncSurfaceExtractor, AStartWithoutCollectDropsTheEarlierJob) {
   const fluid::SurfaceStatus st = async.collect(got);
   ASSERT_EQ(st.error, plain.extract(b.input(), b.params, want).error);
   EXPECT_EQ(meshBitsDiffer(got, want), "");
+}
+
+// The jobs run in an arena of the worker's slots (1 by default), so their parallel loops and an
+// extraction with threads = 0 leave oneTBB's workers to the caller's loops.
+TEST(AsyncSurfaceExtractor, JobsRunInAnArenaOfTheWorkersSlots) {
+  for (int threads : {0, 1, 2}) {
+    std::unique_ptr<fluid::AsyncSurfaceExtractor> async = threads == 0
+                                                              ? std::make_unique<fluid::AsyncSurfaceExtractor>()
+                                                              : std::make_unique<fluid::AsyncSurfaceExtractor>(threads);
+    int slots = -1;
+    async->startJob([&slots](fluid::SurfaceExtractor&, fluid::SurfaceMesh&) {
+      slots = tbb::this_task_arena::max_concurrency();
+      return fluid::SurfaceStatus{};
+    });
+    fluid::SurfaceMesh mesh;
+    ASSERT_TRUE(async->collect(mesh).ok());
+    EXPECT_EQ(slots, threads == 0 ? 1 : threads) << "AsyncSurfaceExtractor(" << threads << "), 0: the default";
+  }
 }
 
 }  // namespace

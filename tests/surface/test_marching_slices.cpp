@@ -6,6 +6,7 @@
 #include "mesh_checks.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -122,6 +123,25 @@ TEST(MarchingSlices, SameTrianglesForEveryBlockSize) {
     EXPECT_TRUE(canonicalTriangles(m) == reference) << "blockCubes " << b;
     EXPECT_EQ(checkTopology(m).badEdges, 0u) << "blockCubes " << b;
   }
+}
+
+// threads = 0 takes the slots of the caller's oneTBB arena, as tbb::parallel_for would: inside a
+// one-slot arena (AsyncSurfaceExtractor's worker) one worker's scratch, as with threads = 1.
+TEST(MarchingSlices, ThreadsZeroUsesTheCallersArenaSlots) {
+  const fluid::ParticlePositions ps = loadSet("spray.xyz");
+  fluid::SurfaceParams p;
+  p.blockCubes = 16;
+  p.threads = 1;
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh one, in_arena;
+  ASSERT_TRUE(ex.extract(inputOf(ps), p, one).ok());
+  ASSERT_GT(one.stats.blocks, 8u) << "enough blocks for a second worker to take some";
+  p.threads = 0;
+  fluid::SurfaceExtractor arena_ex;
+  tbb::task_arena(1).execute([&] { ASSERT_TRUE(arena_ex.extract(inputOf(ps), p, in_arena).ok()); });
+  EXPECT_EQ(in_arena.stats.workingBytesAllWorkers, one.stats.workingBytesAllWorkers)
+      << "one worker's peak, not the sum of one per core";
+  EXPECT_TRUE(in_arena.indices == one.indices);
 }
 
 TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {
