@@ -5,7 +5,8 @@
         fluid_surface.async [ROUNDS [MODES]]
 
 Each round runs the modes of scripts/replay_budget.py (MODES: comma-separated, default
-async,paced,bare) once with BEFORE, then once with AFTER, so both builds see the same load; this
+async,paced,bare) once with each build, BEFORE first in even rounds and AFTER first in odd ones
+(so neither always runs first), so both builds see the same load; this
 shared machine's noise shows between runs more than within one, so the table gives every run's p95
 (simulation + meshing on the main thread, as the budget table) and their median, and the main
 thread's meshing p95 (with asynchronous meshing: the hand-over and the wait for the worker).
@@ -30,13 +31,19 @@ def main():
         sys.exit(__doc__)
     before, after, replay, async_key = sys.argv[1:5]
     rounds = int(sys.argv[5]) if len(sys.argv) > 5 else 4
-    modes = sys.argv[6].split(",") if len(sys.argv) > 6 else ["async", "paced", "bare"]
+    if rounds < 1:
+        sys.exit(f"replay_ab: ROUNDS must be at least 1, got {rounds}")
+    modes = [m.strip() for m in sys.argv[6].split(",")] if len(sys.argv) > 6 else ["async", "paced", "bare"]
+    known = ("async", "bare", "paced", "sync")
+    if any(m not in known for m in modes):
+        sys.exit(f"replay_ab: MODES are among {','.join(known)}, got {','.join(modes)}")
     builds = {"before": before, "after": after}
     frames = {(build, mode): [] for build in builds for mode in modes}
     load_before = os.getloadavg()[0]
     for round_ in range(rounds):
-        for build, binary in builds.items():
-            _, got = run_modes(binary, replay, async_key, rounds=1, only=modes)
+        order = list(builds.items()) if round_ % 2 == 0 else list(builds.items())[::-1]
+        for build, binary in order:
+            command, got = run_modes(binary, replay, async_key, rounds=1, only=modes)
             for mode, rows in got.items():
                 frames[(build, mode)] += [dict(row, run=round_) for row in rows]
     both = lambda r: float(r["physics_ms"]) + float(r["fluid_ms"]) + float(r["meshing_ms"])
@@ -49,9 +56,10 @@ def main():
             main_thread = p95_per_run(rows, lambda r: float(r["meshing_ms"]))
             lines.append(f"| {mode_label(mode, async_key)} | {build} | {' / '.join(f'{v:.2f}' for v in runs)} | "
                          f"**{statistics.median(runs):.2f}** | {' / '.join(f'{v:.2f}' for v in main_thread)} |")
-    lines += ["", f"`python3 scripts/replay_ab.py {' '.join(sys.argv[1:])}`: {rounds} rounds, the builds interleaved "
-              f"in each, on {os.cpu_count()} cores, load average {load_before:.1f} before and "
-              f"{os.getloadavg()[0]:.1f} after."]
+    lines += ["", f"`python3 scripts/replay_ab.py {' '.join(sys.argv[1:])}`: {rounds} rounds of "
+              f"`{' '.join(command)}` with each build's mode flags, the builds interleaved in each, "
+              f"{len(frames[('after', modes[0])]) // rounds} frames per run, on {os.cpu_count()} cores, load average "
+              f"{load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
     print("\n".join(lines))
 
 

@@ -44,7 +44,11 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2, only=None)
     # follow this order.
     modes = {"async": [], "bare": ["--no-render", "--mesh"], "paced": ["--no-render", "--mesh", "--pace", "60"],
              "sync": ["--set", f"{async_key}=false"]}
-    modes = {mode: extra for mode, extra in modes.items() if only is None or mode in only}
+    if only is not None:
+        unknown = set(only) - set(modes)
+        if unknown:
+            sys.exit(f"replay_budget: unknown mode(s) {', '.join(sorted(unknown))}; the modes: {', '.join(modes)}")
+        modes = {mode: extra for mode, extra in modes.items() if mode in set(only)}
     frames = {mode: [] for mode in modes}
     with tempfile.TemporaryDirectory() as tmp:
         for round_ in range(rounds):

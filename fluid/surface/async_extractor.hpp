@@ -33,7 +33,7 @@ namespace fluid {
 
 class AsyncSurfaceExtractor {
  public:
-  explicit AsyncSurfaceExtractor(int threads = 1);  // threads: the jobs' arena slots, >= 1
+  explicit AsyncSurfaceExtractor(int threads = 1);  // threads: the jobs' arena slots; below 1 means 1
   ~AsyncSurfaceExtractor();                         // waits for a running job, then stops the worker
   AsyncSurfaceExtractor(const AsyncSurfaceExtractor&) = delete;
   AsyncSurfaceExtractor& operator=(const AsyncSurfaceExtractor&) = delete;

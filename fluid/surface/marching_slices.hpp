@@ -110,8 +110,8 @@ struct SurfaceParams {
   // particles' lattice extent is cut into equal blocks no larger than this. Never depends on
   // `threads`, so the output does not either.
   int blockCubes = 0;
-  // 0 = as many as the calling thread's oneTBB task arena has slots (all hardware threads outside
-  // one, as tbb::parallel_for would use), else 1..256
+  // 0 = as many as the calling thread's oneTBB task arena has slots (outside one: all the cores the
+  // process may run on, its CPU affinity, as tbb::parallel_for would use), else 1..256
   int threads = 0;
   SurfaceOrder order = SurfaceOrder::none;
   glm::vec3 eye{0.0f};                   // for ordering: eye position (blocks sorted by distance)

@@ -41,6 +41,8 @@
 
 #include <unistd.h>
 
+#include <tbb/task_arena.h>
+
 namespace game {
 namespace {
 
@@ -239,7 +241,7 @@ int meshCommand(const Args& args) {
   app.add_option("--cube", params.cube, "cube edge S of the lattice (world units)")
       ->capture_default_str()
       ->check(positiveNumber());
-  app.add_option("--threads", params.threads, "worker threads, 0 = all hardware threads")
+  app.add_option("--threads", params.threads, "worker threads, 0 = all the cores this process may run on")
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
   app.add_option("--block", params.blockCubes, "largest block edge in cubes, 0 = auto")
@@ -302,7 +304,7 @@ int meshCommand(const Args& args) {
     return usageError("mesh", "--in and --out are both sequence patterns (with '{}') or both files");
   if (sequence_in) {
     if (reps > 0 || stats) return usageError("mesh", "--reps and --stats take one file, not a sequence");
-    const int threads = params.threads > 0 ? params.threads : std::max(1, int(std::thread::hardware_concurrency()));
+    const int threads = params.threads > 0 ? params.threads : std::max(1, tbb::this_task_arena::max_concurrency());
     const int jobs = frame_jobs > 0 ? std::min(frame_jobs, threads) : threads;
     params.threads = std::max(1, threads / jobs);
     return meshSequence(in, out, params, kernel, force, jobs);

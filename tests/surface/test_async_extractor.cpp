@@ -104,6 +104,24 @@ TEST(AsyncSurfaceExtractor, JobsRunInAnArenaOfTheWorkersSlots) {
     ASSERT_TRUE(async->collect(mesh).ok());
     EXPECT_EQ(slots, threads == 0 ? 1 : threads) << "AsyncSurfaceExtractor(" << threads << "), 0: the default";
   }
+  // start() with SurfaceParams::threads = 0 meshes on the worker's one slot: one worker's scratch,
+  // as a plain extraction with threads = 1 (a two-slot run would sum two workers' peaks).
+  std::vector<glm::vec3> grid;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) grid.push_back({float(i), float(j), float((i * 7 + j * 3) % 5)});
+  fluid::SurfaceParams p;
+  p.blockCubes = 8;
+  p.threads = 1;
+  fluid::SurfaceExtractor plain;
+  fluid::SurfaceMesh want, got;
+  ASSERT_TRUE(plain.extract({fluid::pointView(grid)}, p, want).ok());
+  ASSERT_GT(want.stats.blocks, 8u);
+  p.threads = 0;
+  fluid::AsyncSurfaceExtractor async;
+  async.start({fluid::pointView(grid)}, p);
+  ASSERT_TRUE(async.collect(got).ok());
+  EXPECT_EQ(got.stats.workingBytesAllWorkers, want.stats.workingBytesAllWorkers);
+  EXPECT_EQ(meshBitsDiffer(got, want), "");
 }
 
 }  // namespace
