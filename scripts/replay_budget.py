@@ -45,10 +45,10 @@ def run_modes(fluiddemo, replay, async_key, rounds=ROUNDS, threads=2, only=None)
     modes = {"async": [], "bare": ["--no-render", "--mesh"], "paced": ["--no-render", "--mesh", "--pace", "60"],
              "sync": ["--set", f"{async_key}=false"]}
     if only is not None:
-        unknown = set(only) - set(modes)
-        if unknown:
-            sys.exit(f"replay_budget: unknown mode(s) {', '.join(sorted(unknown))}; the modes: {', '.join(modes)}")
-        modes = {mode: extra for mode, extra in modes.items() if mode in set(only)}
+        only = set(only)
+        if only - set(modes):
+            sys.exit(f"replay_budget: unknown mode(s) {', '.join(sorted(only - set(modes)))}; the modes: {', '.join(modes)}")
+        modes = {mode: extra for mode, extra in modes.items() if mode in only}
     frames = {mode: [] for mode in modes}
     with tempfile.TemporaryDirectory() as tmp:
         for round_ in range(rounds):
