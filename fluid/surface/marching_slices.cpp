@@ -27,6 +27,10 @@ std::string fieldError(char axis, std::size_t i, float v) {
 }
 }  // namespace
 
+int surfaceThreads(const SurfaceParams& params) {
+  return params.threads > 0 ? params.threads : std::max(1, tbb::this_task_arena::max_concurrency());
+}
+
 SurfaceStatus validateSurface(const SurfaceInput& in, const SurfaceParams& p) {
   auto bad = [](std::string s) { return SurfaceStatus{std::move(s)}; };
   if (!(std::isfinite(p.rc) && p.rc > 0)) return bad("surface params: rc = " + std::to_string(p.rc) + " must be > 0");

@@ -199,6 +199,10 @@ struct SurfaceStatus {
 // Checks params and input (lengths, NaN/inf, ranges). extract() calls it too.
 SurfaceStatus validateSurface(const SurfaceInput& input, const SurfaceParams& params);
 
+// The worker count an extraction with `params` uses when called from this thread: params.threads,
+// or for 0 the slots of the calling thread's oneTBB arena (the rule on SurfaceParams::threads).
+int surfaceThreads(const SurfaceParams& params);
+
 namespace detail {
 struct ExtractorState;
 }

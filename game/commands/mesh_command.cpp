@@ -41,8 +41,6 @@
 
 #include <unistd.h>
 
-#include <tbb/task_arena.h>
-
 namespace game {
 namespace {
 
@@ -304,7 +302,7 @@ int meshCommand(const Args& args) {
     return usageError("mesh", "--in and --out are both sequence patterns (with '{}') or both files");
   if (sequence_in) {
     if (reps > 0 || stats) return usageError("mesh", "--reps and --stats take one file, not a sequence");
-    const int threads = params.threads > 0 ? params.threads : std::max(1, tbb::this_task_arena::max_concurrency());
+    const int threads = fluid::surfaceThreads(params);
     const int jobs = frame_jobs > 0 ? std::min(frame_jobs, threads) : threads;
     params.threads = std::max(1, threads / jobs);
     return meshSequence(in, out, params, kernel, force, jobs);

@@ -142,6 +142,18 @@ TEST(MarchingSlices, ThreadsZeroUsesTheCallersArenaSlots) {
   EXPECT_EQ(in_arena.stats.workingBytesAllWorkers, one.stats.workingBytesAllWorkers)
       << "one worker's peak, not the sum of one per core";
   EXPECT_TRUE(in_arena.indices == one.indices);
+  // The same rule as a number, for callers that split the threads (fluiddemo mesh's sequence mode).
+  int slots_zero = 0, slots_three = 0;
+  tbb::task_arena(1).execute([&] {
+    slots_zero = fluid::surfaceThreads(p);
+    fluid::SurfaceParams three = p;
+    three.threads = 3;
+    slots_three = fluid::surfaceThreads(three);
+  });
+  EXPECT_EQ(slots_zero, 1);
+  EXPECT_EQ(slots_three, 3) << "a positive count is taken as given";
+  tbb::task_arena(2).execute([&] { slots_zero = fluid::surfaceThreads(p); });
+  EXPECT_EQ(slots_zero, 2);
 }
 
 TEST(MarchingSlices, BitIdenticalForOneTwoAndManyThreads) {

@@ -679,7 +679,7 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());
 
   // 0: what the caller's task arena allows (all cores outside one; 1 on AsyncSurfaceExtractor's worker).
-  const int threads = params.threads > 0 ? params.threads : std::max(1, tbb::this_task_arena::max_concurrency());
+  const int threads = surfaceThreads(params);
   if (!st.arena || st.arenaThreads != threads) {
     st.arena = std::make_unique<tbb::task_arena>(threads);
     st.arenaThreads = threads;
