@@ -7,9 +7,10 @@
 # our packages; EGL through glvnd, SDL's offscreen driver). Results go to $OUT (default /tmp/gpu_check).
 #   usage: .gpurun/run.sh [SECTION...]   (after scripts/gpu_bundle.sh; copy .gpurun, .gl and the repository)
 # Sections, all by default, in this order: tests (the gl_* test binaries), tours (rendered on all
-# cores), pinned (two pinned cores: the fountain tours and the fountain's frame budget against its
-# particle count), mesher (two pinned cores: one and two threads per block size, MESHER_ROUNDS rounds
-# over MESHER_BLOCKS), render (the voxel method's Table 1 and each method on a million particles at
+# cores), pinned (two pinned cores: the fountain tour rendered and its frame budget table,
+# REPLAY_BUDGET_ROUNDS runs per mode, default 1), sweep (two pinned cores: the fountain's frame budget
+# against its particle count), mesher (two pinned cores: one and two threads per block size,
+# MESHER_ROUNDS rounds over MESHER_BLOCKS), render (the voxel method's Table 1 and each method on a million particles at
 # 1920x1080), benches (bench_gpu_particles, bench_fluid_render).
 cd "$(dirname "$0")/.." || exit 1  # the repository root
 OUT=${OUT:-/tmp/gpu_check}
@@ -77,8 +78,13 @@ section_pinned() {
       --csv "$OUT/pinned_$tour.csv" 2>&1 | tail -12
   done
   echo "=== fountain_tour's frame budget on 2 pinned cores (scripts/replay_budget.py, as the README's on this project's VM)"
-  REPLAY_BUDGET_ROUNDS=1 PYTHONUNBUFFERED=1 timeout 300 $pin python3 scripts/replay_budget.py $B/fluiddemo \
+  REPLAY_BUDGET_ROUNDS=${REPLAY_BUDGET_ROUNDS:-1} PYTHONUNBUFFERED=1 timeout 300 $pin python3 scripts/replay_budget.py $B/fluiddemo \
     content/replays/fountain_tour.replay fluid_surface.async | tee "$OUT/budget_2cores.md"
+}
+section_sweep() {
+  command -v taskset >/dev/null || { echo "=== sweep: no taskset, skipped"; return; }
+  local pin
+  pin="taskset -c $(pick_two_cores)"
   echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
   # shellcheck disable=SC2046
   timeout 300 $pin $B/bench_game_fountain --threads 2 --frames 300 --mesh 1 \
@@ -134,7 +140,7 @@ section_benches() {
   echo "=== bench_fluid_render"
   timeout 120 $B/bench_fluid_render --frames 20 --sizes 1280x720 --counts 2500,13000,50000 2>&1 | tail -14
 }
-sections=${*:-tests tours pinned mesher render benches}
+sections=${*:-tests tours pinned sweep mesher render benches}
 {
   nvidia-smi -L
   echo "cores: $(nproc); $(ldd --version | head -1); sections: $sections"

@@ -1,5 +1,7 @@
 #include "fluid/surface/async_extractor.hpp"
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -15,7 +17,16 @@ void copyInto(std::vector<T>& to, std::span<const T> from) {
 
 }  // namespace
 
-AsyncSurfaceExtractor::AsyncSurfaceExtractor(int threads) : arena_(std::max(1, threads)), worker_([this] { work(); }) {}
+int asyncMeshSlots(int threads) {
+  if (threads > 0) return threads;
+  const auto allowed = static_cast<int>(std::min<std::size_t>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+      static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()))));
+  return std::max(1, allowed / 2);
+}
+
+AsyncSurfaceExtractor::AsyncSurfaceExtractor(int threads)
+    : arena_(asyncMeshSlots(threads)), worker_([this] { work(); }) {}
 
 AsyncSurfaceExtractor::~AsyncSurfaceExtractor() {
   {

@@ -9,13 +9,15 @@
 // (no allocation once both meshes have grown). The mesh is what SurfaceExtractor::extract gives
 // for the copied input: deterministic and thread-count invariant like it.
 //
-// The worker's jobs run inside a oneTBB task arena of `threads` slots (default 1: the worker alone).
-// An extraction with SurfaceParams::threads = 0 and any parallel loop in a job then use that many
-// threads. One is the default because the caller's own loops (the SPH's steps) are what the frame
-// waits for: oneTBB keeps one worker thread per core beyond the first, and a two-slot mesher arena
-// takes the worker the caller's loops were using whenever both run, so the steps fall back to the
-// caller's thread alone (fountain_tour on 2 cores, rendered: simulation + meshing p95 13.9 -> 11.1 ms
-// with one; README, "The fountain's frame budget"). The mesh is the same for every thread count.
+// The worker's jobs run inside a oneTBB task arena of `threads` slots. An extraction with
+// SurfaceParams::threads = 0 and any parallel loop in a job then use that many threads. The default
+// (threads <= 0, asyncMeshSlots) is half of what the caller may use, at least one: the caller's own
+// loops (the SPH's steps) are what the frame waits for, and oneTBB keeps one worker thread per core
+// beyond the first, so a mesher arena as wide as the machine takes the workers the caller's loops
+// were using whenever both run. On 2 cores that is the worker alone (fountain_tour, rendered:
+// simulation + meshing p95 13.9 -> 11.1 ms against a two-slot arena; README, "The fountain's frame
+// budget"); on 16 cores 8 slots, where one slot left the main thread waiting for the worker
+// (docs/gpu.md, run 7). The mesh is the same for every thread count.
 //
 // startJob() runs any extraction on the worker (a marching_slices_policy.hpp policy and a pass over
 // the finished mesh, as the blob's tentacle texturing does); the job owns the copy it reads.
@@ -31,9 +33,14 @@
 
 namespace fluid {
 
+// The arena slots AsyncSurfaceExtractor(threads) gives its jobs: threads when positive, else half the
+// parallelism the calling thread may use (oneTBB's active max_allowed_parallelism, at most its
+// arena's slots), at least 1.
+int asyncMeshSlots(int threads);
+
 class AsyncSurfaceExtractor {
  public:
-  explicit AsyncSurfaceExtractor(int threads = 1);  // threads: the jobs' arena slots; below 1 means 1
+  explicit AsyncSurfaceExtractor(int threads = 0);  // threads: the jobs' arena slots; <= 0: asyncMeshSlots
   ~AsyncSurfaceExtractor();                         // waits for a running job, then stops the worker
   AsyncSurfaceExtractor(const AsyncSurfaceExtractor&) = delete;
   AsyncSurfaceExtractor& operator=(const AsyncSurfaceExtractor&) = delete;

@@ -6,6 +6,7 @@
 #include "tests/support/mesh_bits.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <glm/vec4.hpp>
 
@@ -88,9 +89,29 @@ TEST(AsyncSurfaceExtractor, AStartWithoutCollectDropsTheEarlierJob) {
   EXPECT_EQ(meshBitsDiffer(got, want), "");
 }
 
-// The jobs run in an arena of the worker's slots (1 by default), so their parallel loops and an
-// extraction with threads = 0 leave oneTBB's workers to the caller's loops.
+// The default arena is half the parallelism the caller may use, at least one slot: the whole
+// oneTBB worker pool is never the mesher's.
+TEST(AsyncSurfaceExtractor, DefaultSlotsAreHalfTheCallersParallelism) {
+  EXPECT_EQ(fluid::asyncMeshSlots(3), 3) << "a positive count is taken as given";
+  auto slotsUnder = [](std::size_t allowed, int arena_slots) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, allowed);
+    int slots = -1;
+    tbb::task_arena(arena_slots).execute([&] { slots = fluid::asyncMeshSlots(0); });
+    return slots;
+  };
+  EXPECT_EQ(slotsUnder(1, 8), 1);
+  EXPECT_EQ(slotsUnder(2, 8), 1) << "fluiddemo replay --threads 2: the worker alone";
+  EXPECT_EQ(slotsUnder(3, 8), 1);
+  EXPECT_EQ(slotsUnder(8, 8), 4);
+  EXPECT_EQ(slotsUnder(16, 8), 4) << "at most the caller's arena's slots";
+  EXPECT_EQ(slotsUnder(16, 16), 8);
+  EXPECT_EQ(fluid::asyncMeshSlots(-1), fluid::asyncMeshSlots(0));
+}
+
+// The jobs run in an arena of the worker's slots, so their parallel loops and an extraction with
+// threads = 0 leave the rest of oneTBB's workers to the caller's loops.
 TEST(AsyncSurfaceExtractor, JobsRunInAnArenaOfTheWorkersSlots) {
+  const tbb::global_control two_cores(tbb::global_control::max_allowed_parallelism, 2);
   for (int threads : {0, 1, 2}) {
     std::unique_ptr<fluid::AsyncSurfaceExtractor> async = threads == 0
                                                               ? std::make_unique<fluid::AsyncSurfaceExtractor>()
@@ -102,9 +123,9 @@ TEST(AsyncSurfaceExtractor, JobsRunInAnArenaOfTheWorkersSlots) {
     });
     fluid::SurfaceMesh mesh;
     ASSERT_TRUE(async->collect(mesh).ok());
-    EXPECT_EQ(slots, threads == 0 ? 1 : threads) << "AsyncSurfaceExtractor(" << threads << "), 0: the default";
+    EXPECT_EQ(slots, threads == 0 ? 1 : threads) << "AsyncSurfaceExtractor(" << threads << "), 0: the default, on 2 cores";
   }
-  // start() with SurfaceParams::threads = 0 meshes on the worker's one slot: one worker's scratch,
+  // start() with SurfaceParams::threads = 0 meshes on the worker's one slot (2 cores): one worker's scratch,
   // as a plain extraction with threads = 1 (a two-slot run would sum two workers' peaks).
   std::vector<glm::vec3> grid;
   for (int i = 0; i < 40; ++i)
