@@ -10,6 +10,11 @@ reached only by a splat that costs nothing. The table prints that floor against 
 automatic block plan and with one block (`ours-one-block`: no second block's margins, which the plan
 takes for two threads' sake).
 
+A second table splits the peer the same way (its splat, Flying Edges with and without normals,
+`peer-no-normals`) on all four sets: any route that splats a dense value lattice as the peer does and
+then runs Flying Edges costs at least the peer without its normals, which says what such a route
+(the "third route" of docs/surface.md) must save over VTK's Flying Edges to reach 0.8 of the peer.
+
 Each figure is one warm mesh on one thread counted by callgrind between client requests
 (`bench_surface_peers --count SET ROUTE`), split by `callgrind_annotate --inclusive=yes`.
 
@@ -22,16 +27,31 @@ import subprocess
 import tempfile
 
 SETS = ["fountain", "explosion"]
+PEER_SETS = ["fountain", "blob", "explosion", "spray"]
 TOTAL = re.compile(r"^([0-9,]+) \(100\.0+%\)\s+PROGRAM TOTALS", re.M)
 SPLAT = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*BlockMesher<[^>]*>::splatSlice<(true|false)>")
+PEER_SPLAT = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*DensePeer::splatAvx2\(")
+FLYING_EDGES = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*vtkFlyingEdges3D::RequestData\(")
 
 
-def count(bench, set_name, route, work):
+def profile(bench, set_name, route, work):
+    """callgrind_annotate's inclusive listing of one --count run."""
     out = f"{work}/{set_name}.{route}.callgrind"
     subprocess.run(["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}", bench,
                     "--count", set_name, route], check=True, capture_output=True)
-    text = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out], check=True,
+    return subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out], check=True,
                           capture_output=True, text=True).stdout
+
+
+def first(pattern, text, what):
+    for line in text.splitlines():
+        if m := pattern.match(line):
+            return int(m.group(1).replace(",", ""))
+    raise SystemExit(f"no {what} in the profile")
+
+
+def count(bench, set_name, route, work):
+    text = profile(bench, set_name, route, work)
     total = int(TOTAL.search(text).group(1).replace(",", ""))
     # The function itself, not the lambdas inside it (their lines name it too, and its inclusive count has them).
     splat = sum(int(m.group(1).replace(",", "")) for line in text.splitlines()
@@ -55,6 +75,21 @@ def main():
                     raise SystemExit(f"{set_name} {route}: no splatSlice in the profile (not the slice-splat route?)")
                 print(f"| {set_name} | {label} | {total:,} | {splat:,} | {total - splat:,} | {peer:,} "
                       f"| {total / peer:.2f} | {(total - splat) / peer:.2f} |")
+        print()
+        print("| set | peer Ir | of it, the splat | Flying Edges with normals | Flying Edges without normals "
+              "| peer without normals | without normals / peer | 0.8 peer | 0.8 peer - the splat - the rest |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for set_name in PEER_SETS:
+            with_normals = profile(args.bench, set_name, "peer", work)
+            without = profile(args.bench, set_name, "peer-no-normals", work)
+            total = int(TOTAL.search(with_normals).group(1).replace(",", ""))
+            total_without = int(TOTAL.search(without).group(1).replace(",", ""))
+            splat = first(PEER_SPLAT, with_normals, "DensePeer::splatAvx2")
+            fe = first(FLYING_EDGES, with_normals, "vtkFlyingEdges3D::RequestData")
+            fe_without = first(FLYING_EDGES, without, "vtkFlyingEdges3D::RequestData")
+            rest = total - splat - fe  # zeroing the lattice, bounds, the z sort
+            print(f"| {set_name} | {total:,} | {splat:,} | {fe:,} | {fe_without:,} | {total_without:,} "
+                  f"| {total_without / total:.2f} | {0.8 * total:,.0f} | {0.8 * total - splat - rest:,.0f} |")
 
 
 if __name__ == "__main__":

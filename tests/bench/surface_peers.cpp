@@ -5,7 +5,8 @@
 //
 //   bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]
 //   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests;
-//                                           ROUTE = ours | cache | splat | peer | peer-scalar)
+//                                           ROUTE = ours | ours-one-block | cache | splat | peer |
+//                                           peer-scalar | peer-no-normals)
 //
 // Timings: rounds interleave ours and the peer (1 thread, then 2 threads); each timed mesh follows
 // an untimed one of the same route (steady state, as a game meshing every frame); medians of N
@@ -94,6 +95,7 @@ struct DensePeer {
   std::unique_ptr<tbb::task_arena> arena;
   int threads = 0;
   bool scalar = false;
+  bool normals = true;  // false: Flying Edges without its normals (--count SET peer-no-normals)
 
   std::size_t bytes() const { return lattice.size() * sizeof(float); }
 
@@ -137,7 +139,7 @@ struct DensePeer {
       }
     }
     const double origin[3] = {double(i0[0]) * s, double(i0[1]) * s, double(i0[2]) * s};
-    return fe.run(lattice.data(), dims, s, origin, kT);
+    return fe.run(lattice.data(), dims, s, origin, kT, normals);
   }
 
   // Anchors and rests once per particle, then a stable counting sort by lattice z.
@@ -326,8 +328,8 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-// --count: one warm mesh of SET by ROUTE (ours | cache | splat | peer | peer-scalar), one thread, between
-// callgrind's start and stop.
+// --count: one warm mesh of SET by ROUTE (ours | ours-one-block | cache | splat | peer | peer-scalar |
+// peer-no-normals), one thread, between callgrind's start and stop.
 int countMode(const std::string& set, const std::string& route) {
   const float cube = set == "blob" ? 0.3f : set == "explosion" ? 0.6f : 1.0f;
   const fluid::ParticlePositions ps = load(set.c_str());
@@ -342,6 +344,7 @@ int countMode(const std::string& set, const std::string& route) {
   if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
   if (route == "ours-one-block") params.blockCubes = 1024;
   peer.scalar = route == "peer-scalar";
+  peer.normals = route != "peer-no-normals";
   auto run = [&] { return route.rfind("peer", 0) == 0 ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
   CALLGRIND_START_INSTRUMENTATION;
@@ -550,7 +553,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|ours-one-block|cache|splat|peer|peer-scalar\n");
+                   "       bench_surface_peers --count SET ours|ours-one-block|cache|splat|peer|peer-scalar|peer-no-normals\n");
       return 2;
     }
   }

@@ -21,7 +21,8 @@ void setThreads(int threads) { vtkSMPTools::Initialize(threads); }
 FlyingEdges::FlyingEdges() : state_(std::make_unique<FlyingEdgesState>()) {}
 FlyingEdges::~FlyingEdges() = default;
 
-std::size_t FlyingEdges::run(float* lattice, const int dims[3], double spacing, const double origin[3], float value) {
+std::size_t FlyingEdges::run(float* lattice, const int dims[3], double spacing, const double origin[3], float value,
+                             bool normals) {
   FlyingEdgesState& s = *state_;
   s.image->SetDimensions(dims[0], dims[1], dims[2]);
   s.image->SetSpacing(spacing, spacing, spacing);
@@ -31,7 +32,7 @@ std::size_t FlyingEdges::run(float* lattice, const int dims[3], double spacing, 
   s.image->Modified();
   s.filter->SetInputData(s.image);
   s.filter->SetValue(0, value);
-  s.filter->ComputeNormalsOn();
+  s.filter->SetComputeNormals(normals);
   s.filter->ComputeGradientsOff();
   s.filter->ComputeScalarsOff();
   s.filter->Modified();

@@ -19,8 +19,10 @@ class FlyingEdges {
   FlyingEdges();
   ~FlyingEdges();
   // Triangulates the iso surface `value` of lattice[(k dims[1] + j) dims[0] + i] at origin + (i, j, k)
-  // spacing, with normals, on the threads set by setThreads. Returns the triangle count.
-  std::size_t run(float* lattice, const int dims[3], double spacing, const double origin[3], float value);
+  // spacing, with normals unless `normals` is false, on the threads set by setThreads. Returns the
+  // triangle count.
+  std::size_t run(float* lattice, const int dims[3], double spacing, const double origin[3], float value,
+                  bool normals = true);
 
  private:
   std::unique_ptr<FlyingEdgesState> state_;
