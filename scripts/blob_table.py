@@ -59,7 +59,7 @@ def cost(bench, fluiddemo, readme):
     # The blob replay, its goo meshed asynchronously (the default) and synchronously, interleaved.
     command, frames = replay_budget.run_modes(fluiddemo, "content/replays/blob_tour.replay", "blob.async")
     load_after = os.getloadavg()[0]
-    lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {os.cpu_count()} cores, "
+    lines = ["", f"Written by `python3 scripts/blob_table.py --cost {bench} {fluiddemo}` on {len(os.sched_getaffinity(0))} cores, "
              f"load average {load_before:.1f} before and {load_after:.1f} after: wall times on a shared machine, "
              "as noisy as that load says (the CPU column, the main thread's CPU time per frame, is the steadier one "
              "for 1 thread).", "",

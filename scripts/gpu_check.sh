@@ -83,8 +83,10 @@ section_pinned() {
 }
 section_sweep() {
   command -v taskset >/dev/null || { echo "=== sweep: no taskset, skipped"; return; }
-  local pin
-  pin="taskset -c $(pick_two_cores)"
+  local cores pin
+  cores=$(pick_two_cores)
+  pin="taskset -c $cores"
+  echo "=== pinned to cpus $cores: $(lscpu 2>/dev/null | grep -m1 'Model name')"
   echo "=== bench_game_fountain, SPH + async meshing against the particle count, on 2 pinned cores (issue 18 item 5)"
   # shellcheck disable=SC2046
   timeout 300 $pin $B/bench_game_fountain --threads 2 --frames 300 --mesh 1 \

@@ -80,7 +80,7 @@ def main():
     lines += ["", "| low | medium | high |", "|---|---|---|",
               "| " + " | ".join(f"![{p}](docs/images/preset_{p}.png)" for p in PRESETS) + " |", "",
               f"Pictures: step {SHOT_STEP} of the same runs, written at {SIZE[0]}x{SIZE[1]} and stored at 640x360. "
-              f"Written by `/usr/bin/python3 scripts/preset_table.py {' '.join(sys.argv[1:4])}` on {os.cpu_count()} "
+              f"Written by `/usr/bin/python3 scripts/preset_table.py {' '.join(sys.argv[1:4])}` on {len(os.sched_getaffinity(0))} "
               f"cores, load average {load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
     if not readme:
         print("\n".join(lines))

@@ -56,7 +56,7 @@ def main():
                          f"**{statistics.median(runs):.2f}** | {' / '.join(f'{v:.2f}' for v in main_thread)} |")
     lines += ["", f"`python3 scripts/replay_ab.py {' '.join(sys.argv[1:])}`: {rounds} rounds of "
               f"`{' '.join(command)}` with each build's mode flags, the builds interleaved in each, "
-              f"{len(frames[('after', modes[0])]) // rounds} frames per run, on {os.cpu_count()} cores, load average "
+              f"{len(frames[('after', modes[0])]) // rounds} frames per run, on {len(os.sched_getaffinity(0))} cores, load average "
               f"{load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
     print("\n".join(lines))
 

@@ -151,7 +151,7 @@ def main():
     lines = budget_table(command, frames, async_key)
     lines += ["", f"Around the blasts (every explosive that went off, the {AFTER_BLAST} frames from it on against the "
               "other frames):", ""] + blast_table(frames)
-    lines += ["", f"Written by `python3 scripts/replay_budget.py {' '.join(sys.argv[1:4])}` on {os.cpu_count()} cores, "
+    lines += ["", f"Written by `python3 scripts/replay_budget.py {' '.join(sys.argv[1:4])}` on {len(os.sched_getaffinity(0))} cores, "
               f"load average {load_before:.1f} before and {os.getloadavg()[0]:.1f} after."]
     if len(sys.argv) > 4:
         replace_section(sys.argv[4], os.path.splitext(os.path.basename(replay))[0], lines)

@@ -17,7 +17,9 @@
 // were using whenever both run. On 2 cores that is the worker alone (fountain_tour, rendered:
 // simulation + meshing p95 13.9 -> 11.1 ms against a two-slot arena; README, "The fountain's frame
 // budget"); on 16 cores 8 slots, where one slot left the main thread waiting for the worker
-// (docs/gpu.md, run 7). The mesh is the same for every thread count.
+// (docs/gpu.md, runs 7 and 8). The width is read once, by the constructor, on the constructing
+// thread (under its oneTBB global_control and arena); two extractors made by default (the water's
+// and the goo's in one scene) would each take half. The mesh is the same for every thread count.
 //
 // startJob() runs any extraction on the worker (a marching_slices_policy.hpp policy and a pass over
 // the finished mesh, as the blob's tentacle texturing does); the job owns the copy it reads.

@@ -200,7 +200,9 @@ struct SurfaceStatus {
 SurfaceStatus validateSurface(const SurfaceInput& input, const SurfaceParams& params);
 
 // The worker count an extraction with `params` uses when called from this thread: params.threads,
-// or for 0 the slots of the calling thread's oneTBB arena (the rule on SurfaceParams::threads).
+// or for 0 the slots of the calling thread's oneTBB arena (the rule on SurfaceParams::threads). It
+// sizes the extraction's arena and does not read tbb::global_control: under a cap of N (fluiddemo
+// --threads N) oneTBB still runs at most N threads in it.
 int surfaceThreads(const SurfaceParams& params);
 
 namespace detail {

@@ -87,7 +87,7 @@ def main():
             splat = first(PEER_SPLAT, with_normals, "DensePeer::splatAvx2")
             fe = first(FLYING_EDGES, with_normals, "vtkFlyingEdges3D::RequestData")
             fe_without = first(FLYING_EDGES, without, "vtkFlyingEdges3D::RequestData")
-            rest = total - splat - fe  # zeroing the lattice, bounds, the z sort
+            rest = total - splat - fe  # zeroing the lattice, bounds, the z sort, VTK's pipeline outside RequestData
             print(f"| {set_name} | {total:,} | {splat:,} | {fe:,} | {fe_without:,} | {total_without:,} "
                   f"| {total_without / total:.2f} | {0.8 * total:,.0f} | {0.8 * total - splat - rest:,.0f} |")
 

@@ -106,6 +106,21 @@ TEST(AsyncSurfaceExtractor, DefaultSlotsAreHalfTheCallersParallelism) {
   EXPECT_EQ(slotsUnder(16, 8), 4) << "at most the caller's arena's slots";
   EXPECT_EQ(slotsUnder(16, 16), 8);
   EXPECT_EQ(fluid::asyncMeshSlots(-1), fluid::asyncMeshSlots(0));
+  // And the extractor made by default takes that width: 4 slots under a cap of 8 in an 8-slot arena.
+  int job_slots = -1;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 8);
+    tbb::task_arena(8).execute([&] {
+      fluid::AsyncSurfaceExtractor async;
+      async.startJob([&job_slots](fluid::SurfaceExtractor&, fluid::SurfaceMesh&) {
+        job_slots = tbb::this_task_arena::max_concurrency();
+        return fluid::SurfaceStatus{};
+      });
+      fluid::SurfaceMesh mesh;
+      EXPECT_TRUE(async.collect(mesh).ok());
+    });
+  }
+  EXPECT_EQ(job_slots, 4);
 }
 
 // The jobs run in an arena of the worker's slots, so their parallel loops and an extraction with

@@ -126,7 +126,7 @@ TEST(MarchingSlices, SameTrianglesForEveryBlockSize) {
 }
 
 // threads = 0 takes the slots of the caller's oneTBB arena, as tbb::parallel_for would: inside a
-// one-slot arena (AsyncSurfaceExtractor's worker) one worker's scratch, as with threads = 1.
+// one-slot arena (as AsyncSurfaceExtractor's worker on 2 cores) one worker's scratch, as with threads = 1.
 TEST(MarchingSlices, ThreadsZeroUsesTheCallersArenaSlots) {
   const fluid::ParticlePositions ps = loadSet("spray.xyz");
   fluid::SurfaceParams p;

@@ -678,7 +678,8 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   buildBlockLists(st, su, params);
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());
 
-  // 0: what the caller's task arena allows (all cores outside one; 1 on AsyncSurfaceExtractor's worker).
+  // 0: what the caller's task arena allows (all cores outside one; asyncMeshSlots on AsyncSurfaceExtractor's
+  // worker, 1 on 2 cores).
   const int threads = surfaceThreads(params);
   if (!st.arena || st.arenaThreads != threads) {
     st.arena = std::make_unique<tbb::task_arena>(threads);
