@@ -320,6 +320,9 @@ struct SphStepTotals {
   std::size_t dt_min_clamps = 0;    // steps with dt_held_at_min
   std::size_t dt_request_cuts = 0;  // steps with dt_limited_by_request (informational: landing on a frame's end)
   std::size_t nonfinite = 0;
+  // DFSPH's solver iterations (constant-density plus divergence-free, Bender & Koschier 2015 §4)
+  // summed over the steps: what a step costs beyond its fixed passes (0 for WCSPH).
+  std::size_t solver_iterations = 0;
   float meanDensityError() const { return steps > 0 ? static_cast<float>(density_error_sum / steps) : 0.0f; }
 };
 void addStepTotals(SphStepTotals& totals, const SphStepStats& step);

@@ -317,6 +317,8 @@ void addStepTotals(SphStepTotals& totals, const SphStepStats& step) {
   totals.dt_min_clamps += step.dt_held_at_min ? 1 : 0;
   totals.dt_request_cuts += step.dt_limited_by_request ? 1 : 0;
   totals.nonfinite += step.nonfinite;
+  totals.solver_iterations += static_cast<std::size_t>(std::max(0, step.density_iterations)) +
+                              static_cast<std::size_t>(std::max(0, step.divergence_iterations));
 }
 
 void addStepTotals(SphStepTotals& totals, const SphStepTotals& more) {
@@ -330,6 +332,7 @@ void addStepTotals(SphStepTotals& totals, const SphStepTotals& more) {
   totals.dt_min_clamps += more.dt_min_clamps;
   totals.dt_request_cuts += more.dt_request_cuts;
   totals.nonfinite += more.nonfinite;
+  totals.solver_iterations += more.solver_iterations;
 }
 
 bool sphTotalsWarn(const SphStepTotals& totals, float deep_push) {

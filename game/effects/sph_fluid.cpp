@@ -225,6 +225,7 @@ class SphFluidEffect final : public EffectOf<SphFluid> {
     const fluid::SphStepTotals& t = state.last_totals;
     row.set("sph_steps", static_cast<double>(t.steps));
     row.set("sph_fast", static_cast<double>(fastParticles()));
+    row.set("sph_iterations", static_cast<double>(t.solver_iterations));
     row.set("density_err_mean", t.meanDensityError());
     row.set("density_err_p99", t.p99_density_error);
     row.set("density_err_max", t.max_density_error);
@@ -344,6 +345,7 @@ constexpr ColumnSpec kColumns[] = {
     {"water_spray", count, "of the water above, flying ballistic (fluid::SphParams::spray_speed)"},
     {"sph_steps", count, "the solver's sub-steps in the frame's game step"},
     {"sph_fast", count, "SPH particles (not spray) faster than cfl d / game step: each needs a second sub-step"},
+    {"sph_iterations", count, "the pressure solver's iterations over the sub-steps (DFSPH: constant density + divergence)"},
     {"density_err_mean", ratio, "mean over the sub-steps of the mean max(0, rho/rho_0 - 1)"},
     {"density_err_p99", ratio, "largest over the sub-steps of the 99th percentile over particles"},
     {"density_err_max", ratio, "largest density error of any particle"},

@@ -313,7 +313,7 @@ TEST(FrameTimes, CsvRoundTripsWithTheDocumentedColumns) {
   // the hash.
   EXPECT_EQ(game::frameCsvHeader(),
             "frame,step,input_ms,physics_ms,fluid_ms,meshing_ms,render_ms,ui_ms,frame_ms,blasts,particles,water_pool,"
-            "water_air,water_ground,water_pump,water_spray,sph_steps,sph_fast,density_err_mean,density_err_p99,"
+            "water_air,water_ground,water_pump,water_spray,sph_steps,sph_fast,sph_iterations,density_err_mean,density_err_p99,"
             "density_err_max,pushed_out,push_depth_mm,speed_clamps,dt_min_clamps,dt_request_cuts,nonfinite,warned,sprites,triangles,"
             "mesh_worker_ms,raycast_records,raycast_dropped,raycast_pool,raycast_pool_bound,gulls_fleeing,state_hash");
   const auto path = std::filesystem::temp_directory_path() / ("replay_csv_" + std::to_string(::getpid()) + ".csv");

@@ -147,6 +147,9 @@ TEST(SphHealthCounters, TotalsSumStepsAndWarnOnlyOnClampsNonFiniteOrDeepPushes) 
   a.pushed_out = 3;
   a.max_push_depth = 0.002f;
   b.dt_limited_by_request = true;
+  a.density_iterations = 3;
+  a.divergence_iterations = 1;
+  b.density_iterations = 2;
   SphStepTotals t;
   addStepTotals(t, a);
   addStepTotals(t, b);
@@ -155,6 +158,7 @@ TEST(SphHealthCounters, TotalsSumStepsAndWarnOnlyOnClampsNonFiniteOrDeepPushes) 
   EXPECT_FLOAT_EQ(t.max_density_error, 0.02f);
   EXPECT_EQ(t.pushed_out, 3u);
   EXPECT_EQ(t.dt_request_cuts, 1u);
+  EXPECT_EQ(t.solver_iterations, 6u) << "both solvers' iterations over both steps";
   // Shallow pushes and request cuts are not warnings.
   EXPECT_FALSE(sphTotalsWarn(t, 0.025f));
   EXPECT_TRUE(sphTotalsWarn(t, 0.001f));  // 2 mm deep against a 1 mm threshold
@@ -171,6 +175,7 @@ TEST(SphHealthCounters, TotalsSumStepsAndWarnOnlyOnClampsNonFiniteOrDeepPushes) 
     addStepTotals(sum, u);  // totals of totals keep it
     EXPECT_TRUE(sphTotalsWarn(sum, 0.025f)) << which;
     EXPECT_EQ(sum.steps, 3u);
+    EXPECT_EQ(sum.solver_iterations, 6u);
   }
 }
 
