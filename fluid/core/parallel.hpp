@@ -19,13 +19,13 @@
 // does that itself; the TSan path reads the same two values and also stops at
 // detail::kMaxThreads.
 #include <tbb/blocked_range.h>
-
-#if defined(__SANITIZE_THREAD__)
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cstddef>
+
+#if defined(__SANITIZE_THREAD__)
 #include <thread>
 #else
 #include <tbb/parallel_for.h>
@@ -37,21 +37,24 @@ namespace fluid::par {
 template <class Value>
 using Range = tbb::blocked_range<Value>;
 
+// Threads a loop started from this thread may run on, as oneTBB runs it: the active
+// max_allowed_parallelism, at most the slots of the caller's arena (the core count in the implicit
+// arena, N inside a tbb::task_arena(N).execute, as the depth-map bake and batch queries use). Only
+// reads values inside libtbb; no oneTBB task or thread is involved.
+inline std::size_t allowedThreads() {
+  const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  const auto slots = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  return std::max<std::size_t>(1, std::min(allowed, slots));
+}
+
 #if defined(__SANITIZE_THREAD__)
 namespace detail {
 // Most threads one loop runs on at once (the caller's included): each loop starts its own
 // threads, which is slow under TSan, and four already exercise every hand-over.
 constexpr std::size_t kMaxThreads = 4;
 
-// Threads a loop may use, as oneTBB would run it: its active max_allowed_parallelism, at most
-// the slots of the caller's arena (the core count in the implicit arena, N inside a
-// tbb::task_arena(N).execute, as the depth-map bake and batch queries use), and here also at most
-// kMaxThreads. Only reads values inside libtbb; no oneTBB task or thread is involved.
-inline std::size_t threadBudget() {
-  const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  const auto slots = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-  return std::clamp<std::size_t>(std::min(allowed, slots), 1, kMaxThreads);
-}
+// Threads a loop may use: allowedThreads(), as oneTBB would run it, and here also at most kMaxThreads.
+inline std::size_t threadBudget() { return std::min(allowedThreads(), kMaxThreads); }
 
 // `threads` is how many threads this subrange may occupy (this one included): a split hands the
 // right half threads / 2 of them on a new thread and keeps the rest, so at most `threads` run at

@@ -1,6 +1,6 @@
 #include "fluid/surface/async_extractor.hpp"
 
-#include <tbb/global_control.h>
+#include "fluid/core/parallel.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -19,10 +19,7 @@ void copyInto(std::vector<T>& to, std::span<const T> from) {
 
 int asyncMeshSlots(int threads) {
   if (threads > 0) return threads;
-  const auto allowed = static_cast<int>(std::min<std::size_t>(
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
-      static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()))));
-  return std::max(1, allowed / 2);
+  return std::max(1, static_cast<int>(par::allowedThreads() / 2));
 }
 
 AsyncSurfaceExtractor::AsyncSurfaceExtractor(int threads)

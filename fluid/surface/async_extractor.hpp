@@ -36,8 +36,8 @@
 namespace fluid {
 
 // The arena slots AsyncSurfaceExtractor(threads) gives its jobs: threads when positive, else half the
-// parallelism the calling thread may use (oneTBB's active max_allowed_parallelism, at most its
-// arena's slots), at least 1.
+// threads the calling thread's loops may use (fluid::par::allowedThreads: oneTBB's active
+// max_allowed_parallelism, at most its arena's slots), at least 1.
 int asyncMeshSlots(int threads);
 
 class AsyncSurfaceExtractor {

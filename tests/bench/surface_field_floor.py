@@ -43,6 +43,10 @@ def profile(bench, set_name, route, work):
                           capture_output=True, text=True).stdout
 
 
+def program_total(text):
+    return int(TOTAL.search(text).group(1).replace(",", ""))
+
+
 def first(pattern, text, what):
     for line in text.splitlines():
         if m := pattern.match(line):
@@ -52,7 +56,7 @@ def first(pattern, text, what):
 
 def count(bench, set_name, route, work):
     text = profile(bench, set_name, route, work)
-    total = int(TOTAL.search(text).group(1).replace(",", ""))
+    total = program_total(text)
     # The function itself, not the lambdas inside it (their lines name it too, and its inclusive count has them).
     splat = sum(int(m.group(1).replace(",", "")) for line in text.splitlines()
                 if "{lambda" not in line and (m := SPLAT.match(line)))
@@ -82,8 +86,8 @@ def main():
         for set_name in PEER_SETS:
             with_normals = profile(args.bench, set_name, "peer", work)
             without = profile(args.bench, set_name, "peer-no-normals", work)
-            total = int(TOTAL.search(with_normals).group(1).replace(",", ""))
-            total_without = int(TOTAL.search(without).group(1).replace(",", ""))
+            total = program_total(with_normals)
+            total_without = program_total(without)
             splat = first(PEER_SPLAT, with_normals, "DensePeer::splatAvx2")
             fe = first(FLYING_EDGES, with_normals, "vtkFlyingEdges3D::RequestData")
             fe_without = first(FLYING_EDGES, without, "vtkFlyingEdges3D::RequestData")
