@@ -80,24 +80,30 @@ enum class SurfaceOrder : std::uint8_t {
   frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
-// How a corner's field is summed. Both routes are exact (every particle within Rc_i, summed in
-// (z, index) order with the same float expressions), so they give the same bits and the same mesh
-// (tests compare them); they differ in cost. docs/surface.md ("Field routes") has the measurements.
+// How a corner's field is summed and which cubes are visited. Every route is exact (every particle
+// within Rc_i, summed in (z, index) order with the same float expressions), so the corner values
+// and every vertex's bits are the same (tests compare them); they differ in cost and, for the
+// dense scan, in the order of triangles within a slab and in the components §4 seeding cannot
+// reach. docs/surface.md ("Field routes") has the measurements.
 enum class SurfaceFieldRoute : std::uint8_t {
-  // sliceSplat where the block's whole field fits 8 MB per worker and ceil(Rc / S) <= 5 (dense
-  // sets, small discs), else particleCache. Decided per extract() from the block plan, S and Rc.
-  // It trades time for a bound on working memory: where the whole field does not fit, the splat
-  // would be faster but take several times the cache's memory (spray set: about 25 % less time,
-  // 6.4 MB against 1 MB); docs/surface.md ("Field routes") has the figures. Callers with the
-  // memory force sliceSplat.
+  // denseScan. (Policies with per-corner data, Policy::kHasUser or SurfaceInput::user, and
+  // anisotropic kernels take particleCache whatever this says.)
   automatic,
-  // The paper's §6 2D-projection 1D-lookup cache, walked per corner the sweep needs (Figure 7).
+  // The paper's §6 2D-projection 1D-lookup cache, walked per corner the sweep needs (Figure 7),
+  // from §4's seeds (Alg. 1).
   particleCache,
   // Per slice, the block's particles in (z, index) order each add their term to the corners of
-  // their disc in that slice (8 corners of a row at once); the whole block's field when it fits
-  // 8 MB per worker, else each slice as the sweep takes it up. Policies with per-corner data
-  // (Policy::kHasUser, SurfaceInput::user) use particleCache whatever this says.
+  // their disc in that slice (8 corners of a row at once), then Alg. 1's walk from §4's seeds; the
+  // whole block's field is summed up front when it fits 8 MB per worker, else each slice as the
+  // walk takes it up (and value-only slices for seeding).
   sliceSplat,
+  // The slice splat, one slice at a time in sweep order, and no seeding and no walk: every
+  // interior cube is classified from bit masks of each row's inside corners (the row idea of
+  // Flying Edges) and only the crossed ones are polygonized. The walk's triangles and vertex bits,
+  // in row order within each slab; and, unlike the walk, also the components where several
+  // particles' fields exceed T away from each one's nearest corner (the dense oracle's
+  // triangles). Two slices alive per worker.
+  denseScan,
 };
 
 struct SurfaceParams {
@@ -151,14 +157,15 @@ struct SurfaceSlabRun {
 };
 
 struct SurfaceStats {
-  std::uint64_t cubesVisited = 0;       // cubes popped and marked done (margin included)
-  std::uint64_t cornersEvaluated = 0;   // field evaluations stored in corner caches
+  std::uint64_t cubesVisited = 0;       // cubes popped and marked done (margin included); scanned: interior cubes
+  std::uint64_t cornersEvaluated = 0;   // field evaluations stored in corner caches; scanned: interior corners
   std::uint64_t seedEvaluations = 0;    // field evaluations while seeding (not cached)
   std::uint64_t particlesLookedUp = 0;  // particle contributions summed (exact lookups)
   std::uint64_t triangles = 0;
   std::uint64_t vertices = 0;
   std::uint32_t blocks = 0;
   std::uint32_t splatBlocks = 0;      // blocks whose field was summed by slice splat (SurfaceFieldRoute)
+  std::uint32_t scannedBlocks = 0;    // blocks whose interior cubes were all scanned (SurfaceFieldRoute::denseScan)
   std::uint32_t maxActiveSlices = 0;  // most slice caches alive at once in one block
   std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
   // Working memory, bytes actually touched: largest single block, and summed over all blocks

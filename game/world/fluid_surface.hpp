@@ -35,11 +35,11 @@ struct FluidSurfaceParams {
   float smoothing = 2.0f;  // Rc in particle spacings
   float cube = 0.5f;       // lattice cube edge S in particle spacings
   float threshold = 0.2f;  // iso level T in (0, 0.25)
-  // How the mesher sums a corner's field (fluid::SurfaceFieldRoute; every route gives the same
-  // mesh). Slice splat by default: at the game's lattice (Rc = 4 S) it costs about 30 % less
-  // than the paper's §6 cache on the fountain's frames (docs/surface.md, "The game's scale"),
-  // where the library's automatic rule, which also weighs the scratch memory, would take the cache.
-  fluid::SurfaceFieldRoute field = fluid::SurfaceFieldRoute::sliceSplat;
+  // How the mesher finds the surface (fluid::SurfaceFieldRoute; every route gives the same
+  // vertices). The dense scan by default (the library's automatic choice too): at the game's
+  // lattice (Rc = 4 S) it costs less than the slice splat's seeded walk and the paper's §6 cache
+  // on the fountain's frames (docs/surface.md, "The game's scale").
+  fluid::SurfaceFieldRoute field = fluid::SurfaceFieldRoute::denseScan;
   float refraction = 0.08f;  // engine::WaterParams::refraction; 0 = off
   float opacity = 0.85f;
   glm::vec3 absorption = engine::WaterParams{}.absorption;  // Beer–Lambert σ per metre

@@ -1,19 +1,18 @@
 #!/usr/bin/env python3
 """What any change to the slice splat's field sums alone can win against the dense peer (issue 34).
 
-Issue 34 asks the mesher for at most 0.8x the dense splat + Flying Edges peer's time on every set. On
-the sets where the automatic route sums the field by slice splat (fountain, explosion) the splat is
-one function, `splatSlice`; everything else (block plan, seeding, the sweep, vertices, output) does
-not depend on how the field is summed. Ours without the splat's instructions is therefore a floor for
-any change to the field sums (a value-only splat with exact gradients at crossed edges included),
-reached only by a splat that costs nothing. The table prints that floor against the peer, with the
-automatic block plan and with one block (`ours-one-block`: no second block's margins, which the plan
-takes for two threads' sake).
+Issue 34 asks the mesher for at most 0.8x the dense splat + Flying Edges peer's time on every set. The
+automatic route (the dense scan) sums every set's field by slice splat, one function, `splatSlice`;
+everything else (block plan, the sort, the scan's classification, vertices and triangles) does not
+depend on how the field is summed. Ours without the splat's instructions is therefore a floor for any
+change to the field sums, reached only by a splat that costs nothing. The table prints that floor
+against the peer, with the automatic block plan and with one block (`ours-one-block`: no second
+block, which the plan takes for two threads' sake).
 
 A second table splits the peer the same way (its splat, Flying Edges with and without normals,
 `peer-no-normals`) on all four sets: any route that splats a dense value lattice as the peer does and
 then runs Flying Edges costs at least the peer without its normals, which says what such a route
-(the "third route" of docs/surface.md) must save over VTK's Flying Edges to reach 0.8 of the peer.
+must save over VTK's Flying Edges to reach 0.8 of the peer.
 
 Each figure is one warm mesh on one thread counted by callgrind between client requests
 (`bench_surface_peers --count SET ROUTE`), split by `callgrind_annotate --inclusive=yes`.
@@ -26,8 +25,8 @@ import re
 import subprocess
 import tempfile
 
-SETS = ["fountain", "explosion"]
 PEER_SETS = ["fountain", "blob", "explosion", "spray"]
+SETS = PEER_SETS
 TOTAL = re.compile(r"^([0-9,]+) \(100\.0+%\)\s+PROGRAM TOTALS", re.M)
 SPLAT = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*BlockMesher<[^>]*>::splatSlice<(true|false)>")
 PEER_SPLAT = re.compile(r"^\s*([0-9,]+) \([ 0-9.]+%\)\s+.*DensePeer::splatAvx2\(")

@@ -1,6 +1,7 @@
-// fluid_surface.field: how the game's mesher sums a corner's field (fluid::SurfaceFieldRoute). The
+// fluid_surface.field: how the game's mesher finds the surface (fluid::SurfaceFieldRoute). The
 // routes are exact, so the key may change what a frame costs but never what the player sees: the
-// game's meshes are compared bit for bit, and the stats show which route ran.
+// walking routes' meshes are compared bit for bit, the dense scan's vertex by vertex (it emits the
+// same triangles in another order within a slab), and the stats show which route ran.
 #include "game/paths.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fluid_surface.hpp"
@@ -9,7 +10,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cstring>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -20,13 +25,15 @@ game::SceneStatus parseFountain(const std::string& field, game::SceneConfig& sce
   return game::parseSceneText(text, "field_test.json", scene);
 }
 
-TEST(FluidSurfaceField, SliceSplatByDefaultAndEachNameReachesTheMesher) {
+TEST(FluidSurfaceField, DenseScanByDefaultAndEachNameReachesTheMesher) {
   const game::FluidSurfaceParams defaults;
-  EXPECT_EQ(defaults.field, fluid::SurfaceFieldRoute::sliceSplat);
+  EXPECT_EQ(defaults.field, fluid::SurfaceFieldRoute::denseScan);
   const struct {
     const char* name;
     fluid::SurfaceFieldRoute route;
-  } cases[] = {{"splat", fluid::SurfaceFieldRoute::sliceSplat},
+  } cases[] = {{"", fluid::SurfaceFieldRoute::denseScan},
+               {"dense", fluid::SurfaceFieldRoute::denseScan},
+               {"splat", fluid::SurfaceFieldRoute::sliceSplat},
                {"cache", fluid::SurfaceFieldRoute::particleCache},
                {"auto", fluid::SurfaceFieldRoute::automatic}};
   for (const auto& c : cases) {
@@ -70,6 +77,52 @@ TEST(FluidSurfaceField, SplatAndCacheMeshTheGamesFramesBitForBit) {
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
 }
 
+// Every vertex (position and normal bits) as a sorted list, and the triangles as sorted vertex
+// triples: what a frame draws, whatever order the mesher emitted it in.
+std::vector<std::array<std::uint32_t, 18>> drawnTriangles(const fluid::SurfaceMesh& m) {
+  std::vector<std::array<std::uint32_t, 18>> out;
+  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+    std::array<std::array<std::uint32_t, 6>, 3> v;
+    for (int c = 0; c < 3; ++c) {
+      std::memcpy(&v[std::size_t(c)][0], &m.positions[m.indices[i + std::size_t(c)]], 12);
+      std::memcpy(&v[std::size_t(c)][3], &m.normals[m.indices[i + std::size_t(c)]], 12);
+    }
+    while (v[0] > v[1] || v[0] > v[2]) v = {v[1], v[2], v[0]};  // (rotations keep the winding)
+    std::array<std::uint32_t, 18> t;
+    for (int c = 0; c < 3; ++c) std::copy(v[std::size_t(c)].begin(), v[std::size_t(c)].end(), t.begin() + 6 * c);
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(FluidSurfaceField, DenseScanDrawsTheSplatWalksTrianglesOnTheGamesFrames) {
+  game::SceneConfig dense_scene, splat_scene;
+  ASSERT_TRUE(parseFountain("dense", dense_scene).ok());
+  ASSERT_TRUE(parseFountain("splat", splat_scene).ok());
+  game::World dense_world, splat_world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(dense_scene, game::contentDir(), dense_world, error)) << error;
+  ASSERT_TRUE(game::buildWorld(splat_scene, game::contentDir(), splat_world, error)) << error;
+  const game::FluidSurface& dense = *game::findState<game::FluidSurface>(dense_world);
+  const game::FluidSurface& splat = *game::findState<game::FluidSurface>(splat_world);
+  int meshed = 0;
+  for (int frame = 0; frame < 120; ++frame) {
+    game::stepWorld(dense_world, nullptr);
+    game::stepWorld(splat_world, nullptr);
+    game::meshWorld(dense_world, nullptr);
+    game::meshWorld(splat_world, nullptr);
+    ASSERT_EQ(dense.error, "") << "frame " << frame;
+    ASSERT_EQ(dense.job.mesh.indices.size(), splat.job.mesh.indices.size()) << "frame " << frame;
+    ASSERT_TRUE(drawnTriangles(dense.job.mesh) == drawnTriangles(splat.job.mesh)) << "frame " << frame;
+    if (dense.job.mesh.indices.empty()) continue;
+    ++meshed;
+    EXPECT_EQ(dense.job.mesh.stats.scannedBlocks, dense.job.mesh.stats.blocks) << "frame " << frame;
+    EXPECT_EQ(splat.job.mesh.stats.scannedBlocks, 0u) << "frame " << frame;
+  }
+  EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
+}
+
 // The key is live (the overlay's combo): switching the route between frames of one world, the
 // extractor's scratch switching with it, meshes exactly what a world on one route meshes.
 TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
@@ -108,9 +161,10 @@ TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
 
 TEST(FluidSurfaceField, AnUnknownRouteIsRefusedNamingTheKeyAndValue) {
   game::SceneConfig scene;
-  const game::SceneStatus status = parseFountain("dense", scene);
+  const game::SceneStatus status = parseFountain("flying_edges", scene);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.error.find("field"), std::string::npos) << status.error;
+  EXPECT_NE(status.error.find("flying_edges"), std::string::npos) << status.error;
   EXPECT_NE(status.error.find("dense"), std::string::npos) << status.error;
   EXPECT_NE(status.error.find("splat"), std::string::npos) << status.error;
 }

@@ -11,13 +11,21 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <string>
 #include <vector>
 
 using namespace surface_test;
 
 namespace {
+
+int gScannedMeshes = 0;    // expectRoutesAgree calls whose dense-scan mesh was scanned (volume mode)
+int gScansWithGhosts = 0;  // of those, scans that found components the walk's seeding cannot reach
+int gSamePlanScans = 0;    // scans compared with the walk block by block (both planned the same blocks)
 
 fluid::SurfaceMesh meshWith(const fluid::SurfaceInput& in, fluid::SurfaceParams p, fluid::SurfaceFieldRoute route) {
   p.fieldRoute = route;
@@ -28,8 +36,96 @@ fluid::SurfaceMesh meshWith(const fluid::SurfaceInput& in, fluid::SurfaceParams 
   return m;
 }
 
+// One triangle as its three vertices' edge keys, position bits and normal bits, rotated to start
+// at its smallest key (the winding kept).
+using VertexBits = std::array<std::uint32_t, 8>;  // key (2 words), position (3), normal (3)
+using TriangleBits = std::array<VertexBits, 3>;
+
+std::vector<TriangleBits> trianglesWithVertexBits(const fluid::SurfaceMesh& m, std::size_t first, std::size_t count) {
+  std::vector<TriangleBits> out;
+  for (std::size_t i = first; i < first + count; i += 3) {
+    TriangleBits t;
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = m.indices[i + std::size_t(c)];
+      std::memcpy(&t[std::size_t(c)][0], &m.edgeKeys[v], 8);
+      std::memcpy(&t[std::size_t(c)][2], &m.positions[v], 12);
+      std::memcpy(&t[std::size_t(c)][5], &m.normals[v], 12);
+    }
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The dense scan against the slice splat's walk: the walk's triangles with the same vertex bits
+// (keys, positions, normals) and as many per slab; where both planned the same blocks (the scan
+// halves a one-block set across z first, the walk across its longest axis), also block by block,
+// with the same vertex counts and, with the exact slab order, the same slab runs. The scan looks at
+// every interior cube, so it may find more than the walk: components where overlapping fields
+// exceed T away from every particle's nearest corner, which §4 seeding cannot reach
+// (random_sets.hpp's "ghosts"). Then the scan must be the dense oracle's triangles exactly.
+// Otherwise only the order within a slab may differ.
+std::map<std::int32_t, std::uint32_t> slabTotals(const fluid::SurfaceMesh& m, std::uint32_t firstRun,
+                                                 std::uint32_t runs) {
+  std::map<std::int32_t, std::uint32_t> out;
+  for (std::uint32_t r = firstRun; r < firstRun + runs; ++r) out[m.slabRuns[r].slab] += m.slabRuns[r].indices.count;
+  return out;
+}
+
+void expectScanIsTheWalkUpToOrder(const fluid::SurfaceInput& in, const fluid::SurfaceMesh& scan,
+                                  const fluid::SurfaceMesh& walk, const fluid::SurfaceParams& p, const std::string& what) {
+  const std::vector<TriangleBits> all = trianglesWithVertexBits(scan, 0, scan.indices.size());
+  const std::vector<TriangleBits> allWalk = trianglesWithVertexBits(walk, 0, walk.indices.size());
+  const bool ghosts = all != allWalk;
+  if (ghosts) {
+    EXPECT_TRUE(std::includes(all.begin(), all.end(), allWalk.begin(), allWalk.end()))
+        << what << ": the walk has triangles the scan lacks";
+  } else {
+    EXPECT_TRUE(slabTotals(scan, 0, std::uint32_t(scan.slabRuns.size())) ==
+                slabTotals(walk, 0, std::uint32_t(walk.slabRuns.size())))
+        << what;
+  }
+  for (const fluid::SurfaceBlockRange& s : scan.blocks)
+    for (std::uint32_t r = s.firstSlabRun; r < s.firstSlabRun + s.slabRunCount; ++r)
+      EXPECT_TRUE(scan.slabRuns[r].indices.first >= s.indices.first &&
+                  scan.slabRuns[r].indices.first + scan.slabRuns[r].indices.count <= s.indices.first + s.indices.count)
+          << what;
+  bool samePlan = scan.blocks.size() == walk.blocks.size();
+  for (std::size_t b = 0; samePlan && b < scan.blocks.size(); ++b)
+    samePlan = scan.blocks[b].bx == walk.blocks[b].bx && scan.blocks[b].by == walk.blocks[b].by &&
+               scan.blocks[b].bz == walk.blocks[b].bz;
+  for (std::size_t b = 0; samePlan && !ghosts && b < scan.blocks.size(); ++b) {
+    const fluid::SurfaceBlockRange &s = scan.blocks[b], &w = walk.blocks[b];
+    EXPECT_TRUE(trianglesWithVertexBits(scan, s.indices.first, s.indices.count) ==
+                trianglesWithVertexBits(walk, w.indices.first, w.indices.count))
+        << what << " block " << b;
+    EXPECT_EQ(s.vertexCount, w.vertexCount) << what << " block " << b;
+    EXPECT_TRUE(slabTotals(scan, s.firstSlabRun, s.slabRunCount) == slabTotals(walk, w.firstSlabRun, w.slabRunCount))
+        << what << " block " << b;
+    if (p.order != fluid::SurfaceOrder::none && p.exactSlabOrder) {
+      EXPECT_EQ(s.slabRunCount, w.slabRunCount) << what << " block " << b;
+    }
+  }
+  gSamePlanScans += samePlan;
+  EXPECT_EQ(checkTopology(scan).badEdges, 0u) << what;
+  if (ghosts) {  // the extra triangles: exactly what the dense oracle has beyond the walk
+    fluid::SurfaceParams plain = p;
+    plain.order = fluid::SurfaceOrder::none;
+    plain.fieldRoute = fluid::SurfaceFieldRoute::denseScan;
+    fluid::SurfaceExtractor ex;
+    fluid::SurfaceMesh scanPlain, ref;
+    ASSERT_TRUE(ex.extract(in, plain, scanPlain).ok());
+    fluid::BaselineExtractor dense;
+    ASSERT_TRUE(dense.extract(fluid::BaselineMethod::dense, in, plain, ref).ok());
+    EXPECT_TRUE(canonicalTriangles(scanPlain) == canonicalTriangles(ref)) << what << ": not the dense oracle's triangles";
+    ++gScansWithGhosts;
+  }
+}
+
 // Both routes on `in`: the same mesh bit for bit (every array, block and slab ranges included),
-// closed, and (unless `oracleToo` is off) the dense oracle's triangles. Returns the splat mesh.
+// closed, and (unless `oracleToo` is off) the dense oracle's triangles; and the dense scan the
+// splat's triangles and vertices up to their order. Returns the splat mesh.
 fluid::SurfaceMesh expectRoutesAgree(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p,
                                      const std::string& what, std::size_t minTriangles = 1, bool oracleToo = true) {
   const fluid::SurfaceMesh cache = meshWith(in, p, fluid::SurfaceFieldRoute::particleCache);
@@ -48,6 +144,10 @@ fluid::SurfaceMesh expectRoutesAgree(const fluid::SurfaceInput& in, const fluid:
   EXPECT_EQ(splat.stats.cornersEvaluated, cache.stats.cornersEvaluated) << what;
   EXPECT_GT(splat.stats.particlesLookedUp, 0u) << what;
   EXPECT_EQ(checkTopology(splat).badEdges, 0u) << what;
+  const fluid::SurfaceMesh scan = meshWith(in, p, fluid::SurfaceFieldRoute::denseScan);
+  EXPECT_TRUE(scan.stats.scannedBlocks == 0 || scan.stats.scannedBlocks == scan.stats.blocks) << what;
+  gScannedMeshes += scan.stats.scannedBlocks > 0;
+  expectScanIsTheWalkUpToOrder(in, scan, splat, p, what + " (dense scan)");
   if (oracleToo && p.order == fluid::SurfaceOrder::none) {
     fluid::BaselineExtractor dense;
     fluid::SurfaceMesh ref;
@@ -71,30 +171,105 @@ TEST(FieldRoutes, SliceSplatIsTheCacheMeshBitForBitOnTheTestSets) {
         p.exactSlabOrder = true;
       }
       if (variant == 2) p.portableKernels = true;  // the SSE2 copy of the splat
+      const int scannedBefore = gScannedMeshes;
       expectRoutesAgree(inputOf(ps), p, std::string(name) + " variant " + std::to_string(variant), 1000);
+      EXPECT_EQ(gScannedMeshes, scannedBefore + 1) << name << " not scanned";
     }
   }
 }
 
-TEST(FieldRoutes, AutomaticPicksTheSplatForDenseSetsWithSmallDiscs) {
-  // The default route: the splat on fountain and explosion (dense, ceil(Rc / S) <= 5, block fields
-  // within the volume budget), the cache on blob (ceil(Rc / S) = 10) and spray (large sparse
-  // blocks); the same bits either way.
-  const std::tuple<const char*, float, bool> sets[] = {{"fountain.xyz", 1.0f, true},
-                                                       {"blob.xyz", 0.3f, false},
-                                                       {"explosion.xyz", 0.6f, true},
-                                                       {"spray.xyz", 1.0f, false}};
-  for (const auto& [name, cube, splat] : sets) {
+TEST(FieldRoutes, DenseScanRunsInEveryBlock) {
+  // Forced, the dense scan takes every block: those whose whole field is summed up front (fountain
+  // and explosion with the automatic plan) and spray's large ones, summed a slice at a time.
+  const std::tuple<const char*, float, bool> sets[] = {
+      {"fountain.xyz", 1.0f, true}, {"explosion.xyz", 0.6f, true}, {"spray.xyz", 1.0f, true}};
+  for (const auto& [name, cube, scanned] : sets) {
+    const fluid::ParticlePositions ps = loadSet(name);
+    fluid::SurfaceParams p;
+    p.cube = cube;
+    const fluid::SurfaceMesh scan = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::denseScan);
+    EXPECT_EQ(scan.stats.splatBlocks, scan.stats.blocks) << name;
+    EXPECT_EQ(scan.stats.scannedBlocks, scanned ? scan.stats.blocks : 0u) << name;
+    if (scanned) {
+      EXPECT_EQ(scan.stats.seedEvaluations, 0u) << name;
+      EXPECT_EQ(scan.stats.slabReversals, 0u) << name;
+    }
+  }
+}
+
+TEST(FieldRoutes, DenseScanIsThreadCountInvariant) {
+  const fluid::ParticlePositions ps = loadSet("fountain.xyz");
+  fluid::SurfaceParams p;
+  p.blockCubes = 16;
+  p.threads = 1;
+  p.fieldRoute = fluid::SurfaceFieldRoute::denseScan;
+  for (bool exact : {false, true}) {
+    if (exact) {
+      p.order = fluid::SurfaceOrder::backToFront;
+      p.eye = {-30.0f, 20.0f, 45.0f};
+      p.viewDir = {0.6f, -0.3f, -0.7f};
+      p.exactSlabOrder = true;
+    }
+    fluid::SurfaceExtractor ex1;
+    fluid::SurfaceMesh one;
+    ASSERT_TRUE(ex1.extract(inputOf(ps), p, one).ok());
+    ASSERT_GT(one.blocks.size(), 8u);
+    ASSERT_EQ(one.stats.scannedBlocks, one.stats.blocks);
+    for (int threads : {2, 3}) {
+      fluid::SurfaceParams pt = p;
+      pt.threads = threads;
+      fluid::SurfaceExtractor ex;
+      fluid::SurfaceMesh m;
+      for (int rep = 0; rep < 2; ++rep) {  // and again with warm scratch
+        ASSERT_TRUE(ex.extract(inputOf(ps), pt, m).ok());
+        EXPECT_EQ(test_support::meshBitsDiffer(m, one), "") << threads << " threads, rep " << rep << ", exact " << exact;
+      }
+    }
+  }
+}
+
+TEST(FieldRoutes, OneExtractorSwitchingRoutesAndSetsMeshesAsFreshOnes) {
+  // The game switches the route live: each worker's scratch (the dense scan's two slices, which
+  // it only clears where their last splat wrote; the walk's slices and volume) must not leak
+  // from one route or set into the next.
+  const std::tuple<const char*, float> sets[] = {{"fountain.xyz", 1.0f}, {"spray.xyz", 1.0f}, {"blob.xyz", 0.3f}};
+  const fluid::SurfaceFieldRoute routes[] = {fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::sliceSplat,
+                                             fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::particleCache};
+  std::vector<fluid::ParticlePositions> data;
+  for (const auto& [name, cube] : sets) data.push_back(loadSet(name));
+  fluid::SurfaceExtractor reused;
+  fluid::SurfaceMesh m;
+  for (int round = 0; round < 2; ++round)
+    for (std::size_t i = 0; i < data.size(); ++i)
+      for (const fluid::SurfaceFieldRoute route : routes) {
+        fluid::SurfaceParams p;
+        p.cube = std::get<1>(sets[i]);
+        p.threads = 2;
+        p.fieldRoute = route;
+        ASSERT_TRUE(reused.extract(inputOf(data[i]), p, m).ok());
+        EXPECT_EQ(test_support::meshBitsDiffer(m, meshWith(inputOf(data[i]), p, route)), "")
+            << std::get<0>(sets[i]) << " route " << int(route) << " round " << round;
+      }
+}
+
+TEST(FieldRoutes, AutomaticIsTheDenseScan) {
+  // The default route: the slice splat and the dense scan in every block of every set (dense and
+  // sparse, small and large discs), the walk's vertex bits (the cache route's, checked above).
+  for (const auto& [name, cube] : kTestSets) {
     const fluid::ParticlePositions ps = loadSet(name);
     fluid::SurfaceParams p;
     p.cube = cube;
     p.threads = 1;
     EXPECT_EQ(p.fieldRoute, fluid::SurfaceFieldRoute::automatic);
     const fluid::SurfaceMesh automatic = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::automatic);
+    const fluid::SurfaceMesh scan = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::denseScan);
     const fluid::SurfaceMesh cache = meshWith(inputOf(ps), p, fluid::SurfaceFieldRoute::particleCache);
-    EXPECT_EQ(automatic.stats.splatBlocks, splat ? automatic.stats.blocks : 0u) << name;
+    EXPECT_EQ(automatic.stats.splatBlocks, automatic.stats.blocks) << name;
+    EXPECT_EQ(automatic.stats.scannedBlocks, automatic.stats.blocks) << name;
     EXPECT_EQ(cache.stats.splatBlocks, 0u) << name;
-    EXPECT_EQ(test_support::meshBitsDiffer(automatic, cache), "") << name;
+    EXPECT_EQ(cache.stats.scannedBlocks, 0u) << name;
+    EXPECT_EQ(test_support::meshBitsDiffer(automatic, scan), "") << name;
+    expectScanIsTheWalkUpToOrder(inputOf(ps), automatic, cache, p, name);
   }
 }
 
@@ -173,11 +348,16 @@ TEST(FieldRoutes, HiddenStyleCases) {
 
 TEST(FieldRoutes, RandomSetsAgree) {
   // The property sweep's random sets (clusters, sheets, lines, lattices, duplicates, exact-T
-  // values, mixed radii; random S, Rc, blocks, views): both routes give the same bits.
+  // values, mixed radii; random S, Rc, blocks, views): both routes give the same bits, and the
+  // dense scan the walk's triangles, or the dense oracle's where seeding misses a component.
+  const int scannedBefore = gScannedMeshes, ghostsBefore = gScansWithGhosts, samePlanBefore = gSamePlanScans;
   for (int seed = 1; seed <= 48; ++seed) {
     const RandomSet r = drawRandomSet(std::uint64_t(seed));
     expectRoutesAgree(r.input(), r.params, "seed " + std::to_string(seed), 0, false);
   }
+  EXPECT_EQ(gScannedMeshes - scannedBefore, 48) << "the dense scan did not run on every set";
+  EXPECT_GE(gScansWithGhosts - ghostsBefore, 1) << "no set exercised the oracle comparison";
+  EXPECT_GE(gSamePlanScans - samePlanBefore, 24) << "too few sets compared block by block";
 }
 
 TEST(FieldRoutes, UserDataAndPoliciesKeepTheCacheRoute) {

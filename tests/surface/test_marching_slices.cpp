@@ -35,9 +35,24 @@ fluid::SurfaceMesh oracle(const fluid::SurfaceInput& in, const fluid::SurfacePar
   return m;
 }
 
-// Closed, consistently oriented outward, and the same triangles as dense MC on the lattice.
+void expectClosedAndEqualToOracleBy(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p,
+                                    std::size_t minTriangles);
+
+// Closed, consistently oriented outward, and the same triangles as dense MC on the lattice: with
+// p's route (the default: the dense scan) and with §4 seeding and Alg. 1's walk (the §6 cache).
 void expectClosedAndEqualToOracle(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p,
                                   std::size_t minTriangles = 1) {
+  expectClosedAndEqualToOracleBy(in, p, minTriangles);
+  if (p.fieldRoute != fluid::SurfaceFieldRoute::particleCache) {
+    fluid::SurfaceParams walk = p;
+    walk.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+    SCOPED_TRACE("the walk (particle cache route)");
+    expectClosedAndEqualToOracleBy(in, walk, minTriangles);
+  }
+}
+
+void expectClosedAndEqualToOracleBy(const fluid::SurfaceInput& in, const fluid::SurfaceParams& p,
+                                    std::size_t minTriangles) {
   const fluid::SurfaceMesh m = slices(in, p);
   const fluid::SurfaceMesh ref = oracle(in, p);
   const Topology t = checkTopology(m);
@@ -327,6 +342,7 @@ TEST(MarchingSlices, UprightBowlSeedingFailureCaseOfFigure4b) {
   fluid::SurfaceParams p;
   p.cube = 0.5f;
   p.blockCubes = 64;
+  p.fieldRoute = fluid::SurfaceFieldRoute::particleCache;  // the walk (the dense scan has no seeds)
   const fluid::SurfaceMesh m = slices(inputOf(bowl), p);
   EXPECT_GT(m.stats.slabReversals, 0u) << "the sweep never reversed; the bowl does not test reversal";
   expectClosedAndEqualToOracle(inputOf(bowl), p, 1000);

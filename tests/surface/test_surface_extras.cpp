@@ -130,8 +130,11 @@ TEST(SurfaceAttributes, PerParticleVec4IsInterpolatedOntoVertices) {
     blended = blended || (a.x > 0.3f && a.x < 0.7f);
   }
   EXPECT_TRUE(blended);
-  // Same geometry as without attributes.
-  const fluid::SurfaceMesh plain = run({fluid::pointView(points2)}, p);
+  // Same geometry as without attributes (per-corner data takes the §6 cache's walk: compared with
+  // that route, the same triangle order too).
+  fluid::SurfaceParams walk = p;
+  walk.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+  const fluid::SurfaceMesh plain = run({fluid::pointView(points2)}, walk);
   EXPECT_TRUE(plain.positions == b.positions);
   EXPECT_TRUE(plain.indices == b.indices);
 }
@@ -207,7 +210,9 @@ TEST(SurfacePolicy, CallerPolicyIsInterpolatedAndGeometryUnchanged) {
   fluid::SurfaceExtractor ex;
   fluid::SurfaceMesh m, plain;
   ASSERT_TRUE(fluid::extractWithPolicy(ex, {fluid::pointView(points)}, p, IndexMeanPolicy{}, m).ok());
-  ASSERT_TRUE(ex.extract({fluid::pointView(points)}, p, plain).ok());
+  fluid::SurfaceParams walk = p;  // a policy with corner data takes the §6 cache's walk; so does this
+  walk.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
+  ASSERT_TRUE(ex.extract({fluid::pointView(points)}, walk, plain).ok());
   EXPECT_TRUE(m.positions == plain.positions);
   EXPECT_TRUE(m.indices == plain.indices);
   ASSERT_EQ(m.attributes.size(), m.positions.size());

@@ -48,10 +48,16 @@ class BlockMesher {
     else
       buildParticleCache(particles);
     const PhaseClock::time_point cached = PhaseClock::now();
-    seed(particles);
-    seedFromNeighbours();
+    const bool scan = su_.dense;  // block_dense_scan.inl: every interior cube, no seeds
+    if (!scan) {
+      seed(particles);
+      seedFromNeighbours();
+    }
     const PhaseClock::time_point seeded = PhaseClock::now();
-    march();
+    if (scan)
+      denseScan();
+    else
+      march();
     out_.stats.particlesLookedUp += looked_;
     looked_ = 0;
     if (su_.exact) {  // otherwise polygonize() built the runs as it went
@@ -67,6 +73,7 @@ class BlockMesher {
     out_.runCount = std::uint32_t(out_.runs.size() - runBase_);
     out_.stats.triangles = out_.indexCount / 3;
     out_.stats.splatBlocks = su_.splat ? 1 : 0;
+    out_.stats.scannedBlocks = scan ? 1 : 0;
     out_.stats.vertices = out_.vertexCount;
     if (su_.splat)  // block particles, the seeding ring and the small tables
       out_.particleBytes = std::uint64_t(w_.local.size()) * sizeof(CacheParticle) +
@@ -131,6 +138,7 @@ class BlockMesher {
   const StretchTerm* stretch_ = nullptr;
   const StretchTerm& stretchOf(const CacheParticle& p) const { return stretch_[std::size_t(&p - parts_)]; }
   int lowestTodo_ = std::numeric_limits<int>::max();
+  std::int32_t denseSlot_[2][32] = {};  // the dense scan's edge slots (denseSlotTable)
 
   std::size_t col(int x, int y) const { return std::size_t(y) * std::size_t(stride_) + std::size_t(x); }
 
@@ -159,6 +167,7 @@ class BlockMesher {
 #include "fluid/surface/detail/block_particle_cache.inl"
 #include "fluid/surface/detail/block_slice_splat.inl"
 #include "fluid/surface/detail/block_seeding.inl"
+#include "fluid/surface/detail/block_dense_scan.inl"
 
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {

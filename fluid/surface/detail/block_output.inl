@@ -44,6 +44,14 @@
     if (ca.vert[axis]) return ca.vert[axis] - 1;
     const Corner<Policy>& cb = *cp[base | (1 << axis)];
     const int lx = x + (base & 1), ly = y + ((base >> 1) & 1), lz = z + (base >> 2);
+    const std::uint32_t id = emitVertex(ca, cb, axis, lx, ly, lz);
+    ca.vert[axis] = id + 1;
+    return id;
+  }
+
+  // Appends the vertex on the edge from local corner (lx, ly, lz) (values and gradients in ca) along
+  // `axis` to its neighbour (cb); returns its id.
+  std::uint32_t emitVertex(const Corner<Policy>& ca, const Corner<Policy>& cb, unsigned axis, int lx, int ly, int lz) {
     double local[3] = {w_.cx[lx], w_.cy[ly], w_.cz[lz]};  // double(g0 + l) * S, see begin()
 #if defined(FLUID_SURFACE_IN_AVX2_COPY)
     const VertexOut v = su_.plainFrame ? makeVertexPlainAvx2(ca, cb, axis, local)
@@ -58,15 +66,18 @@
       out_.attributes.push_back(pol_.vertex(ca.user, cb.user, tf));
     }
     out_.keys.push_back(w_.kx[lx] | w_.ky[ly] | w_.kz[lz] | std::uint64_t(axis));  // edgeKey(g0 + l, axis)
-    const std::uint32_t id = vertexCount_++;                                       // == out_.positions.size() - 1
-    ca.vert[axis] = id + 1;
-    return id;
+    return vertexCount_++;                                                         // == out_.positions.size() - 1
   }
 
-  // Each crossed edge's vertex is looked up (or made) once per cube, in first-use order along the
-  // case's triangles (the order walking the triangles would make them in), then the triangles
-  // are written from those.
   void polygonize(const mc::CaseTable& cs, Corner<Policy>* cp[8], int x, int y, int z) {
+    writeCase(cs, [&](unsigned baseAxis) { return vertexOn(cp, baseAxis, x, y, z); });
+  }
+
+  // Each crossed edge's vertex is looked up (or made) once per cube by vertexFor(firstCorner), in
+  // first-use order along the case's triangles (the order walking the triangles would make them
+  // in), then the triangles are written from those.
+  template <class VertexFor>
+  [[gnu::always_inline]] void writeCase(const mc::CaseTable& cs, VertexFor&& vertexFor) {
 #if defined(FLUID_SURFACE_IN_AVX2_COPY)
     // Zeroed first, so that the permutes below never read an unset lane (ids past the case's edges
     // are computed but never picked).
@@ -77,7 +88,7 @@
     std::uint32_t vid[12];
 #endif
     const int ne = cs.edgeCount;
-    for (int u = 0; u < ne; ++u) vid[u] = vertexOn(cp, cs.firstCorner[u], x, y, z);
+    for (int u = 0; u < ne; ++u) vid[u] = vertexFor(cs.firstCorner[u]);
     const int nt = cs.triangleCount;
     // out_.indices is grown ahead in steps of 256 (one bulk zero-fill instead of a resize per
     // cube); nIndices_ is its used length, and march() trims it to that at the end. 40 = 3 x the

@@ -30,6 +30,7 @@
   int splatReachMax_ = 0;  // largest particleReach() of the block's particles (prepareSplat)
   float oneSpan2_ = 0;     // float((4 S)^2): splatSlice's one-window rows
   float invS_ = 1, hSlack_ = 0;  // float(1 / S) and float(1e-3 S): splatSlice's disc rows
+  int splatFirst_ = 1, splatLast_[2] = {0, 0};  // rows and columns written: first (both), last x, last y
 
   // Block setup for the route: the block particles' float records (CacheParticle, as the cache has
   // them), the offsets table float(d S) and the corners' x coordinates over the padded plane rows.
@@ -43,8 +44,17 @@
     w_.splatOffsets.resize(std::size_t(2 * offsetRange_ + 1));
     for (int d = -offsetRange_; d <= offsetRange_; ++d)
       w_.splatOffsets[std::size_t(d + offsetRange_)] = float(double(d) * su_.s);
+    // The corners the splat writes: the expanded block's inner ones (the walk and §4 seeding read
+    // margin corners too; the outer faces stay 0, §3), or for the dense scan, which reads nothing
+    // but the interior's corners, the interior alone (a particle near a seam then writes each of
+    // its corners in one block only).
+    const int lo = su_.dense ? su_.m : 1;
+    splatLast_[0] = su_.dense ? su_.m + su_.b[0] : nx_ - 1;
+    splatLast_[1] = su_.dense ? su_.m + su_.b[1] : ny_ - 1;
+    splatFirst_ = lo;
     w_.splatInBlock.resize(std::size_t(w_.planeStride));
-    for (int x = 0; x < w_.planeStride; ++x) w_.splatInBlock[std::size_t(x)] = x >= 1 && x <= nx_ - 1 ? -1 : 0;
+    for (int x = 0; x < w_.planeStride; ++x)
+      w_.splatInBlock[std::size_t(x)] = x >= lo && x <= splatLast_[0] ? -1 : 0;
     w_.splatCx.resize(std::size_t(nx_ + 1 + 2 * m + 16));
     for (int i = -m; i <= nx_ + m + 15; ++i) w_.splatCx[std::size_t(i + m)] = double(g0_[0] + i) * su_.s;
     w_.local.resize(particles.size());
@@ -151,8 +161,8 @@
     const float* off = w_.splatOffsets.data() + offsetRange_;
     const double* cxPad = w_.splatCx.data() + m;  // cxPad[x] = double(g0 + x) S for x in [-m, nx + m + 15]
     const std::int16_t* reachOf = w_.splatReach.data();
-    const std::int32_t* inBlockAt = w_.splatInBlock.data();  // -1 on the inner columns 1 .. nx - 1, else 0
-    const int ylo = 1, yhi = ny_ - 1;
+    const std::int32_t* inBlockAt = w_.splatInBlock.data();  // -1 on the columns written, else 0
+    const int ylo = splatFirst_, yhi = splatLast_[1];
     SplatI8 counted = {};
     for (const CacheParticle* cp = first; cp != last; ++cp) {
       const std::size_t li = std::size_t(cp - parts);

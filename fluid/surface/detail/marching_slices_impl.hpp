@@ -178,6 +178,11 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
+  for (std::size_t k = 0; k < 3; ++k) {  // the dense scan's written-slot lists
+    std::size_t need = 0;
+    for (const auto& w : workers) need = std::max(need, w->denseTouched[k].capacity());
+    for (auto& w : workers) w->denseTouched[k].reserve(need);
+  }
   // Workers share the block dimensions (Worker::resize), so todo lists and slices are alike.
   std::size_t slices = 0, corners = 0, dzs = 0, slabs = 0;
   for (const auto& w : workers) {
@@ -317,7 +322,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
   for (auto& w : workers) {
     if (!w) w = std::make_unique<Worker<Policy>>();
     w->resize(su.n);
-    w->setPlanes(su.splat, su.m);
+    w->setPlanes(su.splat, su.m, su.dense);
     w->peakBytes = 0;
   }
   if (st.seams.size() < st.blocks.size()) st.seams.resize(st.blocks.size());
@@ -377,7 +382,16 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
     su.lattice0[a] = c0;
   }
   if (autoSize && su.nb[0] * su.nb[1] * su.nb[2] == 1) {
-    const int a = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
+    int a = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
+    // The dense scan's splat pays per particle and slice, then per disc row: a cut across the
+    // sweep (z) splits a seam particle's slices between the halves, a cut across y its rows, a cut
+    // across x every row it writes. So it cuts the first axis of z, y, x that is wide enough.
+    if (su.dense)
+      for (int b : {2, 1, 0})
+        if ((extent[b] + 1) / 2 >= 5 * r) {
+          a = b;
+          break;
+        }
     if ((extent[a] + 1) / 2 >= 5 * r) su.nb[a] = 2;
   }
   for (int a = 0; a < 3; ++a) {
@@ -386,21 +400,16 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
   }
 }
 
-// Whether the blocks sum their fields by slice splat (SurfaceFieldRoute; the plan's block shape
-// and margin set). automatic: where the splat's whole-block field fits Worker::kVolumeBytes (summed
-// once, serving seeding and the sweep) and a particle's disc row fits one or two 8-wide windows
-// (ceil(Rc / S) <= 5). Measured (docs/surface.md, "Field routes"): there it does fewer instructions
-// than the §6 cache walk on the dense sets; with blocks whose field does not fit (spray) the cache
-// does fewer, and with larger discs it does fewer on the larger sets (fountain and explosion at
-// S = 0.3, Rc / S = 10: bench_surface_count with SURFACE_COUNT_ROUTE=cache|splat under callgrind),
-// while on blob (Rc / S = 10, 100 particles) the two are about even. The choice depends on the
-// data, S and Rc only, never on the thread count, and both routes give the same bits.
-inline bool useSliceSplat(SurfaceFieldRoute route, const Setup& su) {
-  if (route != SurfaceFieldRoute::automatic) return route == SurfaceFieldRoute::sliceSplat;
-  const int r = std::max(1, int(std::ceil(su.rcMax / su.s)));
-  const std::size_t stride = std::size_t(std::max(su.n[0] + 1, 8 * ((2 * su.m + 8) / 8)));
-  const std::size_t volumeBytes = 4 * std::size_t(su.n[2] + 1) * stride * std::size_t(su.n[1] + 1) * sizeof(float);
-  return r <= 5 && volumeBytes <= Worker<PlainPolicy>::kVolumeBytes;
+// Whether the blocks sum their fields by slice splat (SurfaceFieldRoute). automatic: always, with
+// the dense scan (block_dense_scan.inl): measured on the four sets (docs/surface.md, "Field
+// routes"), splat plus scan does fewer instructions and takes less time than the §6 cache walk and
+// than the splat with the walk on every one of them, spray's large sparse blocks included (their
+// slices are cleared only where the splat wrote, and two slices are alive, so it also holds less
+// memory than the cache). The choice never depends on the thread count, and all routes give the
+// same vertex bits.
+inline bool useSliceSplat(SurfaceFieldRoute route) {
+  return route == SurfaceFieldRoute::automatic || route == SurfaceFieldRoute::sliceSplat ||
+         route == SurfaceFieldRoute::denseScan;
 }
 
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
@@ -560,6 +569,7 @@ inline SurfaceStatus gatherBlocks(ExtractorState& st, const Setup& su, bool user
     stats.maxActiveSlices = std::max(stats.maxActiveSlices, o.stats.maxActiveSlices);
     stats.slabReversals += o.stats.slabReversals;
     stats.splatBlocks += o.stats.splatBlocks;
+    stats.scannedBlocks += o.stats.scannedBlocks;
     stats.cacheBuildMs += o.stats.cacheBuildMs;
     stats.seedMs += o.stats.seedMs;
     stats.marchMs += o.stats.marchMs;
@@ -668,12 +678,13 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   // paper's (~100^3, §3): 128 cubes, where the margins cost about 15% of the cubes (64: ~30%).
   // Approach 2 holds a full 3D corner array per block, so it keeps 64 (its memory grows with the
   // cube of the block edge; 128 would make it a strawman).
+  // The slice splat sums the sphere's terms only (anisotropic kernels take the §6 cache).
+  su.splat = st.method != 2 && !Policy::kHasUser && !isAnisotropic<Policy>() && useSliceSplat(params.fieldRoute);
+  su.dense = su.splat && params.fieldRoute != SurfaceFieldRoute::sliceSplat;
   planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};
   su.octant = viewOctant(params, su.frame);
-  // The slice splat sums the sphere's terms only (anisotropic kernels take the §6 cache).
-  su.splat = !Policy::kHasUser && !isAnisotropic<Policy>() && useSliceSplat(params.fieldRoute, su);
 
   buildBlockLists(st, su, params);
   if (st.outs.size() < st.blocks.size()) st.outs.resize(st.blocks.size());

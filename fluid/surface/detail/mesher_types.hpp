@@ -245,6 +245,7 @@ struct Setup {
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
   bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
+  bool dense = false;            // SurfaceFieldRoute::denseScan: splat, then scan volume-mode blocks
   const StretchTerm* stretch = nullptr;  // by input index: SurfaceInput::stretch's terms (null: spheres)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
@@ -290,6 +291,18 @@ struct Worker {
   std::vector<std::int16_t> splatReach;         // particleReach() of each block particle
   std::vector<std::array<float, 2>> splatBand;  // per block particle: float(Rc_i^2 -/+ tol) (splatSlice)
   std::vector<std::uint32_t> slabCount;
+  // Dense scan (block_dense_scan.inl): the inside bits of two slices' rows (words per row each),
+  // the cubes of the interior as a row mask, vertex ids + 1 of the edges of two slices' faces (x
+  // and y edges, by slice parity) and of one slab's z edges, five per column, and the slots
+  // written in each of those three kinds since they were last cleared.
+  std::vector<std::uint64_t> denseBits, denseCubeMask;
+  // Its two slices' planes (4 planeFloats each, slice z in [z & 1]) and what their last splats
+  // wrote ({y0, y1, x0, x1}, as volumeRect): everything else of them is 0.
+  std::array<std::vector<float>, 2> denseField;
+  std::array<std::array<std::int16_t, 4>, 2> denseRect{};
+  std::vector<std::uint32_t> denseIds;
+  std::array<std::vector<std::uint32_t>, 3> denseTouched;
+  std::size_t denseWords = 0;
   std::uint64_t peakBytes = 0;
 
   std::size_t columns() const { return std::size_t(nx + 1) * std::size_t(ny + 1); }
@@ -328,23 +341,31 @@ struct Worker {
   // kVolumeBytes, a ring of 2 m + 4 (seeding's descents start at the particles' nearest corners,
   // which rise with their z, but one from a margin column may run down the whole block).
   static constexpr std::size_t kVolumeBytes = std::size_t(8) << 20;
-  void setPlanes(bool splat, int m) {
+  // `scan`: the dense scan (block_dense_scan.inl) needs neither: it sums each slice's planes once,
+  // in order, into one of two slices of the pool, and reads each only while it is in cache.
+  void setPlanes(bool splat, int m, bool scan = false) {
     const int pad = 0;
     const int stride = splat ? std::max(nx + 1, 8 * ((2 * m + 8) / 8)) : 0;
     const std::size_t floats = splat ? std::size_t(stride) * std::size_t(ny + 1) : 0;
     const std::size_t slices = std::size_t(nz + 1);
-    const bool vol = splat && 4 * slices * floats * sizeof(float) <= kVolumeBytes;
+    const bool vol = splat && !scan && 4 * slices * floats * sizeof(float) <= kVolumeBytes;
+    const std::size_t denseFloats = scan ? 4 * floats : 0;
+    if (denseField[0].size() != denseFloats || floats != planeFloats || stride != planeStride)
+      for (int i = 0; i < 2; ++i) {
+        denseField[i].assign(denseFloats, 0.0f);
+        denseRect[i] = {1, 0, 1, 0};
+      }
+    const std::size_t slots = !splat || vol || scan                             ? 0
+                              : slices * floats * sizeof(float) <= kVolumeBytes ? slices
+                                                                                : std::size_t(2 * m + 4);
     if (floats == planeFloats && stride == planeStride && pad == planePad && vol == volumeMode &&
-        (!vol || volume.size() == 4 * slices * floats))
+        (!vol || volume.size() == 4 * slices * floats) && ringZ.size() == slots)
       return;
     planeFloats = floats, planeStride = stride, planePad = pad, volumeMode = vol;
     sliceFieldFloats = vol ? 0 : 4 * floats;
     for (auto& s : slicePool) s->field.assign(sliceFieldFloats, 0.0f);
     volume.assign(vol ? 4 * slices * floats : 0, 0.0f);
     volumeRect.assign(vol ? slices : 0, std::array<std::int16_t, 4>{1, 0, 1, 0});
-    const std::size_t slots = !splat || vol                                     ? 0
-                              : slices * floats * sizeof(float) <= kVolumeBytes ? slices
-                                                                                : std::size_t(2 * m + 4);
     seedRing.assign(slots * floats, 0.0f);
     ringZ.assign(slots, -1);
   }
