@@ -112,7 +112,8 @@ struct SurfaceParams {
   float cube = 1.0f;       // cube edge S, world units, > 0
   // Largest interior cubes per block edge, else [4, 1024]; 0 = auto: max(128, 12 ceil(Rc/S)),
   // so the margins (about ceil(Rc/S) cubes) stay a modest share of each block, and a set fitting one
-  // block is halved along its longest axis when the halves stay >= 5 margins wide. The
+  // block is halved when the halves stay >= 5 margins wide: along its longest axis for the walking
+  // routes, for the dense scan along the first wide enough of the sweep axis, y, x. The
   // particles' lattice extent is cut into equal blocks no larger than this. Never depends on
   // `threads`, so the output does not either.
   int blockCubes = 0;

@@ -44,7 +44,7 @@ const ParamTable<FluidSurfaceParams>& table() {
       param<&P::cube>("cube", 0.2, 2.0, "marching cube edge in particle spacings"),
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the particle field"),
       choice<&P::field>("field", kFieldNames, kFieldValues,
-                        "how the mesher finds the surface, the same vertices either way: dense (slice splat, every "
+                        "how the mesher finds the surface, the same vertices on every route: dense (slice splat, every "
                         "cube scanned), splat (slice splat, seeded walk), cache (the paper's section 6 cache, "
                         "seeded walk) or auto (the library's choice)"),
       param<&P::refraction>("refraction", 0.0, 1.0, "screen offset per metre of water; 0 = off"),

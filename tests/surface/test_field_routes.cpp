@@ -23,7 +23,7 @@ using namespace surface_test;
 
 namespace {
 
-int gScannedMeshes = 0;    // expectRoutesAgree calls whose dense-scan mesh was scanned (volume mode)
+int gScannedMeshes = 0;    // expectRoutesAgree calls whose dense-scan mesh was scanned (every block)
 int gScansWithGhosts = 0;  // of those, scans that found components the walk's seeding cannot reach
 int gSamePlanScans = 0;    // scans compared with the walk block by block (both planned the same blocks)
 
@@ -179,8 +179,8 @@ TEST(FieldRoutes, SliceSplatIsTheCacheMeshBitForBitOnTheTestSets) {
 }
 
 TEST(FieldRoutes, DenseScanRunsInEveryBlock) {
-  // Forced, the dense scan takes every block: those whose whole field is summed up front (fountain
-  // and explosion with the automatic plan) and spray's large ones, summed a slice at a time.
+  // Forced, the dense scan takes every block of every set, the small dense ones (fountain,
+  // explosion) and spray's large sparse ones alike, each summed a slice at a time.
   const std::tuple<const char*, float, bool> sets[] = {
       {"fountain.xyz", 1.0f, true}, {"explosion.xyz", 0.6f, true}, {"spray.xyz", 1.0f, true}};
   for (const auto& [name, cube, scanned] : sets) {

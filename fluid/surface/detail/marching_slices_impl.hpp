@@ -178,6 +178,9 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::splatBand);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
+  grow(&Worker<Policy>::denseIds);
+  grow(&Worker<Policy>::denseBits);
+  grow(&Worker<Policy>::denseCubeMask);
   for (std::size_t k = 0; k < 3; ++k) {  // the dense scan's written-slot lists
     std::size_t need = 0;
     for (const auto& w : workers) need = std::max(need, w->denseTouched[k].capacity());

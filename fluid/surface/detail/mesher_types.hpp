@@ -245,7 +245,7 @@ struct Setup {
   bool plainFrame = false;       // frame is the identity (no view ordering): cheaper vertex output
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
   bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
-  bool dense = false;            // SurfaceFieldRoute::denseScan: splat, then scan volume-mode blocks
+  bool dense = false;            // SurfaceFieldRoute::denseScan: slice splat a slice at a time, every cube scanned
   const StretchTerm* stretch = nullptr;  // by input index: SurfaceInput::stretch's terms (null: spheres)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
@@ -362,7 +362,7 @@ struct Worker {
         (!vol || volume.size() == 4 * slices * floats) && ringZ.size() == slots)
       return;
     planeFloats = floats, planeStride = stride, planePad = pad, volumeMode = vol;
-    sliceFieldFloats = vol ? 0 : 4 * floats;
+    sliceFieldFloats = vol || scan ? 0 : 4 * floats;  // (the scan uses no pool slices)
     for (auto& s : slicePool) s->field.assign(sliceFieldFloats, 0.0f);
     volume.assign(vol ? 4 * slices * floats : 0, 0.0f);
     volumeRect.assign(vol ? slices : 0, std::array<std::int16_t, 4>{1, 0, 1, 0});
