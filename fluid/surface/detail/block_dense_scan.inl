@@ -18,18 +18,9 @@
 
   // Slice z's four planes (value, df/dx, df/dy, df/dz; Worker::planeFloats each), by parity.
   const float* densePlanes(int z) const { return w_.denseField[std::size_t(z & 1)].data(); }
-  // Sums slice z into its slot. The slot is 0 outside what its last splat wrote (Worker::denseRect:
-  // rows y0..y1, columns x0..x1), so only that is cleared first: a sparse block's slices cost
-  // what their particles write, not the whole plane.
+  // Sums slice z into its slot, which is 0 outside Worker::denseRect (splatSliceInto).
   void denseSumSlice(int z) {
-    float* planes = w_.denseField[std::size_t(z & 1)].data();
-    std::array<std::int16_t, 4>& rect = w_.denseRect[std::size_t(z & 1)];
-    for (int a = 0; a < 4; ++a)
-      for (int y = rect[0]; y <= rect[1]; ++y) {
-        float* row = planes + std::size_t(a) * w_.planeFloats + std::size_t(y) * std::size_t(w_.planeStride);
-        std::fill(row + rect[2], row + rect[3] + 1, 0.0f);
-      }
-    looked_ += splatSlice<true>(planes, z, &rect);
+    splatSliceInto(w_.denseField[std::size_t(z & 1)].data(), z, w_.denseRect[std::size_t(z & 1)]);
   }
 
   // Inside bits of slice z's rows y0 .. y1 (a word per 64 corners, bit x = corner x), all columns
@@ -74,17 +65,9 @@
     if (id) return id - 1;
     const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
     const int lx = x + int(base & 1), ly = y + int((base >> 1) & 1), lz = z + int(base >> 2);
-    const std::size_t pf = w_.planeFloats, stride = std::size_t(w_.planeStride);
-    const std::size_t at = std::size_t(ly) * stride + std::size_t(lx);
-    const float* pa = densePlanes(lz) + at;
-    const float* pb = axis == 2 ? densePlanes(lz + 1) + at : pa + (axis == 0 ? 1 : stride);
     Corner<Policy> ca, cb;
-    ca.value = pa[0];
-    cb.value = pb[0];
-    for (int a = 0; a < 3; ++a) {
-      ca.g[a] = pa[std::size_t(a + 1) * pf];
-      cb.g[a] = pb[std::size_t(a + 1) * pf];
-    }
+    cornerFromPlanes(densePlanes(lz), lx, ly, ca);
+    cornerFromPlanes(densePlanes(lz + int(axis == 2)), lx + int(axis == 0), ly + int(axis == 1), cb);
     const std::uint32_t made = emitVertex(ca, cb, axis, lx, ly, lz);
     id = made + 1;
     w_.denseTouched[axis == 2 ? 2 : std::size_t(lz & 1)].push_back(std::uint32_t(slot));

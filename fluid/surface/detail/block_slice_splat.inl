@@ -82,16 +82,20 @@
     std::fill(w_.ringZ.begin(), w_.ringZ.end(), -1);
     parts_ = w_.local.data();
     if (w_.volumeMode)  // the whole block's field, once (see Worker::setPlanes)
-      for (int z = 0; z <= nz_; ++z) {
-        float* planes = w_.volume.data() + std::size_t(z) * 4 * w_.planeFloats;
-        std::array<std::int16_t, 4>& rect = w_.volumeRect[std::size_t(z)];
-        for (int y = rect[0]; y <= rect[1]; ++y)  // what the last splat wrote (the rest is 0)
-          for (int a = 0; a < 4; ++a) {
-            float* row = planes + std::size_t(a) * w_.planeFloats + std::size_t(y) * std::size_t(w_.planeStride);
-            std::fill(row + rect[2], row + rect[3] + 1, 0.0f);
-          }
-        looked_ += splatSlice<true>(planes, z, &rect);
+      for (int z = 0; z <= nz_; ++z)
+        splatSliceInto(w_.volume.data() + std::size_t(z) * 4 * w_.planeFloats, z, w_.volumeRect[std::size_t(z)]);
+  }
+
+  // Sums slice z into four planes that are 0 outside `rect`, what their last splat wrote (rows
+  // y0..y1, columns x0..x1): only that is cleared first, so a sparse slice costs what its particles
+  // write, not the whole plane; `rect` becomes what this splat wrote.
+  void splatSliceInto(float* planes, int z, std::array<std::int16_t, 4>& rect) {
+    for (int y = rect[0]; y <= rect[1]; ++y)
+      for (int a = 0; a < 4; ++a) {
+        float* row = planes + std::size_t(a) * w_.planeFloats + std::size_t(y) * std::size_t(w_.planeStride);
+        std::fill(row + rect[2], row + rect[3] + 1, 0.0f);
       }
+    looked_ += splatSlice<true>(planes, z, &rect);
   }
 
   // Slice z's planes for the sweep: its part of the block's volume, or summed into its own.
@@ -303,8 +307,11 @@
 
   // A corner of slice `slice` from its planes.
   void cornerFromPlanes(const Slice<Policy>& slice, int x, int y, Corner<Policy>& c) const {
+    cornerFromPlanes(slice.planes, x, y, c);
+  }
+  // Corner (x, y) of a slice's four planes (value, df/dx, df/dy, df/dz; planeFloats each).
+  void cornerFromPlanes(const float* f, int x, int y, Corner<Policy>& c) const {
     const std::size_t at = std::size_t(y) * std::size_t(w_.planeStride) + std::size_t(w_.planePad + x);
-    const float* f = slice.planes;
     const std::size_t pf = w_.planeFloats;
     c.value = f[at];
     c.g[0] = f[at + pf];
