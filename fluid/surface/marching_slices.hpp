@@ -80,11 +80,14 @@ enum class SurfaceOrder : std::uint8_t {
   frontToBack,  // the reverse, for early-z with opaque surfaces
 };
 
-// How a corner's field is summed and which cubes are visited. Every route is exact (every particle
-// within Rc_i, summed in (z, index) order with the same float expressions), so the corner values
-// and every vertex's bits are the same (tests compare them); they differ in cost and, for the
-// dense scan, in the order of triangles within a slab and in the components §4 seeding cannot
-// reach. docs/surface.md ("Field routes") has the measurements.
+// How a corner's field is summed and which cubes are visited. The first three routes are exact
+// (every particle within Rc_i by influences()'s double predicate, summed in (z, index) order with
+// the same float expressions, gradient included), so the corner values and every vertex's bits are
+// the same (tests compare them); they differ in cost and, for the dense scan, in the order of
+// triangles within a slab and in the components §4 seeding cannot reach. valueScan trades that
+// for speed: the field's value alone, by a float predicate, and normals from central differences
+// of it (what the dense-lattice peer and Flying Edges do). docs/surface.md ("Field routes") has
+// the measurements.
 enum class SurfaceFieldRoute : std::uint8_t {
   // denseScan. (Policies with per-corner data, Policy::kHasUser or SurfaceInput::user, and
   // anisotropic kernels take particleCache whatever this says.)
@@ -104,6 +107,14 @@ enum class SurfaceFieldRoute : std::uint8_t {
   // particles' fields exceed T away from each one's nearest corner (the dense oracle's
   // triangles). Two slices alive per worker.
   denseScan,
+  // The dense scan over a value-only splat: each term added where its float r^2 < float(Rc_i^2)
+  // (not influences()'s double predicate), no gradient planes, and each vertex's normal
+  // interpolated from central differences of the value at its edge's two corners (so the splat
+  // also sums one corner around the interior, and the blocks' margins and particle lists grow by
+  // one cube). The dense oracle's triangles wherever no corner lies within float rounding of T;
+  // normals within a few degrees of the analytic ones (tests measure both). Four value slices
+  // alive per worker.
+  valueScan,
 };
 
 struct SurfaceParams {
@@ -166,7 +177,7 @@ struct SurfaceStats {
   std::uint64_t vertices = 0;
   std::uint32_t blocks = 0;
   std::uint32_t splatBlocks = 0;      // blocks whose field was summed by slice splat (SurfaceFieldRoute)
-  std::uint32_t scannedBlocks = 0;    // blocks whose interior cubes were all scanned (SurfaceFieldRoute::denseScan)
+  std::uint32_t scannedBlocks = 0;    // blocks whose interior cubes were all scanned (SurfaceFieldRoute::denseScan, valueScan)
   std::uint32_t maxActiveSlices = 0;  // most slice caches alive at once in one block
   std::uint64_t slabReversals = 0;    // times the sweep stepped down to a slab below (§4, Fig. 4)
   // Working memory, bytes actually touched: largest single block, and summed over all blocks

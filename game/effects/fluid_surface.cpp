@@ -17,10 +17,10 @@ namespace {
 constexpr std::string_view kOrderNames[] = {"sorted", "unsorted", "exact"};
 constexpr SurfaceOrderChoice kOrderValues[] = {SurfaceOrderChoice::sorted, SurfaceOrderChoice::unsorted,
                                                SurfaceOrderChoice::exact};
-constexpr std::string_view kFieldNames[] = {"dense", "splat", "cache", "auto"};
+constexpr std::string_view kFieldNames[] = {"dense", "splat", "cache", "value", "auto"};
 constexpr fluid::SurfaceFieldRoute kFieldValues[] = {
     fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::sliceSplat, fluid::SurfaceFieldRoute::particleCache,
-    fluid::SurfaceFieldRoute::automatic};
+    fluid::SurfaceFieldRoute::valueScan, fluid::SurfaceFieldRoute::automatic};
 constexpr std::string_view kNeeds[] = {"sph_fluid"};
 constexpr std::string_view kKernelNames[] = {"isotropic", "anisotropic"};
 constexpr SurfaceKernel kKernelValues[] = {SurfaceKernel::isotropic, SurfaceKernel::anisotropic};
@@ -44,9 +44,10 @@ const ParamTable<FluidSurfaceParams>& table() {
       param<&P::cube>("cube", 0.2, 2.0, "marching cube edge in particle spacings"),
       param<&P::threshold>("threshold", 0.01, 0.24, "iso level T of the particle field"),
       choice<&P::field>("field", kFieldNames, kFieldValues,
-                        "how the mesher finds the surface, the same vertices on every route: dense (slice splat, every "
-                        "cube scanned), splat (slice splat, seeded walk), cache (the paper's section 6 cache, "
-                        "seeded walk) or auto (the library's choice)"),
+                        "how the mesher finds the surface: dense (slice splat, every cube scanned), splat (slice "
+                        "splat, seeded walk), cache (the paper's section 6 cache, seeded walk), the same vertices on "
+                        "those three; value (dense scan of the value alone, normals by central differences: faster, "
+                        "the vertices' last bits may differ) or auto (the library's choice)"),
       param<&P::refraction>("refraction", 0.0, 1.0, "screen offset per metre of water; 0 = off"),
       param<&P::opacity>("opacity", 0.0, 1.0, "blend alpha of one water layer"),
       param<&P::absorption>("absorption", 0.0, 50.0, "Beer-Lambert sigma per metre, RGB"),

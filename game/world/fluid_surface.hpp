@@ -35,8 +35,9 @@ struct FluidSurfaceParams {
   float smoothing = 2.0f;  // Rc in particle spacings
   float cube = 0.5f;       // lattice cube edge S in particle spacings
   float threshold = 0.2f;  // iso level T in (0, 0.25)
-  // How the mesher finds the surface (fluid::SurfaceFieldRoute; every route gives the same
-  // vertices, the dense scan also the rare pieces §4's seeds miss). The dense scan by default (the library's automatic choice too): at the game's
+  // How the mesher finds the surface (fluid::SurfaceFieldRoute; the exact routes give the same
+  // vertices, the dense scan also the rare pieces §4's seeds miss; the value scan is faster, with
+  // central-difference normals). The dense scan by default (the library's automatic choice too): at the game's
   // lattice (Rc = 4 S) it costs less than the slice splat's seeded walk and the paper's §6 cache
   // on the fountain's frames (docs/surface.md, "The game's scale").
   fluid::SurfaceFieldRoute field = fluid::SurfaceFieldRoute::denseScan;

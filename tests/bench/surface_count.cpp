@@ -64,11 +64,12 @@ int main(int argc, char** argv) {
   if (const char* b = std::getenv("SURFACE_COUNT_BLOCK")) params.blockCubes = std::atoi(b);  // 0 = auto
   if (const char* rc = std::getenv("SURFACE_COUNT_RC")) params.rc = float(std::atof(rc));
   if (const char* pk = std::getenv("SURFACE_COUNT_PORTABLE")) params.portableKernels = std::atoi(pk) != 0;
-  // The §6 cache route (bench_surface's Figure 7 tables use it); SURFACE_COUNT_ROUTE=auto|splat|dense for the others.
+  // The §6 cache route (bench_surface's Figure 7 tables use it); SURFACE_COUNT_ROUTE=auto|splat|dense|value for the others.
   params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
   if (const char* r = std::getenv("SURFACE_COUNT_ROUTE"))
     params.fieldRoute = std::string(r) == "splat"   ? fluid::SurfaceFieldRoute::sliceSplat
                         : std::string(r) == "dense" ? fluid::SurfaceFieldRoute::denseScan
+                        : std::string(r) == "value" ? fluid::SurfaceFieldRoute::valueScan
                         : std::string(r) == "auto"  ? fluid::SurfaceFieldRoute::automatic
                                                     : fluid::SurfaceFieldRoute::particleCache;
   const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 1;

@@ -4,9 +4,10 @@
 // when CMake finds VTK 9 (Debian: `apt-get install libvtk9-dev`); not part of scripts/test.sh.
 //
 //   bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]
-//   bench_surface_peers --count SET ROUTE   (one warm mesh between callgrind client requests;
-//                                           ROUTE = ours | ours-one-block | cache | splat | peer |
-//                                           peer-scalar | peer-no-normals)
+//   bench_surface_peers --count SET ROUTE [MESHES]   (one warm mesh, or MESHES of them for `perf
+//                                           record`, between callgrind client requests; ROUTE = ours |
+//                                           ours-one-block | cache | splat | dense | value | peer | peer-scalar |
+//                                           peer-no-normals)
 //
 // Timings: rounds interleave ours and the peer (1 thread, then 2 threads); each timed mesh follows
 // an untimed one of the same route (steady state, as a game meshing every frame); medians of N
@@ -329,8 +330,9 @@ std::string fmt(const char* f, double v) {
 }
 
 // --count: one warm mesh of SET by ROUTE (ours | ours-one-block | cache | splat | peer | peer-scalar |
-// peer-no-normals), one thread, between callgrind's start and stop.
-int countMode(const std::string& set, const std::string& route) {
+// peer-no-normals), one thread, between callgrind's start and stop; `repeats` meshes there instead of one
+// for a sampling profiler (perf record), which needs many to split the time between functions.
+int countMode(const std::string& set, const std::string& route, int repeats) {
   const float cube = set == "blob" ? 0.3f : set == "explosion" ? 0.6f : 1.0f;
   const fluid::ParticlePositions ps = load(set.c_str());
   Ours ours;
@@ -343,13 +345,15 @@ int countMode(const std::string& set, const std::string& route) {
   if (route == "cache") params.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
   if (route == "splat") params.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
   if (route == "dense") params.fieldRoute = fluid::SurfaceFieldRoute::denseScan;
+  if (route == "value") params.fieldRoute = fluid::SurfaceFieldRoute::valueScan;
   if (route == "ours-one-block") params.blockCubes = 1024;
   peer.scalar = route == "peer-scalar";
   peer.normals = route != "peer-no-normals";
   auto run = [&] { return route.rfind("peer", 0) == 0 ? peer.mesh(ps, cube, 1) : ours.mesh1(ps, cube, 1, params); };
   run();
   CALLGRIND_START_INSTRUMENTATION;
-  const std::size_t tris = run();
+  std::size_t tris = 0;
+  for (int i = 0; i < repeats; ++i) tris = run();
   CALLGRIND_STOP_INSTRUMENTATION;
   std::printf("%s %s triangles %zu\n", set.c_str(), route.c_str(), tris);
   return 0;
@@ -385,17 +389,18 @@ void setsTables(int reps, std::ostringstream& md) {
       for (int r = 0; r < 20; ++r) o.mesh1(sets[i].ps, sets[i].cube, t);
       allocs[i][std::size_t(t - 1)] = gAllocations - a0;
     }
-  bool allMet = true, allMetCpu = true;
+  bool allMet = true, allMetCpu = true, allMetValue = true;
   std::ostringstream cpuTable;
   for (Set& set : sets) {
-    Ours o1, o2, oc, os;  // oc, os: one thread with the field route fixed (cache, splat)
+    Ours o1, o2, oc, os, ov;  // oc, os, ov: one thread with the field route fixed (cache, splat, value)
     DensePeer p1, p2, p0;  // p0: the peer's row-chord splat of before issue 34 (DensePeer::scalar)
     p0.scalar = true;
-    std::vector<double> to1, to2, tp1, tp2, co1, cp1, cc1, cs1, cp0;
-    fluid::SurfaceParams cacheRoute, splatRoute;
+    std::vector<double> to1, to2, tp1, tp2, co1, cp1, cc1, cs1, cv1, cp0;
+    fluid::SurfaceParams cacheRoute, splatRoute, valueRoute;
     cacheRoute.fieldRoute = fluid::SurfaceFieldRoute::particleCache;
     splatRoute.fieldRoute = fluid::SurfaceFieldRoute::sliceSplat;
-    std::size_t tri[4] = {};
+    valueRoute.fieldRoute = fluid::SurfaceFieldRoute::valueScan;
+    std::size_t tri[5] = {};
     for (int r = 0; r < reps; ++r) {
       // Two threads first (VTK's thread setting caps the process, see setThreads), then one.
       benchpeers::setThreads(2);
@@ -409,6 +414,8 @@ void setsTables(int reps, std::ostringstream& md) {
       timeCpuMs([&] { oc.mesh1(set.ps, set.cube, 1, cacheRoute); }, cc1);
       os.mesh1(set.ps, set.cube, 1, splatRoute);
       timeCpuMs([&] { os.mesh1(set.ps, set.cube, 1, splatRoute); }, cs1);
+      ov.mesh1(set.ps, set.cube, 1, valueRoute);
+      timeCpuMs([&] { tri[4] = ov.mesh1(set.ps, set.cube, 1, valueRoute); }, cv1);
       benchpeers::setThreads(1);
       p1.mesh(set.ps, set.cube, 1);
       tp1.push_back(timeCpuMs([&] { tri[1] = p1.mesh(set.ps, set.cube, 1); }, cp1));
@@ -417,9 +424,11 @@ void setsTables(int reps, std::ostringstream& md) {
     }
     const double mo1 = median(to1), mp1 = median(tp1), mo2 = median(to2), mp2 = median(tp2);
     const double mc1 = median(co1), mq1 = median(cp1), mcc = median(cc1), mcs = median(cs1), mq0 = median(cp0);
-    const bool met = mo1 <= 0.8 * mp1, metCpu = mc1 <= 0.8 * mq1;
+    const double mcv = median(cv1);
+    const bool met = mo1 <= 0.8 * mp1, metCpu = mc1 <= 0.8 * mq1, metValue = mcv <= 0.8 * mq1;
     allMet = allMet && met && tri[0] == tri[1];
     allMetCpu = allMetCpu && metCpu && tri[0] == tri[1];
+    allMetValue = allMetValue && metValue && tri[4] == tri[1];
     std::printf("%-9s tris %zu/%zu  1 thr ours %.3f peer %.3f ratio %.2f  2 thr ours %.3f peer %.3f  speed-up %.2f\n",
                 set.name, tri[0], tri[1], mo1, mp1, mo1 / mp1, mo2, mp2, mo1 / mo2);
     std::fflush(stdout);
@@ -436,41 +445,50 @@ void setsTables(int reps, std::ostringstream& md) {
              << fmt("%.3f", mc1) << " | " << fmt("%.3f", mq1) << " | " << fmt("%.2f", mc1 / mq1)
              << (metCpu ? " (met)" : " (**not met**)") << " | " << fmt("%.3f", mcc) << " | " << fmt("%.3f", mcs)
              << " | " << fmt("%.2f", mcc / mq1) << " | " << fmt("%.2f", mcs / mq1) << " | " << fmt("%.3f", mq0) << " | "
-             << fmt("%.2f", mc1 / mq0) << " |\n";
+             << fmt("%.2f", mc1 / mq0) << " | " << fmt("%.3f", mcv) << " | " << fmt("%.2f", mcv / mq1)
+             << (metValue ? " (met)" : " (**not met**)") << (tri[4] == tri[1] ? "" : " (**triangles differ**)") << " |\n";
   }
   md << "\nThe same one-thread meshes timed by the CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`, "
         "medians of the same rounds): both routes run on the calling thread there, and this leaves out the time it "
         "waited for a core, which dominates the wall-clock figures on a loaded machine.\n\n"
         "Ours uses the default `SurfaceFieldRoute::automatic`, which picks the route in the second column; the next "
         "four columns time the two routes with §4 seeding and Alg. 1's walk forced (`particleCache`, `sliceSplat`), "
-        "in the same rounds (every route gives the same vertex bits).\n\n"
+        "in the same rounds (these three routes give the same vertex bits, with analytic normals). The last two "
+        "columns time `valueScan` in the same rounds: the dense scan over a value-only float splat with normals from "
+        "central differences, the peer's own kind of output (Flying Edges' normals), so the like-for-like "
+        "comparison; its normals are 0.6-5.4 degrees from the analytic ones on average "
+        "(tests/surface/test_value_scan.cpp prints them per set).\n\n"
         "| set | route picked | ours CPU ms | peer CPU ms | ours / peer (CPU) | particle cache CPU ms | slice splat "
         "CPU "
-        "ms | cache / peer | splat / peer | peer before issue 34 (row-chord splat) CPU ms | ours / that peer |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "ms | cache / peer | splat / peer | peer before issue 34 (row-chord splat) CPU ms | ours / that peer | "
+        "value scan CPU ms | value scan / peer (CPU) |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
      << cpuTable.str();
   md << "\nAll four one-thread ratios at most 0.8 with equal triangles: wall clock **" << (allMet ? "met" : "not met")
-     << "**, CPU time **" << (allMetCpu ? "met" : "not met") << "**.\n";
+     << "**, CPU time **" << (allMetCpu ? "met" : "not met") << "**; the value scan's (CPU time) **"
+     << (allMetValue ? "met" : "not met") << "**.\n";
 }
 
 // Instruction counts of one warm mesh (fountain, spray) by each route, from callgrind runs of `self`.
 void callgrindTable(const char* self, std::ostringstream& md) {
   md << "\nInstruction counts (callgrind, one warm mesh on one thread between client requests: "
-        "`bench_surface_peers --count SET ours|cache|splat|peer|peer-scalar` under `valgrind --tool=callgrind "
+        "`bench_surface_peers --count SET ours|cache|splat|value|peer|peer-scalar` under `valgrind --tool=callgrind "
         "--instr-atstart=no`; ours = the default automatic route (the dense scan), cache / splat = the particle "
-        "cache or the slice splat with the seeded walk, forced, peer-scalar = the peer's row-chord splat of before issue 34; a memset counts about one instruction per "
-        "byte there):\n\n"
-        "| set | ours Ir | particle cache Ir | slice splat Ir | peer Ir | ours / peer | cache / peer | splat / peer | "
-        "peer before issue 34 Ir |\n"
-        "|---|---|---|---|---|---|---|---|---|\n";
+        "cache or the slice splat with the seeded walk, forced, value = the value scan (central-difference "
+        "normals), peer-scalar = the peer's row-chord splat of before issue 34; a memset counts about one "
+        "instruction per byte there):\n\n"
+        "| set | ours Ir | particle cache Ir | slice splat Ir | value scan Ir | peer Ir | ours / peer | cache / peer | "
+        "splat / peer | value / peer | peer before issue 34 Ir |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const char* set : {"fountain", "blob", "explosion", "spray"}) {
     const double a = callgrindIr(self, set, "ours"), c = callgrindIr(self, set, "cache"),
-                 sp = callgrindIr(self, set, "splat"), b = callgrindIr(self, set, "peer"),
-                 b0 = callgrindIr(self, set, "peer-scalar");
-    std::printf("callgrind %s: ours %.0f cache %.0f splat %.0f peer %.0f ratio %.3f\n", set, a, c, sp, b, a / b);
+                 sp = callgrindIr(self, set, "splat"), v = callgrindIr(self, set, "value"),
+                 b = callgrindIr(self, set, "peer"), b0 = callgrindIr(self, set, "peer-scalar");
+    std::printf("callgrind %s: ours %.0f cache %.0f splat %.0f value %.0f peer %.0f ratio %.3f\n", set, a, c, sp, v, b,
+                a / b);
     md << "| " << set << " | " << fmt("%.0f", a) << " | " << fmt("%.0f", c) << " | " << fmt("%.0f", sp) << " | "
-       << fmt("%.0f", b) << " | " << fmt("%.3f", a / b) << " | " << fmt("%.3f", c / b) << " | " << fmt("%.3f", sp / b)
-       << " | " << fmt("%.0f", b0) << " |\n";
+       << fmt("%.0f", v) << " | " << fmt("%.0f", b) << " | " << fmt("%.3f", a / b) << " | " << fmt("%.3f", c / b)
+       << " | " << fmt("%.3f", sp / b) << " | " << fmt("%.3f", v / b) << " | " << fmt("%.0f", b0) << " |\n";
   }
 }
 
@@ -544,7 +562,8 @@ int main(int argc, char** argv) {
   std::string outPath;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--count" && i + 2 < argc) return countMode(argv[i + 1], argv[i + 2]);
+    if (a == "--count" && i + 2 < argc)
+      return countMode(argv[i + 1], argv[i + 2], i + 3 < argc ? std::max(1, std::atoi(argv[i + 3])) : 1);
     if (a == "--reps" && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--scale-reps" && i + 1 < argc) {
@@ -558,7 +577,8 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_surface_peers [--reps N] [--scale-reps N] [--out FILE] [--callgrind] [--quick]\n"
-                   "       bench_surface_peers --count SET ours|ours-one-block|cache|splat|peer|peer-scalar|peer-no-normals\n");
+                   "       bench_surface_peers --count SET ours|ours-one-block|cache|splat|dense|value|peer|peer-scalar|peer-no-normals "
+                   "[MESHES]\n");
       return 2;
     }
   }

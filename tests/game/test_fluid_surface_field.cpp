@@ -35,6 +35,7 @@ TEST(FluidSurfaceField, DenseScanByDefaultAndEachNameReachesTheMesher) {
                {"dense", fluid::SurfaceFieldRoute::denseScan},
                {"splat", fluid::SurfaceFieldRoute::sliceSplat},
                {"cache", fluid::SurfaceFieldRoute::particleCache},
+               {"value", fluid::SurfaceFieldRoute::valueScan},
                {"auto", fluid::SurfaceFieldRoute::automatic}};
   for (const auto& c : cases) {
     game::SceneConfig scene;
@@ -121,6 +122,49 @@ TEST(FluidSurfaceField, DenseScanDrawsTheSplatWalksTrianglesOnTheGamesFrames) {
     EXPECT_EQ(splat.job.mesh.stats.scannedBlocks, 0u) << "frame " << frame;
   }
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
+}
+
+// Triangles as sorted edge-key triples (the lattice edges they cut, whatever the vertex bits).
+std::vector<std::array<std::uint64_t, 3>> edgeTriangles(const fluid::SurfaceMesh& m) {
+  std::vector<std::array<std::uint64_t, 3>> out;
+  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+    std::array<std::uint64_t, 3> t = {m.edgeKeys[m.indices[i]], m.edgeKeys[m.indices[i + 1]],
+                                      m.edgeKeys[m.indices[i + 2]]};
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
+  // The value scan's corner values are the dense scan's up to float rounding (a float predicate
+  // and another order of additions), so the same lattice edges are cut unless a corner sits
+  // within rounding of T; its normals come from central differences, so only edges are compared.
+  game::SceneConfig dense_scene, value_scene;
+  ASSERT_TRUE(parseFountain("dense", dense_scene).ok());
+  ASSERT_TRUE(parseFountain("value", value_scene).ok());
+  game::World dense_world, value_world;
+  std::string error;
+  ASSERT_TRUE(game::buildWorld(dense_scene, game::contentDir(), dense_world, error)) << error;
+  ASSERT_TRUE(game::buildWorld(value_scene, game::contentDir(), value_world, error)) << error;
+  const game::FluidSurface& dense = *game::findState<game::FluidSurface>(dense_world);
+  const game::FluidSurface& value = *game::findState<game::FluidSurface>(value_world);
+  int meshed = 0, same = 0;
+  for (int frame = 0; frame < 120; ++frame) {
+    game::stepWorld(dense_world, nullptr);
+    game::stepWorld(value_world, nullptr);
+    game::meshWorld(dense_world, nullptr);
+    game::meshWorld(value_world, nullptr);
+    ASSERT_EQ(value.error, "") << "frame " << frame;
+    if (dense.job.mesh.indices.empty()) continue;
+    ++meshed;
+    EXPECT_EQ(value.job.mesh.stats.scannedBlocks, value.job.mesh.stats.blocks) << "frame " << frame;
+    same += edgeTriangles(value.job.mesh) == edgeTriangles(dense.job.mesh);
+    for (const glm::vec3& n : value.job.mesh.normals) ASSERT_NEAR(glm::length(n), 1.0f, 1e-3f) << "frame " << frame;
+  }
+  EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
+  EXPECT_GE(same, meshed - 2) << "the value scan cut other edges than the dense scan on " << meshed - same << " frames";
 }
 
 // The key is live (the overlay's combo): switching the route between frames of one world, the

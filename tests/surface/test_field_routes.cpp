@@ -238,12 +238,14 @@ TEST(FieldRoutes, DenseScanIsThreadCountInvariant) {
 }
 
 TEST(FieldRoutes, OneExtractorSwitchingRoutesAndSetsMeshesAsFreshOnes) {
-  // The game switches the route live: each worker's scratch (the dense scan's two slices, which
-  // it only clears where their last splat wrote; the walk's slices and volume) must not leak
+  // The game switches the route live: each worker's scratch (the dense scan's two slices and the
+  // value scan's four, which they only clear where their last splat wrote; the walk's slices and
+  // volume) must not leak
   // from one route or set into the next.
   const std::tuple<const char*, float> sets[] = {{"fountain.xyz", 1.0f}, {"spray.xyz", 1.0f}, {"blob.xyz", 0.3f}};
   const fluid::SurfaceFieldRoute routes[] = {fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::sliceSplat,
-                                             fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::particleCache};
+                                             fluid::SurfaceFieldRoute::valueScan, fluid::SurfaceFieldRoute::denseScan,
+                                             fluid::SurfaceFieldRoute::particleCache, fluid::SurfaceFieldRoute::valueScan};
   std::vector<fluid::ParticlePositions> data;
   for (const auto& [name, cube] : sets) data.push_back(loadSet(name));
   fluid::SurfaceExtractor reused;

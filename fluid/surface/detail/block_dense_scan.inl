@@ -16,20 +16,38 @@
 // block of the extraction), and so are the components the §4 seeds cannot reach (fields of
 // several particles above T away from each one's nearest corner): the dense oracle's triangles.
 
-  // Slice z's four planes (value, df/dx, df/dy, df/dz; Worker::planeFloats each), by parity.
-  const float* densePlanes(int z) const { return w_.denseField[std::size_t(z & 1)].data(); }
-  // Sums slice z into its slot, which is 0 outside Worker::denseRect (splatSliceInto).
+  // Slice z's four planes (value, df/dx, df/dy, df/dz; Worker::planeFloats each), by parity; with
+  // valueScan its value plane, by z & 3 (block_value_splat.inl).
+  const float* densePlanes(int z) const {
+    return su_.valueOnly ? w_.valueField[std::size_t(z & 3)].data() : w_.denseField[std::size_t(z & 1)].data();
+  }
+  // What slice z's last splat wrote: the slice is 0 outside it.
+  const std::array<std::int16_t, 4>& denseRectOf(int z) const {
+    return su_.valueOnly ? w_.valueRect[std::size_t(z & 3)] : w_.denseRect[std::size_t(z & 1)];
+  }
+  // Sums slice z into its slot (splatSliceInto, or splatValueInto for valueScan).
   void denseSumSlice(int z) {
-    splatSliceInto(w_.denseField[std::size_t(z & 1)].data(), z, w_.denseRect[std::size_t(z & 1)]);
+    if (su_.valueOnly)
+      splatValueInto(w_.valueField[std::size_t(z & 3)].data(), z, w_.valueRect[std::size_t(z & 3)]);
+    else
+      splatSliceInto(w_.denseField[std::size_t(z & 1)].data(), z, w_.denseRect[std::size_t(z & 1)]);
+  }
+  // Corner (x, y) of slice z: from its planes, or for valueScan by central differences.
+  void denseCorner(int z, int x, int y, Corner<Policy>& c) const {
+    if (su_.valueOnly)
+      cornerCentral(z, x, y, c);
+    else
+      cornerFromPlanes(densePlanes(z), x, y, c);
   }
 
   // Inside bits of slice z's rows y0 .. y1 (a word per 64 corners, bit x = corner x), all columns
   // 0 .. nx. The value plane's rows are planeStride >= nx + 1 floats and the gradient planes follow
-  // it, so the 8-wide loads past a row's end stay inside the slice; their bits are masked off.
+  // it (valueScan's value slices have 8 floats of slack after the last row instead), so the 8-wide
+  // loads past a row's end stay inside the slice; their bits are masked off.
   // Rows and columns outside what the slice's splat wrote are 0, so not above T > 0.
   void denseSliceBits(int z, int y0, int y1, std::uint64_t* bits) const {
     const float* plane = densePlanes(z);
-    const std::array<std::int16_t, 4>& rect = w_.denseRect[std::size_t(z & 1)];
+    const std::array<std::int16_t, 4>& rect = denseRectOf(z);
     const std::size_t words = w_.denseWords;
 #if defined(__SSE2__)
     const __m128 t = _mm_set1_ps(su_.threshold);
@@ -66,8 +84,8 @@
     const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
     const int lx = x + int(base & 1), ly = y + int((base >> 1) & 1), lz = z + int(base >> 2);
     Corner<Policy> ca, cb;
-    cornerFromPlanes(densePlanes(lz), lx, ly, ca);
-    cornerFromPlanes(densePlanes(lz + int(axis == 2)), lx + int(axis == 0), ly + int(axis == 1), cb);
+    denseCorner(lz, lx, ly, ca);
+    denseCorner(lz + int(axis == 2), lx + int(axis == 0), ly + int(axis == 1), cb);
     const std::uint32_t made = emitVertex(ca, cb, axis, lx, ly, lz);
     id = made + 1;
     w_.denseTouched[axis == 2 ? 2 : std::size_t(lz & 1)].push_back(std::uint32_t(slot));
@@ -112,11 +130,14 @@
     for (int x = ia; x < ibx; ++x) w_.denseCubeMask[std::size_t(x) >> 6] |= 1ull << (x & 63);
     const std::uint64_t* cubeMask = w_.denseCubeMask.data();
     std::uint64_t* bits[2] = {w_.denseBits.data(), w_.denseBits.data() + sliceWords};
-    denseSumSlice(ia);
+    // Slices are summed one ahead of the slab's top (two ahead with valueScan, whose vertices read
+    // the slices below and above their corners').
+    const int ahead = 1 + int(su_.valueOnly);
+    for (int z = ia - ahead + 1; z <= ia + ahead - 1; ++z) denseSumSlice(z);
     denseSliceBits(ia, ia, iby, bits[ia & 1]);
     std::uint64_t cubes = 0;
     for (int z = ia; z < ibz; ++z) {
-      denseSumSlice(z + 1);
+      denseSumSlice(z + ahead);
       denseSliceBits(z + 1, ia, iby, bits[(z + 1) & 1]);
       const std::uint64_t* below = bits[z & 1];
       const std::uint64_t* above = bits[(z + 1) & 1];
@@ -159,6 +180,6 @@
     out_.indices.resize(nIndices_);
     const std::uint64_t bytes = w_.denseBits.size() * sizeof(std::uint64_t) +
                                 w_.denseIds.size() * sizeof(std::uint32_t) +
-                                2 * w_.denseField[0].size() * sizeof(float);
+                                2 * w_.denseField[0].size() * sizeof(float) + 4 * w_.valueField[0].size() * sizeof(float);
     peakCornerBytes_ = std::max(peakCornerBytes_, bytes);
   }

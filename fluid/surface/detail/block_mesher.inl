@@ -168,6 +168,7 @@ class BlockMesher {
 #include "fluid/surface/detail/block_slice_splat.inl"
 #include "fluid/surface/detail/block_seeding.inl"
 #include "fluid/surface/detail/block_dense_scan.inl"
+#include "fluid/surface/detail/block_value_splat.inl"
 
   Slice<Policy>* ensureSlice(int z) {
     if (!w_.active[z]) {

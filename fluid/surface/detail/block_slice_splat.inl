@@ -47,10 +47,12 @@
     // The corners the splat writes: the expanded block's inner ones (the walk and §4 seeding read
     // margin corners too; the outer faces stay 0, §3), or for the dense scan, which reads nothing
     // but the interior's corners, the interior alone (a particle near a seam then writes each of
-    // its corners in one block only).
-    const int lo = su_.dense ? su_.m : 1;
-    splatLast_[0] = su_.dense ? su_.m + su_.b[0] : nx_ - 1;
-    splatLast_[1] = su_.dense ? su_.m + su_.b[1] : ny_ - 1;
+    // its corners in one block only); valueScan's central differences also read the ring of
+    // corners around the interior (m >= 2 there, so the ring is inside the outer faces).
+    const int ring = int(su_.valueOnly);
+    const int lo = su_.dense ? su_.m - ring : 1;
+    splatLast_[0] = su_.dense ? su_.m + su_.b[0] + ring : nx_ - 1;
+    splatLast_[1] = su_.dense ? su_.m + su_.b[1] + ring : ny_ - 1;
     splatFirst_ = lo;
     w_.splatInBlock.resize(std::size_t(w_.planeStride));
     for (int x = 0; x < w_.planeStride; ++x)
@@ -60,6 +62,7 @@
     w_.local.resize(particles.size());
     w_.splatReach.resize(particles.size());
     w_.splatBand.resize(particles.size());
+    w_.splatRc2.resize(su_.valueOnly ? particles.size() : 0);
     splatReachMax_ = 0;
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
       const Particle& p = particles[li];
@@ -69,6 +72,7 @@
       // splatSlice's band around Rc_i^2 where the float r^2 does not settle a lane.
       const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
       w_.splatBand[li] = {float(p.rc2 - tol), float(p.rc2 + tol)};
+      if (su_.valueOnly) w_.splatRc2[li] = float(p.rc2);
       CacheParticle& cp = w_.local[li];
       for (int a = 0; a < 3; ++a) {
         cp.rest[a] = p.rest[a];
@@ -265,6 +269,10 @@
       // Different rows, the same particle: every corner's terms keep their order.
       if (vectors == 2 && ax >= 3 && ax + 4 < stride) {
         const float oneFrom = outFrom - oneSpan2_;
+        if (dz2f >= oneFrom) {  // every row's dy^2 + dz^2 >= oneFrom (Rc_i < 4 S: all of them)
+          rows(ax - 3, 1, y0, y1);
+          continue;
+        }
         int ya = y0;  // first row that needs both windows
         while (ya <= y1) {
           const float dyf = offY[ya] - rest1;

@@ -88,19 +88,26 @@ void prepareParticles(const SurfaceInput& input, const SurfaceParams& params, co
   out.resize(n);
   const double rc = params.rc;
   rcMax = 0.0;
+  // Without per-particle radii or stretch every particle has Rc_i = Rc: k and Rc_i^2 once.
+  const bool oneRadius = input.radiusScale.empty() && input.stretch.empty();
+  const float kOne = float(1.0 / (2.0 * rc * rc));
   for (std::size_t r = 0; r < n; ++r) {
     const std::size_t i = order[r].index;
     Particle& p = out[r];
     p.x = frame.sign[0] * double(world.at(i, frame.axis[0]));
     p.y = frame.sign[1] * double(world.at(i, frame.axis[1]));
     p.z = order[r].z;
-    const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
-    const double rci = rc * scale;
-    p.k = float(1.0 / (2.0 * rci * rci));
-    // An ellipsoid |g d| < Rc_i lies within Rc_i / lambda_min(g); the factor 1 + 2^-10 covers the
-    // float rounding of u (stretchedU) near the ellipsoid's edge, so the bound stays a superset.
-    const double bound =
-        input.stretch.empty() ? rci : rci / smallestEigenvalue(input.stretch[i]) * (1.0 + 1.0 / 1024.0);
+    double bound = rc;
+    if (oneRadius) {
+      p.k = kOne;
+    } else {
+      const double scale = input.radiusScale.empty() ? 1.0 : double(input.radiusScale[i]);
+      const double rci = rc * scale;
+      p.k = float(1.0 / (2.0 * rci * rci));
+      // An ellipsoid |g d| < Rc_i lies within Rc_i / lambda_min(g); the factor 1 + 2^-10 covers the
+      // float rounding of u (stretchedU) near the ellipsoid's edge, so the bound stays a superset.
+      bound = input.stretch.empty() ? rci : rci / smallestEigenvalue(input.stretch[i]) * (1.0 + 1.0 / 1024.0);
+    }
     p.rc2 = bound * bound;
     p.strength = input.strength.empty() ? 1.0f : input.strength[i];
     p.index = static_cast<std::uint32_t>(i);

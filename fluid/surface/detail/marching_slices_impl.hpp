@@ -71,6 +71,7 @@ struct ExtractorState {
   };
   std::vector<Pair> pairs, pairsByBlock;
   std::vector<std::uint32_t> blockCount;  // counting sort of pairs by block
+  BlockSpanTables spans;  // buildBlockLists' blockSpan
   std::vector<Particle> blockParticles;
   std::vector<BlockDesc> blocks;
   std::vector<BlockOut> outs;
@@ -176,6 +177,7 @@ void shareCapacities(std::vector<std::unique_ptr<Worker<Policy>>>& workers) {
   grow(&Worker<Policy>::splatInBlock);
   grow(&Worker<Policy>::splatReach);
   grow(&Worker<Policy>::splatBand);
+  grow(&Worker<Policy>::splatRc2);
   grow(&Worker<Policy>::chainTouched);
   grow(&Worker<Policy>::slicePool);
   grow(&Worker<Policy>::denseIds);
@@ -325,7 +327,7 @@ void runBlocks(ExtractorState& st, const Setup& su, const Policy& policy,
   for (auto& w : workers) {
     if (!w) w = std::make_unique<Worker<Policy>>();
     w->resize(su.n);
-    w->setPlanes(su.splat, su.m, su.dense);
+    w->setPlanes(su.splat, su.m, su.dense, su.valueOnly);
     w->peakBytes = 0;
   }
   if (st.seams.size() < st.blocks.size()) st.seams.resize(st.blocks.size());
@@ -412,7 +414,7 @@ inline void planBlocks(const std::vector<Particle>& ps, const SurfaceParams& par
 // same vertex bits.
 inline bool useSliceSplat(SurfaceFieldRoute route) {
   return route == SurfaceFieldRoute::automatic || route == SurfaceFieldRoute::sliceSplat ||
-         route == SurfaceFieldRoute::denseScan;
+         route == SurfaceFieldRoute::denseScan || route == SurfaceFieldRoute::valueScan;
 }
 
 // Approach 2's block pass and its memory figure (marching_slices.cpp).
@@ -462,13 +464,17 @@ inline void buildBlockLists(ExtractorState& st, const Setup& su, const SurfacePa
   // pairs are made in rank order, so a stable counting sort by block gives that order in one pass
   // when the block grid is not much larger than the pair list (otherwise a comparison sort).
   st.pairs.clear();
+  st.spans.build(su);
+  double reachRc2 = -1.0;  // particleReach of the last Rc_i^2 seen (one sqrt per distinct Rc_i)
+  int reach = 0;
   for (std::uint32_t r = 0; r < st.particles.size(); ++r) {
     const Particle& p = st.particles[r];
-    const int reach = particleReach(p, su.s);
-    assert(reach <= su.m);  // Rc_i <= rcMax, so ceil(Rc_i / S) <= ceil(rcMax / S)
+    // valueScan also sums the corners one cube around the interior (block_value_splat.inl).
+    if (p.rc2 != reachRc2) reach = particleReach(p, su.s) + int(su.valueOnly), reachRc2 = p.rc2;
+    assert(reach <= su.m);  // Rc_i <= rcMax, so ceil(Rc_i / S) (+ 1) <= m (extractImpl)
     int b0[3], b1[3];
     for (int a = 0; a < 3; ++a) {
-      blockSpan(su, a, p.anchor[a], reach, b0[a], b1[a]);
+      st.spans.span(su, a, p.anchor[a], reach, b0[a], b1[a]);
       b0[a] = std::max(b0[a], 0);
       b1[a] = std::min(b1[a], su.nb[a] - 1);
     }
@@ -684,6 +690,10 @@ SurfaceStatus extractImpl(ExtractorState& st, const SurfaceInput& input, const S
   // The slice splat sums the sphere's terms only (anisotropic kernels take the §6 cache).
   su.splat = st.method != 2 && !Policy::kHasUser && !isAnisotropic<Policy>() && useSliceSplat(params.fieldRoute);
   su.dense = su.splat && params.fieldRoute != SurfaceFieldRoute::sliceSplat;
+  su.valueOnly = su.dense && params.fieldRoute == SurfaceFieldRoute::valueScan;
+  // Central differences read one corner beyond the interior, whose particles reach one cube
+  // farther: their anchors must stay in the expanded block (blockSpan's invariant).
+  if (su.valueOnly) su.m = std::max(su.m, int(std::ceil(su.rcMax / su.s)) + 1);
   planBlocks(st.particles, params, st.method == 2 ? 64 : 128, su);
   if (su.n[0] + 1 > 32000 || su.n[1] + 1 > 32000 || su.n[2] + 1 > 32000)
     return {"surface params: blockCubes + 2 ceil(rc / cube + 1/2) is too large"};

@@ -246,6 +246,7 @@ struct Setup {
   bool avx2 = false;             // the CPU has AVX2 and SurfaceParams::portableKernels is off
   bool splat = false;            // SurfaceFieldRoute::sliceSplat (and a policy without corner data)
   bool dense = false;            // SurfaceFieldRoute::denseScan: slice splat a slice at a time, every cube scanned
+  bool valueOnly = false;        // SurfaceFieldRoute::valueScan: the dense scan on value slices (block_value_splat.inl)
   const StretchTerm* stretch = nullptr;  // by input index: SurfaceInput::stretch's terms (null: spheres)
   double origin[3] = {0, 0, 0};  // world origin subtracted from output positions
   double eyeRel[3] = {0, 0, 0};  // eye minus origin (world axes), for the exact in-slab order
@@ -300,6 +301,12 @@ struct Worker {
   // wrote ({y0, y1, x0, x1}, as volumeRect): everything else of them is 0.
   std::array<std::vector<float>, 2> denseField;
   std::array<std::array<std::int16_t, 4>, 2> denseRect{};
+  // valueScan (block_value_splat.inl): four value slices instead (slice z in [z & 3]: central
+  // differences read z - 1 and z + 1 around a slab's two), each with what its last splat wrote,
+  // and float(Rc_i^2) per block particle.
+  std::array<std::vector<float>, 4> valueField;
+  std::array<std::array<std::int16_t, 4>, 4> valueRect{};
+  std::vector<float> splatRc2;
   std::vector<std::uint32_t> denseIds;
   std::array<std::vector<std::uint32_t>, 3> denseTouched;
   std::size_t denseWords = 0;
@@ -342,18 +349,25 @@ struct Worker {
   // which rise with their z, but one from a margin column may run down the whole block).
   static constexpr std::size_t kVolumeBytes = std::size_t(8) << 20;
   // `scan`: the dense scan (block_dense_scan.inl) needs neither: it sums each slice's planes once,
-  // in order, into one of two slices of the pool, and reads each only while it is in cache.
-  void setPlanes(bool splat, int m, bool scan = false) {
+  // in order, into one of two slices of the pool, and reads each only while it is in cache;
+  // `valueOnly` (valueScan): into one of four value slices instead.
+  void setPlanes(bool splat, int m, bool scan = false, bool valueOnly = false) {
     const int pad = 0;
     const int stride = splat ? std::max(nx + 1, 8 * ((2 * m + 8) / 8)) : 0;
     const std::size_t floats = splat ? std::size_t(stride) * std::size_t(ny + 1) : 0;
     const std::size_t slices = std::size_t(nz + 1);
     const bool vol = splat && !scan && 4 * slices * floats * sizeof(float) <= kVolumeBytes;
-    const std::size_t denseFloats = scan ? 4 * floats : 0;
+    const std::size_t denseFloats = scan && !valueOnly ? 4 * floats : 0;
     if (denseField[0].size() != denseFloats || floats != planeFloats || stride != planeStride)
       for (int i = 0; i < 2; ++i) {
         denseField[i].assign(denseFloats, 0.0f);
         denseRect[i] = {1, 0, 1, 0};
+      }
+    const std::size_t valueFloats = valueOnly ? floats + 8 : 0;  // + 8: denseSliceBits' loads past the last row
+    if (valueField[0].size() != valueFloats || floats != planeFloats || stride != planeStride)
+      for (int i = 0; i < 4; ++i) {
+        valueField[i].assign(valueFloats, 0.0f);
+        valueRect[i] = {1, 0, 1, 0};
       }
     const std::size_t slots = !splat || vol || scan                             ? 0
                               : slices * floats * sizeof(float) <= kVolumeBytes ? slices
@@ -432,12 +446,45 @@ inline int marginCubes(double rcMax, double s) { return std::max(1, int(std::cei
 // the ceil and the exact predicate (influences()) agree with real arithmetic at its ends.
 inline std::int64_t floorDivInt(std::int64_t v, std::int64_t d) { return v / d - (v % d != 0 && (v < 0) != (d < 0)); }
 inline int particleReach(const Particle& p, double s) { return int(std::ceil(std::sqrt(p.rc2) / s)); }
-inline void blockSpan(const Setup& su, int a, std::int64_t anchor, int reach, int& first, int& last) {
-  const std::int64_t t = anchor - su.lattice0[a], b = su.b[a];
-  // (first + 1) b >= t - reach  and  last b <= t + reach.
-  first = int(floorDivInt(t - reach - 1, b));
-  last = int(floorDivInt(t + reach, b));
+// The blocks along axis a whose interior corners a particle with this anchor and reach touches:
+// (first + 1) b >= t - reach and last b <= t + reach, t = anchor - lattice0. `blockOf(t)` =
+// floorDivInt(t, b): a division (blockSpan) or a table (BlockSpanTables, for every particle).
+template <class BlockOf>
+void blockSpanBy(std::int64_t t, int reach, BlockOf&& blockOf, int& first, int& last) {
+  first = int(blockOf(t - reach - 1));
+  last = int(blockOf(t + reach));
 }
+inline void blockSpan(const Setup& su, int a, std::int64_t anchor, int reach, int& first, int& last) {
+  const std::int64_t b = su.b[a];
+  blockSpanBy(anchor - su.lattice0[a], reach, [b](std::int64_t t) { return floorDivInt(t, b); }, first, last);
+}
+// blockSpan from a table of floorDivInt(t, b) per axis (two 64-bit divisions per particle and axis
+// cost more than the rest of building the block lists); offsets outside the table divide.
+struct BlockSpanTables {
+  std::array<std::vector<std::int32_t>, 3> blockOf;
+  std::int64_t pad = 0;  // the tables start at t = -pad
+  static constexpr std::int64_t kMaxLength = std::int64_t(1) << 16;
+  void build(const Setup& su) {
+    pad = std::int64_t(su.m) + 2;  // t - reach - 1 >= -(m + 1) for anchors in the lattice
+    for (int a = 0; a < 3; ++a) {
+      auto& table = blockOf[std::size_t(a)];
+      const std::int64_t length = std::int64_t(su.nb[a]) * su.b[a] + 2 * pad + 1;
+      table.resize(length <= kMaxLength ? std::size_t(length) : 0);  // a lattice miles wide divides
+      for (std::size_t i = 0; i < table.size(); ++i) table[i] = std::int32_t(floorDivInt(std::int64_t(i) - pad, su.b[a]));
+    }
+  }
+  void span(const Setup& su, int a, std::int64_t anchor, int reach, int& first, int& last) const {
+    const auto& table = blockOf[std::size_t(a)];
+    const std::int64_t b = su.b[a], padded = pad;
+    blockSpanBy(
+        anchor - su.lattice0[a], reach,
+        [&table, b, padded](std::int64_t t) {
+          const std::uint64_t i = std::uint64_t(t + padded);
+          return i < table.size() ? std::int64_t(table[i]) : floorDivInt(t, b);
+        },
+        first, last);
+  }
+};
 
 // Vertex on the edge from corner A (lattice index gi, value va, gradient ga) along `axis` to B.
 // The default vertex routine of §2: linear interpolation of position and normal. Positions in
