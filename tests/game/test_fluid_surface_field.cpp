@@ -168,39 +168,61 @@ TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
 }
 
 // The key is live (the overlay's combo): switching the route between frames of one world, the
-// extractor's scratch switching with it, meshes exactly what a world on one route meshes.
+// extractor's scratch switching with it, meshes exactly what a world on one route meshes: the
+// splat walk's bits on splat and cache frames, its triangles and vertex bits in the dense scan's
+// order on dense frames, and a world fixed on the value scan's bits on value frames.
 TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
-  game::SceneConfig scene;
+  game::SceneConfig scene, value_scene;
   ASSERT_TRUE(parseFountain("splat", scene).ok());
-  game::World fixed_world, switching_world;
+  ASSERT_TRUE(parseFountain("value", value_scene).ok());
+  game::World fixed_world, value_world, switching_world;
   std::string error;
   ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), fixed_world, error)) << error;
+  ASSERT_TRUE(game::buildWorld(value_scene, game::contentDir(), value_world, error)) << error;
   ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), switching_world, error)) << error;
   game::SectionConfig* section = nullptr;
   for (game::SectionConfig& effect : switching_world.scene.effects)
     if (effect.name == "fluid_surface") section = &effect;
   ASSERT_NE(section, nullptr);
   const game::FluidSurface& fixed = *game::findState<game::FluidSurface>(fixed_world);
+  const game::FluidSurface& value = *game::findState<game::FluidSurface>(value_world);
   const game::FluidSurface& switching = *game::findState<game::FluidSurface>(switching_world);
-  int cache_frames = 0;
-  for (int frame = 0; frame < 90; ++frame) {
-    const bool cache = frame % 3 == 1;  // splat, cache, splat, splat, cache, ...
-    section->params["field"].text = cache ? "cache" : "splat";
+  const struct {
+    const char* name;
+    fluid::SurfaceFieldRoute route;
+  } cycle[] = {{"splat", fluid::SurfaceFieldRoute::sliceSplat},
+               {"cache", fluid::SurfaceFieldRoute::particleCache},
+               {"dense", fluid::SurfaceFieldRoute::denseScan},
+               {"splat", fluid::SurfaceFieldRoute::sliceSplat},
+               {"value", fluid::SurfaceFieldRoute::valueScan}};
+  int frames_by_route[5] = {};
+  for (int frame = 0; frame < 100; ++frame) {
+    const auto& pick = cycle[frame % 5];
+    section->params["field"].text = pick.name;
     game::applyLiveParams(switching_world);
-    ASSERT_EQ(switching.params.field,
-              cache ? fluid::SurfaceFieldRoute::particleCache : fluid::SurfaceFieldRoute::sliceSplat);
-    game::stepWorld(fixed_world, nullptr);
-    game::stepWorld(switching_world, nullptr);
-    game::meshWorld(fixed_world, nullptr);
-    game::meshWorld(switching_world, nullptr);
-    ASSERT_EQ(switching.error, "") << "frame " << frame;
-    ASSERT_EQ(test_support::meshBitsDiffer(switching.job.mesh, fixed.job.mesh), "") << "frame " << frame;
-    if (cache && !switching.job.mesh.indices.empty()) {
-      EXPECT_EQ(switching.job.mesh.stats.splatBlocks, 0u) << "frame " << frame;
-      ++cache_frames;
+    ASSERT_EQ(switching.params.field, pick.route) << "frame " << frame;
+    for (game::World* w : {&fixed_world, &value_world, &switching_world}) {
+      game::stepWorld(*w, nullptr);
+      game::meshWorld(*w, nullptr);
     }
+    ASSERT_EQ(switching.error, "") << "frame " << frame;
+    const fluid::SurfaceMesh& got = switching.job.mesh;
+    if (pick.route == fluid::SurfaceFieldRoute::valueScan) {
+      ASSERT_EQ(test_support::meshBitsDiffer(got, value.job.mesh), "") << "frame " << frame;
+    } else if (pick.route == fluid::SurfaceFieldRoute::denseScan) {
+      ASSERT_TRUE(drawnTriangles(got) == drawnTriangles(fixed.job.mesh)) << "frame " << frame;
+    } else {
+      ASSERT_EQ(test_support::meshBitsDiffer(got, fixed.job.mesh), "") << "frame " << frame;
+    }
+    if (got.indices.empty()) continue;
+    ++frames_by_route[frame % 5];
+    const bool walked = pick.route == fluid::SurfaceFieldRoute::sliceSplat ||
+                        pick.route == fluid::SurfaceFieldRoute::particleCache;
+    EXPECT_EQ(got.stats.scannedBlocks, walked ? 0u : got.stats.blocks) << "frame " << frame;
+    EXPECT_EQ(got.stats.splatBlocks, pick.route == fluid::SurfaceFieldRoute::particleCache ? 0u : got.stats.blocks)
+        << "frame " << frame;
   }
-  EXPECT_GE(cache_frames, 25);
+  for (int k = 0; k < 5; ++k) EXPECT_GE(frames_by_route[k], 15) << cycle[k].name;
 }
 
 TEST(FluidSurfaceField, AnUnknownRouteIsRefusedNamingTheKeyAndValue) {
