@@ -16,28 +16,41 @@
 // block of the extraction), and so are the components the §4 seeds cannot reach (fields of
 // several particles above T away from each one's nearest corner): the dense oracle's triangles.
 
+  // kValue (a template argument of the scan's functions, so the exact route's inner loops carry no
+  // test of it): SurfaceFieldRoute::valueScan, whose slices are value planes (block_value_splat.inl).
+  //
   // Slice z's four planes (value, df/dx, df/dy, df/dz; Worker::planeFloats each), by parity; with
-  // valueScan its value plane, by z & 3 (block_value_splat.inl).
+  // kValue its value plane, by z & 3.
+  template <bool kValue>
   const float* densePlanes(int z) const {
-    return su_.valueOnly ? w_.valueField[std::size_t(z & 3)].data() : w_.denseField[std::size_t(z & 1)].data();
+    if constexpr (kValue)
+      return w_.valueField[std::size_t(z & 3)].data();
+    else
+      return w_.denseField[std::size_t(z & 1)].data();
   }
   // What slice z's last splat wrote: the slice is 0 outside it.
+  template <bool kValue>
   const std::array<std::int16_t, 4>& denseRectOf(int z) const {
-    return su_.valueOnly ? w_.valueRect[std::size_t(z & 3)] : w_.denseRect[std::size_t(z & 1)];
+    if constexpr (kValue)
+      return w_.valueRect[std::size_t(z & 3)];
+    else
+      return w_.denseRect[std::size_t(z & 1)];
   }
-  // Sums slice z into its slot (splatSliceInto, or splatValueInto for valueScan).
+  // Sums slice z into its slot (splatSliceInto, or splatValueInto).
+  template <bool kValue>
   void denseSumSlice(int z) {
-    if (su_.valueOnly)
+    if constexpr (kValue)
       splatValueInto(w_.valueField[std::size_t(z & 3)].data(), z, w_.valueRect[std::size_t(z & 3)]);
     else
       splatSliceInto(w_.denseField[std::size_t(z & 1)].data(), z, w_.denseRect[std::size_t(z & 1)]);
   }
-  // Corner (x, y) of slice z: from its planes, or for valueScan by central differences.
+  // Corner (x, y) of slice z: from its planes, or with kValue by central differences.
+  template <bool kValue>
   void denseCorner(int z, int x, int y, Corner<Policy>& c) const {
-    if (su_.valueOnly)
+    if constexpr (kValue)
       cornerCentral(z, x, y, c);
     else
-      cornerFromPlanes(densePlanes(z), x, y, c);
+      cornerFromPlanes(densePlanes<false>(z), x, y, c);
   }
 
   // Inside bits of slice z's rows y0 .. y1 (a word per 64 corners, bit x = corner x), all columns
@@ -45,9 +58,10 @@
   // it (valueScan's value slices have 8 floats of slack after the last row instead), so the 8-wide
   // loads past a row's end stay inside the slice; their bits are masked off.
   // Rows and columns outside what the slice's splat wrote are 0, so not above T > 0.
+  template <bool kValue>
   void denseSliceBits(int z, int y0, int y1, std::uint64_t* bits) const {
-    const float* plane = densePlanes(z);
-    const std::array<std::int16_t, 4>& rect = denseRectOf(z);
+    const float* plane = densePlanes<kValue>(z);
+    const std::array<std::int16_t, 4>& rect = denseRectOf<kValue>(z);
     const std::size_t words = w_.denseWords;
 #if defined(__SSE2__)
     const __m128 t = _mm_set1_ps(su_.threshold);
@@ -77,6 +91,7 @@
   // The vertex on the edge `baseAxis` (mc::CaseTable::firstCorner: base corner | axis << 3) of cube
   // (x, y) of slab z, made on first use. Ids live five to a column (x and y edges of the even
   // slice, of the odd slice, the slab's z edge): slot 5 col(x, y) + denseSlot_[z & 1][baseAxis].
+  template <bool kValue>
   std::uint32_t denseVertex(unsigned baseAxis, std::size_t slot0, int x, int y, int z) {
     const std::size_t slot = slot0 + std::size_t(denseSlot_[z & 1][baseAxis]);
     std::uint32_t& id = w_.denseIds[slot];
@@ -84,8 +99,8 @@
     const unsigned base = baseAxis & 7u, axis = baseAxis >> 3;
     const int lx = x + int(base & 1), ly = y + int((base >> 1) & 1), lz = z + int(base >> 2);
     Corner<Policy> ca, cb;
-    denseCorner(lz, lx, ly, ca);
-    denseCorner(lz + int(axis == 2), lx + int(axis == 0), ly + int(axis == 1), cb);
+    denseCorner<kValue>(lz, lx, ly, ca);
+    denseCorner<kValue>(lz + int(axis == 2), lx + int(axis == 0), ly + int(axis == 1), cb);
     const std::uint32_t made = emitVertex(ca, cb, axis, lx, ly, lz);
     id = made + 1;
     w_.denseTouched[axis == 2 ? 2 : std::size_t(lz & 1)].push_back(std::uint32_t(slot));
@@ -112,6 +127,13 @@
 
   // The block's interior cubes, slab by slab upwards (the sweep order, §5).
   void denseScan() {
+    if (su_.valueOnly)
+      denseScanSlabs<true>();
+    else
+      denseScanSlabs<false>();
+  }
+  template <bool kValue>
+  void denseScanSlabs() {
     const auto& table = mc::tables().cases[su_.octant];
     const int ia = su_.m, ibx = su_.m + su_.b[0], iby = su_.m + su_.b[1], ibz = su_.m + su_.b[2];
     const std::size_t words = std::size_t(nx_ + 1 + 63) / 64 + 1;  // + 1: a zero word for the shifts
@@ -132,13 +154,13 @@
     std::uint64_t* bits[2] = {w_.denseBits.data(), w_.denseBits.data() + sliceWords};
     // Slices are summed one ahead of the slab's top (two ahead with valueScan, whose vertices read
     // the slices below and above their corners').
-    const int ahead = 1 + int(su_.valueOnly);
-    for (int z = ia - ahead + 1; z <= ia + ahead - 1; ++z) denseSumSlice(z);
-    denseSliceBits(ia, ia, iby, bits[ia & 1]);
+    constexpr int ahead = kValue ? 2 : 1;
+    for (int z = ia - ahead + 1; z <= ia + ahead - 1; ++z) denseSumSlice<kValue>(z);
+    denseSliceBits<kValue>(ia, ia, iby, bits[ia & 1]);
     std::uint64_t cubes = 0;
     for (int z = ia; z < ibz; ++z) {
-      denseSumSlice(z + ahead);
-      denseSliceBits(z + 1, ia, iby, bits[(z + 1) & 1]);
+      denseSumSlice<kValue>(z + ahead);
+      denseSliceBits<kValue>(z + 1, ia, iby, bits[(z + 1) & 1]);
       const std::uint64_t* below = bits[z & 1];
       const std::uint64_t* above = bits[(z + 1) & 1];
       const std::size_t slabFirst = nIndices_;
@@ -165,7 +187,7 @@
                                   unsigned((a2 >> b) & 1) << 4 | unsigned((s2 >> b) & 1) << 5 |
                                   unsigned((a3 >> b) & 1) << 6 | unsigned((s3 >> b) & 1) << 7;
             const std::size_t slot0 = 5 * col(x, y);
-            writeCase(table[cube], [&](unsigned baseAxis) { return denseVertex(baseAxis, slot0, x, y, z); });
+            writeCase(table[cube], [&](unsigned baseAxis) { return denseVertex<kValue>(baseAxis, slot0, x, y, z); });
           }
         }
       }

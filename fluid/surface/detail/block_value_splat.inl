@@ -115,10 +115,10 @@
   void cornerCentral(int z, int x, int y, Corner<Policy>& c) const {
     const std::size_t stride = std::size_t(w_.planeStride);
     const std::size_t at = std::size_t(y) * stride + std::size_t(w_.planePad + x);
-    const float* f = densePlanes(z);
+    const float* f = densePlanes<true>(z);
     c.value = f[at];
     c.g[0] = f[at + 1] - f[at - 1];
     c.g[1] = f[at + stride] - f[at - stride];
-    c.g[2] = densePlanes(z + 1)[at] - densePlanes(z - 1)[at];
+    c.g[2] = densePlanes<true>(z + 1)[at] - densePlanes<true>(z - 1)[at];
     c.user = {};
   }
