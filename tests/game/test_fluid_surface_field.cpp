@@ -1,7 +1,8 @@
 // fluid_surface.field: how the game's mesher finds the surface (fluid::SurfaceFieldRoute). The
-// routes are exact, so the key may change what a frame costs but never what the player sees: the
-// walking routes' meshes are compared bit for bit, the dense scan's vertex by vertex (it emits the
-// same triangles in another order within a slab), and the stats show which route ran.
+// exact routes may change what a frame costs but never what the player sees: the walking routes'
+// meshes are compared bit for bit, the dense scan's vertex by vertex (it emits the same triangles
+// in another order within a slab); the value scan cuts the same lattice edges with other normals;
+// and the stats show which route ran.
 #include "game/paths.hpp"
 #include "game/scene/scene_config.hpp"
 #include "game/world/fluid_surface.hpp"
@@ -13,6 +14,8 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <initializer_list>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +26,33 @@ game::SceneStatus parseFountain(const std::string& field, game::SceneConfig& sce
                                            "fluid_surface": {"async": false)" +
                            (field.empty() ? std::string() : ", \"field\": \"" + field + "\"") + "}}}";
   return game::parseSceneText(text, "field_test.json", scene);
+}
+
+// Fountain worlds, one per route name, stepped and meshed together frame by frame (the
+// simulation is deterministic, so they mesh the same particles).
+struct RouteWorlds {
+  std::vector<std::unique_ptr<game::World>> worlds;
+  std::vector<const game::FluidSurface*> surfaces;
+  void stepAndMesh() {
+    for (auto& w : worlds) {
+      game::stepWorld(*w, nullptr);
+      game::meshWorld(*w, nullptr);
+    }
+  }
+};
+::testing::AssertionResult buildRouteWorlds(std::initializer_list<const char*> routes, RouteWorlds& out) {
+  for (const char* route : routes) {
+    game::SceneConfig scene;
+    if (const game::SceneStatus status = parseFountain(route, scene); !status.ok())
+      return ::testing::AssertionFailure() << route << ": " << status.error;
+    auto world = std::make_unique<game::World>();
+    std::string error;
+    if (!game::buildWorld(scene, game::contentDir(), *world, error))
+      return ::testing::AssertionFailure() << route << ": " << error;
+    out.surfaces.push_back(game::findState<game::FluidSurface>(*world));
+    out.worlds.push_back(std::move(world));
+  }
+  return ::testing::AssertionSuccess();
 }
 
 TEST(FluidSurfaceField, DenseScanByDefaultAndEachNameReachesTheMesher) {
@@ -51,21 +81,12 @@ TEST(FluidSurfaceField, DenseScanByDefaultAndEachNameReachesTheMesher) {
 }
 
 TEST(FluidSurfaceField, SplatAndCacheMeshTheGamesFramesBitForBit) {
-  game::SceneConfig splat_scene, cache_scene;
-  ASSERT_TRUE(parseFountain("splat", splat_scene).ok());
-  ASSERT_TRUE(parseFountain("cache", cache_scene).ok());
-  game::World splat_world, cache_world;
-  std::string error;
-  ASSERT_TRUE(game::buildWorld(splat_scene, game::contentDir(), splat_world, error)) << error;
-  ASSERT_TRUE(game::buildWorld(cache_scene, game::contentDir(), cache_world, error)) << error;
-  const game::FluidSurface& splat = *game::findState<game::FluidSurface>(splat_world);
-  const game::FluidSurface& cache = *game::findState<game::FluidSurface>(cache_world);
+  RouteWorlds w;
+  ASSERT_TRUE(buildRouteWorlds({"splat", "cache"}, w));
+  const game::FluidSurface &splat = *w.surfaces[0], &cache = *w.surfaces[1];
   int meshed = 0;
   for (int frame = 0; frame < 120; ++frame) {
-    game::stepWorld(splat_world, nullptr);
-    game::stepWorld(cache_world, nullptr);
-    game::meshWorld(splat_world, nullptr);
-    game::meshWorld(cache_world, nullptr);
+    w.stepAndMesh();
     ASSERT_EQ(splat.error, "") << "frame " << frame;
     ASSERT_EQ(cache.error, "") << "frame " << frame;
     ASSERT_EQ(test_support::meshBitsDiffer(splat.job.mesh, cache.job.mesh), "") << "frame " << frame;
@@ -98,21 +119,12 @@ std::vector<std::array<std::uint32_t, 18>> drawnTriangles(const fluid::SurfaceMe
 }
 
 TEST(FluidSurfaceField, DenseScanDrawsTheSplatWalksTrianglesOnTheGamesFrames) {
-  game::SceneConfig dense_scene, splat_scene;
-  ASSERT_TRUE(parseFountain("dense", dense_scene).ok());
-  ASSERT_TRUE(parseFountain("splat", splat_scene).ok());
-  game::World dense_world, splat_world;
-  std::string error;
-  ASSERT_TRUE(game::buildWorld(dense_scene, game::contentDir(), dense_world, error)) << error;
-  ASSERT_TRUE(game::buildWorld(splat_scene, game::contentDir(), splat_world, error)) << error;
-  const game::FluidSurface& dense = *game::findState<game::FluidSurface>(dense_world);
-  const game::FluidSurface& splat = *game::findState<game::FluidSurface>(splat_world);
+  RouteWorlds w;
+  ASSERT_TRUE(buildRouteWorlds({"dense", "splat"}, w));
+  const game::FluidSurface &dense = *w.surfaces[0], &splat = *w.surfaces[1];
   int meshed = 0;
   for (int frame = 0; frame < 120; ++frame) {
-    game::stepWorld(dense_world, nullptr);
-    game::stepWorld(splat_world, nullptr);
-    game::meshWorld(dense_world, nullptr);
-    game::meshWorld(splat_world, nullptr);
+    w.stepAndMesh();
     ASSERT_EQ(dense.error, "") << "frame " << frame;
     ASSERT_EQ(dense.job.mesh.indices.size(), splat.job.mesh.indices.size()) << "frame " << frame;
     ASSERT_TRUE(drawnTriangles(dense.job.mesh) == drawnTriangles(splat.job.mesh)) << "frame " << frame;
@@ -141,21 +153,12 @@ TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
   // The value scan's corner values are the dense scan's up to float rounding (a float predicate
   // and another order of additions), so the same lattice edges are cut unless a corner sits
   // within rounding of T; its normals come from central differences, so only edges are compared.
-  game::SceneConfig dense_scene, value_scene;
-  ASSERT_TRUE(parseFountain("dense", dense_scene).ok());
-  ASSERT_TRUE(parseFountain("value", value_scene).ok());
-  game::World dense_world, value_world;
-  std::string error;
-  ASSERT_TRUE(game::buildWorld(dense_scene, game::contentDir(), dense_world, error)) << error;
-  ASSERT_TRUE(game::buildWorld(value_scene, game::contentDir(), value_world, error)) << error;
-  const game::FluidSurface& dense = *game::findState<game::FluidSurface>(dense_world);
-  const game::FluidSurface& value = *game::findState<game::FluidSurface>(value_world);
+  RouteWorlds w;
+  ASSERT_TRUE(buildRouteWorlds({"dense", "value"}, w));
+  const game::FluidSurface &dense = *w.surfaces[0], &value = *w.surfaces[1];
   int meshed = 0, same = 0;
   for (int frame = 0; frame < 120; ++frame) {
-    game::stepWorld(dense_world, nullptr);
-    game::stepWorld(value_world, nullptr);
-    game::meshWorld(dense_world, nullptr);
-    game::meshWorld(value_world, nullptr);
+    w.stepAndMesh();
     ASSERT_EQ(value.error, "") << "frame " << frame;
     if (dense.job.mesh.indices.empty()) continue;
     ++meshed;
@@ -172,21 +175,14 @@ TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
 // splat walk's bits on splat and cache frames, its triangles and vertex bits in the dense scan's
 // order on dense frames, and a world fixed on the value scan's bits on value frames.
 TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
-  game::SceneConfig scene, value_scene;
-  ASSERT_TRUE(parseFountain("splat", scene).ok());
-  ASSERT_TRUE(parseFountain("value", value_scene).ok());
-  game::World fixed_world, value_world, switching_world;
-  std::string error;
-  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), fixed_world, error)) << error;
-  ASSERT_TRUE(game::buildWorld(value_scene, game::contentDir(), value_world, error)) << error;
-  ASSERT_TRUE(game::buildWorld(scene, game::contentDir(), switching_world, error)) << error;
+  RouteWorlds w;
+  ASSERT_TRUE(buildRouteWorlds({"splat", "value", "splat"}, w));  // fixed, fixed, switching
+  game::World& switching_world = *w.worlds[2];
   game::SectionConfig* section = nullptr;
   for (game::SectionConfig& effect : switching_world.scene.effects)
     if (effect.name == "fluid_surface") section = &effect;
   ASSERT_NE(section, nullptr);
-  const game::FluidSurface& fixed = *game::findState<game::FluidSurface>(fixed_world);
-  const game::FluidSurface& value = *game::findState<game::FluidSurface>(value_world);
-  const game::FluidSurface& switching = *game::findState<game::FluidSurface>(switching_world);
+  const game::FluidSurface &fixed = *w.surfaces[0], &value = *w.surfaces[1], &switching = *w.surfaces[2];
   const struct {
     const char* name;
     fluid::SurfaceFieldRoute route;
@@ -201,10 +197,7 @@ TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
     section->params["field"].text = pick.name;
     game::applyLiveParams(switching_world);
     ASSERT_EQ(switching.params.field, pick.route) << "frame " << frame;
-    for (game::World* w : {&fixed_world, &value_world, &switching_world}) {
-      game::stepWorld(*w, nullptr);
-      game::meshWorld(*w, nullptr);
-    }
+    w.stepAndMesh();
     ASSERT_EQ(switching.error, "") << "frame " << frame;
     const fluid::SurfaceMesh& got = switching.job.mesh;
     if (pick.route == fluid::SurfaceFieldRoute::valueScan) {

@@ -11,6 +11,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -124,6 +126,43 @@ inline fluid::ParticlePositions blobOffsetBy1e5(fluid::SurfaceParams& params) {
   params.originY = -1e5;
   params.originZ = 1e5;
   return p;
+}
+
+// `in` meshed by a fresh extractor with `p` on `route`; a failed extraction throws (the test fails
+// with the extractor's message).
+inline fluid::SurfaceMesh meshWith(const fluid::SurfaceInput& in, fluid::SurfaceParams p, fluid::SurfaceFieldRoute route) {
+  p.fieldRoute = route;
+  fluid::SurfaceExtractor ex;
+  fluid::SurfaceMesh m;
+  const fluid::SurfaceStatus st = ex.extract(in, p, m);
+  if (!st.ok()) throw std::runtime_error(st.error);
+  return m;
+}
+
+// One triangle as its three vertices' edge keys, position bits and normal bits, rotated to start
+// at its smallest key (the winding kept).
+using VertexBits = std::array<std::uint32_t, 8>;  // key (2 words), position (3), normal (3)
+using TriangleBits = std::array<VertexBits, 3>;
+
+// The triangles of index range [first, first + count) (all of them by default) with their
+// vertex bits, sorted: equal lists mean the same triangles with the same vertex bits, in any order.
+inline std::vector<TriangleBits> trianglesWithVertexBits(const fluid::SurfaceMesh& m, std::size_t first = 0,
+                                                         std::size_t count = std::numeric_limits<std::size_t>::max()) {
+  count = std::min(count, m.indices.size() - first);
+  std::vector<TriangleBits> out;
+  for (std::size_t i = first; i + 3 <= first + count; i += 3) {
+    TriangleBits t;
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = m.indices[i + std::size_t(c)];
+      std::memcpy(&t[std::size_t(c)][0], &m.edgeKeys[v], 8);
+      std::memcpy(&t[std::size_t(c)][2], &m.positions[v], 12);
+      std::memcpy(&t[std::size_t(c)][5], &m.normals[v], 12);
+    }
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace surface_test

@@ -27,37 +27,6 @@ int gScannedMeshes = 0;    // expectRoutesAgree calls whose dense-scan mesh was 
 int gScansWithGhosts = 0;  // of those, scans that found components the walk's seeding cannot reach
 int gSamePlanScans = 0;    // scans compared with the walk block by block (both planned the same blocks)
 
-fluid::SurfaceMesh meshWith(const fluid::SurfaceInput& in, fluid::SurfaceParams p, fluid::SurfaceFieldRoute route) {
-  p.fieldRoute = route;
-  fluid::SurfaceExtractor ex;
-  fluid::SurfaceMesh m;
-  const fluid::SurfaceStatus st = ex.extract(in, p, m);
-  EXPECT_TRUE(st.ok()) << st.error;
-  return m;
-}
-
-// One triangle as its three vertices' edge keys, position bits and normal bits, rotated to start
-// at its smallest key (the winding kept).
-using VertexBits = std::array<std::uint32_t, 8>;  // key (2 words), position (3), normal (3)
-using TriangleBits = std::array<VertexBits, 3>;
-
-std::vector<TriangleBits> trianglesWithVertexBits(const fluid::SurfaceMesh& m, std::size_t first, std::size_t count) {
-  std::vector<TriangleBits> out;
-  for (std::size_t i = first; i < first + count; i += 3) {
-    TriangleBits t;
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t v = m.indices[i + std::size_t(c)];
-      std::memcpy(&t[std::size_t(c)][0], &m.edgeKeys[v], 8);
-      std::memcpy(&t[std::size_t(c)][2], &m.positions[v], 12);
-      std::memcpy(&t[std::size_t(c)][5], &m.normals[v], 12);
-    }
-    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
-    out.push_back(t);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 // The dense scan against the slice splat's walk: the walk's triangles with the same vertex bits
 // (keys, positions, normals) and as many per slab; where both planned the same blocks (the scan
 // halves a one-block set across z first, the walk across its longest axis), also block by block,

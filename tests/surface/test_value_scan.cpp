@@ -26,15 +26,6 @@ namespace {
 
 constexpr fluid::SurfaceFieldRoute kValue = fluid::SurfaceFieldRoute::valueScan;
 
-fluid::SurfaceMesh meshWith(const fluid::SurfaceInput& in, fluid::SurfaceParams p, fluid::SurfaceFieldRoute route) {
-  p.fieldRoute = route;
-  fluid::SurfaceExtractor ex;
-  fluid::SurfaceMesh m;
-  const fluid::SurfaceStatus st = ex.extract(in, p, m);
-  EXPECT_TRUE(st.ok()) << st.error;
-  return m;
-}
-
 fluid::SurfaceMesh denseOracle(const fluid::SurfaceInput& in, fluid::SurfaceParams p) {
   p.order = fluid::SurfaceOrder::none;
   fluid::BaselineExtractor dense;
@@ -42,26 +33,6 @@ fluid::SurfaceMesh denseOracle(const fluid::SurfaceInput& in, fluid::SurfacePara
   const fluid::SurfaceStatus st = dense.extract(fluid::BaselineMethod::dense, in, p, ref);
   EXPECT_TRUE(st.ok()) << st.error;
   return ref;
-}
-
-// Each triangle as its vertices' edge keys with position and normal bits, sorted (see
-// test_field_routes.cpp): equal lists mean the same triangles with the same vertex bits.
-using VertexBits = std::array<std::uint32_t, 8>;
-std::vector<std::array<VertexBits, 3>> trianglesWithVertexBits(const fluid::SurfaceMesh& m) {
-  std::vector<std::array<VertexBits, 3>> out;
-  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
-    std::array<VertexBits, 3> t;
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t v = m.indices[i + std::size_t(c)];
-      std::memcpy(&t[std::size_t(c)][0], &m.edgeKeys[v], 8);
-      std::memcpy(&t[std::size_t(c)][2], &m.positions[v], 12);
-      std::memcpy(&t[std::size_t(c)][5], &m.normals[v], 12);
-    }
-    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
-    out.push_back(t);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 // Angles (degrees) between the value route's normals and the exact route's at the same edge keys,
