@@ -329,8 +329,8 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-// --count: one warm mesh of SET by ROUTE (ours | ours-one-block | cache | splat | peer | peer-scalar |
-// peer-no-normals), one thread, between callgrind's start and stop; `repeats` meshes there instead of one
+// --count: one warm mesh of SET by ROUTE (ours | ours-one-block | cache | splat | dense | value | peer |
+// peer-scalar | peer-no-normals), one thread, between callgrind's start and stop; `repeats` meshes there instead of one
 // for a sampling profiler (perf record), which needs many to split the time between functions.
 int countMode(const std::string& set, const std::string& route, int repeats) {
   const float cube = set == "blob" ? 0.3f : set == "explosion" ? 0.6f : 1.0f;

@@ -8,6 +8,7 @@
 #include "game/world/fluid_surface.hpp"
 #include "game/world/world.hpp"
 #include "tests/support/mesh_bits.hpp"
+#include "tests/surface/mesh_checks.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,6 +21,11 @@
 #include <vector>
 
 namespace {
+
+// Triangles with their vertices' bits (edge key, position, normal), and as edge-key triples alone;
+// both sorted, so meshes emitted in another order compare equal.
+using surface_test::canonicalTriangles;
+using surface_test::trianglesWithVertexBits;
 
 game::SceneStatus parseFountain(const std::string& field, game::SceneConfig& scene) {
   const std::string text = R"({"effects": {"sph_fluid": {"max_particles": 900},
@@ -99,25 +105,6 @@ TEST(FluidSurfaceField, SplatAndCacheMeshTheGamesFramesBitForBit) {
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
 }
 
-// Every vertex (position and normal bits) as a sorted list, and the triangles as sorted vertex
-// triples: what a frame draws, whatever order the mesher emitted it in.
-std::vector<std::array<std::uint32_t, 18>> drawnTriangles(const fluid::SurfaceMesh& m) {
-  std::vector<std::array<std::uint32_t, 18>> out;
-  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
-    std::array<std::array<std::uint32_t, 6>, 3> v;
-    for (int c = 0; c < 3; ++c) {
-      std::memcpy(&v[std::size_t(c)][0], &m.positions[m.indices[i + std::size_t(c)]], 12);
-      std::memcpy(&v[std::size_t(c)][3], &m.normals[m.indices[i + std::size_t(c)]], 12);
-    }
-    while (v[0] > v[1] || v[0] > v[2]) v = {v[1], v[2], v[0]};  // (rotations keep the winding)
-    std::array<std::uint32_t, 18> t;
-    for (int c = 0; c < 3; ++c) std::copy(v[std::size_t(c)].begin(), v[std::size_t(c)].end(), t.begin() + 6 * c);
-    out.push_back(t);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 TEST(FluidSurfaceField, DenseScanDrawsTheSplatWalksTrianglesOnTheGamesFrames) {
   RouteWorlds w;
   ASSERT_TRUE(buildRouteWorlds({"dense", "splat"}, w));
@@ -127,26 +114,14 @@ TEST(FluidSurfaceField, DenseScanDrawsTheSplatWalksTrianglesOnTheGamesFrames) {
     w.stepAndMesh();
     ASSERT_EQ(dense.error, "") << "frame " << frame;
     ASSERT_EQ(dense.job.mesh.indices.size(), splat.job.mesh.indices.size()) << "frame " << frame;
-    ASSERT_TRUE(drawnTriangles(dense.job.mesh) == drawnTriangles(splat.job.mesh)) << "frame " << frame;
+    ASSERT_TRUE(trianglesWithVertexBits(dense.job.mesh) == trianglesWithVertexBits(splat.job.mesh))
+        << "frame " << frame;
     if (dense.job.mesh.indices.empty()) continue;
     ++meshed;
     EXPECT_EQ(dense.job.mesh.stats.scannedBlocks, dense.job.mesh.stats.blocks) << "frame " << frame;
     EXPECT_EQ(splat.job.mesh.stats.scannedBlocks, 0u) << "frame " << frame;
   }
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
-}
-
-// Triangles as sorted edge-key triples (the lattice edges they cut, whatever the vertex bits).
-std::vector<std::array<std::uint64_t, 3>> edgeTriangles(const fluid::SurfaceMesh& m) {
-  std::vector<std::array<std::uint64_t, 3>> out;
-  for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) {
-    std::array<std::uint64_t, 3> t = {m.edgeKeys[m.indices[i]], m.edgeKeys[m.indices[i + 1]],
-                                      m.edgeKeys[m.indices[i + 2]]};
-    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
-    out.push_back(t);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
@@ -163,7 +138,7 @@ TEST(FluidSurfaceField, ValueScanCutsTheDenseScansEdgesOnTheGamesFrames) {
     if (dense.job.mesh.indices.empty()) continue;
     ++meshed;
     EXPECT_EQ(value.job.mesh.stats.scannedBlocks, value.job.mesh.stats.blocks) << "frame " << frame;
-    same += edgeTriangles(value.job.mesh) == edgeTriangles(dense.job.mesh);
+    same += canonicalTriangles(value.job.mesh) == canonicalTriangles(dense.job.mesh);
     for (const glm::vec3& n : value.job.mesh.normals) ASSERT_NEAR(glm::length(n), 1.0f, 1e-3f) << "frame " << frame;
   }
   EXPECT_GE(meshed, 100) << "the jet has a surface in almost every frame";
@@ -203,7 +178,7 @@ TEST(FluidSurfaceField, SwitchingTheRouteLiveEveryFrameKeepsTheMeshes) {
     if (pick.route == fluid::SurfaceFieldRoute::valueScan) {
       ASSERT_EQ(test_support::meshBitsDiffer(got, value.job.mesh), "") << "frame " << frame;
     } else if (pick.route == fluid::SurfaceFieldRoute::denseScan) {
-      ASSERT_TRUE(drawnTriangles(got) == drawnTriangles(fixed.job.mesh)) << "frame " << frame;
+      ASSERT_TRUE(trianglesWithVertexBits(got) == trianglesWithVertexBits(fixed.job.mesh)) << "frame " << frame;
     } else {
       ASSERT_EQ(test_support::meshBitsDiffer(got, fixed.job.mesh), "") << "frame " << frame;
     }

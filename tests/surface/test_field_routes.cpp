@@ -209,8 +209,7 @@ TEST(FieldRoutes, DenseScanIsThreadCountInvariant) {
 TEST(FieldRoutes, OneExtractorSwitchingRoutesAndSetsMeshesAsFreshOnes) {
   // The game switches the route live: each worker's scratch (the dense scan's two slices and the
   // value scan's four, which they only clear where their last splat wrote; the walk's slices and
-  // volume) must not leak
-  // from one route or set into the next.
+  // volume) must not leak from one route or set into the next.
   const std::tuple<const char*, float> sets[] = {{"fountain.xyz", 1.0f}, {"spray.xyz", 1.0f}, {"blob.xyz", 0.3f}};
   const fluid::SurfaceFieldRoute routes[] = {fluid::SurfaceFieldRoute::denseScan, fluid::SurfaceFieldRoute::sliceSplat,
                                              fluid::SurfaceFieldRoute::valueScan, fluid::SurfaceFieldRoute::denseScan,

@@ -61,7 +61,8 @@
     for (int i = -m; i <= nx_ + m + 15; ++i) w_.splatCx[std::size_t(i + m)] = double(g0_[0] + i) * su_.s;
     w_.local.resize(particles.size());
     w_.splatReach.resize(particles.size());
-    w_.splatBand.resize(particles.size());
+    // Each route's predicate data alone: splatSlice's band, or the value scan's float(Rc_i^2).
+    w_.splatBand.resize(su_.valueOnly ? 0 : particles.size());
     w_.splatRc2.resize(su_.valueOnly ? particles.size() : 0);
     splatReachMax_ = 0;
     for (std::uint32_t li = 0; li < particles.size(); ++li) {
@@ -69,10 +70,12 @@
       const int r = particleReach(p, su_.s);  // <= m (blockSpan)
       w_.splatReach[li] = std::int16_t(r);
       splatReachMax_ = std::max(splatReachMax_, r);
-      // splatSlice's band around Rc_i^2 where the float r^2 does not settle a lane.
-      const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
-      w_.splatBand[li] = {float(p.rc2 - tol), float(p.rc2 + tol)};
-      if (su_.valueOnly) w_.splatRc2[li] = float(p.rc2);
+      if (su_.valueOnly) {
+        w_.splatRc2[li] = float(p.rc2);
+      } else {  // splatSlice's band around Rc_i^2 where the float r^2 does not settle a lane
+        const double span = double(r + 9) * su_.s, tol = 3e-5 * span * span;
+        w_.splatBand[li] = {float(p.rc2 - tol), float(p.rc2 + tol)};
+      }
       CacheParticle& cp = w_.local[li];
       for (int a = 0; a < 3; ++a) {
         cp.rest[a] = p.rest[a];
